@@ -27,8 +27,8 @@ class Drive:
             v = getattr(self, name)
             if not isinstance(v, (int, float)) or not math.isfinite(v):
                 raise ParameterError(f"{name} = {v!r}: must be a finite number")
-        if self.amplitude <= 0:
-            raise ParameterError(f"amplitude = {self.amplitude}: must be > 0 m")
+        if self.amplitude < 0:
+            raise ParameterError(f"amplitude = {self.amplitude}: must be >= 0 m (0 holds the device at rest)")
         if self.frequency <= 0:
             raise ParameterError(f"frequency = {self.frequency}: must be > 0 Hz")
         if not isinstance(self.cycles, int) or self.cycles < 1:

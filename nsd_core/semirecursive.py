@@ -1,0 +1,176 @@
+"""The two-step semirecursive equations of motion (Eqs. 9-12) with driven and locked coordinates.
+
+The coordinates z split into prescribed (driven, or locked at a constant: Table 1), dependent
+(one per independent loop equation, chosen by full-pivot elimination, Eq. 9) and free (the rest).
+Positions of the dependent coordinates are solved by Newton from Phi(z) = 0 and velocities from
+Phi_z z' = 0 at every evaluation, so only the free coordinates are integrated and the constraint
+drift stays at round-off. With z' = R_z z'_f + (prescribed part) (Eq. 10) and
+z'' = R_z z''_f + z''_0, Eq. 12 becomes
+    R_z^T (R_d^T M^S R_d) R_z z''_f = R_z^T [R_d^T (Q^S - P^S) - (R_d^T M^S R_d) z''_0],
+where z''_0 holds the prescribed accelerations and the dependent response to them and to the
+velocity-product term. Reactions follow from the full residual: Phi_z^T lambda on the loop
+equations and the drive forces on the prescribed coordinates.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from .closure import closure, full_pivot_elimination
+from .dynamics import tree_equations
+from .kinematics import Kinematics, positions, velocities
+from .mechanism import Mechanism
+
+# forces(t, kin, z, zd, extra) -> (wrench (n,6) about the origin, joint forces (n,) or None, extra rates)
+ForceFn = Callable[[float, Kinematics, np.ndarray, np.ndarray, np.ndarray], tuple]
+# motion(t) -> (q, q', q'') of the prescribed coordinates, in the order of ``prescribed``
+MotionFn = Callable[[float], tuple[np.ndarray, np.ndarray, np.ndarray]]
+
+
+class ConstraintError(RuntimeError):
+    """The loop equations could not be solved (the mechanism cannot follow, or a singular position)."""
+
+
+@dataclass(frozen=True)
+class Partition:
+    free: np.ndarray
+    dependent: np.ndarray
+    rows: np.ndarray        # independent loop equations (redundant ones left out)
+    pivot_ratio: float      # smallest / largest pivot: how well-conditioned the choice is
+
+
+@dataclass
+class Evaluation:
+    """Everything computed at one (t, state): for outputs and diagnostics."""
+    t: float
+    z: np.ndarray
+    zd: np.ndarray
+    zdd: np.ndarray
+    kin: Kinematics
+    extra_rate: np.ndarray
+    lam: np.ndarray          # multipliers of the independent loop equations
+    drive_force: np.ndarray  # generalized force the drive applies on each prescribed coordinate
+    Phi: np.ndarray
+    info: dict = field(default_factory=dict)
+
+
+class SemiRecursiveSystem:
+    """A mechanism, its prescribed coordinates and its applied forces, as an ODE in the free ones."""
+
+    def __init__(self, mech: Mechanism, prescribed: list[int], motion: MotionFn, forces: ForceFn,
+                 n_extra: int = 0, prefer_free: list[int] | None = None, newton_tol: float = 1e-13):
+        self.m = mech
+        self.prescribed = np.array(prescribed, dtype=int)
+        self.motion = motion
+        self.forces = forces
+        self.n_extra = n_extra
+        self.prefer_free = list(prefer_free or [])
+        self.newton_tol = newton_tol
+        self.partition: Partition | None = None
+        self._z = None  # last full configuration: the Newton warm start (keeps the assembly branch)
+
+    # ---- partition (Eq. 9) ----
+    def choose_partition(self, z: np.ndarray) -> Partition:
+        k = positions(self.m, z)
+        _, J, _ = closure(self.m, k)
+        others = [i for i in range(self.m.n) if i not in set(self.prescribed)]
+        # coordinates the user prefers free are offered as pivots last
+        cand = [i for i in others if i not in self.prefer_free] + [i for i in others if i in self.prefer_free]
+        rows, dep, piv = full_pivot_elimination(J, cand) if J.shape[0] else ([], [], np.ones(1))
+        if self.prefer_free and len(dep) < J.shape[0]:
+            pass  # redundant equations: fine, they are left out
+        free = np.array([i for i in others if i not in dep], dtype=int)
+        ratio = float(piv.min() / piv.max()) if len(piv) else 1.0
+        self.partition = Partition(free, np.array(dep, dtype=int), np.array(rows, dtype=int), ratio)
+        self._z = np.array(z, dtype=float)
+        return self.partition
+
+    # ---- positions and velocities on the constraint manifold ----
+    def assemble(self, t: float, zf: np.ndarray) -> np.ndarray:
+        P = self.partition
+        z = self._z.copy()
+        q, _, _ = self.motion(t)
+        z[self.prescribed] = q
+        z[P.free] = zf
+        if len(P.dependent) == 0:
+            return z
+        for _ in range(30):
+            k = positions(self.m, z)
+            Phi, J, _ = closure(self.m, k)
+            step = np.linalg.solve(J[np.ix_(P.rows, P.dependent)], Phi[P.rows])
+            z[P.dependent] -= step
+            if np.max(np.abs(step)) < self.newton_tol * (1.0 + np.max(np.abs(z[P.dependent]))):
+                break
+        else:
+            raise ConstraintError(f"t = {t:.6g} s: Newton on the loop equations did not converge "
+                                  f"(|Phi| = {np.max(np.abs(Phi)):.3g})")
+        self._z = z
+        return z
+
+    def rhs_parts(self, t: float, zf: np.ndarray, zfd: np.ndarray, extra: np.ndarray) -> Evaluation:
+        P, m = self.partition, self.m
+        z = self.assemble(t, zf)
+        q, qd, qdd = self.motion(t)
+        kin = positions(m, z)
+        Phi, J, _ = closure(m, kin)
+        Jr = J[P.rows]
+        Jd = Jr[:, P.dependent]
+        zd = np.zeros(m.n)
+        zd[self.prescribed] = qd
+        zd[P.free] = zfd
+        if len(P.dependent):
+            zd[P.dependent] = -np.linalg.solve(Jd, Jr @ zd)
+        velocities(m, kin, zd)
+        _, _, c = closure(m, kin, with_rates=True)
+        wrench, gen, extra_rate = self.forces(t, kin, z, zd, extra)
+        M, Q = tree_equations(m, kin, wrench, gen)
+        # Eq. 10: R_z, and the particular acceleration z''_0
+        nf = len(P.free)
+        Rz = np.zeros((m.n, nf))
+        Rz[P.free, np.arange(nf)] = 1.0
+        zdd0 = np.zeros(m.n)
+        zdd0[self.prescribed] = qdd
+        if len(P.dependent):
+            Rz[P.dependent] = -np.linalg.solve(Jd, Jr[:, P.free])
+            zdd0[P.dependent] = np.linalg.solve(Jd, -c[P.rows] - Jr[:, self.prescribed] @ qdd)
+        lhs = Rz.T @ M @ Rz
+        rhs = Rz.T @ (Q - M @ zdd0)
+        zfdd = np.linalg.solve(lhs, rhs) if nf else np.zeros(0)
+        zdd = Rz @ zfdd + zdd0
+        # reactions: M z'' - Q = Phi_z^T lambda + E^T tau
+        res = M @ zdd - Q
+        lam = np.linalg.solve(Jd.T, res[P.dependent]) if len(P.dependent) else np.zeros(0)
+        tau = res[self.prescribed] - Jr[:, self.prescribed].T @ lam
+        return Evaluation(t, z, zd, zdd, kin, np.asarray(extra_rate, dtype=float), lam, tau, Phi)
+
+    # ---- the ODE in y = [z_f, z'_f, extra] ----
+    def rhs(self, t: float, y: np.ndarray) -> np.ndarray:
+        nf = len(self.partition.free)
+        ev = self.rhs_parts(t, y[:nf], y[nf:2 * nf], y[2 * nf:])
+        return np.concatenate([y[nf:2 * nf], ev.zdd[self.partition.free], ev.extra_rate])
+
+    def state(self, z: np.ndarray, zd: np.ndarray, extra=()) -> np.ndarray:
+        f = self.partition.free
+        return np.concatenate([z[f], zd[f], np.asarray(extra, dtype=float)])
+
+    def evaluate(self, t: float, y: np.ndarray) -> Evaluation:
+        nf = len(self.partition.free)
+        return self.rhs_parts(t, y[:nf], y[nf:2 * nf], y[2 * nf:])
+
+    def repartition(self, t: float, y: np.ndarray) -> np.ndarray:
+        """Choose a new partition at the current configuration and map the state onto it."""
+        ev = self.evaluate(t, y)
+        self.choose_partition(ev.z)
+        return self.state(ev.z, ev.zd, y[len(y) - self.n_extra:])
+
+    def pivot_ratio(self, t: float, y: np.ndarray) -> float:
+        """Conditioning of the current dependent block (1 = ideal, 0 = singular)."""
+        P = self.partition
+        if len(P.dependent) == 0:
+            return 1.0
+        z = self.assemble(t, y[:len(P.free)])
+        _, J, _ = closure(self.m, positions(self.m, z))
+        s = np.linalg.svd(J[np.ix_(P.rows, P.dependent)], compute_uv=False)
+        return float(s[-1] / s[0])
