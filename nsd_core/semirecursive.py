@@ -99,7 +99,7 @@ class SemiRecursiveSystem:
         for _ in range(30):
             k = positions(self.m, z)
             Phi, J, _ = closure(self.m, k)
-            step = np.linalg.solve(J[np.ix_(P.rows, P.dependent)], Phi[P.rows])
+            step = np.linalg.solve(J[P.rows][:, P.dependent], Phi[P.rows])
             z[P.dependent] -= step
             if np.max(np.abs(step)) < self.newton_tol * (1.0 + np.max(np.abs(z[P.dependent]))):
                 break
@@ -110,18 +110,17 @@ class SemiRecursiveSystem:
         return z
 
     def rhs_parts(self, t: float, zf: np.ndarray, zfd: np.ndarray, extra: np.ndarray) -> Evaluation:
-        P, m = self.partition, self.m
+        P, m, pr = self.partition, self.m, self.prescribed
         z = self.assemble(t, zf)
         q, qd, qdd = self.motion(t)
         kin = positions(m, z)
         Phi, J, _ = closure(m, kin)
         Jr = J[P.rows]
-        Jd = Jr[:, P.dependent]
+        Jd_inv = np.linalg.inv(Jr[:, P.dependent]) if len(P.dependent) else np.zeros((0, 0))
         zd = np.zeros(m.n)
-        zd[self.prescribed] = qd
+        zd[pr] = qd
         zd[P.free] = zfd
-        if len(P.dependent):
-            zd[P.dependent] = -np.linalg.solve(Jd, Jr @ zd)
+        zd[P.dependent] = -Jd_inv @ (Jr @ zd)
         velocities(m, kin, zd)
         _, _, c = closure(m, kin, with_rates=True)
         wrench, gen, extra_rate = self.forces(t, kin, z, zd, extra)
@@ -130,19 +129,17 @@ class SemiRecursiveSystem:
         nf = len(P.free)
         Rz = np.zeros((m.n, nf))
         Rz[P.free, np.arange(nf)] = 1.0
+        Rz[P.dependent] = -Jd_inv @ Jr[:, P.free]
         zdd0 = np.zeros(m.n)
-        zdd0[self.prescribed] = qdd
-        if len(P.dependent):
-            Rz[P.dependent] = -np.linalg.solve(Jd, Jr[:, P.free])
-            zdd0[P.dependent] = np.linalg.solve(Jd, -c[P.rows] - Jr[:, self.prescribed] @ qdd)
-        lhs = Rz.T @ M @ Rz
-        rhs = Rz.T @ (Q - M @ zdd0)
-        zfdd = np.linalg.solve(lhs, rhs) if nf else np.zeros(0)
+        zdd0[pr] = qdd
+        zdd0[P.dependent] = Jd_inv @ (-c[P.rows] - Jr[:, pr] @ qdd)
+        MRz = M @ Rz
+        zfdd = np.linalg.solve(Rz.T @ MRz, Rz.T @ (Q - M @ zdd0)) if nf else np.zeros(0)
         zdd = Rz @ zfdd + zdd0
         # reactions: M z'' - Q = Phi_z^T lambda + E^T tau
-        res = M @ zdd - Q
-        lam = np.linalg.solve(Jd.T, res[P.dependent]) if len(P.dependent) else np.zeros(0)
-        tau = res[self.prescribed] - Jr[:, self.prescribed].T @ lam
+        res = MRz @ zfdd + M @ zdd0 - Q
+        lam = Jd_inv.T @ res[P.dependent]
+        tau = res[pr] - Jr[:, pr].T @ lam
         return Evaluation(t, z, zd, zdd, kin, np.asarray(extra_rate, dtype=float), lam, tau, Phi)
 
     # ---- the ODE in y = [z_f, z'_f, extra] ----
