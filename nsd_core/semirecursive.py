@@ -29,6 +29,22 @@ ForceFn = Callable[[float, Kinematics, np.ndarray, np.ndarray, np.ndarray], tupl
 MotionFn = Callable[[float], tuple[np.ndarray, np.ndarray, np.ndarray]]
 
 
+def _solve(A: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """LU solve; at an exactly singular block (a singular position hit dead on) the minimum-norm
+    least-squares step instead of an exception: the predictor has already put z on the branch."""
+    try:
+        return np.linalg.solve(A, b)
+    except np.linalg.LinAlgError:
+        return np.linalg.lstsq(A, b, rcond=None)[0]
+
+
+def _inverse(A: np.ndarray) -> np.ndarray:
+    try:
+        return np.linalg.inv(A)
+    except np.linalg.LinAlgError:
+        return np.linalg.pinv(A)
+
+
 class ConstraintError(RuntimeError):
     """The loop equations could not be solved (the mechanism cannot follow, or a singular position)."""
 
@@ -70,6 +86,7 @@ class SemiRecursiveSystem:
         self.newton_tol = newton_tol
         self.partition: Partition | None = None
         self._z = None  # last full configuration: the Newton warm start (keeps the assembly branch)
+        self._lin = None  # (z, S) at the last evaluation: dz_dep = S dz, the Newton predictor
 
     # ---- partition (Eq. 9) ----
     def choose_partition(self, z: np.ndarray) -> Partition:
@@ -85,6 +102,7 @@ class SemiRecursiveSystem:
         ratio = float(piv.min() / piv.max()) if len(piv) else 1.0
         self.partition = Partition(free, np.array(dep, dtype=int), np.array(rows, dtype=int), ratio)
         self._z = np.array(z, dtype=float)
+        self._lin = None
         return self.partition
 
     # ---- positions and velocities on the constraint manifold ----
@@ -96,17 +114,48 @@ class SemiRecursiveSystem:
         z[P.free] = zf
         if len(P.dependent) == 0:
             return z
+        pred = None
+        if self._lin is not None:
+            # first-order predictor along the constraint manifold, z_dep + S dz (S = -Jd^-1 Jr from
+            # the last evaluation). With large steps (loose tolerances, or across a singular
+            # position where two assembly branches meet) Newton from the plain warm start can land
+            # on another branch, or on the same one shifted by 2 pi; the predictor tells which.
+            z_lin, S = self._lin
+            dz = z - z_lin
+            dz[P.dependent] = 0.0
+            pred = z_lin[P.dependent] + S @ dz
+            move = float(np.max(np.abs(pred - z_lin[P.dependent])))
+        try:
+            z = self._newton(t, z)
+        except ConstraintError:
+            if pred is None:
+                raise
+            z = None
+        if pred is not None:
+            dev = np.inf if z is None else float(np.max(np.abs(z[P.dependent] - pred)))
+            # the predictor's own error is second order in the move: a first-order gap is a jump
+            if dev > 0.25 * move + 1e-8:
+                z_alt = self._z.copy() if z is None else z.copy()
+                z_alt[P.dependent] = pred
+                z_alt = self._newton(t, z_alt)
+                if float(np.max(np.abs(z_alt[P.dependent] - pred))) < dev:
+                    z = z_alt
+        self._z = z
+        return z
+
+    def _newton(self, t: float, z: np.ndarray) -> np.ndarray:
+        """Newton on the independent loop equations for the dependent coordinates (in place)."""
+        P = self.partition
         for _ in range(30):
             k = positions(self.m, z)
             Phi, J, _ = closure(self.m, k)
-            step = np.linalg.solve(J[P.rows][:, P.dependent], Phi[P.rows])
+            step = _solve(J[P.rows][:, P.dependent], Phi[P.rows])
             z[P.dependent] -= step
             if np.max(np.abs(step)) < self.newton_tol * (1.0 + np.max(np.abs(z[P.dependent]))):
                 break
         else:
             raise ConstraintError(f"t = {t:.6g} s: Newton on the loop equations did not converge "
                                   f"(|Phi| = {np.max(np.abs(Phi)):.3g})")
-        self._z = z
         return z
 
     def rhs_parts(self, t: float, zf: np.ndarray, zfd: np.ndarray, extra: np.ndarray) -> Evaluation:
@@ -116,11 +165,14 @@ class SemiRecursiveSystem:
         kin = positions(m, z)
         Phi, J, _ = closure(m, kin)
         Jr = J[P.rows]
-        Jd_inv = np.linalg.inv(Jr[:, P.dependent]) if len(P.dependent) else np.zeros((0, 0))
+        Jd_inv = _inverse(Jr[:, P.dependent]) if len(P.dependent) else np.zeros((0, 0))
         zd = np.zeros(m.n)
         zd[pr] = qd
         zd[P.free] = zfd
         zd[P.dependent] = -Jd_inv @ (Jr @ zd)
+        S = -Jd_inv @ Jr
+        S[:, P.dependent] = 0.0
+        self._lin = (z.copy(), S)
         velocities(m, kin, zd)
         _, _, c = closure(m, kin, with_rates=True)
         wrench, gen, extra_rate = self.forces(t, kin, z, zd, extra)
