@@ -1,0 +1,274 @@
+"""MuJoCo engine: the negative-stiffness device of nsd-model.md in drive mode (Table 1, first row).
+
+Model (MJCF generated in code from ``device_geometry(params)``; no XML file):
+- world -> ``cap``: three slide joints, ``drive`` along e_psi, ``lateral`` along e_z x e_psi (both
+  prescribed) and ``cap_z`` (free: the cap slides vertically in the massless plate);
+- world -> ``wall``: slide ``wall_z``; wall -> ``rod``: ball joint at the wall reference point;
+- the loop wall -> rod -> cap is closed by an equality ``connect`` at the rod's upper end;
+- the base is fixed (the world), gravity is -g along Z.
+The rod's spin about its own axis is the one free direction a ball-ball rod has; no moment ever acts
+about that axis, so it stays zero; the axial inertia is set to 1e-3 of the transverse one (MuJoCo
+rejects zero) and has no effect.
+
+Forces (Eqs. 16-18): ropes (base point -> cap point), SMA wires (cap point -> wall point) and the
+push-only Bouc-Wen spring (base origin -> wall reference, along Z) are added to ``qfrc_passive`` by
+an ``mjcb_passive`` callback that calls ``nsd_core.forces`` (rope_tension, spring_push; the wire
+tension is Eq. 17a, A_w max(sigma, 0), of the committed stress). The callback is installed for the
+run only and the previous one is restored afterwards.
+
+Hysteretic states (wire stresses sigma_j, spring zeta): never integrated by MuJoCo. After every
+``commit_every`` accepted steps (and at every output time) they are advanced along the actual
+change of strain / compression since the last commit with ``advance_wire_stress`` /
+``advance_spring_zeta`` (RK4 in strain, ``hysteresis_substeps`` substeps). The callback is a pure
+function of the stage positions and the committed states: when a stage can differ from the
+committed configuration (RK4 stages, or commit_every > 1) it predicts the state to first order,
+state_c + slope(direction) * (strain - strain_c), with the two directional slopes
+(``sma_stress_slope`` / ``bouc_wen_slope``) evaluated at the commit. This works with every
+integrator and never commits anything inside a callback that MuJoCo may call several times a step.
+
+Drive (exact): the driven slides carry a large armature M (a heavy virtual plate) and a
+feed-forward force (M + m_c) a - f_prev, where f_prev is the device's force on the drive joint at
+the previous step and a is the acceleration that makes the integrator land on u(t_{n+1}) exactly
+(Euler: the central difference (u_{n+1} - 2u_n + u_{n-1})/h^2); the driven qpos/qvel are then
+reset to the prescribed values every step, so the tracking error is the (reported) drift of one
+step, ~1e-15 m. The drive force is measured from the equation of motion of the drive joint,
+F = m_c u'' - (qfrc_passive + qfrc_constraint - qfrc_bias)[drive], i.e. m_c u'' minus rod, ropes
+and wires on the cap along psi (the rod's share is the connect's constraint force).
+
+Constraint softness: MuJoCo's equality constraints are soft. solref time constant
+``solref_factor`` x timestep (2 = the smallest MuJoCo accepts) with solimp d = 0.9999 keeps the loop
+closed to ~1e-8 m at h = 1e-5 s (benchmarks/convergence_mujoco.py measures the effect).
+"""
+from __future__ import annotations
+
+import math
+import time
+
+import mujoco
+import numpy as np
+
+from nsd_core.drive import Drive
+from nsd_core.forces import (advance_spring_zeta, advance_wire_stress, bouc_wen_slope, rope_tension,
+                             sma_stress_slope, spring_push)
+from nsd_core.geometry import DeviceGeometry, device_geometry
+from nsd_core.outputs import device_columns
+from nsd_core.params import Params
+from nsd_core.results import RunResult
+
+from .base import EngineError, merged_settings
+
+_EULER_LIKE = ("Euler", "implicit", "implicitfast")
+
+
+def _f(x) -> str:
+    return " ".join(repr(float(v)) for v in np.ravel(x))
+
+
+def build_mjcf(g: DeviceGeometry, drive: Drive, s: dict, h: float) -> str:
+    """The MJCF text of the driven device (see the module docstring for bodies and joints)."""
+    p = g.params
+    e = drive.unit_vector
+    lat = np.array([-e[1], e[0], 0.0])
+    rod_t = g.rod.inertia[0, 0]
+    solref = f"{_f(s['solref_factor'] * h)} {_f(s['solref_dampratio'])}"
+    return f"""<mujoco model="nsd_drive">
+  <option timestep="{_f(h)}" integrator="{s['integrator']}" gravity="0 0 {_f(-p.gravity)}" solver="Newton"
+          tolerance="{_f(s['solver_tolerance'])}" iterations="{s['solver_iterations']}" jacobian="dense">
+    <flag contact="disable"/>
+  </option>
+  <worldbody>
+    <body name="base" pos="0 0 0"/>
+    <body name="cap" pos="0 0 {_f(g.cap_rest_z)}">
+      <inertial pos="{_f(g.cap.com)}" mass="{_f(g.cap.mass)}" diaginertia="{_f(np.diag(g.cap.inertia))}"/>
+      <joint name="drive" type="slide" axis="{_f(e)}" armature="{_f(s['drive_armature'])}"/>
+      <joint name="lateral" type="slide" axis="{_f(lat)}" armature="{_f(s['drive_armature'])}"/>
+      <joint name="cap_z" type="slide" axis="0 0 1"/>
+    </body>
+    <body name="wall" pos="0 0 {_f(g.wall_rest_z)}">
+      <inertial pos="{_f(g.wall.com)}" mass="{_f(g.wall.mass)}" diaginertia="{_f(np.diag(g.wall.inertia))}"/>
+      <joint name="wall_z" type="slide" axis="0 0 1"/>
+      <body name="rod">
+        <inertial pos="{_f(g.rod.com)}" mass="{_f(g.rod.mass)}" diaginertia="{_f(rod_t)} {_f(rod_t)} {_f(1e-3 * rod_t)}"/>
+        <joint name="rod_ball" type="ball"/>
+        <site name="rod_tip" pos="0 0 {_f(p.rod_length)}"/>
+      </body>
+    </body>
+  </worldbody>
+  <equality>
+    <connect name="loop" body1="rod" body2="cap" anchor="0 0 {_f(p.rod_length)}"
+             solref="{solref}" solimp="{_f(s['solimp'])}"/>
+  </equality>
+</mujoco>
+"""
+
+
+class _Device:
+    """Precomputed element data, the committed hysteretic states and the passive callback."""
+
+    def __init__(self, g: DeviceGeometry, drive: Drive, data: mujoco.MjData, predict: bool, substeps: int):
+        self.g, self.nr, self.nw = g, g.n_ropes, g.n_wires
+        e = drive.unit_vector
+        self.e0, self.e1 = float(e[0]), float(e[1])
+        self.zc0, self.zw0 = g.cap_rest_z, g.wall_rest_z
+        # element vector = cap position + D (- wall z for wires): upper end minus lower end
+        self.D = np.vstack([g.rope_cap_points - g.rope_base_points, g.wire_cap_points - g.wire_wall_points])
+        self.T = np.zeros(self.nr + self.nw)
+        self.data, self.qpos, self.qfrc = data, data.qpos, data.qfrc_passive
+        self.predict, self.substeps = predict, substeps
+        self._dirs = np.repeat([1.0, -1.0], self.nw)   # one slope call gives both directions
+        self.sigma = np.array(g.initial_wire_stress(), dtype=float)
+        self.zeta = float(g.spring_zeta0)
+        self.eps_c, self.x_c = self.strains(self.qpos)
+        self._slopes()
+
+    def geometry(self, q):
+        """Cap position, wall height, element vectors (n, 3) and lengths for generalized positions q."""
+        q0, q1, q2, q3 = q[0], q[1], q[2], q[3]
+        cap = np.array((q0 * self.e0 - q1 * self.e1, q0 * self.e1 + q1 * self.e0, self.zc0 + q2))
+        wz = self.zw0 + q3
+        v = self.D + cap
+        v[self.nr:, 2] -= wz
+        return cap, wz, v, np.sqrt(np.einsum("ij,ij->i", v, v))
+
+    def strains(self, q):
+        _, wz, _, L = self.geometry(q)
+        L0 = self.g.wire.natural_length
+        return (L[self.nr:] - L0) / L0, self.g.spring.free_length - wz
+
+    def _slopes(self):
+        if self.predict:  # directional slopes at the committed state, for the callback's prediction
+            w, sp = self.g.wire, self.g.spring
+            both = sma_stress_slope(np.tile(self.eps_c, 2), self._dirs, np.tile(self.sigma, 2), w)
+            self.s_up, self.s_dn = both[:self.nw], both[self.nw:]
+            self.z_up = float(bouc_wen_slope(self.zeta, 1.0, sp))
+            self.z_dn = float(bouc_wen_slope(self.zeta, -1.0, sp))
+
+    def commit(self):
+        """Advance the hysteretic states along the strain change since the last commit (accepted states only)."""
+        eps, x = self.strains(self.qpos)
+        if self.nw:
+            self.sigma = advance_wire_stress(self.eps_c, eps, self.sigma, self.g.wire, self.substeps)
+        self.zeta = float(advance_spring_zeta(self.x_c, x, self.zeta, self.g.spring, self.substeps))
+        self.eps_c, self.x_c = eps, x
+        self._slopes()
+
+    def passive(self, m, d):
+        """mjcb_passive: add ropes, wires and spring to qfrc_passive. Pure: commits nothing."""
+        qfrc = self.qfrc if d is self.data else d.qfrc_passive
+        cap, wz, v, L = self.geometry(self.qpos if d is self.data else d.qpos)
+        g, nr, T = self.g, self.nr, self.T
+        T[:nr] = rope_tension(L[:nr], g.rope_natural_length, g.rope_stiffness)   # Eq. 16
+        sigma, zeta = self.sigma, self.zeta
+        if self.predict:
+            de = (L[nr:] - g.wire.natural_length) / g.wire.natural_length - self.eps_c
+            sigma = sigma + np.where(de > 0.0, self.s_up, self.s_dn) * de
+            dx = g.spring.free_length - wz - self.x_c
+            zeta = zeta + (self.z_up if dx > 0.0 else self.z_dn) * dx
+        T[nr:] = g.wire.area * np.maximum(sigma, 0.0)                               # Eq. 17a
+        push = spring_push(wz, 0.0, zeta, g.spring)[0]                              # Eq. 18
+        w = T / L
+        f_cap = -(w @ v)                  # every element pulls the cap towards its lower end
+        qfrc[0] += f_cap[0] * self.e0 + f_cap[1] * self.e1
+        qfrc[1] += f_cap[1] * self.e0 - f_cap[0] * self.e1
+        qfrc[2] += f_cap[2]
+        qfrc[3] += float(w[nr:] @ v[nr:, 2]) + float(push)   # wires pull the wall up, spring pushes it
+
+
+class MujocoEngine:
+    name = "mujoco"
+    default_settings = {
+        "timestep": 1e-5,            # [s] largest step; the step used divides the output interval
+        "integrator": "Euler",       # Euler | implicitfast | implicit | RK4
+        "solref_factor": 2.0,        # connect time constant = factor x timestep (MuJoCo's minimum is 2)
+        "solref_dampratio": 1.0,
+        "solimp": [0.9999, 0.9999, 0.001, 0.5, 2.0],
+        "drive_armature": 1e4,       # [kg] virtual plate mass on the driven slides
+        "commit_every": 1,           # accepted steps between commits of the hysteretic states
+        "hysteresis_substeps": 1,    # RK4 substeps of advance_wire_stress / advance_spring_zeta
+        "solver_tolerance": 1e-12,
+        "solver_iterations": 20,
+        "closure_limit": 1e-4,       # [m] a larger loop gap is an instability (EngineError)
+    }
+
+    def run(self, params: Params, drive: Drive, settings: dict | None = None, zero_drive: bool = False) -> RunResult:
+        """Run the drive; ``zero_drive`` holds u = 0 (the rest-state check) on the same time grid."""
+        s = merged_settings(self.default_settings, settings, self.name)
+        if s["integrator"] not in _EULER_LIKE + ("RK4",):
+            raise EngineError(f"mujoco: integrator {s['integrator']!r} not supported")
+        drive.check_followable(params)
+        g = device_geometry(params)
+        t_out = drive.output_times()
+        dt_out = float(t_out[1] - t_out[0])
+        n_sub = max(1, math.ceil(dt_out / float(s["timestep"]) - 1e-9))
+        h = dt_out / n_sub
+        commit_every = max(1, int(s["commit_every"]))
+        n_steps = n_sub * (len(t_out) - 1)
+        try:
+            model = mujoco.MjModel.from_xml_string(build_mjcf(g, drive, s, h))
+        except ValueError as exc:
+            raise EngineError(f"mujoco: model rejected: {str(exc).splitlines()[0]}") from None
+        data = mujoco.MjData(model)
+        euler = s["integrator"] in _EULER_LIKE
+        dev = _Device(g, drive, data, predict=(not euler) or commit_every > 1,
+                      substeps=int(s["hysteresis_substeps"]))
+
+        # prescribed drive on the step grid (one extra point on each side for the differences)
+        tn = h * np.arange(-1, n_steps + 2)
+        u, ud, udd = (np.zeros_like(tn),) * 3 if zero_drive else drive.displacement(tn)
+        if euler:   # semi-implicit Euler lands on u_{n+1} exactly with the central difference
+            vel = np.diff(u) / h                     # vel[n] = (u_n - u_{n-1})/h  (index shift +1)
+            acc = (u[2:] - 2 * u[1:-1] + u[:-2]) / (h * h)
+            vel_at = vel.tolist()                    # qvel for step n: vel_at[n]
+        else:       # RK4: constant acceleration that lands on u_{n+1}; qvel = u'
+            acc = 2.0 * (u[2:] - u[1:-1] - h * ud[1:-1]) / (h * h)
+            vel_at = ud[1:].tolist()
+        u_at, acc_at = u[1:].tolist(), acc.tolist()
+        m_c, M = g.cap.mass, float(s["drive_armature"])
+
+        n_out = len(t_out)
+        cap_pos, wall_z = np.zeros((n_out, 3)), np.zeros(n_out)
+        sig, zet, clo, F = np.zeros((n_out, g.n_wires)), np.zeros(n_out), np.zeros(n_out), np.zeros(n_out)
+        qpos, qvel, qfa = data.qpos, data.qvel, data.qfrc_applied
+        qpas, qcon, qbias = data.qfrc_passive, data.qfrc_constraint, data.qfrc_bias
+        tip, cap_id = model.site("rod_tip").id, model.body("cap").id
+        track = 0.0
+        previous_cb = mujoco.get_mjcb_passive()
+        t0 = time.perf_counter()
+        try:
+            mujoco.set_mjcb_passive(dev.passive)
+            mujoco.mj_forward(model, data)
+            f_prev = qpas[0] + qcon[0] - qbias[0]
+            # consistent initial velocities: the rod (vertical at u = 0) swings with the plate
+            qpos[0], qvel[0] = u_at[0], vel_at[0]
+            qvel[4:7] = vel_at[0] / params.rod_length * np.array([-drive.unit_vector[1], drive.unit_vector[0], 0.0])
+            mujoco.mj_forward(model, data)
+            f_prev = qpas[0] + qcon[0] - qbias[0]
+            for n in range(n_steps + 1):
+                qfa[0] = (M + m_c) * acc_at[n] - f_prev
+                if n % n_sub == 0:
+                    k = n // n_sub
+                    mujoco.mj_forward(model, data)
+                    F[k] = m_c * udd[n + 1] - (qpas[0] + qcon[0] - qbias[0])
+                    cap_pos[k] = data.xpos[cap_id]
+                    wall_z[k] = g.wall_rest_z + qpos[3]
+                    sig[k], zet[k] = dev.sigma, dev.zeta
+                    clo[k] = np.linalg.norm(data.site_xpos[tip] - data.xpos[cap_id])
+                    if not (np.isfinite(qpos).all() and clo[k] < s["closure_limit"]):
+                        raise EngineError(f"mujoco: unstable at t = {n * h:.6g} s (loop gap {clo[k]:.3g} m)")
+                    if n == n_steps:
+                        break
+                mujoco.mj_step(model, data)
+                f_prev = qpas[0] + qcon[0] - qbias[0]
+                track = max(track, abs(qpos[0] - u_at[n + 1]), abs(qpos[1]))
+                qpos[0], qvel[0], qpos[1], qvel[1] = u_at[n + 1], vel_at[n + 1], 0.0, 0.0
+                if (n + 1) % commit_every == 0 or (n + 1) % n_sub == 0:
+                    dev.commit()
+        finally:
+            mujoco.set_mjcb_passive(previous_cb)
+        wall = time.perf_counter() - t0
+        if not np.isfinite(F).all():
+            raise EngineError("mujoco: non-finite drive force")
+        stats = {"wall_time": wall, "steps": n_steps, "timestep": h, "tracking_error": track,
+                 "closure_max": float(clo.max()), "settings": s, "mujoco_version": mujoco.__version__}
+        return device_columns(self.name, g, drive, t_out, cap_pos, wall_z, sig, zet, clo,
+                              drive_force=F, stats=stats)
