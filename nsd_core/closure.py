@@ -108,13 +108,19 @@ def closure(m: Mechanism, k: Kinematics, with_rates: bool = False):
     return Phi, J, (c if with_rates else None)
 
 
-def full_pivot_elimination(J: np.ndarray, candidates: list[int], rel_tol: float = 1e-9):
+def full_pivot_elimination(J: np.ndarray, candidates: list[int], rel_tol: float = 1e-9,
+                           n_pivots: int | None = None):
     """Gaussian elimination with full pivoting on J[:, candidates].
 
     Returns (pivot_rows, pivot_cols, pivots): the independent equations, the dependent coordinates
     (the columns where pivots fell) and the pivot magnitudes. Rows whose remaining entries fall
     below rel_tol * (largest first pivot) are redundant (a rank-deficient Phi_z, as in Bricard's
     mechanism) and are left out rather than divided by.
+
+    With ``n_pivots`` the elimination takes exactly that many pivots (fewer only if the rest are
+    exactly zero): used when re-partitioning near a singular position, where small pivots are
+    genuine (the rank is only lost at the singular point itself) and the number of dependent
+    coordinates must stay what it was at a regular configuration.
     """
     A = J[:, candidates].astype(float, copy=True)
     rows = list(range(A.shape[0]))
@@ -127,7 +133,7 @@ def full_pivot_elimination(J: np.ndarray, candidates: list[int], rel_tol: float 
         pv = sub[ri, ci]
         if scale is None:
             scale = pv if pv > 0 else 1.0
-        if pv <= rel_tol * scale:
+        if (pv <= rel_tol * scale) if n_pivots is None else (len(pivots) >= n_pivots or pv == 0.0):
             break
         r, cc = rows[ri], cols[ci]
         for rr in rows:

@@ -83,7 +83,11 @@ def integrate(system: SemiRecursiveSystem, y0: np.ndarray, t_eval: np.ndarray, m
                 progress((solver.t - t0) / (t1 - t0))
             if min_pivot_ratio > 0 and solver.status == "running" and \
                     len(system.partition.dependent) and system.pivot_ratio(solver.t, solver.y) < min_pivot_ratio:
-                t, y = solver.t, system.repartition(solver.t, solver.y)
+                before = system.partition
+                y_new = system.repartition(solver.t, solver.y)
+                if system.partition is before:
+                    continue  # no better partition here (a singular position of the mechanism)
+                t, y = solver.t, y_new
                 partitions.append((t, system.partition))
                 restart = t_old < t
                 break

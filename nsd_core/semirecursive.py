@@ -89,15 +89,15 @@ class SemiRecursiveSystem:
         self._lin = None  # (z, S) at the last evaluation: dz_dep = S dz, the Newton predictor
 
     # ---- partition (Eq. 9) ----
-    def choose_partition(self, z: np.ndarray) -> Partition:
+    def choose_partition(self, z: np.ndarray, n_dependent: int | None = None) -> Partition:
+        """Eq. 9 at z. ``n_dependent`` forces that many dependent coordinates (re-partitioning)."""
         k = positions(self.m, z)
         _, J, _ = closure(self.m, k)
         others = [i for i in range(self.m.n) if i not in set(self.prescribed)]
         # coordinates the user prefers free are offered as pivots last
         cand = [i for i in others if i not in self.prefer_free] + [i for i in others if i in self.prefer_free]
-        rows, dep, piv = full_pivot_elimination(J, cand) if J.shape[0] else ([], [], np.ones(1))
-        if self.prefer_free and len(dep) < J.shape[0]:
-            pass  # redundant equations: fine, they are left out
+        # redundant equations (rank-deficient Phi_z) are left out by the elimination
+        rows, dep, piv = full_pivot_elimination(J, cand, n_pivots=n_dependent) if J.shape[0] else ([], [], np.ones(1))
         free = np.array([i for i in others if i not in dep], dtype=int)
         ratio = float(piv.min() / piv.max()) if len(piv) else 1.0
         self.partition = Partition(free, np.array(dep, dtype=int), np.array(rows, dtype=int), ratio)
@@ -125,6 +125,7 @@ class SemiRecursiveSystem:
             dz[P.dependent] = 0.0
             pred = z_lin[P.dependent] + S @ dz
             move = float(np.max(np.abs(pred - z_lin[P.dependent])))
+        z_start = z.copy()
         try:
             z = self._newton(t, z)
         except ConstraintError:
@@ -133,12 +134,21 @@ class SemiRecursiveSystem:
             z = None
         if pred is not None:
             dev = np.inf if z is None else float(np.max(np.abs(z[P.dependent] - pred)))
-            # the predictor's own error is second order in the move: a first-order gap is a jump
-            if dev > 0.25 * move + 1e-8:
-                z_alt = self._z.copy() if z is None else z.copy()
+            # the predictor's own error is second order in the move; a larger gap may be a jump to
+            # another branch: solve again from the predictor and keep that answer only if it is a
+            # genuinely different solution (not the same one to round-off) closer to the predictor
+            if dev > 0.02 * move + 1e-10:
+                z_alt = z_start
                 z_alt[P.dependent] = pred
-                z_alt = self._newton(t, z_alt)
-                if float(np.max(np.abs(z_alt[P.dependent] - pred))) < dev:
+                try:
+                    z_alt = self._newton(t, z_alt)
+                except ConstraintError:
+                    if z is None:
+                        raise
+                    z_alt = None
+                if z_alt is not None and (z is None or (
+                        float(np.max(np.abs(z_alt[P.dependent] - z[P.dependent]))) > 1e-8
+                        and float(np.max(np.abs(z_alt[P.dependent] - pred))) < dev)):
                     z = z_alt
         self._z = z
         return z
@@ -209,9 +219,21 @@ class SemiRecursiveSystem:
         return self.rhs_parts(t, y[:nf], y[nf:2 * nf], y[2 * nf:])
 
     def repartition(self, t: float, y: np.ndarray) -> np.ndarray:
-        """Choose a new partition at the current configuration and map the state onto it."""
+        """Choose a new partition at the current configuration and map the state onto it.
+
+        The number of dependent coordinates is kept (the state layout stays the same), and the old
+        partition is kept when the new one is not clearly better conditioned: near a singular
+        position of the mechanism itself (the N-four-bar's flat position) every partition
+        degrades, and switching back and forth would only restart the integrator for nothing.
+        """
         ev = self.evaluate(t, y)
-        self.choose_partition(ev.z)
+        old, old_z, old_lin = self.partition, self._z, self._lin
+        J = closure(self.m, ev.kin)[1]
+        before = _block_ratio(J, old)
+        new = self.choose_partition(ev.z, n_dependent=len(old.dependent))
+        if _block_ratio(J, new) < 2.0 * before:
+            self.partition, self._z, self._lin = old, old_z, old_lin
+            return y
         return self.state(ev.z, ev.zd, y[len(y) - self.n_extra:])
 
     def pivot_ratio(self, t: float, y: np.ndarray) -> float:
@@ -220,6 +242,12 @@ class SemiRecursiveSystem:
         if len(P.dependent) == 0:
             return 1.0
         z = self.assemble(t, y[:len(P.free)])
-        _, J, _ = closure(self.m, positions(self.m, z))
-        s = np.linalg.svd(J[np.ix_(P.rows, P.dependent)], compute_uv=False)
-        return float(s[-1] / s[0])
+        return _block_ratio(closure(self.m, positions(self.m, z))[1], P)
+
+
+def _block_ratio(J: np.ndarray, P: Partition) -> float:
+    """sigma_min / sigma_max of the dependent block J[rows, dependent]."""
+    if len(P.dependent) == 0:
+        return 1.0
+    s = np.linalg.svd(J[np.ix_(P.rows, P.dependent)], compute_uv=False)
+    return float(s[-1] / s[0]) if s[0] > 0 else 0.0
