@@ -1,0 +1,263 @@
+"""The device in Exudyn: redundant-coordinate rigid bodies, joints as constraints, the drive as motion.
+
+Model (nsd-model.md, drive mode). Base = ground. Wall, rod and cap are ``ObjectRigidBody`` bodies on
+``NodeRigidBodyEP`` nodes (3 positions + 4 Euler parameters each, plus the Euler-parameter
+normalisation as an algebraic equation: Exudyn's redundant coordinates). Constraints:
+- the wall's vertical guide: a GenericJoint ground-wall locking X, Y and the three rotations;
+- the rod: a spherical joint at each end (lower = wall reference, upper = cap reference);
+- the cap's guide: a GenericJoint ground-cap locking the three rotations (the plate holds it level),
+  and the drive: two CoordinateConstraints on the cap's X and Y coordinates with offset
+  u(t) cos(psi), u(t) sin(psi) (position and velocity offset functions, so both index-3 and
+  index-2 solvers follow it). The cap's Z is free (it slides in the plate).
+The drive force is the Lagrange multiplier of those two constraints, read through SensorObject
+(OutputVariableType.Force): F = -(lambda_x cos psi + lambda_y sin psi), sign checked against
+nsd_core.quasistatic at 1 Hz (the multiplier is the force the constraint takes from the cap).
+
+Force elements (Eqs. 16-18). One ObjectGenericODE2 on the cap and wall nodes carries all of them:
+its forceUserFunction gets the two nodes' coordinates and, vectorised over the elements, calls
+nsd_core.forces (rope_tension, advance_wire_stress, advance_spring_zeta, spring_push). One Python
+call per residual evaluation instead of one per element. Forces act at the body reference points
+(the cap and the wall only translate: their rotations are locked, so the moments of the off-centre
+attachment points go only into the rotation locks' reactions and change no motion).
+
+Hysteretic states (SMA stress per wire, Eq. 17; Bouc-Wen zeta, Eq. 18). The laws are
+rate-independent, so they are integrated in strain, not in time: within a time step the force
+function is pure, sigma(L) = advance_wire_stress(eps_n, eps(L), sigma_n) (one classical RK4 step
+along the straight strain path from the committed strain eps_n), and likewise zeta(x_s). The
+committed states (eps_n, sigma_n, x_n, zeta_n) change only in a PostStepUserFunction, from the
+converged lengths of the accepted step. So Newton and its numerical Jacobian always see the same
+smooth function, the states are consistent with the end-of-step configuration (implicit, no lag),
+and the error is that of RK4 along each step's strain increment (fifth order per step).
+"""
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+import exudyn as exu
+from exudyn.itemInterface import (LoadForceVector, MarkerNodePosition, ObjectGenericODE2, SensorNode,
+                                  SensorObject)
+from exudyn.rigidBodyUtilities import RigidBodyInertia
+
+from comparisons.engines.base import EngineError, merged_settings
+from nsd_core.drive import Drive
+from nsd_core.forces import advance_spring_zeta, advance_wire_stress, rope_tension, spring_push
+from nsd_core.geometry import device_geometry
+from nsd_core.outputs import device_columns
+from nsd_core.params import Params
+from nsd_core.results import RunResult
+
+
+class _Elements:
+    """All force elements of the device as one pure function of the cap and wall positions."""
+
+    def __init__(self, g):
+        self.g = g
+        self.rope_offset = g.rope_cap_points - g.rope_base_points   # rope vector = cap_pos + this
+        self.wire_offset = g.wire_cap_points - g.wire_wall_points   # wire vector = cap - wall + this
+        self.sigma = g.initial_wire_stress().astype(float)
+        self.zeta = float(g.spring_zeta0)
+        self.eps = self.wire_strain(np.array([0.0, 0.0, g.cap_rest_z]), g.wall_rest_z)[1]
+        self.x = g.spring.free_length - g.wall_rest_z
+
+    def wire_strain(self, cap, wall_z):
+        v = self.wire_offset + (cap - [0.0, 0.0, wall_z])
+        L = np.sqrt((v * v).sum(1))
+        return v, (L - self.g.wire.natural_length) / self.g.wire.natural_length, L
+
+    def states(self, cap, wall_z):
+        """Wire stresses and spring zeta at (cap, wall_z), from the committed states (pure)."""
+        g = self.g
+        v, eps, L = self.wire_strain(cap, wall_z)
+        sigma = advance_wire_stress(self.eps, eps, self.sigma, g.wire) if g.n_wires else self.sigma
+        x = g.spring.free_length - wall_z
+        zeta = float(advance_spring_zeta(self.x, x, self.zeta, g.spring))
+        return v, eps, L, sigma, x, zeta
+
+    def forces(self, cap, wall_z):
+        """Force on the cap (3) and on the wall (3) from ropes, wires and the spring."""
+        g = self.g
+        r = self.rope_offset + cap
+        rl = np.sqrt((r * r).sum(1))
+        t_rope = rope_tension(rl, g.rope_natural_length, g.rope_stiffness)          # Eq. 16
+        v, _, L, sigma, _, zeta = self.states(cap, wall_z)
+        t_wire = g.wire.area * np.maximum(sigma, 0.0)                                  # Eq. 17a
+        f_wire = ((t_wire / L)[:, None] * v).sum(0)
+        f_cap = -((t_rope / rl)[:, None] * r).sum(0) - f_wire
+        push = float(spring_push(wall_z, 0.0, zeta, g.spring)[0])                      # Eq. 18
+        return f_cap, f_wire + [0.0, 0.0, push]
+
+    def commit(self, cap, wall_z):
+        _, self.eps, _, self.sigma, self.x, self.zeta = self.states(cap, wall_z)
+
+
+class ExudynEngine:
+    name = "exudyn"
+    default_settings = {
+        "step_size": 1.0e-5,          # largest step [s]; the step used divides the output interval
+        "solver": "generalized_alpha",  # or "trapezoidal_index2"
+        "spectral_radius": 0.9,       # generalized-alpha rho_inf (index 3 needs < 1)
+        "newton_rel_tol": 1e-10,      # Exudyn's defaults leave noisy multipliers at small steps
+        "newton_abs_tol": 1e-12,
+        "newton_jacobian": "modified",  # "modified" (kept across steps), "per_step", "full"
+        "forces": "per_iteration",    # "per_iteration": GenericODE2 user function (implicit);
+                                      # "per_step": pre-step loads at the predicted end-of-step state
+        "rod_axial_inertia": 1e-3,    # rod spin inertia / its transverse inertia (must be > 0)
+        "drive_offsets": "prestep",   # "prestep": offset = u(t_end) set once per step; "user_function"
+    }
+
+    def run(self, params: Params, drive: Drive, settings=None) -> RunResult:
+        s = merged_settings(self.default_settings, settings, self.name)
+        drive.check_followable(params)
+        g = device_geometry(params)
+        t_out = drive.output_times()
+        per_out = max(1, int(math.ceil((t_out[1] - t_out[0]) / float(s["step_size"]) - 1e-9)))
+        try:
+            return self._run(g, drive, s, t_out, per_out)
+        except EngineError:
+            raise
+        except Exception as e:  # Exudyn raises RuntimeError/ValueError with multi-line text
+            msg = " ".join(str(e).split())[:300]
+            raise EngineError(f"exudyn: {type(e).__name__}: {msg}") from None
+
+    def _run(self, g, drive, s, t_out, per_out):
+        p = g.params
+        n_out = len(t_out)
+        n_steps = per_out * (n_out - 1)
+        h = drive.duration / n_steps
+        e, w, A = drive.unit_vector, drive.omega, drive.amplitude
+        v0 = A * w  # du/dt at t = 0: start with velocities consistent with the drive
+        grav = list(g.gravity_vector)
+        SC = exu.SystemContainer()
+        mbs = SC.AddSystem()
+        ground = mbs.CreateGround(referencePosition=[0.0, 0.0, 0.0])
+        cap_z, wall_z, ld = g.cap_rest_z, g.wall_rest_z, p.rod_length
+
+        def body(name, mass, inertia, pos, vel=(0.0, 0.0, 0.0), omega=(0.0, 0.0, 0.0)):
+            d = mbs.CreateRigidBody(name=name, referencePosition=list(pos), initialVelocity=list(vel),
+                                    initialAngularVelocity=list(omega),
+                                    inertia=RigidBodyInertia(mass, inertia, com=[0.0, 0.0, 0.0]),
+                                    gravity=grav, nodeType=exu.NodeType.RotationEulerParameters,
+                                    returnDict=True, show=False)
+            return d["nodeNumber"], d["bodyNumber"]
+
+        rod_I = np.array(g.rod.inertia, dtype=float)
+        rod_I[2, 2] = float(s["rod_axial_inertia"]) * rod_I[0, 0]  # spin inertia: only for a regular M
+        wall_n, wall_o = body("wall", g.wall.mass, g.wall.inertia, [0.0, 0.0, wall_z])
+        # rod node at its centre of mass (mid-length); at t = 0 it swings about the lower joint
+        rod_n, rod_o = body("rod", g.rod.mass, rod_I, [0.0, 0.0, wall_z + ld / 2], vel=0.5 * v0 * e,
+                            omega=(v0 / ld) * np.cross([0.0, 0.0, 1.0], e))
+        cap_n, cap_o = body("cap", g.cap.mass, g.cap.inertia, [0.0, 0.0, cap_z], vel=v0 * e)
+
+        mbs.CreateGenericJoint(itemNumbers=[ground, wall_o], position=[0.0, 0.0, wall_z],
+                               constrainedAxes=[1, 1, 0, 1, 1, 1], show=False)   # wall: Z guide
+        mbs.CreateGenericJoint(itemNumbers=[ground, cap_o], position=[0.0, 0.0, cap_z],
+                               constrainedAxes=[0, 0, 0, 1, 1, 1], show=False)   # cap: held level
+        mbs.CreateSphericalJoint(itemNumbers=[wall_o, rod_o], position=[0.0, 0.0, wall_z], show=False)
+        mbs.CreateSphericalJoint(itemNumbers=[rod_o, cap_o], position=[0.0, 0.0, cap_z], show=False)
+
+        # the drive: cap X = u cos psi, cap Y = u sin psi (coordinate constraints to the ground)
+        drives = []
+        for k in (0, 1):
+            c = float(e[k])
+            kw = {"offset": 0.0}
+            if s["drive_offsets"] == "user_function":
+                kw = {"offsetUserFunction": lambda mbs_, t, i, off, c=c: c * A * math.sin(w * t),
+                      "offsetUserFunction_t": lambda mbs_, t, i, off, c=c: c * A * w * math.cos(w * t)}
+            drives.append((mbs.CreateCoordinateConstraint(itemNumbers=[None, cap_n], coordinates=[None, k],
+                                                          show=False, **kw), c))
+
+        el = _Elements(g)
+        cap_ref = np.array([0.0, 0.0, cap_z])
+        per_step = s["forces"] == "per_step"
+        if per_step:
+            f_cap, f_wall = el.forces(cap_ref, wall_z)
+            loads = [mbs.AddLoad(LoadForceVector(markerNumber=mbs.AddMarker(MarkerNodePosition(nodeNumber=n)),
+                                                 loadVector=list(f))) for n, f in ((cap_n, f_cap), (wall_n, f_wall))]
+        else:
+            def force_uf(mbs_, t, i, q, q_t):
+                f_cap, f_wall = el.forces(cap_ref + q[0:3], wall_z + q[9])
+                out = np.zeros(14)
+                out[0:3], out[7:10] = f_cap, f_wall
+                return out
+
+            mbs.AddObject(ObjectGenericODE2(nodeNumbers=[cap_n, wall_n], massMatrix=np.zeros((14, 14)),
+                                            forceUserFunction=force_uf))
+
+        OV = exu.OutputVariableType
+        sens_l = [mbs.AddSensor(SensorObject(objectNumber=cc, outputVariableType=OV.Force)) for cc, _ in drives]
+        sens_cap = mbs.AddSensor(SensorNode(nodeNumber=cap_n, outputVariableType=OV.Position))
+        sens_wall = mbs.AddSensor(SensorNode(nodeNumber=wall_n, outputVariableType=OV.Position))
+        rec = {"sigma": np.zeros((n_out, g.n_wires)), "zeta": np.zeros(n_out), "closure": np.zeros(n_out),
+               "lam": np.zeros(n_out), "cap": np.zeros((n_out, 3)), "wall": np.zeros(n_out)}
+        counter = [0]
+
+        def record(k):
+            """Converged state at output time k: sensors, committed states, loop closure."""
+            rec["lam"][k] = sum(c * mbs.GetSensorValues(sl) for sl, (_, c) in zip(sens_l, drives))
+            rec["cap"][k] = mbs.GetSensorValues(sens_cap)
+            wp = mbs.GetSensorValues(sens_wall)
+            rec["wall"][k] = wp[2]
+            rec["sigma"][k], rec["zeta"][k] = el.sigma, el.zeta
+            rp = mbs.GetNodeOutput(rod_n, OV.Position)
+            ax = mbs.GetNodeOutput(rod_n, OV.RotationMatrix).reshape(3, 3)[:, 2] * (ld / 2)
+            rec["closure"][k] = max(np.linalg.norm(rp + ax - rec["cap"][k]), np.linalg.norm(rp - ax - wp),
+                                    math.hypot(wp[0], wp[1]))
+
+        def pre_step(mbs_, t):
+            """t is the END of the step (Exudyn's convention); the state is the converged one at t - h."""
+            n = counter[0]
+            counter[0] += 1
+            cap = mbs_.GetNodeOutput(cap_n, OV.Position)
+            wz = mbs_.GetNodeOutput(wall_n, OV.Position)[2]
+            el.commit(cap, wz)  # hysteretic states follow the accepted step (idempotent if repeated)
+            if n % per_out == 0:
+                record(n // per_out)
+            u = A * math.sin(w * t)
+            if s["drive_offsets"] != "user_function":
+                for cc, c in drives:
+                    mbs_.SetObjectParameter(cc, "offset", c * u)
+            if per_step:  # forces at the end-of-step state predicted by a second-order Taylor step
+                cv, wv = mbs_.GetNodeOutput(cap_n, OV.Velocity), mbs_.GetNodeOutput(wall_n, OV.Velocity)[2]
+                ca, wa = mbs_.GetNodeOutput(cap_n, OV.Acceleration), mbs_.GetNodeOutput(wall_n, OV.Acceleration)[2]
+                cap_p = cap + h * cv + 0.5 * h * h * ca
+                cap_p[0:2] = u * e[0:2]  # the horizontal end-of-step position is prescribed: exact
+                f_cap, f_wall = el.forces(cap_p, wz + h * wv + 0.5 * h * h * wa)
+                mbs_.SetLoadParameter(loads[0], "loadVector", f_cap)
+                mbs_.SetLoadParameter(loads[1], "loadVector", f_wall)
+            return True
+
+        mbs.SetPreStepUserFunction(pre_step)
+        mbs.Assemble()
+
+        ss = exu.SimulationSettings()
+        ti = ss.timeIntegration
+        ti.numberOfSteps, ti.endTime = n_steps, drive.duration
+        ti.verboseMode = int(__import__("os").environ.get("EXU_VERBOSE", "0"))
+        ti.adaptiveStep = False
+        nw = ti.newton
+        nw.relativeTolerance, nw.absoluteTolerance = float(s["newton_rel_tol"]), float(s["newton_abs_tol"])
+        nw.useModifiedNewton = s["newton_jacobian"] != "full"
+        nw.modifiedNewtonJacUpdatePerStep = s["newton_jacobian"] == "per_step"
+        ti.generalizedAlpha.spectralRadius = float(s["spectral_radius"])
+        ti.generalizedAlpha.storeInitialAlgebraicCoordinates = True
+        ss.solutionSettings.writeSolutionToFile = False
+        ss.solutionSettings.sensorsWritePeriod = drive.duration
+        ss.displayStatistics = ss.displayComputationTime = False
+        solver = {"generalized_alpha": exu.DynamicSolverType.GeneralizedAlpha,
+                  "trapezoidal_index2": exu.DynamicSolverType.TrapezoidalIndex2}[s["solver"]]
+        t0 = time.perf_counter()
+        ok = mbs.SolveDynamic(ss, solverType=solver)
+        wall_time = time.perf_counter() - t0
+        if not ok or counter[0] != n_steps:
+            raise EngineError(f"exudyn: SolveDynamic failed after {counter[0]} of {n_steps} steps")
+        el.commit(mbs.GetNodeOutput(cap_n, OV.Position), mbs.GetNodeOutput(wall_n, OV.Position)[2])
+        record(n_out - 1)
+        stats = {"wall_time": wall_time, "steps": n_steps, "step_size": h,
+                 "newton_iterations": mbs.sys["dynamicSolver"].it.newtonStepsCount if "dynamicSolver" in mbs.sys else None,
+                 "tracking_error": float(np.max(np.abs(rec["cap"] @ e - drive.displacement(t_out)[0]))),
+                 "closure_max": float(np.max(rec["closure"])), "settings": dict(s)}
+        return device_columns(self.name, g, drive, t_out, rec["cap"], rec["wall"], rec["sigma"], rec["zeta"],
+                              rec["closure"], drive_force=-rec["lam"], stats=stats)
