@@ -114,7 +114,7 @@ def ladders(quick: bool):
     steps = {"Euler": [4e-5, 2e-5, 1e-5] + ([] if quick else [5e-6]),
              "RK4": [5e-5, 2.5e-5] + ([] if quick else [1e-5])}
     out = [("timestep", {"integrator": k, "timestep": h}) for k, hs in steps.items() for h in hs]
-    out += [("commit", {"commit_every": k}) for k in ([10] if quick else [5, 10, 20])]
+    out += [("commit", {"commit_every": k}) for k in ([1, 5] if quick else [1, 5, 20])]
     out += [("solref", {"solref_factor": k}) for k in ([4, 10] if quick else [3, 4, 10, 30])]
     out += [("solimp", {"solimp": [d, d, 0.001, 0.5, 2.0]}) for d in ([0.999, 0.99] if quick else [0.9999, 0.999, 0.99, 0.9])]
     return out
