@@ -72,7 +72,7 @@ def add_cycle_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--cycles", type=int, default=2)
     p.add_argument("--samples-per-cycle", type=int, default=2000)
     add_param_arguments(p)
-    p.add_argument("--method", default="RK45", help="RK45, DOP853, RK23, Radau, LSODA")
+    p.add_argument("--method", default=None, help="RK45, DOP853 (default), RK23, Radau, LSODA")
     p.add_argument("--rtol", type=float, default=None)
     p.add_argument("--atol", type=float, default=None)
     p.add_argument("--max-step", type=float, default=None)

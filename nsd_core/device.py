@@ -33,7 +33,7 @@ DRIVEN = [BODY["plate_x"], BODY["plate_y"], BODY["plate"]]
 LOCKED = [BODY["base_x"], BODY["base_y"], BODY["base"]]
 X, Y, Z = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)
 
-DEFAULT_SOLVER = {"method": "RK45", "rtol": 1e-9, "atol": 1e-12, "max_step": 1e-3}
+DEFAULT_SOLVER = {"method": "DOP853", "rtol": 1e-7, "atol": 1e-12, "max_step": 1e-3}
 
 
 def device_mechanism(g: DeviceGeometry) -> Mechanism:
