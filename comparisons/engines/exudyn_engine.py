@@ -43,18 +43,24 @@ from exudyn.rigidBodyUtilities import RigidBodyInertia
 
 from comparisons.engines.base import EngineError, merged_settings
 from nsd_core.drive import Drive
-from nsd_core.forces import advance_spring_zeta, advance_wire_stress, rope_tension, spring_push
+from nsd_core.forces import (advance_spring_zeta, advance_wire_stress, bouc_wen_slope, rope_tension,
+                             sma_stress_slope, spring_push)
 from nsd_core.geometry import device_geometry
 from nsd_core.outputs import device_columns
-from nsd_core.params import Params
+from nsd_core.params import ParameterError, Params
 from nsd_core.results import RunResult
 
 
 class _Elements:
-    """All force elements of the device as one pure function of the cap and wall positions."""
+    """All force elements of the device (Eqs. 16-18) as functions of the cap and wall positions.
 
-    def __init__(self, g):
+    Holds the committed hysteretic states (eps_c, sigma_c) per wire and (x_c, zeta_c) for the spring,
+    valid at the last converged configuration.
+    """
+
+    def __init__(self, g, integrator="heun"):
         self.g = g
+        self.heun = integrator == "heun"
         self.rope_offset = g.rope_cap_points - g.rope_base_points   # rope vector = cap_pos + this
         self.wire_offset = g.wire_cap_points - g.wire_wall_points   # wire vector = cap - wall + this
         self.sigma = g.initial_wire_stress().astype(float)
@@ -67,30 +73,99 @@ class _Elements:
         L = np.sqrt((v * v).sum(1))
         return v, (L - self.g.wire.natural_length) / self.g.wire.natural_length, L
 
-    def states(self, cap, wall_z):
-        """Wire stresses and spring zeta at (cap, wall_z), from the committed states (pure)."""
-        g = self.g
-        v, eps, L = self.wire_strain(cap, wall_z)
-        sigma = advance_wire_stress(self.eps, eps, self.sigma, g.wire) if g.n_wires else self.sigma
-        x = g.spring.free_length - wall_z
-        zeta = float(advance_spring_zeta(self.x, x, self.zeta, g.spring))
-        return v, eps, L, sigma, x, zeta
-
-    def forces(self, cap, wall_z):
-        """Force on the cap (3) and on the wall (3) from ropes, wires and the spring."""
+    def forces_with(self, cap, wall_z, v, L, sigma, zeta):
+        """Force on the cap (3) and on the wall (3) for given wire stresses and spring zeta."""
         g = self.g
         r = self.rope_offset + cap
         rl = np.sqrt((r * r).sum(1))
         t_rope = rope_tension(rl, g.rope_natural_length, g.rope_stiffness)          # Eq. 16
-        v, _, L, sigma, _, zeta = self.states(cap, wall_z)
         t_wire = g.wire.area * np.maximum(sigma, 0.0)                                  # Eq. 17a
         f_wire = ((t_wire / L)[:, None] * v).sum(0)
         f_cap = -((t_rope / rl)[:, None] * r).sum(0) - f_wire
-        push = float(spring_push(wall_z, 0.0, zeta, g.spring)[0])                      # Eq. 18
+        push = float(spring_push(wall_z, 0.0, zeta, g.spring)[0])                      # Eq. 18, push only
         return f_cap, f_wire + [0.0, 0.0, push]
+
+    def advance_wire(self, eps0, eps1, sigma):
+        """Eq. 17 integrated in strain from eps0 to eps1 (one straight, monotonic strain increment)."""
+        if not self.heun:
+            return advance_wire_stress(eps0, eps1, sigma, self.g.wire)
+        d, de, law = np.sign(eps1 - eps0), eps1 - eps0, self.g.wire
+        k1 = sma_stress_slope(eps0, d, sigma, law)
+        return sigma + 0.5 * de * (k1 + sma_stress_slope(eps1, d, sigma + de * k1, law))
+
+    def advance_spring(self, x0, x1, zeta):
+        """Eq. 18b integrated in the compression x_s from x0 to x1."""
+        if not self.heun:
+            return advance_spring_zeta(x0, x1, zeta, self.g.spring)
+        d, dx, law = np.sign(x1 - x0), x1 - x0, self.g.spring
+        k1 = bouc_wen_slope(zeta, d, law)
+        return zeta + 0.5 * dx * (k1 + bouc_wen_slope(zeta + dx * k1, d, law))
+
+    # ---- "per_iteration": a pure function of the configuration, from the committed states ----
+    def states(self, cap, wall_z):
+        g = self.g
+        v, eps, L = self.wire_strain(cap, wall_z)
+        sigma = self.advance_wire(self.eps, eps, self.sigma) if g.n_wires else self.sigma
+        x = g.spring.free_length - wall_z
+        zeta = float(self.advance_spring(self.x, x, self.zeta))
+        return v, eps, L, sigma, x, zeta
+
+    def forces(self, cap, wall_z):
+        v, _, L, sigma, _, zeta = self.states(cap, wall_z)
+        return self.forces_with(cap, wall_z, v, L, sigma, zeta)
 
     def commit(self, cap, wall_z):
         _, self.eps, _, self.sigma, self.x, self.zeta = self.states(cap, wall_z)
+
+    # ---- "per_step": commit the converged step and predict the next one in one batched call ----
+    def step(self, cap, wall_z, cap_p, wall_p):
+        """Commit the states at the converged (cap, wall_z); return the forces at the predicted
+        end of the next step (cap_p, wall_p).
+
+        Each law is rate-independent and its strain is a scalar, so its path is an interval: the
+        commit (eps_c -> eps_n) and the prediction (eps_c -> eps_p) start from the same committed
+        state and run as one vectorised RK4 call (advance_*), twice the rows for the price of one.
+        Where the strain reverses at eps_n the prediction is redone from the new committed state.
+        """
+        g, nw = self.g, self.g.n_wires
+        eps_n = self.wire_strain(cap, wall_z)[1]
+        v, eps_p, L = self.wire_strain(cap_p, wall_p)
+        x_n, x_p = g.spring.free_length - wall_z, g.spring.free_length - wall_p
+        if nw:
+            s = self.advance_wire(np.concatenate([self.eps, self.eps]), np.concatenate([eps_n, eps_p]),
+                                  np.concatenate([self.sigma, self.sigma]))
+            sig_n, sig_p = s[:nw], s[nw:]
+            rev = np.sign(eps_p - self.eps) != np.sign(eps_n - self.eps)
+            if rev.any():
+                sig_p = np.where(rev, self.advance_wire(eps_n, eps_p, sig_n), sig_p)
+            self.eps, self.sigma = eps_n, sig_n
+        z = self.advance_spring(np.array([self.x, self.x]), np.array([x_n, x_p]),
+                                np.array([self.zeta, self.zeta]))
+        zeta_n, zeta_p = float(z[0]), float(z[1])
+        if np.sign(x_p - self.x) != np.sign(x_n - self.x):
+            zeta_p = float(self.advance_spring(x_n, x_p, zeta_n))
+        self.x, self.zeta = x_n, zeta_n
+        return self.forces_with(cap_p, wall_p, v, L, sig_p if nw else self.sigma, zeta_p)
+
+
+CHOICES = {"solver": ("generalized_alpha", "trapezoidal_index2"), "forces": ("per_step", "per_iteration"),
+           "newton_jacobian": ("modified", "per_step", "full"), "state_integrator": ("heun", "rk4"),
+           "drive_offsets": ("prestep", "user_function")}
+POSITIVE = ("step_size", "spectral_radius", "newton_rel_tol", "newton_abs_tol", "rod_axial_inertia")
+
+
+def _check_settings(s):
+    for k, allowed in CHOICES.items():
+        if s[k] not in allowed:
+            raise ParameterError(f"exudyn.{k} = {s[k]!r}: allowed: {', '.join(allowed)}")
+    for k in POSITIVE:
+        if not isinstance(s[k], (int, float)) or not s[k] > 0:
+            raise ParameterError(f"exudyn.{k} = {s[k]!r}: must be a number > 0")
+    if s["spectral_radius"] > 1 or (s["solver"] == "generalized_alpha" and s["spectral_radius"] == 1):
+        raise ParameterError(f"exudyn.spectral_radius = {s['spectral_radius']}: must be < 1 (index-3)")
+    if s["solver"] == "trapezoidal_index2" and s["drive_offsets"] != "user_function":
+        raise ParameterError("exudyn.solver = trapezoidal_index2 needs drive_offsets = user_function "
+                             "(a velocity-level drive needs the offset's time derivative)")
 
 
 class ExudynEngine:
@@ -104,12 +179,14 @@ class ExudynEngine:
         "newton_jacobian": "modified",  # "modified" (kept across steps), "per_step", "full"
         "forces": "per_iteration",    # "per_iteration": GenericODE2 user function (implicit);
                                       # "per_step": pre-step loads at the predicted end-of-step state
+        "state_integrator": "heun",   # hysteretic states per step in strain: "heun" or "rk4" (advance_*)
         "rod_axial_inertia": 1e-3,    # rod spin inertia / its transverse inertia (must be > 0)
         "drive_offsets": "prestep",   # "prestep": offset = u(t_end) set once per step; "user_function"
     }
 
     def run(self, params: Params, drive: Drive, settings=None) -> RunResult:
         s = merged_settings(self.default_settings, settings, self.name)
+        _check_settings(s)
         drive.check_followable(params)
         g = device_geometry(params)
         t_out = drive.output_times()
@@ -169,7 +246,7 @@ class ExudynEngine:
             drives.append((mbs.CreateCoordinateConstraint(itemNumbers=[None, cap_n], coordinates=[None, k],
                                                           show=False, **kw), c))
 
-        el = _Elements(g)
+        el = _Elements(g, s["state_integrator"])
         cap_ref = np.array([0.0, 0.0, cap_z])
         per_step = s["forces"] == "per_step"
         if per_step:
@@ -210,23 +287,24 @@ class ExudynEngine:
             """t is the END of the step (Exudyn's convention); the state is the converged one at t - h."""
             n = counter[0]
             counter[0] += 1
+            u = A * math.sin(w * t)
             cap = mbs_.GetNodeOutput(cap_n, OV.Position)
             wz = mbs_.GetNodeOutput(wall_n, OV.Position)[2]
-            el.commit(cap, wz)  # hysteretic states follow the accepted step (idempotent if repeated)
-            if n % per_out == 0:
-                record(n // per_out)
-            u = A * math.sin(w * t)
-            if s["drive_offsets"] != "user_function":
-                for cc, c in drives:
-                    mbs_.SetObjectParameter(cc, "offset", c * u)
             if per_step:  # forces at the end-of-step state predicted by a second-order Taylor step
                 cv, wv = mbs_.GetNodeOutput(cap_n, OV.Velocity), mbs_.GetNodeOutput(wall_n, OV.Velocity)[2]
                 ca, wa = mbs_.GetNodeOutput(cap_n, OV.Acceleration), mbs_.GetNodeOutput(wall_n, OV.Acceleration)[2]
                 cap_p = cap + h * cv + 0.5 * h * h * ca
                 cap_p[0:2] = u * e[0:2]  # the horizontal end-of-step position is prescribed: exact
-                f_cap, f_wall = el.forces(cap_p, wz + h * wv + 0.5 * h * h * wa)
+                f_cap, f_wall = el.step(cap, wz, cap_p, wz + h * wv + 0.5 * h * h * wa)
                 mbs_.SetLoadParameter(loads[0], "loadVector", f_cap)
                 mbs_.SetLoadParameter(loads[1], "loadVector", f_wall)
+            else:
+                el.commit(cap, wz)  # hysteretic states follow the accepted step
+            if n % per_out == 0:
+                record(n // per_out)
+            if s["drive_offsets"] != "user_function":
+                for cc, c in drives:
+                    mbs_.SetObjectParameter(cc, "offset", c * u)
             return True
 
         mbs.SetPreStepUserFunction(pre_step)
@@ -248,14 +326,19 @@ class ExudynEngine:
         ss.displayStatistics = ss.displayComputationTime = False
         solver = {"generalized_alpha": exu.DynamicSolverType.GeneralizedAlpha,
                   "trapezoidal_index2": exu.DynamicSolverType.TrapezoidalIndex2}[s["solver"]]
-        t0 = time.perf_counter()
-        ok = mbs.SolveDynamic(ss, solverType=solver)
-        wall_time = time.perf_counter() - t0
+        t0, c0 = time.perf_counter(), time.process_time()
+        why = "SolveDynamic returned False"
+        try:
+            ok = mbs.SolveDynamic(ss, solverType=solver)
+        except Exception as err:  # Exudyn's solver error carries no detail beyond "terminated"
+            ok, why = False, " ".join(str(err).split())[:200]
+        wall_time, cpu_time = time.perf_counter() - t0, time.process_time() - c0
         if not ok or counter[0] != n_steps:
-            raise EngineError(f"exudyn: SolveDynamic failed after {counter[0]} of {n_steps} steps")
+            raise EngineError(f"exudyn: solver failed in step {counter[0]} of {n_steps} (t = {counter[0] * h:.6g} s,"
+                              f" h = {h:.3g} s): {why}")
         el.commit(mbs.GetNodeOutput(cap_n, OV.Position), mbs.GetNodeOutput(wall_n, OV.Position)[2])
         record(n_out - 1)
-        stats = {"wall_time": wall_time, "steps": n_steps, "step_size": h,
+        stats = {"wall_time": wall_time, "cpu_time": cpu_time, "steps": n_steps, "step_size": h,
                  "newton_iterations": mbs.sys["dynamicSolver"].it.newtonStepsCount if "dynamicSolver" in mbs.sys else None,
                  "tracking_error": float(np.max(np.abs(rec["cap"] @ e - drive.displacement(t_out)[0]))),
                  "closure_max": float(np.max(rec["closure"])), "settings": dict(s)}
