@@ -264,9 +264,10 @@ class ExudynEngine:
                                             forceUserFunction=force_uf))
 
         OV = exu.OutputVariableType
-        sens_l = [mbs.AddSensor(SensorObject(objectNumber=cc, outputVariableType=OV.Force)) for cc, _ in drives]
-        sens_cap = mbs.AddSensor(SensorNode(nodeNumber=cap_n, outputVariableType=OV.Position))
-        sens_wall = mbs.AddSensor(SensorNode(nodeNumber=wall_n, outputVariableType=OV.Position))
+        sens_l = [mbs.AddSensor(SensorObject(objectNumber=cc, outputVariableType=OV.Force,
+                                                   writeToFile=False)) for cc, _ in drives]
+        sens_cap = mbs.AddSensor(SensorNode(nodeNumber=cap_n, outputVariableType=OV.Position, writeToFile=False))
+        sens_wall = mbs.AddSensor(SensorNode(nodeNumber=wall_n, outputVariableType=OV.Position, writeToFile=False))
         rec = {"sigma": np.zeros((n_out, g.n_wires)), "zeta": np.zeros(n_out), "closure": np.zeros(n_out),
                "lam": np.zeros(n_out), "cap": np.zeros((n_out, 3)), "wall": np.zeros(n_out)}
         counter = [0]
@@ -321,9 +322,9 @@ class ExudynEngine:
         nw.modifiedNewtonJacUpdatePerStep = s["newton_jacobian"] == "per_step"
         ti.generalizedAlpha.spectralRadius = float(s["spectral_radius"])
         ti.generalizedAlpha.storeInitialAlgebraicCoordinates = True
-        ss.solutionSettings.writeSolutionToFile = False
-        ss.solutionSettings.sensorsWritePeriod = drive.duration
-        ss.displayStatistics = ss.displayComputationTime = False
+        ss.solution.file.write = False
+        ss.solution.sensors.active = False  # sensors are read in the pre-step function, never written
+        ss.show.statistics = ss.show.computationTime = False
         solver = {"generalized_alpha": exu.DynamicSolverType.GeneralizedAlpha,
                   "trapezoidal_index2": exu.DynamicSolverType.TrapezoidalIndex2}[s["solver"]]
         t0, c0 = time.perf_counter(), time.process_time()

@@ -1,0 +1,110 @@
+"""Case and tolerance files (TOML), validated into plain data with one-line errors."""
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from nsd_core.drive import Drive
+from nsd_core.params import ParameterError, Params, load_params
+
+HERE = Path(__file__).resolve().parent
+DEFAULT_CASES = HERE / "cases.toml"
+DEFAULT_TOLERANCES = HERE / "tolerances.toml"
+
+METRICS = {  # name -> (unit, description)
+    "max_dF_rel": ("-", "max |F - F_ref| / max |F_ref|"),
+    "rms_dF_rel": ("-", "RMS (F - F_ref) / max |F_ref|"),
+    "loop_area_rel": ("-", "|loop area - reference| / |reference|"),
+    "peak_force_rel": ("-", "|peak |F| - reference| / reference"),
+    "region_shift_rel": ("-", "largest stiffness-region boundary shift / amplitude"),
+    "closure_max": ("m", "largest loop-closure violation"),
+    "tracking_error": ("m", "largest drive tracking error"),
+}
+CASE_KEYS = {"name", "amplitude", "frequency", "direction_deg", "cycles", "samples_per_cycle", "params",
+             "settings", "engine_params"}
+
+
+@dataclass(frozen=True)
+class Case:
+    name: str
+    drive: Drive
+    params: Params
+    settings: dict[str, dict] = field(default_factory=dict)       # engine -> solver settings
+    engine_params: dict[str, Params] = field(default_factory=dict)  # engine -> its own parameter set
+
+    def params_for(self, engine: str) -> Params:
+        return self.engine_params.get(engine, self.params)
+
+    def describe(self) -> dict[str, Any]:
+        d = self.drive
+        return {"name": self.name, "amplitude": d.amplitude, "frequency": d.frequency,
+                "direction_deg": d.direction_deg, "cycles": d.cycles, "samples_per_cycle": d.samples_per_cycle,
+                "params_overridden": {k: v for k, v in self.params.to_dict().items() if v != getattr(Params(), k)},
+                "settings": self.settings,
+                "engine_params": {e: {k: v for k, v in p.to_dict().items() if v != getattr(self.params, k)}
+                                  for e, p in self.engine_params.items()}}
+
+
+def _read(path: Path, what: str) -> dict:
+    try:
+        return tomllib.loads(Path(path).read_text())
+    except FileNotFoundError:
+        raise ParameterError(f"{what} {path}: file not found") from None
+    except tomllib.TOMLDecodeError as e:
+        raise ParameterError(f"{what} {path}: not valid TOML ({e})") from None
+
+
+def _number(where: str, v, positive=True) -> float:
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or (positive and v <= 0):
+        raise ParameterError(f"{where} = {v!r}: must be a {'positive ' if positive else ''}finite number")
+    return float(v)
+
+
+def load_cases(path: str | Path | None = None, base_params: Params | None = None) -> list[Case]:
+    data = _read(Path(path or DEFAULT_CASES), "--cases")
+    unknown = set(data) - {"defaults", "case"}
+    if unknown:
+        raise ParameterError(f"--cases: unknown table {sorted(unknown)[0]!r}; allowed: defaults, case")
+    defaults = data.get("defaults", {})
+    raw_cases = data.get("case", [])
+    if not raw_cases:
+        raise ParameterError("--cases: no [[case]] entries")
+    out, names = [], set()
+    for i, raw in enumerate(raw_cases):
+        merged = {**{k: v for k, v in defaults.items() if k not in ("params", "settings")}, **raw}
+        bad = set(merged) - CASE_KEYS
+        if bad:
+            raise ParameterError(f"case[{i}].{sorted(bad)[0]}: unknown key; allowed: {', '.join(sorted(CASE_KEYS))}")
+        name = str(merged.get("name", f"case{i}"))
+        if name in names:
+            raise ParameterError(f"case[{i}].name = {name!r}: duplicate case name")
+        names.add(name)
+        for key in ("amplitude", "frequency"):
+            if key not in merged:
+                raise ParameterError(f"case {name}: missing {key}")
+        overrides = {**defaults.get("params", {}), **raw.get("params", {})}
+        base = base_params.to_dict() if base_params else {}
+        params = load_params(None, {**base, **overrides})
+        drive = Drive(_number(f"case {name}.amplitude", merged["amplitude"], positive=False),
+                      _number(f"case {name}.frequency", merged["frequency"]),
+                      float(merged.get("direction_deg", 0.0)), int(merged.get("cycles", 2)),
+                      int(merged.get("samples_per_cycle", 2000)))
+        settings = {e: dict(s) for e, s in defaults.get("settings", {}).items()}
+        for e, s in raw.get("settings", {}).items():
+            settings[e] = {**settings.get(e, {}), **s}
+        engine_params = {e: params.replace(**p) for e, p in raw.get("engine_params", {}).items()}
+        out.append(Case(name, drive, params, settings, engine_params))
+    return out
+
+
+def load_tolerances(path: str | Path | None = None) -> dict[str, float]:
+    data = _read(Path(path or DEFAULT_TOLERANCES), "--tolerances")
+    limits = data.get("limits", data)
+    for k, v in limits.items():
+        if k not in METRICS:
+            raise ParameterError(f"tolerance {k}: unknown metric; allowed: {', '.join(METRICS)}")
+        _number(f"tolerance {k}", v)
+    return {k: float(v) for k, v in limits.items()}

@@ -1,0 +1,24 @@
+"""The in-house two-step semirecursive model (nsd_core.device) behind the shared engine interface."""
+from __future__ import annotations
+
+from nsd_core.device import DEFAULT_SOLVER, simulate
+from nsd_core.drive import Drive
+from nsd_core.integrate import SolverError
+from nsd_core.params import Params
+from nsd_core.results import RunResult
+
+from .base import EngineError, merged_settings
+
+
+class SemirecursiveEngine:
+    name = "semirecursive"
+    default_settings = dict(DEFAULT_SOLVER)
+
+    def run(self, params: Params, drive: Drive, settings: dict | None = None) -> RunResult:
+        s = merged_settings(self.default_settings, settings, self.name)
+        try:
+            result = simulate(params, drive, **s)
+        except SolverError as e:
+            raise EngineError(str(e)) from None
+        result.stats["settings"] = s
+        return result
