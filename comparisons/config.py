@@ -63,11 +63,18 @@ def _number(where: str, v, positive=True) -> float:
     return float(v)
 
 
+def load_convergence(path: str | Path | None, cases: list[Case]) -> dict | None:
+    """The [convergence] table of a case file, validated; None when the file has none."""
+    from .convergence import parse_convergence
+    raw = _read(Path(path or DEFAULT_CASES), "--cases").get("convergence")
+    return parse_convergence(raw, cases) if raw else None
+
+
 def load_cases(path: str | Path | None = None, base_params: Params | None = None) -> list[Case]:
     data = _read(Path(path or DEFAULT_CASES), "--cases")
-    unknown = set(data) - {"defaults", "case"}
+    unknown = set(data) - {"defaults", "case", "convergence"}
     if unknown:
-        raise ParameterError(f"--cases: unknown table {sorted(unknown)[0]!r}; allowed: defaults, case")
+        raise ParameterError(f"--cases: unknown table {sorted(unknown)[0]!r}; allowed: defaults, case, convergence")
     defaults = data.get("defaults", {})
     raw_cases = data.get("case", [])
     if not raw_cases:

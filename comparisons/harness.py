@@ -46,7 +46,8 @@ def git_revision() -> str:
 
 
 def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float], out_dir: str | Path,
-            workers: int | None = None, log: Callable[[str], None] = print) -> dict[str, Any]:
+            workers: int | None = None, log: Callable[[str], None] = print,
+            convergence: dict | None = None) -> dict[str, Any]:
     """Run, measure, and write ``out_dir/results.json`` and ``out_dir/cycles/CASE__ENGINE.csv``."""
     out = Path(out_dir)
     jobs = [(c, e) for c in cases for e in engines]
@@ -91,6 +92,10 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
     }
     from nsd_core.cli import versions
     summary["versions"] = versions()
+    if convergence:
+        from .convergence import convergence_study
+        log("  convergence study ...")
+        summary["convergence"] = convergence_study(convergence, engines, workers)
     atomic_write_json(out / "results.json", summary)
     return summary
 

@@ -8,7 +8,7 @@ from xml.sax.saxutils import escape, quoteattr
 from nsd_core.params import ParameterError, load_params, parse_set
 from nsd_core.results import atomic_write_text
 
-from .config import load_cases, load_tolerances
+from .config import load_cases, load_convergence, load_tolerances
 from .engines import ENGINES, REFERENCE
 from .harness import compare
 
@@ -22,6 +22,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE")
     p.add_argument("--workers", type=int, default=None, help="parallel processes (default: all cores)")
     p.add_argument("--junit", help="write JUnit XML here (one test per case and engine)")
+    p.add_argument("--convergence", action="store_true",
+                   help="also run the case file's [convergence] study (discrepancy vs step size per engine)")
     p.add_argument("--report", action="store_true", help="also write the validation report into OUT/report")
     p.add_argument("--out", required=True, help="output folder")
 
@@ -90,10 +92,13 @@ def run(args) -> int:
     cases = load_cases(args.cases, base)
     tolerances = load_tolerances(args.tolerances)
     check_settings(cases, engines)
+    conv = load_convergence(args.cases, cases) if args.convergence else None
+    if args.convergence and conv is None:
+        raise ParameterError("--convergence: the case file has no [convergence] table")
     if REFERENCE not in engines:
         print(f"note: {REFERENCE} not among the engines: pairs are reported, nothing is gated")
     print(f"nsd compare: {len(cases)} cases x {len(engines)} engines -> {args.out}")
-    summary = compare(cases, engines, tolerances, args.out, workers=args.workers)
+    summary = compare(cases, engines, tolerances, args.out, workers=args.workers, convergence=conv)
     print(format_table(summary))
     if args.junit:
         atomic_write_text(args.junit, junit_xml(summary))

@@ -184,15 +184,24 @@ class ExudynEngine:
         "drive_offsets": "prestep",   # "prestep": offset = u(t_end) set once per step; "user_function"
     }
 
+    @staticmethod
+    def steps_per_output(drive: Drive, settings: dict) -> int:
+        """Steps per output interval: the largest step <= step_size that divides the interval."""
+        return max(1, int(math.ceil(1.0 / (drive.frequency * drive.samples_per_cycle * float(settings["step_size"]))
+                                    - 1e-9)))
+
+    @classmethod
+    def step_used(cls, drive: Drive, settings: dict | None = None) -> float:
+        s = merged_settings(cls.default_settings, settings, cls.name)
+        return 1.0 / (drive.frequency * drive.samples_per_cycle * cls.steps_per_output(drive, s))
+
     def run(self, params: Params, drive: Drive, settings=None) -> RunResult:
         s = merged_settings(self.default_settings, settings, self.name)
         _check_settings(s)
         drive.check_followable(params)
         g = device_geometry(params)
-        t_out = drive.output_times()
-        per_out = max(1, int(math.ceil((t_out[1] - t_out[0]) / float(s["step_size"]) - 1e-9)))
         try:
-            return self._run(g, drive, s, t_out, per_out)
+            return self._run(g, drive, s, drive.output_times(), self.steps_per_output(drive, s))
         except EngineError:
             raise
         except Exception as e:  # Exudyn raises RuntimeError/ValueError with multi-line text

@@ -1,0 +1,92 @@
+"""nsd compare: the gate passes on agreeing engines, fails on a perturbed one, reports failures."""
+import json
+import subprocess
+import sys
+
+import pytest
+
+CASE = """
+[defaults]
+cycles = 1
+samples_per_cycle = 300
+[[case]]
+name = "quick"
+amplitude = 0.015
+frequency = 10.0
+"""
+
+
+def nsd(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "nsd_core.cli", *args], capture_output=True, text=True,
+                          timeout=600, cwd=cwd)
+
+
+@pytest.fixture(scope="module")
+def perturbed(tmp_path_factory):
+    d = tmp_path_factory.mktemp("gate")
+    cases = d / "cases.toml"
+    cases.write_text(CASE + """
+[[case]]
+name = "stiff_ropes"
+amplitude = 0.015
+frequency = 10.0
+engine_params.mujoco = { rope_stiffness = 6.0e5 }   # +20 % for one engine only
+""")
+    out = d / "out"
+    p = nsd("compare", "--cases", str(cases), "--engines", "semirecursive,mujoco", "--out", str(out),
+            "--junit", str(d / "junit.xml"))
+    return p, out, d
+
+
+def test_gate_fails_and_names_case_and_metric(perturbed):
+    p, out, d = perturbed
+    assert p.returncode == 1, p.stderr
+    assert "FAILED stiff_ropes: mujoco max_dF_rel" in p.stdout
+    res = json.loads((out / "results.json").read_text())
+    assert res["verdict"] == "FAIL" and res["exit_code"] == 1
+    # the unperturbed case passes inside the same run: the engines agree to well within 0.1 %
+    quick = [m for m in res["metrics"] if m["case"] == "quick" and m["gated"]]
+    assert quick and all(m["pass"] for m in quick)
+    dF = next(m["value"] for m in quick if m["metric"] == "max_dF_rel")
+    assert dF < 1e-3
+    assert (out / "cycles" / "quick__mujoco.csv").exists() and (out / "cycles" / "stiff_ropes__semirecursive.csv").exists()
+    junit = (d / "junit.xml").read_text()
+    assert 'name="stiff_ropes.mujoco"' in junit and "<failure" in junit and 'failures="1"' in junit
+
+
+def test_engine_failure_is_reported_for_its_case_and_others_kept(tmp_path):
+    cases = tmp_path / "cases.toml"
+    cases.write_text(CASE + """
+[[case]]
+name = "broken"
+amplitude = 0.015
+frequency = 10.0
+settings.semirecursive = { atol = -1.0 }   # the integrator refuses it at run time
+""")
+    out = tmp_path / "out"
+    p = nsd("compare", "--cases", str(cases), "--engines", "semirecursive", "--out", str(out))
+    assert p.returncode == 3, p.stdout + p.stderr
+    res = json.loads((out / "results.json").read_text())
+    assert res["runs"]["broken"]["semirecursive"]["status"] == "error"
+    assert "atol" in res["runs"]["broken"]["semirecursive"]["message"]
+    assert res["runs"]["quick"]["semirecursive"]["status"] == "ok"
+    assert (out / "cycles" / "quick__semirecursive.csv").exists()
+
+
+@pytest.mark.parametrize("args,fragment", [
+    (["--engines", "semirecursive,bullet"], "unknown engine"),
+    (["--tolerances", "{tol}"], "unknown metric"),
+    (["--cases", "{badcase}"], "unknown key"),
+    (["--set", "n_ropes=2"], "n_ropes = 2"),
+])
+def test_bad_input_exits_2_and_writes_nothing(tmp_path, args, fragment):
+    tol = tmp_path / "tol.toml"
+    tol.write_text("[limits]\nmax_dF = 1e-3\n")
+    bad = tmp_path / "bad.toml"
+    bad.write_text(CASE.replace("frequency = 10.0", "frequency = 10.0\nfrequncy = 3"))
+    args = [a.format(tol=tol, badcase=bad) for a in args]
+    out = tmp_path / "out"
+    p = nsd("compare", *args, "--out", str(out))
+    assert p.returncode == 2
+    assert fragment in p.stderr and len(p.stderr.strip().splitlines()) == 1
+    assert not out.exists()
