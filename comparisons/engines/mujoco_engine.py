@@ -39,15 +39,18 @@ Constraint softness: MuJoCo's equality constraints are soft. solref time constan
 ``solref_factor`` x timestep (2 = the smallest MuJoCo accepts) with solimp d = 0.9999 keeps the loop
 closed to ~1e-8 m at h = 1e-5 s (benchmarks/convergence_mujoco.py measures the effect).
 
-Default settings and why (measured at 10 Hz, A = 0.0255 m, 2 cycles, against the in-house model
-nsd_core.device.simulate(rtol=1e-10): dF = max|dF|/max|F|, dA = loop-area difference):
-- Euler, h = 1e-5 s, commit every 10 steps: dF 1.2e-4, dA 1.1e-4, ~45 us CPU a step (1 Hz case
-  ~10 s). Commit every step: dF 9.4e-5 at 3x the cost (the commit's RK4 is 4 slope calls).
-  Euler h = 5e-6: dF 2.4e-5. The error is Euler's (first order): halving h at a fixed solref time
-  constant moves F by 7e-5, changing only the time constant (2e-5 -> 1e-5 s) by 5e-6.
-- RK4 (commit every step) is the accurate option: h = 2.5e-5: dF 2.7e-5; 5e-6: 2.1e-5, at ~2.5x
-  the CPU of the default. MuJoCo and the in-house model keep a 2.1e-5 residual as h -> 0, smooth
-  and even in u' (a velocity-squared term in the rod force).
+Default settings and why (against the in-house model nsd_core.device.simulate(rtol=1e-10), on
+the last of 2 cycles: dF = max|dF|/max|F_ref|, dA = relative loop-area difference):
+- Euler, h = 1e-5 s, commit every 10 steps, solref 2h, solimp 0.9999: dF 7.3e-5 / dA 2.5e-5
+  (1 Hz, A = 0.0255 m), 1.2e-4 / 1.1e-4 (10 Hz, 0.0255), 7.9e-6 / 8.7e-6 (10 Hz, 0.015); about
+  45 us CPU a step, 10-11 s CPU per 1 Hz case. Committing every step (3x the cost of a step)
+  changes dF by < 3e-5. The timestep dominates the error: at 10 Hz, A = 0.015 m, h = 4e-5, 2e-5,
+  1e-5 give dF 8.4e-5, 3.0e-5, 7.9e-6 (about 3x per halving).
+- Softness (10 Hz, A = 0.015): solref 4h / 10h: dF 2.2e-5 / 1.1e-4; solimp 0.999 / 0.99: 3.8e-5 /
+  3.5e-4. Hence the stiffest: 2h (MuJoCo's floor) and 0.9999.
+- RK4 (commit every step) is the accurate option: h = 2.5e-5: dF 1.5e-5 (1 Hz) / 2.7e-5 (10 Hz),
+  ~2.5x the CPU of the default; h = 5e-6: 6e-7 (1 Hz, 0.0255), 3e-6 (10 Hz, 0.015), 2.1e-5
+  (10 Hz, 0.0255: a residual even in u', in the rod force, left where both models ring).
 """
 from __future__ import annotations
 
