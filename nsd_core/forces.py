@@ -15,6 +15,7 @@ import math
 from typing import NamedTuple
 
 import numpy as np
+from numba import vectorize
 
 
 class WireLaw(NamedTuple):
@@ -47,6 +48,19 @@ def rope_tension(length, natural_length, stiffness):
     return stiffness * np.maximum(np.asarray(length, dtype=float) - natural_length, 0.0)
 
 
+@vectorize(["float64(float64, float64, float64, float64, float64, float64, float64, float64, float64, "
+            "float64, float64, float64)"], cache=True)
+def _sma_slope(eps, d, stress, E, Y, alpha, n, fT, a, Em, eps_t, c):
+    """Elementwise Eq. 17b-d slope; a compiled ufunc (one call for all wires, scalars too)."""
+    d = 1.0 if d > 0 else (-1.0 if d < 0 else 0.0)
+    unloading_towards_zero = 1.0 if eps * d < 0.0 else 0.0  # H(-eps deps), H(0) = 0
+    beta = E * alpha * (eps - stress / E + fT * math.tanh(a * eps) * unloading_towards_zero)
+    over = stress - beta
+    sg = 1.0 if over > 0 else (-1.0 if over < 0 else 0.0)
+    s = 0.5 * (math.tanh(c * (abs(eps) - eps_t)) + 1.0)
+    return (1.0 - s) * E * (1.0 - d * sg * abs(over / Y) ** n) + s * Em
+
+
 def sma_stress_slope(strain, direction, stress, law: WireLaw):
     """Eq. 17b-d as a slope: d sigma / d epsilon for straining in ``direction`` (+1, -1 or 0).
 
@@ -54,13 +68,8 @@ def sma_stress_slope(strain, direction, stress, law: WireLaw):
     s = (tanh(c(|eps| - eps_t)) + 1)/2 (17d), and
     d sigma/d eps = (1 - s) E [1 - sgn(deps) sgn(sigma - beta) |(sigma - beta)/Y|^n] + s E_m (17b).
     """
-    eps = np.asarray(strain, dtype=float)
-    d = np.sign(direction)
-    unloading_towards_zero = (eps * d) < 0.0
-    beta = law.E * law.alpha * (eps - stress / law.E + law.fT * np.tanh(law.a * eps) * unloading_towards_zero)
-    over = stress - beta
-    s = 0.5 * (np.tanh(law.c * (np.abs(eps) - law.eps_t)) + 1.0)
-    return (1.0 - s) * law.E * (1.0 - d * np.sign(over) * np.abs(over / law.Y) ** law.n) + s * law.Em
+    return _sma_slope(strain, direction, stress, law.E, law.Y, law.alpha, law.n, law.fT, law.a, law.Em,
+                      law.eps_t, law.c)
 
 
 def sma_wire(length, length_rate, stress, law: WireLaw):
@@ -71,13 +80,24 @@ def sma_wire(length, length_rate, stress, law: WireLaw):
     strain = (np.asarray(length, dtype=float) - law.natural_length) / law.natural_length
     strain_rate = np.asarray(length_rate, dtype=float) / law.natural_length
     rate = sma_stress_slope(strain, strain_rate, stress, law) * strain_rate
-    return law.area * np.maximum(stress, 0.0), rate
+    return wire_tension(stress, law), rate
+
+
+@vectorize(["float64(float64, float64, float64, float64, float64, float64)"], cache=True)
+def _bouc_wen_slope(zeta, direction, ksd, beta, gamma, n):
+    sg = zeta * direction
+    sg = 1.0 if sg > 0 else (-1.0 if sg < 0 else 0.0)
+    return ksd - (gamma + beta * sg) * abs(zeta) ** n
 
 
 def bouc_wen_slope(zeta, direction, law: SpringLaw):
     """Eq. 18b as a slope: d zeta / d x_s = k_sd - (gamma_s + beta_s sgn(zeta dx_s)) |zeta|^n_s."""
-    z = np.asarray(zeta, dtype=float)
-    return law.ksd - (law.gamma + law.beta * np.sign(z * direction)) * np.abs(z) ** law.n
+    return _bouc_wen_slope(zeta, direction, law.ksd, law.beta, law.gamma, law.n)
+
+
+def wire_tension(stress, law: WireLaw):
+    """Eq. 17a: T = sigma A_w H(sigma); a wire never pushes."""
+    return law.area * np.maximum(stress, 0.0)
 
 
 def spring_push(length, length_rate, zeta, law: SpringLaw):

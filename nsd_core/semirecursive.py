@@ -18,6 +18,7 @@ from typing import Callable
 
 import numpy as np
 
+from .fastpath import dynamics_kernel, newton_kernel, velocity_kernel
 from .closure import closure, full_pivot_elimination
 from .dynamics import tree_equations
 from .kinematics import Kinematics, positions, velocities
@@ -76,7 +77,8 @@ class SemiRecursiveSystem:
     """A mechanism, its prescribed coordinates and its applied forces, as an ODE in the free ones."""
 
     def __init__(self, mech: Mechanism, prescribed: list[int], motion: MotionFn, forces: ForceFn,
-                 n_extra: int = 0, prefer_free: list[int] | None = None, newton_tol: float = 1e-13):
+                 n_extra: int = 0, prefer_free: list[int] | None = None, newton_tol: float = 1e-13,
+                 fast: bool = True):
         self.m = mech
         self.prescribed = np.array(prescribed, dtype=int)
         self.motion = motion
@@ -84,6 +86,7 @@ class SemiRecursiveSystem:
         self.n_extra = n_extra
         self.prefer_free = list(prefer_free or [])
         self.newton_tol = newton_tol
+        self.fast = fast  # compiled kernels (nsd_core.fastpath); False: the numpy specification
         self.partition: Partition | None = None
         self._z = None  # last full configuration: the Newton warm start (keeps the assembly branch)
         self._lin = None  # (z, S) at the last evaluation: dz_dep = S dz, the Newton predictor
@@ -156,6 +159,16 @@ class SemiRecursiveSystem:
     def _newton(self, t: float, z: np.ndarray) -> np.ndarray:
         """Newton on the independent loop equations for the dependent coordinates (in place)."""
         P = self.partition
+        if self.fast:
+            a, m = self.m.arrays, self.m
+            n = m.n
+            zz = z.copy()
+            code = newton_kernel(a.parent, a.jtype, m.joint_axis, m.joint_offset, a.cut_kind, a.cut_a,
+                                 a.cut_va, a.cut_b, a.cut_vb, zz, P.rows, P.dependent, self.newton_tol, 30,
+                                 m.n_constraints,
+                                 np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((n, 6)))
+            if code == 1:
+                return zz
         for _ in range(30):
             k = positions(self.m, z)
             Phi, J, _ = closure(self.m, k)
@@ -172,6 +185,40 @@ class SemiRecursiveSystem:
         P, m, pr = self.partition, self.m, self.prescribed
         z = self.assemble(t, zf)
         q, qd, qdd = self.motion(t)
+        if self.fast and len(P.dependent):
+            ev = self._rhs_compiled(t, z, zfd, qd, qdd, extra)
+            if ev is not None:
+                return ev
+        return self._rhs_numpy(t, z, zfd, qd, qdd, extra)
+
+    def _rhs_compiled(self, t, z, zfd, qd, qdd, extra):
+        """The same equations as _rhs_numpy through nsd_core.fastpath (None: singular, use numpy)."""
+        P, m, pr, a = self.partition, self.m, self.prescribed, self.m.arrays
+        n, nc = m.n, m.n_constraints
+        A, r, B, Z, vp = np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((n, 6)), np.empty((n, 6)), np.empty((n, 6))
+        Phi, J, c = np.zeros(nc), np.zeros((nc, n)), np.zeros(nc)
+        Jd_inv = np.empty((len(P.dependent), len(P.dependent)))
+        zd = np.zeros(n)
+        zd[pr] = qd
+        zd[P.free] = zfd
+        if not velocity_kernel(a.parent, a.jtype, m.joint_axis, m.joint_offset, a.cut_kind, a.cut_a, a.cut_va,
+                               a.cut_b, a.cut_vb, z, zd, P.rows, P.dependent, A, r, B, Z, vp, Phi, J, c, Jd_inv):
+            return None
+        S = -Jd_inv @ J[P.rows]
+        S[:, P.dependent] = 0.0
+        self._lin = (z.copy(), S)
+        kin = Kinematics(A, r, B, Z, vp)
+        wrench, gen, extra_rate = self.forces(t, kin, z, zd, extra)
+        zdd, lam, tau = np.empty(n), np.empty(len(P.dependent)), np.empty(len(pr))
+        if not dynamics_kernel(a.parent, m.mass, m.com, m.inertia, m.gravity, A, r, B, Z, vp,
+                               np.ascontiguousarray(wrench, dtype=float),
+                               np.zeros(n) if gen is None else np.asarray(gen, dtype=float), J, c, P.rows,
+                               P.dependent, P.free, pr, np.asarray(qdd, dtype=float), Jd_inv, zdd, lam, tau):
+            return None
+        return Evaluation(t, z, zd, zdd, kin, np.asarray(extra_rate, dtype=float), lam, tau, Phi)
+
+    def _rhs_numpy(self, t, z, zfd, qd, qdd, extra):
+        P, m, pr = self.partition, self.m, self.prescribed
         kin = positions(m, z)
         Phi, J, _ = closure(m, kin)
         Jr = J[P.rows]

@@ -108,3 +108,23 @@ def test_prescribed_coordinate_reaction_is_the_drive_force():
         ev = s.evaluate(t, np.zeros(0))
         x, _, xdd = motion(t)
         assert ev.drive_force[0] == pytest.approx(mass * xdd[0] + k * x[0], rel=1e-12, abs=1e-12)
+
+
+@pytest.mark.parametrize("A", [0.015, 0.0255])
+def test_compiled_fast_path_equals_the_numpy_specification(A):
+    """nsd_core.fastpath fuses the numpy steps of rhs_parts; both must give the same numbers."""
+    from nsd_core.device import device_system, rest_coordinates
+    from nsd_core.drive import Drive
+    d = Drive(A, 10.0)
+    s, g = device_system(Params(), d)
+    z0 = rest_coordinates(g)
+    y = s.state(s.assemble(0.0, z0[s.partition.free]), np.zeros(len(z0)), np.r_[np.zeros(g.n_wires), g.spring_zeta0])
+    y[1] = -0.05  # a vertical velocity, so that velocity terms matter
+    for t in (0.003, 0.011, 0.02):
+        s.fast = True
+        a = s.evaluate(t, y)
+        s.fast = False
+        b = s.evaluate(t, y)
+        for name in ("z", "zd", "zdd", "lam", "drive_force", "extra_rate"):
+            np.testing.assert_allclose(getattr(a, name), getattr(b, name), rtol=1e-9,
+                                       atol=1e-9 * max(1.0, np.max(np.abs(getattr(b, name)))), err_msg=name)

@@ -1,0 +1,190 @@
+"""Compiled fast path of SemiRecursiveSystem.rhs_parts: the same equations, fused into three calls.
+
+``SemiRecursiveSystem`` keeps the readable numpy version of each step (the specification); these
+kernels do the identical arithmetic without numpy's per-call overhead, which dominates on a
+ten-body tree. tests/test_engine.py checks that both paths agree to round-off.
+    newton_kernel:    Newton on the independent loop equations for the dependent coordinates;
+    velocity_kernel:  positions, Phi_z, the dependent velocities (Eq. 10), Z, vp and c (Eq. 5);
+    dynamics_kernel:  Eqs. 7-8 recursively, Eq. 12 in the free coordinates, and the reactions.
+Each returns False when its dependent block is singular; the caller then takes the numpy path.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .closure import closure_kernel
+from .dynamics import body_terms_kernel, tree_kernel
+from .kinematics import positions_kernel, velocities_kernel
+
+
+@njit(cache=True)
+def _lu_solve_inplace(M, b):
+    """Gaussian elimination with partial pivoting on a copy; returns (ok, x)."""
+    n = M.shape[0]
+    A = M.copy()
+    x = b.copy()
+    scale = 0.0
+    for i in range(n):
+        for j in range(n):
+            scale = max(scale, abs(A[i, j]))
+    for k in range(n):
+        p = k
+        for i in range(k + 1, n):
+            if abs(A[i, k]) > abs(A[p, k]):
+                p = i
+        if abs(A[p, k]) <= 1e-14 * scale:
+            return False, x
+        if p != k:
+            for j in range(n):
+                A[k, j], A[p, j] = A[p, j], A[k, j]
+            x[k], x[p] = x[p], x[k]
+        for i in range(k + 1, n):
+            f = A[i, k] / A[k, k]
+            for j in range(k, n):
+                A[i, j] -= f * A[k, j]
+            x[i] -= f * x[k]
+    for k in range(n - 1, -1, -1):
+        acc = x[k]
+        for j in range(k + 1, n):
+            acc -= A[k, j] * x[j]
+        x[k] = acc / A[k, k]
+    return True, x
+
+
+@njit(cache=True)
+def _inverse(M):
+    n = M.shape[0]
+    inv = np.empty((n, n))
+    e = np.zeros(n)
+    for j in range(n):
+        e[:] = 0.0
+        e[j] = 1.0
+        ok, col = _lu_solve_inplace(M, e)
+        if not ok:
+            return False, inv
+        inv[:, j] = col
+    return True, inv
+
+
+@njit(cache=True)
+def newton_kernel(parent, jtype, axis, offset, ck, ca, cva, cb, cvb, z, rows, dep, tol, maxit, nc, A, r, B):
+    """Newton from z (updated in place). Returns 1 converged, 0 not converged, -1 singular."""
+    Phi = np.zeros(nc)
+    J = np.zeros((nc, z.shape[0]))
+    dummy = np.zeros((z.shape[0], 6))
+    nd = dep.shape[0]
+    Jd = np.empty((nd, nd))
+    rhs = np.empty(nd)
+    for _ in range(maxit):
+        positions_kernel(parent, jtype, axis, offset, z, A, r, B)
+        Phi[:] = 0.0
+        J[:, :] = 0.0
+        closure_kernel(parent, ck, ca, cva, cb, cvb, A, r, B, dummy, dummy, False, Phi, J, Phi)
+        for i in range(nd):
+            rhs[i] = Phi[rows[i]]
+            for j in range(nd):
+                Jd[i, j] = J[rows[i], dep[j]]
+        ok, step = _lu_solve_inplace(Jd, rhs)
+        if not ok:
+            return -1
+        smax, zmax = 0.0, 0.0
+        for i in range(nd):
+            z[dep[i]] -= step[i]
+            smax = max(smax, abs(step[i]))
+            zmax = max(zmax, abs(z[dep[i]]))
+        if smax < tol * (1.0 + zmax):
+            return 1
+    return 0
+
+
+@njit(cache=True)
+def velocity_kernel(parent, jtype, axis, offset, ck, ca, cva, cb, cvb, z, zd, rows, dep, A, r, B, Z, vp,
+                    Phi, J, c, Jd_inv):
+    """zd holds the prescribed and free velocities on entry; the dependent ones are filled in."""
+    positions_kernel(parent, jtype, axis, offset, z, A, r, B)
+    Phi[:] = 0.0
+    J[:, :] = 0.0
+    closure_kernel(parent, ck, ca, cva, cb, cvb, A, r, B, Z, vp, False, Phi, J, c)
+    nd = dep.shape[0]
+    Jd = np.empty((nd, nd))
+    for i in range(nd):
+        for j in range(nd):
+            Jd[i, j] = J[rows[i], dep[j]]
+    ok, inv = _inverse(Jd)
+    if not ok:
+        return False
+    Jd_inv[:, :] = inv
+    for j in range(nd):
+        zd[dep[j]] = 0.0
+    t = np.zeros(nd)
+    for i in range(nd):
+        acc = 0.0
+        for k in range(z.shape[0]):
+            acc += J[rows[i], k] * zd[k]
+        t[i] = acc
+    for j in range(nd):
+        acc = 0.0
+        for i in range(nd):
+            acc += inv[j, i] * t[i]
+        zd[dep[j]] = -acc
+    velocities_kernel(parent, jtype, B, r, zd, Z, vp)
+    Phi2 = np.zeros(Phi.shape[0])
+    J2 = np.zeros(J.shape)
+    c[:] = 0.0
+    closure_kernel(parent, ck, ca, cva, cb, cvb, A, r, B, Z, vp, True, Phi2, J2, c)
+    return True
+
+
+@njit(cache=True)
+def dynamics_kernel(parent, mass, com, inertia, gravity, A, r, B, Z, vp, wrench, gen, J, c, rows, dep, free,
+                    pres, qdd, Jd_inv, zdd, lam, tau):
+    """Eq. 12 in the free coordinates (z'' = R_z z''_f + z''_0) and the reactions lambda, tau."""
+    n = parent.shape[0]
+    Mb = np.zeros((n, 6, 6))
+    Qb = wrench.copy()
+    body_terms_kernel(mass, com, inertia, gravity, A, r, Z, True, Mb, Qb)
+    M = np.zeros((n, n))
+    Q = np.zeros(n)
+    tree_kernel(parent, B, vp, Mb, Qb, M, Q)
+    for i in range(n):
+        Q[i] += gen[i]
+    nd, nf, npr = dep.shape[0], free.shape[0], pres.shape[0]
+    Rz = np.zeros((n, nf))
+    for a in range(nf):
+        Rz[free[a], a] = 1.0
+        for j in range(nd):
+            acc = 0.0
+            for i in range(nd):
+                acc -= Jd_inv[j, i] * J[rows[i], free[a]]
+            Rz[dep[j], a] = acc
+    zdd0 = np.zeros(n)
+    for a in range(npr):
+        zdd0[pres[a]] = qdd[a]
+    for j in range(nd):
+        acc = 0.0
+        for i in range(nd):
+            rhs_i = -c[rows[i]]
+            for a in range(npr):
+                rhs_i -= J[rows[i], pres[a]] * qdd[a]
+            acc += Jd_inv[j, i] * rhs_i
+        zdd0[dep[j]] = acc
+    MRz = M @ Rz
+    lhs = Rz.T @ MRz
+    rhs = Rz.T @ (Q - M @ zdd0)
+    ok, zfdd = _lu_solve_inplace(lhs, rhs)
+    if not ok:
+        return False
+    zdd[:] = Rz @ zfdd + zdd0
+    res = M @ zdd - Q
+    for j in range(nd):
+        acc = 0.0
+        for i in range(nd):
+            acc += Jd_inv[i, j] * res[dep[i]]
+        lam[j] = acc
+    for a in range(npr):
+        acc = res[pres[a]]
+        for i in range(nd):
+            acc -= J[rows[i], pres[a]] * lam[i]
+        tau[a] = acc
+    return True
