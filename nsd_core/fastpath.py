@@ -81,6 +81,16 @@ def newton_kernel(parent, jtype, axis, offset, ck, ca, cva, cb, cvb, z, rows, de
         Phi[:] = 0.0
         J[:, :] = 0.0
         closure_kernel(parent, ck, ca, cva, cb, cvb, A, r, B, dummy, dummy, False, Phi, J, Phi)
+        # converged when the residual is at round-off of the positions (near a singular position
+        # the step cannot shrink below the conditioning, but the loop is already closed)
+        res, pos = 0.0, 1.0
+        for i in range(nd):
+            res = max(res, abs(Phi[rows[i]]))
+        for i in range(r.shape[0]):
+            for a in range(3):
+                pos = max(pos, abs(r[i, a]))
+        if res <= 4e-16 * pos:
+            return 1
         for i in range(nd):
             rhs[i] = Phi[rows[i]]
             for j in range(nd):

@@ -172,6 +172,8 @@ class SemiRecursiveSystem:
         for _ in range(30):
             k = positions(self.m, z)
             Phi, J, _ = closure(self.m, k)
+            if np.max(np.abs(Phi[P.rows])) <= 4e-16 * max(1.0, np.max(np.abs(k.r))):
+                break  # closed to round-off (near a singular position the step cannot shrink further)
             step = _solve(J[P.rows][:, P.dependent], Phi[P.rows])
             z[P.dependent] -= step
             if np.max(np.abs(step)) < self.newton_tol * (1.0 + np.max(np.abs(z[P.dependent]))):
