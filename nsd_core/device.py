@@ -16,7 +16,7 @@ import time
 import numpy as np
 
 from . import __version__
-from .drive import Drive
+from .drive import Drive, DriveError
 from .forces import rope_tension, sma_wire, spring_push
 from .geometry import DeviceGeometry, device_geometry
 from .integrate import SolverError, integrate
@@ -32,6 +32,8 @@ BODY = {name: i for i, name in enumerate(
 DRIVEN = [BODY["plate_x"], BODY["plate_y"], BODY["plate"]]
 LOCKED = [BODY["base_x"], BODY["base_y"], BODY["base"]]
 X, Y, Z = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)
+
+MAX_WIRE_STRAIN = 0.2  # beyond it the SMA law (Eq. 17, fitted up to ~8 %) says nothing about a real wire
 
 DEFAULT_SOLVER = {"method": "DOP853", "rtol": 1e-7, "atol": 1e-12, "max_step": 1e-3}
 
@@ -93,6 +95,19 @@ class DeviceForces:
         return self.elements.wrench(T), None, rates
 
 
+def check_validity(t: float, kin, forces: DeviceForces) -> None:
+    """Stop, with a message, where the device leaves the force laws' validity (never NaNs)."""
+    L, _ = forces.elements.state(kin)
+    g = forces.g
+    if np.any(L <= 0.0):
+        raise DriveError(f"t = {t:.6g} s: an element's length reached zero: outside the model's validity")
+    if g.n_wires:
+        strain = (L[forces.wires] - g.wire.natural_length) / g.wire.natural_length
+        if np.max(strain) > MAX_WIRE_STRAIN:  # a shortened wire is merely slack
+            raise DriveError(f"t = {t:.6g} s: wire strain {np.max(strain):.3g} beyond "
+                             f"{MAX_WIRE_STRAIN}: outside the SMA law's validity")
+
+
 def device_system(params: Params, drive: Drive) -> tuple[SemiRecursiveSystem, DeviceGeometry]:
     g = device_geometry(params)
     mech = device_mechanism(g)
@@ -134,6 +149,7 @@ def simulate(params: Params, drive: Drive, method: str = DEFAULT_SOLVER["method"
         cap_pos = ev.kin.r[BODY["cap"]]
         e = drive.unit_vector
         F = ev.drive_force[0] * e[0] + ev.drive_force[1] * e[1]
+        check_validity(t, ev.kin, system.forces)
         rows.append((t, cap_pos.copy(), ev.z[BODY["wall"]], y[-g.n_wires - 1:-1].copy(), y[-1],
                      float(np.max(np.abs(ev.Phi))), F, lam))
 

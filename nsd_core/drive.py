@@ -10,7 +10,8 @@ from .params import ParameterError, Params
 
 
 class DriveError(ValueError):
-    """A drive the mechanism cannot follow (|u| >= l_d): exit code 4."""
+    """A drive the mechanism cannot follow (|u| >= l_d), or a state it drives the device into that
+    lies outside the force laws' validity: exit code 4."""
 
 
 @dataclass(frozen=True)
