@@ -1,33 +1,50 @@
 """The device in Exudyn: redundant-coordinate rigid bodies, joints as constraints, the drive as motion.
 
 Model (nsd-model.md, drive mode). Base = ground. Wall, rod and cap are ``ObjectRigidBody`` bodies on
-``NodeRigidBodyEP`` nodes (3 positions + 4 Euler parameters each, plus the Euler-parameter
-normalisation as an algebraic equation: Exudyn's redundant coordinates). Constraints:
+``NodeRigidBodyEP`` nodes (3 positions + 4 Euler parameters each, the Euler-parameter normalisation
+an algebraic equation: Exudyn's redundant coordinates). Constraints (index 3, Lagrange multipliers):
 - the wall's vertical guide: a GenericJoint ground-wall locking X, Y and the three rotations;
-- the rod: a spherical joint at each end (lower = wall reference, upper = cap reference);
-- the cap's guide: a GenericJoint ground-cap locking the three rotations (the plate holds it level),
-  and the drive: two CoordinateConstraints on the cap's X and Y coordinates with offset
-  u(t) cos(psi), u(t) sin(psi) (position and velocity offset functions, so both index-3 and
-  index-2 solvers follow it). The cap's Z is free (it slides in the plate).
-The drive force is the Lagrange multiplier of those two constraints, read through SensorObject
-(OutputVariableType.Force): F = -(lambda_x cos psi + lambda_y sin psi), sign checked against
-nsd_core.quasistatic at 1 Hz (the multiplier is the force the constraint takes from the cap).
+- the rod: a SphericalJoint at each end (lower = wall reference, upper = cap reference). The rod's
+  spin about its own axis is free and never excited (axisymmetric inertia: no gyroscopic torque
+  about the axis), but it needs a non-zero axial inertia for a regular mass matrix:
+  ``rod_axial_inertia`` x the transverse inertia (1e-3, i.e. ~1.3e-9 kg m^2);
+- the cap's guide: a GenericJoint ground-cap locking its rotations (the plate holds it level); the
+  drive: two CoordinateConstraints on the cap's X and Y coordinates with offsets u(t) cos(psi),
+  u(t) sin(psi), set once per step to u(t_end) in a PreStepUserFunction (exact at index 3 with a
+  fixed step), or as offset user functions (position and velocity, needed by the index-2 solver).
+  The cap's Z is free (it slides in the plate). The initial velocities (cap u'(0) e_psi, the rod
+  swinging about its lower joint) are consistent with the drive.
+The drive force F = -(lambda_x cos psi + lambda_y sin psi) is read from the multipliers of those two
+constraints through SensorObject(OutputVariableType.Force) (sign checked against
+nsd_core.quasistatic); nsd_core.outputs.device_columns builds the other columns.
 
-Force elements (Eqs. 16-18). One ObjectGenericODE2 on the cap and wall nodes carries all of them:
-its forceUserFunction gets the two nodes' coordinates and, vectorised over the elements, calls
-nsd_core.forces (rope_tension, advance_wire_stress, advance_spring_zeta, spring_push). One Python
-call per residual evaluation instead of one per element. Forces act at the body reference points
-(the cap and the wall only translate: their rotations are locked, so the moments of the off-centre
-attachment points go only into the rotation locks' reactions and change no motion).
+Force elements (Eqs. 16-18), all through nsd_core.forces, in one of two ways (``forces``):
+- "per_step" (default): a PreStepUserFunction predicts the end-of-step configuration with a
+  second-order Taylor step from the converged state (q + h q' + h^2/2 q''; the cap's X, Y exact),
+  evaluates all elements there at once (numpy over the elements) and sets two LoadForceVector
+  loads (on the cap node and on the wall node), constant within the step. The prediction error is
+  O(h^3) per step, so the loads are as good as implicit forces: at 10 Hz the result matches
+  "per_iteration" to ~1e-5 of the peak force, at a quarter of the cost (one Python call per step).
+- "per_iteration": one ObjectGenericODE2 on the cap and wall nodes whose forceUserFunction
+  evaluates all elements at every Newton residual (implicit; numerical Jacobian).
+Forces act at the body reference points: the cap and the wall only translate (rotations locked), so
+the moments of the off-centre attachment points go only into the rotation locks' reactions.
 
-Hysteretic states (SMA stress per wire, Eq. 17; Bouc-Wen zeta, Eq. 18). The laws are
-rate-independent, so they are integrated in strain, not in time: within a time step the force
-function is pure, sigma(L) = advance_wire_stress(eps_n, eps(L), sigma_n) (one classical RK4 step
-along the straight strain path from the committed strain eps_n), and likewise zeta(x_s). The
-committed states (eps_n, sigma_n, x_n, zeta_n) change only in a PostStepUserFunction, from the
-converged lengths of the accepted step. So Newton and its numerical Jacobian always see the same
-smooth function, the states are consistent with the end-of-step configuration (implicit, no lag),
-and the error is that of RK4 along each step's strain increment (fifth order per step).
+Hysteretic states (SMA stress per wire, Eq. 17; Bouc-Wen zeta, Eq. 18). The laws are rate-
+independent and each state's driving strain is a scalar, so they are integrated in strain, once per
+accepted step, from the committed states (eps_c, sigma_c), (x_c, zeta_c) at the last converged
+configuration along the straight increment to the new one: Heun's method (two slope evaluations,
+``sma_stress_slope`` / ``bouc_wen_slope``, second order; "rk4" uses advance_wire_stress /
+advance_spring_zeta, and gives the same loops to < 1e-6, since a step moves the strain < 1e-4).
+"per_step" commits the converged step and predicts the next one in one batched call; in
+"per_iteration" the force function is pure (it starts from the committed states every residual) so
+Newton and its Jacobian see one smooth function, and the states are committed in the pre-step.
+
+Solver: generalized-alpha (index 3), fixed step dividing the output interval, spectral radius 0.8
+(damps the multipliers' step-to-step oscillation; at 0.9 they are noisy to ~5e-4 of the peak force,
+at 0.5 the 250 Hz mode's phase error is 1.5x larger), modified Newton with tight residual
+tolerances (rel 1e-10, abs 1e-12). Accuracy is limited by the phase of the ringing ~250 Hz vertical
+mode after the slack events at A = 0.0255 m: second order in h (benchmarks/convergence_exudyn.py).
 """
 from __future__ import annotations
 
@@ -172,13 +189,13 @@ class ExudynEngine:
     name = "exudyn"
     default_settings = {
         "step_size": 1.0e-5,          # largest step [s]; the step used divides the output interval
-        "solver": "generalized_alpha",  # or "trapezoidal_index2"
-        "spectral_radius": 0.9,       # generalized-alpha rho_inf (index 3 needs < 1)
+        "solver": "generalized_alpha",  # or "trapezoidal_index2" (needs drive_offsets=user_function)
+        "spectral_radius": 0.8,       # generalized-alpha rho_inf (index 3 needs < 1)
         "newton_rel_tol": 1e-10,      # Exudyn's defaults leave noisy multipliers at small steps
         "newton_abs_tol": 1e-12,
         "newton_jacobian": "modified",  # "modified" (kept across steps), "per_step", "full"
-        "forces": "per_iteration",    # "per_iteration": GenericODE2 user function (implicit);
-                                      # "per_step": pre-step loads at the predicted end-of-step state
+        "forces": "per_step",         # "per_step": pre-step loads at the predicted end-of-step state;
+                                      # "per_iteration": GenericODE2 user function (implicit, ~4x slower)
         "state_integrator": "heun",   # hysteretic states per step in strain: "heun" or "rk4" (advance_*)
         "rod_axial_inertia": 1e-3,    # rod spin inertia / its transverse inertia (must be > 0)
         "drive_offsets": "prestep",   # "prestep": offset = u(t_end) set once per step; "user_function"
@@ -323,7 +340,7 @@ class ExudynEngine:
         ss = exu.SimulationSettings()
         ti = ss.timeIntegration
         ti.numberOfSteps, ti.endTime = n_steps, drive.duration
-        ti.verboseMode = int(__import__("os").environ.get("EXU_VERBOSE", "0"))
+        ti.verboseMode = 0
         ti.adaptiveStep = False
         nw = ti.newton
         nw.relativeTolerance, nw.absoluteTolerance = float(s["newton_rel_tol"]), float(s["newton_abs_tol"])
