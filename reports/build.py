@@ -1,0 +1,195 @@
+"""Build the validation report from an ``nsd compare`` results folder.
+
+``build_report(results_dir, out_dir)`` reads ``results.json`` and the cycle CSVs (and, when present,
+``benchmark/results.json`` and a parametric study under ``study/``), checks everything first, and
+only then writes ``out_dir/validation.pdf`` and one PNG per page. Every file is rendered under a
+temporary name and moved into place with ``os.replace``: a reader never sees half a report, and bad
+input (raised as ParameterError, one line) leaves nothing behind.
+"""
+from __future__ import annotations
+
+import json
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from nsd_core.params import ParameterError
+from nsd_core.results import RunResult, read_csv
+
+from . import style  # noqa: F401  (selects the Agg backend before pyplot is imported anywhere)
+
+REQUIRED = {"verdict": str, "exit_code": int, "failures": list, "engines": list, "cases": list, "runs": dict,
+            "metrics": list, "tolerances": dict}
+
+
+@dataclass
+class ReportData:
+    root: Path
+    summary: dict[str, Any]
+    results: dict[tuple[str, str], RunResult] = field(default_factory=dict)
+    benchmark: dict | None = None
+    study: list[dict] = field(default_factory=list)
+
+    @property
+    def cases(self) -> list[dict]:
+        return self.summary["cases"]
+
+    @property
+    def engines(self) -> list[str]:
+        return self.summary["engines"]
+
+    @property
+    def reference(self) -> str:
+        return self.summary.get("reference") or (self.engines[0] if self.engines else "")
+
+    def run(self, case: str, engine: str) -> dict:
+        return self.summary["runs"].get(case, {}).get(engine, {"status": "missing", "message": "not run"})
+
+
+def _json(path: Path, what: str) -> Any:
+    try:
+        return json.loads(path.read_text())
+    except FileNotFoundError:
+        raise ParameterError(f"--from {path.parent}: no {path.name} ({what})") from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
+        raise ParameterError(f"{path}: not readable JSON ({' '.join(str(e).split())})") from None
+
+
+def load(results_dir: str | Path) -> ReportData:
+    """Read and check a results folder; ParameterError (one line) if it is missing or malformed."""
+    root = Path(results_dir)
+    if not root.is_dir():
+        raise ParameterError(f"--from {root}: no such folder (give the --out folder of nsd compare)")
+    summary = _json(root / "results.json", "written by nsd compare --out")
+    if not isinstance(summary, dict):
+        raise ParameterError(f"{root / 'results.json'}: malformed (expected a JSON object)")
+    for key, typ in REQUIRED.items():
+        if key not in summary:
+            raise ParameterError(f"{root / 'results.json'}: malformed (no {key!r}); is it an nsd compare result?")
+        if not isinstance(summary[key], typ) or isinstance(summary[key], bool):
+            raise ParameterError(f"{root / 'results.json'}: malformed ({key!r} should be {typ.__name__})")
+    names = []
+    for i, c in enumerate(summary["cases"]):
+        if not isinstance(c, dict) or not {"name", "amplitude", "frequency"} <= set(c):
+            raise ParameterError(f"{root / 'results.json'}: malformed (cases[{i}] needs name, amplitude, frequency)")
+        names.append(c["name"])
+    data = ReportData(root, summary)
+    for case in names:
+        per = summary["runs"].get(case, {})
+        if not isinstance(per, dict):
+            raise ParameterError(f"{root / 'results.json'}: malformed (runs[{case!r}] should be an object)")
+        for engine, run in per.items():
+            if not isinstance(run, dict) or "status" not in run:
+                raise ParameterError(f"{root / 'results.json'}: malformed (runs[{case!r}][{engine!r}])")
+            if run["status"] != "ok":
+                continue
+            csv = root / str(run.get("csv", ""))
+            if not run.get("csv") or not csv.is_file():
+                raise ParameterError(f"--from {root}: cycle file {run.get('csv')!r} of {case}/{engine} is missing")
+            try:
+                data.results[(case, engine)] = read_csv(csv, engine)
+            except (OSError, ValueError, IndexError) as e:
+                raise ParameterError(f"{csv}: not a readable cycle CSV ({' '.join(str(e).split())[:120]})") from None
+            for col in ("t", "u", "F", "closure"):
+                if col not in data.results[(case, engine)].columns:
+                    raise ParameterError(f"{csv}: malformed (no column {col!r})")
+    bench = root / "benchmark" / "results.json"
+    if bench.is_file():
+        b = _json(bench, "written by nsd benchmark")
+        data.benchmark = b if isinstance(b, dict) and isinstance(b.get("problems"), dict) else None
+    data.study = _load_study(root / "study")
+    return data
+
+
+def _load_study(folder: Path) -> list[dict]:
+    """Per study of a parametric sweep (nsd_core.study): its summary and the steady cycles it names.
+    A study folder that cannot be read is skipped (it is an optional extra, not the validation)."""
+    index = folder / "sweep.json"
+    if not index.is_file():
+        return []
+    try:
+        studies = json.loads(index.read_text()).get("studies", {})
+        out = []
+        for name, rel in studies.items():
+            s = json.loads((folder / rel).read_text())
+            curves = []
+            for d in s.get("designs", []):
+                if d.get("status") == "ok" and d.get("steady_csv") and (folder / d["steady_csv"]).is_file():
+                    arr = np.genfromtxt(folder / d["steady_csv"], delimiter=",", names=True, deletechars="")
+                    cols = {n.split(" [")[0]: arr[n] for n in arr.dtype.names}
+                    curves.append({"value": d["value"], "engine": d.get("engine", "semirecursive"), "u": cols["u"],
+                                   "F": cols["F"], "design": d})
+            out.append({"name": name, "summary": s, "curves": curves})
+        return out
+    except (OSError, ValueError, KeyError, AttributeError, TypeError):
+        return []
+
+
+def pages(data: ReportData) -> list[tuple[str, Callable]]:
+    """(file stem, figure function) per page, in order. Each function returns one Figure."""
+    from . import figures, figures_extra, pages as text_pages
+    out: list[tuple[str, Callable]] = []
+    for i, fn in enumerate(text_pages.summary_pages(data)):
+        out.append((f"summary{'' if i == 0 else f'_{i + 1}'}", fn))
+    for i, fn in enumerate(text_pages.parameter_pages(data)):
+        out.append((f"parameters{'' if i == 0 else f'_{i + 1}'}", fn))
+    for i, group in enumerate(figures.case_groups(data)):
+        tag = "" if i == 0 else f"_{i + 1}"
+        out.append((f"cycles{tag}", lambda g=group: figures.cycles_figure(data, g)))
+        out.append((f"stiffness{tag}", lambda g=group: figures.stiffness_figure(data, g)))
+    for i, chunk in enumerate(figures.chunks([c["name"] for c in data.cases], 4)):
+        out.append((f"breakdown{'' if i == 0 else f'_{i + 1}'}", lambda c=chunk: figures.breakdown_figure(data, c)))
+    out.append(("convergence", lambda: figures_extra.convergence_figure(data)))
+    out.append(("cost", lambda: figures_extra.cost_figure(data)))
+    for i, chunk in enumerate(figures.chunks([c["name"] for c in data.cases], 4)):
+        out.append((f"closure{'' if i == 0 else f'_{i + 1}'}", lambda c=chunk: figures.closure_figure(data, c)))
+    if data.benchmark:
+        out.append(("benchmark", lambda: figures_extra.benchmark_figure(data)))
+    for s in data.study:
+        out.append((f"study_{s['name']}", lambda s=s: figures_extra.study_figure(data, s)))
+    return out
+
+
+def build_report(results_dir: str | Path, out_dir: str | Path) -> dict[str, Any]:
+    """Write ``out_dir/validation.pdf`` and ``out_dir/NN_page.png``; returns their paths."""
+    import matplotlib.pyplot as plt
+    from matplotlib.backends.backend_pdf import PdfPages
+    start = time.perf_counter()
+    data = load(results_dir)  # everything is checked before anything is written
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    pdf_path = out / "validation.pdf"
+    tmp_pdf = out / f".validation.pdf.{os.getpid()}.tmp"
+    written: list[tuple[Path, Path]] = []
+    try:
+        with plt.rc_context(style.RC), PdfPages(tmp_pdf, metadata={"Title": "NSD cross-validation report"}) as pdf:
+            plan = pages(data)
+            for n, (stem, make) in enumerate(plan, start=1):
+                fig = make()
+                style.footer(fig, f"NSD cross-validation report  |  {data.summary.get('date', '')}  |  "
+                                  f"revision {data.summary.get('git_revision', '?')}  |  page {n} of {len(plan)}")
+                pdf.savefig(fig)
+                png = out / f"{n:02d}_{stem}.png"
+                tmp = out / f".{png.name}.{os.getpid()}.tmp.png"
+                fig.savefig(tmp)
+                written.append((tmp, png))
+                plt.close(fig)
+        for tmp, png in written:
+            os.replace(tmp, png)
+        os.replace(tmp_pdf, pdf_path)
+        keep = {png.name for _, png in written}
+        for old in out.glob("[0-9][0-9]_*.png"):  # pages of an earlier report that this one no longer has
+            if old.name not in keep:
+                old.unlink()
+    except BaseException:
+        plt.close("all")
+        for tmp in [tmp_pdf] + [t for t, _ in written]:
+            if tmp.exists():
+                tmp.unlink()
+        raise
+    return {"pdf": str(pdf_path), "pngs": [str(p) for _, p in written], "pages": [s for s, _ in plan],
+            "seconds": time.perf_counter() - start}

@@ -1,0 +1,230 @@
+"""Per-case figures: force-displacement cycles with Delta F beneath (laid out like the paper's
+Figure 6), tangent stiffness with the Figure 7 working regions, force breakdown, loop closure."""
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.gridspec import GridSpecFromSubplotSpec
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
+
+from comparisons.metrics import phase_resample
+from nsd_core.cycle import loading_quarter, steady_cycle, tangent_stiffness
+
+from .style import GREY, LANDSCAPE, RED, SHADE, fmt, new_figure, no_data, style
+
+CLOSURE_FLOOR = 1e-18  # [m]; exact zeros are drawn here on the log axis
+
+
+def chunks(items: list, n: int) -> list[list]:
+    return [items[i:i + n] for i in range(0, len(items), n)] or [[]]
+
+
+def case_groups(data) -> list[dict]:
+    """Pages of case panels. Cases forming a full amplitude x frequency grid (at most 3 x 3, one
+    direction) get the paper's Figure 6 layout: rows = amplitude, columns = frequency."""
+    cases = data.cases
+    amps = sorted({c["amplitude"] for c in cases})
+    freqs = sorted({c["frequency"] for c in cases})
+    pairs = {(c["amplitude"], c["frequency"]) for c in cases}
+    if (len(cases) > 1 and len(pairs) == len(cases) == len(amps) * len(freqs) and len(amps) <= 3
+            and len(freqs) <= 3 and len({c.get("direction_deg", 0.0) for c in cases}) == 1):
+        cells = [(amps.index(c["amplitude"]), freqs.index(c["frequency"]), c["name"]) for c in cases]
+        return [{"shape": (len(amps), len(freqs)), "cells": sorted(cells), "grid": True}]
+    out = []
+    for chunk in chunks([c["name"] for c in cases], 4):
+        shape = {0: (1, 1), 1: (1, 1), 2: (1, 2)}.get(len(chunk), (2, 2))
+        out.append({"shape": shape, "cells": [(i // shape[1], i % shape[1], n) for i, n in enumerate(chunk)],
+                    "grid": False})
+    return out
+
+
+def _case(data, name: str) -> dict:
+    return next(c for c in data.cases if c["name"] == name)
+
+
+def _title(c: dict) -> str:
+    psi = c.get("direction_deg", 0.0)
+    return (f"{c['name']}: A = {fmt(c['amplitude'] * 1e3)} mm, f = {fmt(c['frequency'])} Hz"
+            + (f", psi = {fmt(psi)} deg" if psi else ""))
+
+
+def _engines_legend(fig, data, y: float = 0.925, extra: list | None = None) -> None:
+    handles = [Line2D([], [], **style(e), label=e + (" (reference)" if e == data.reference else ""))
+               for e in data.engines] + (extra or [])
+    fig.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, y), ncol=len(handles), frameon=False,
+               fontsize=8.5)
+
+
+def _failed_note(data, case: str) -> str:
+    bad = [f"{e}: {data.run(case, e).get('message', 'not run')}" for e in data.engines
+           if (case, e) not in data.results]
+    return "; ".join(bad)
+
+
+def _steady(data, case: str, engine: str):
+    res = data.results[(case, engine)]
+    m = steady_cycle(res, _case(data, case)["frequency"])
+    return res, m
+
+
+def cycles_figure(data, group: dict):
+    """F(u) of every engine overlaid per case, Delta F(u) against the reference beneath."""
+    fig = new_figure(LANDSCAPE, "Force-displacement cycles (steady cycle)" + (
+        " - Figure 6 layout: rows amplitude, columns frequency" if group["grid"] else ""),
+        f"beneath each panel: Delta F = F(engine) - F({data.reference}) on a common phase grid, "
+        f"plotted against the reference's displacement")
+    _engines_legend(fig, data)
+    rows, cols = group["shape"]
+    outer = fig.add_gridspec(rows, cols, left=0.07, right=0.98, top=0.88, bottom=0.07, hspace=0.32, wspace=0.2)
+    for r, c, name in group["cells"]:
+        inner = GridSpecFromSubplotSpec(2, 1, subplot_spec=outer[r, c], height_ratios=[3, 1.25], hspace=0.06)
+        ax, axd = fig.add_subplot(inner[0]), fig.add_subplot(inner[1])
+        case = _case(data, name)
+        f = case["frequency"]
+        drawn = False
+        for e in data.engines:
+            if (name, e) in data.results:
+                res, m = _steady(data, name, e)
+                ax.plot(res["u"][m] * 1e3, res["F"][m], **style(e))
+                drawn = True
+        if not drawn:
+            no_data(ax, f"no engine ran this case: {_failed_note(data, name)}")
+        ax.set_title(_title(case), fontsize=9)
+        ax.set_ylabel("force F [N]")
+        ax.tick_params(labelbottom=False)
+        note = _failed_note(data, name)
+        if note and drawn:
+            ax.text(0.02, 0.03, "failed: " + note[:90], transform=ax.transAxes, fontsize=7, color=RED, va="bottom")
+        ref = data.reference
+        if (name, ref) in data.results:
+            Fr = phase_resample(data.results[(name, ref)], f, "F")
+            ur = phase_resample(data.results[(name, ref)], f, "u")
+            for e in data.engines:
+                if e != ref and (name, e) in data.results:
+                    dF = phase_resample(data.results[(name, e)], f, "F") - Fr
+                    axd.plot(ur * 1e3, dF, **style(e), label=f"{e}: max |dF| {fmt(np.max(np.abs(dF)), 2)} N")
+            if len(axd.lines):
+                axd.legend(loc="upper left", fontsize=6.5, frameon=True, framealpha=0.8, handlelength=1.5)
+            axd.axhline(0.0, color=GREY, lw=0.6)
+        else:
+            axd.text(0.5, 0.5, f"reference {ref} did not run: no Delta F", transform=axd.transAxes, ha="center",
+                     va="center", fontsize=7.5, color=RED)
+        axd.sharex(ax)
+        axd.set_xlabel("displacement u [mm]")
+        axd.set_ylabel("Delta F [N]")
+        axd.ticklabel_format(axis="y", style="sci", scilimits=(-2, 3))
+        axd.yaxis.get_offset_text().set_fontsize(7)
+    return fig
+
+
+def stiffness_figure(data, group: dict):
+    """Tangent stiffness dF/du on the loading quarter (u: 0 -> +A) per engine, working regions of the
+    reference shaded (Figure 7), X_max marked where the ropes went slack."""
+    fig = new_figure(LANDSCAPE, "Tangent stiffness on the loading branch (Figure 7 working regions)",
+                     "dF/du along u = 0 -> +A of the steady cycle; shaded: the reference's regions of positive "
+                     "and negative stiffness; X_max: displacement at which every rope is slack")
+    extra = [Patch(facecolor=SHADE["+"], label="k > 0 region"), Patch(facecolor=SHADE["-"], label="k < 0 region"),
+             Line2D([], [], color="k", ls="-.", lw=1.0, label="X_max (reference)")]
+    _engines_legend(fig, data, extra=extra)
+    rows, cols = group["shape"]
+    gs = fig.add_gridspec(rows, cols, left=0.08, right=0.98, top=0.87, bottom=0.07, hspace=0.35, wspace=0.22)
+    for r, c, name in group["cells"]:
+        ax = fig.add_subplot(gs[r, c])
+        case = _case(data, name)
+        ks = []
+        for e in data.engines:
+            if (name, e) in data.results:
+                res = data.results[(name, e)]
+                q = loading_quarter(res, case["frequency"])
+                u, F = res["u"][q], res["F"][q]
+                keep = np.concatenate([[True], np.diff(u) > 0])  # strictly rising: a defined gradient
+                k = tangent_stiffness(u[keep], F[keep])
+                ax.plot(u[keep] * 1e3, k / 1e3, **style(e))
+                ks.append(k)
+        run = data.run(name, data.reference)
+        summ = run.get("summary") or next((data.run(name, e).get("summary") for e in data.engines
+                                          if data.run(name, e).get("summary")), None)
+        if not ks:
+            no_data(ax, f"no engine ran this case: {_failed_note(data, name)}")
+            ax.set_title(_title(case), fontsize=9)
+            continue
+        allk = np.concatenate(ks) / 1e3
+        lo, hi = np.percentile(allk, [1, 99])
+        pad = 0.12 * (hi - lo or 1.0)
+        ax.set_ylim(lo - pad, hi + pad)
+        if summ:
+            for reg in summ.get("stiffness_regions", []):
+                ax.axvspan(reg["from"] * 1e3, reg["to"] * 1e3, color=SHADE.get(reg["sign"], "#eeeeee"), zorder=0,
+                           lw=0)
+            xm = summ.get("x_max")
+            if xm is not None and xm <= case["amplitude"] * (1 + 1e-9):
+                ax.axvline(xm * 1e3, color="k", ls="-.", lw=1.0)
+                ax.text(xm * 1e3, 0.97, f"X_max = {xm * 1e3:.2f} mm ", transform=ax.get_xaxis_transform(),
+                        ha="right", va="top", fontsize=7.5, bbox=dict(fc="white", ec="none", alpha=0.8, pad=1))
+        ax.axhline(0.0, color=GREY, lw=0.6)
+        ax.set_xlim(0, case["amplitude"] * 1e3)
+        ax.set_title(_title(case), fontsize=9)
+        ax.set_xlabel("displacement u [mm]")
+        ax.set_ylabel("tangent stiffness dF/du [kN/m]")
+    return fig
+
+
+PARTS = [("F_rod", "rod (F_rod)"), ("F_ropes", "ropes (F_ropes)"), ("F_wires", "SMA wires (F_wires)"),
+         ("spring_push", "spring push on the wall (vertical)")]
+
+
+def breakdown_figure(data, names: list[str]):
+    """Per case (rows) the parts' contributions to F (columns), every engine overlaid."""
+    fig = new_figure(LANDSCAPE, "Force breakdown over the steady cycle",
+                     "F_rod + F_ropes + F_wires = F_device (the drive force less the cap's inertia); the spring "
+                     "column is the spring's push on the movable wall, not a part of F")
+    _engines_legend(fig, data)
+    n = max(len(names), 1)
+    gs = fig.add_gridspec(n, len(PARTS), left=0.07, right=0.985, top=0.87, bottom=0.07,
+                          hspace=0.55 if n > 1 else 0.3, wspace=0.32)
+    for i, name in enumerate(names):
+        case = _case(data, name)
+        for j, (col, label) in enumerate(PARTS):
+            ax = fig.add_subplot(gs[i, j])
+            for e in data.engines:
+                if (name, e) in data.results and col in data.results[(name, e)].columns:
+                    res, m = _steady(data, name, e)
+                    ax.plot(res["u"][m] * 1e3, res[col][m], **style(e))
+            if not ax.lines:
+                no_data(ax, "no engine output")
+            ax.set_title(f"{name}: {label}", fontsize=8)
+            ax.set_ylabel(f"{col} [N]", fontsize=7.5)
+            if i == n - 1:
+                ax.set_xlabel("displacement u [mm]")
+            ax.ticklabel_format(axis="y", style="sci", scilimits=(-3, 4))
+            ax.yaxis.get_offset_text().set_fontsize(7)
+            ax.set_xlim(-case["amplitude"] * 1.05e3, case["amplitude"] * 1.05e3)
+    return fig
+
+
+def closure_figure(data, names: list[str]):
+    """|loop-closure violation| against time per engine, log scale, with the gated limit."""
+    limit = data.summary["tolerances"].get("closure_max")
+    fig = new_figure(LANDSCAPE, "Loop-closure violation over time",
+                     f"largest constraint residual of the closed loops at each output sample (whole run); exact "
+                     f"zeros are drawn at {CLOSURE_FLOOR:g} m" + (f"; dashed red: the limit {limit:g} m" if limit else ""))
+    _engines_legend(fig, data)
+    shape = {0: (1, 1), 1: (1, 1), 2: (1, 2)}.get(len(names), (2, 2))
+    gs = fig.add_gridspec(*shape, left=0.08, right=0.98, top=0.87, bottom=0.07, hspace=0.35, wspace=0.2)
+    for i, name in enumerate(names):
+        ax = fig.add_subplot(gs[i // shape[1], i % shape[1]])
+        case = _case(data, name)
+        for e in data.engines:
+            if (name, e) in data.results:
+                res = data.results[(name, e)]
+                ax.semilogy(res["t"], np.maximum(np.abs(res["closure"]), CLOSURE_FLOOR), **style(e))
+        if not ax.lines:
+            no_data(ax, f"no engine ran this case: {_failed_note(data, name)}")
+        else:
+            if limit:
+                ax.axhline(limit, color=RED, ls="--", lw=1.0)
+            ax.set_ylim(CLOSURE_FLOOR / 3, max(limit or 0, max(np.nanmax(ln.get_ydata()) for ln in ax.lines)) * 30)
+        ax.set_title(_title(case), fontsize=9)
+        ax.set_xlabel("time t [s]")
+        ax.set_ylabel("|closure violation| [m]")
+    return fig

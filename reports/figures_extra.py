@@ -1,0 +1,242 @@
+"""Run-level figures: convergence, cost (wall time and speed-accuracy), and the optional extra
+pages (closed-loop benchmarks, parametric study) when the results folder holds them."""
+from __future__ import annotations
+
+import textwrap
+
+import matplotlib
+import numpy as np
+from matplotlib.lines import Line2D
+
+from .style import GREEN, GREY, LANDSCAPE, RED, color, fmt, new_figure, no_data, style, table
+
+SETTING_UNITS = {"rtol": "-", "atol": "-", "timestep": "s", "step_size": "s", "max_step": "s",
+                 "solver_tolerance": "-", "newton_rel_tol": "-"}
+FLOOR = 1e-16  # relative discrepancies of exactly zero are drawn here on log axes
+MARKERS = ["o", "s", "^", "D", "v", "P", "X", "*"]
+
+
+def _setting_label(name: str) -> str:
+    unit = SETTING_UNITS.get(name)
+    return f"{name} [{unit}]" if unit else f"{name} [as set in the engine]"
+
+
+def convergence_figure(data):
+    conv = data.summary.get("convergence")
+    fig = new_figure(LANDSCAPE, "Convergence: discrepancy against step size or solver tolerance",
+                     "each engine's steady cycle against a tight in-house reference, as its setting is refined "
+                     "(log-log); a discrepancy that falls with the setting is numerical error, a plateau is a floor")
+    if not isinstance(conv, dict) or not conv or "error" in conv:
+        why = (f"The convergence study failed: {conv['error']}" if isinstance(conv, dict) and "error" in conv
+               else "This results folder has no convergence study.")
+        how = ("To produce one, add a [convergence] table to the case file (case = a case of the file, cycles, "
+               "reference = semirecursive settings, and [convergence.sweep] with setting and values per engine; "
+               "comparisons/cases.toml has an example) and run:  nsd compare --cases FILE --convergence --out DIR")
+        fig.text(0.5, 0.6, why, ha="center", va="center", fontsize=12, color=RED if "failed" in why else "black")
+        fig.text(0.5, 0.5, "\n".join(textwrap.wrap(how, 110)), ha="center", va="top", fontsize=9.5)
+        return fig
+    engines = [e for e in data.engines if e in conv] + [e for e in conv if e not in data.engines]
+    n = len(engines) + 1
+    cols = min(n, 3)
+    rows = int(np.ceil(n / cols))
+    gs = fig.add_gridspec(rows, cols, left=0.07, right=0.98, top=0.84, bottom=0.08, hspace=0.4, wspace=0.28)
+    tol = data.summary["tolerances"]
+    leg = [Line2D([], [], color="k", marker="o", ls="-", label="max |dF| / max |F_ref|"),
+           Line2D([], [], color="k", marker="s", ls="--", mfc="none", label="|loop area - ref| / ref"),
+           Line2D([], [], color=GREY, ls=":", label="gated limits (max_dF_rel, loop_area_rel)")]
+    fig.legend(handles=leg, loc="upper center", bbox_to_anchor=(0.5, 0.925), ncol=3, frameon=False, fontsize=8.5)
+    speed = fig.add_subplot(gs[(n - 1) // cols, (n - 1) % cols])
+    for i, e in enumerate(engines):
+        ax = fig.add_subplot(gs[i // cols, i % cols])
+        entry = conv[e]
+        pts = [p for p in entry.get("points", []) if "error" not in p]
+        bad = [p for p in entry.get("points", []) if "error" in p]
+        if not pts:
+            no_data(ax, f"{e}: no converged point" + (f" ({bad[0]['error']})" if bad else ""))
+            continue
+        v = np.array([p["value"] for p in pts], float)
+        d1 = np.maximum([p["max_dF_rel"] for p in pts], FLOOR)
+        d2 = np.maximum([p["loop_area_rel"] for p in pts], FLOOR)
+        c = color(e)
+        ax.loglog(v, d1, "o-", color=c, lw=1.4)
+        ax.loglog(v, d2, "s--", color=c, mfc="none", lw=1.1)
+        for k in ("max_dF_rel", "loop_area_rel"):
+            if k in tol:
+                ax.axhline(tol[k], color=GREY, ls=":", lw=1.0)
+        if bad:
+            ax.text(0.02, 0.02, "failed at " + ", ".join(fmt(p["value"]) for p in bad), transform=ax.transAxes,
+                    fontsize=7, color=RED)
+        ax.set_title(f"{e}: {entry.get('setting', '?')} (case {entry.get('case', '?')})", fontsize=9, color=c)
+        ax.set_xlabel(_setting_label(entry.get("setting", "?")))
+        ax.set_ylabel("relative discrepancy [-]")
+        w = np.array([p.get("wall_time", np.nan) for p in pts], float)
+        ok = np.isfinite(w) & (w > 0)
+        speed.loglog(w[ok], d1[ok], "o-", color=c, lw=1.4, label=e)
+    ref = next((conv[e].get("reference") for e in engines if conv[e].get("reference")), "")
+    speed.set_title("max |dF| against cost", fontsize=9)
+    speed.set_xlabel("wall time per cycle [s]")
+    speed.set_ylabel("max |dF| / max |F_ref| [-]")
+    if "max_dF_rel" in tol:
+        speed.axhline(tol["max_dF_rel"], color=GREY, ls=":", lw=1.0)
+    if speed.lines:
+        speed.legend(fontsize=7.5)
+    fig.text(0.5, 0.895, f"reference run: {ref}", ha="center", va="top", fontsize=8, color=GREY)
+    return fig
+
+
+def cost_figure(data):
+    fig = new_figure(LANDSCAPE, "Cost: wall time per cycle, and accuracy against cost",
+                     "wall time of each engine's run divided by its cycles (engines ran in parallel worker "
+                     "processes on a shared machine); the reference has no discrepancy against itself")
+    gs = fig.add_gridspec(1, 2, left=0.07, right=0.98, top=0.86, bottom=0.16, wspace=0.25, width_ratios=[1.15, 1])
+    ax = fig.add_subplot(gs[0])
+    names = [c["name"] for c in data.cases]
+    ne = len(data.engines)
+    width = 0.8 / max(ne, 1)
+    x = np.arange(len(names))
+    vals = []
+    for j, e in enumerate(data.engines):
+        w = [data.run(n, e).get("wall_time_per_cycle") if data.run(n, e).get("status") == "ok" else None for n in names]
+        h = [v if v else 0.0 for v in w]
+        ax.bar(x + (j - (ne - 1) / 2) * width, h, width * 0.92, color=color(e), label=e)
+        vals += [v for v in w if v]
+        for xi, v in zip(x, w):
+            xx = xi + (j - (ne - 1) / 2) * width
+            if v:
+                ax.text(xx, v * 1.06, fmt(v, 2), ha="center", va="bottom", fontsize=6.5, rotation=90)
+            else:
+                ax.text(xx, 0.0, "failed", ha="center", va="bottom", fontsize=6.5, rotation=90, color=RED)
+    if vals and max(vals) / max(min(vals), 1e-12) > 30:
+        ax.set_yscale("log")
+        ax.set_ylim(min(vals) / 3, max(vals) * 6)
+    elif vals:
+        ax.set_ylim(0, max(vals) * 1.3)
+    ax.set_xticks(x, names, rotation=20 if len(names) > 2 else 0, ha="right" if len(names) > 2 else "center")
+    ax.set_xlabel("case")
+    ax.set_ylabel("wall time per cycle [s]")
+    ax.set_title("wall time per cycle per engine", fontsize=9)
+    ax.legend(fontsize=7.5, loc="upper left")
+    ax.grid(axis="x", visible=False)
+
+    sp = fig.add_subplot(gs[1])
+    ref = data.reference
+    marks = {n: MARKERS[i % len(MARKERS)] for i, n in enumerate(names)}
+    for m in data.summary["metrics"]:
+        if m.get("metric") == "max_dF_rel" and m.get("reference") == ref:
+            w = data.run(m["case"], m["engine"]).get("wall_time_per_cycle")
+            if w:
+                sp.loglog([w], [max(m["value"], FLOOR)], marks.get(m["case"], "o"), color=color(m["engine"]), ms=7,
+                          mec="k", mew=0.5)
+    conv = data.summary.get("convergence")
+    if isinstance(conv, dict) and "error" not in conv:
+        for e, entry in conv.items():
+            pts = [p for p in entry.get("points", []) if "error" not in p and p.get("wall_time")]
+            if pts:
+                sp.loglog([p["wall_time"] for p in pts], [max(p["max_dF_rel"], FLOOR) for p in pts], ":",
+                          color=color(e), marker=".", lw=1.0)
+    lim = data.summary["tolerances"].get("max_dF_rel")
+    if lim:
+        sp.axhline(lim, color=RED, ls="--", lw=1.0)
+    if not sp.lines:
+        no_data(sp, "no engine besides the reference ran: nothing to compare")
+    sp.set_xlabel("wall time per cycle [s]")
+    sp.set_ylabel(f"max |F - F_ref| / max |F_ref| [-] (vs {ref})")
+    sp.set_title("speed-accuracy", fontsize=9)
+    handles = [Line2D([], [], ls="", marker=marks[n], color="w", mec="k", mfc=GREY, label=n) for n in names]
+    handles += [Line2D([], [], ls="", marker="o", color=color(e), label=e) for e in data.engines if e != ref]
+    if lim:
+        handles.append(Line2D([], [], color=RED, ls="--", label=f"limit {fmt(lim)}"))
+    if isinstance(conv, dict) and conv and "error" not in conv:
+        handles.append(Line2D([], [], color=GREY, ls=":", marker=".", label="convergence study"))
+    sp.legend(handles=handles, fontsize=7, loc="best", ncol=2)
+    return fig
+
+
+def benchmark_figure(data):
+    b = data.benchmark
+    probs = b.get("problems", {})
+    ok = all(bool(p.get("passed")) for p in probs.values())
+    fig = new_figure(LANDSCAPE, "Closed-loop multibody benchmarks (generic semirecursive engine)",
+                     f"nsd benchmark{' --quick' if b.get('quick') else ''}: every problem against its published "
+                     f"reference; {'all goals met' if ok else 'SOME GOALS NOT MET'}")
+    rows, colors = [], []
+    for name, p in probs.items():
+        err = p.get("error")
+        digits = -np.log10(max(err, 1e-16)) if isinstance(err, (int, float)) and err > 0 else None
+        if "min_digits" in p:
+            digits = p["min_digits"]
+        extra = []
+        if "energy_drift" in p:
+            extra.append(f"energy drift {fmt(p['energy_drift'], 2)} J")
+        if "closure_max" in p:
+            extra.append(f"closure {fmt(p['closure_max'], 2)}")
+        rows.append([name, p.get("problem", name) if isinstance(p.get("problem"), str) else name,
+                     fmt(err, 3), fmt(digits, 3) if digits is not None else "-",
+                     fmt(p.get("cpu_time", p.get("wall_time")), 3), fmt(p.get("goal", "-")),
+                     "; ".join(extra) or "-", "yes" if p.get("passed") else "NO"])
+        colors.append([None] * 7 + [GREEN if p.get("passed") else RED])
+    y = table(fig, 0.9, [("problem", 12, "l"), ("label", 12, "l"), ("error vs reference", 13, "r"),
+                         ("digits", 7, "r"), ("wall time [s]", 10, "r"), ("goal", 8, "r"),
+                         ("also", 30, "l"), ("met", 5, "c")], rows, colors, fontsize=8)
+    wp = probs.get("andrews", {}).get("work_precision") or []
+    ax = fig.add_axes([0.1, 0.08, 0.55, max(y - 0.16, 0.2)])
+    if wp:
+        t = [r["wall_time"] for r in wp]
+        d = [r["min_digits"] for r in wp]
+        ax.semilogx(t, d, "o-", **{k: v for k, v in style("semirecursive").items() if k != "linestyle"})
+        for r in wp:
+            ax.annotate(f"rtol {r['rtol']:.0e}", (r["wall_time"], r["min_digits"]), textcoords="offset points",
+                        xytext=(6, -10), fontsize=7)
+        ax.axhline(8.0, color=GREY, ls=":", lw=1.0)
+        ax.set_title(f"Andrews' squeezing mechanism: work-precision ({wp[0].get('method', '')}, t = 0.03 s)",
+                     fontsize=9)
+    else:
+        no_data(ax, "no Andrews work-precision data in benchmark/results.json")
+    ax.set_xlabel("wall time [s]")
+    ax.set_ylabel("correct digits, min over the 7 angles [-]")
+    fig.text(0.7, 0.3, "dotted: the goal of 8 correct digits\n(Hairer & Wanner test set reference)", fontsize=8,
+             color=GREY, va="center")
+    return fig
+
+
+def study_figure(data, s: dict):
+    summ = s["summary"]
+    param = summ.get("parameter", s["name"])
+    unit = next((p.get("unit") for p in data.summary.get("params", []) if p.get("name") == param), None)
+    label = f"{param} [{unit or '-'}]"
+    fig = new_figure(LANDSCAPE, f"Parametric study: {param}" + (f" ({summ['paper']})" if summ.get("paper") else ""),
+                     f"steady cycles of the in-house model at f = {fmt(summ.get('frequency'))} Hz; amplitude per "
+                     f"design as recorded (working-range rule)")
+    gs = fig.add_gridspec(2, 2, left=0.07, right=0.97, top=0.88, bottom=0.08, hspace=0.35, wspace=0.25,
+                          width_ratios=[1.4, 1])
+    ax = fig.add_subplot(gs[:, 0])
+    vals = [c["value"] for c in s["curves"]]
+    if vals:
+        norm = matplotlib.colors.Normalize(min(vals), max(vals) if max(vals) > min(vals) else min(vals) + 1)
+        cmap = matplotlib.colormaps["viridis"]
+        for c in s["curves"]:
+            ax.plot(c["u"] * 1e3, c["F"], color=cmap(norm(c["value"])), lw=1.2,
+                    ls="-" if c["engine"] == "semirecursive" else "--")
+        cb = fig.colorbar(matplotlib.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, pad=0.02)
+        cb.set_label(label)
+    else:
+        no_data(ax, "no finished design in this study")
+    ax.set_xlabel("displacement u [mm]")
+    ax.set_ylabel("force F [N]")
+    ax.set_title("force-displacement, steady cycle", fontsize=9)
+    ds = [d for d in summ.get("designs", []) if d.get("status") == "ok"]
+    for k, (key, scale, ylab) in enumerate([("dissipated_energy", 1.0, "dissipated energy per cycle [J]"),
+                                            ("x_max_quasi_static", 1e3, "X_max, quasi-static [mm]")]):
+        a = fig.add_subplot(gs[k, 1])
+        pts = [(d["value"], d[key] * scale) for d in ds if isinstance(d.get(key), (int, float))]
+        if pts:
+            a.plot(*zip(*sorted(pts)), "o-", color=color("semirecursive"))
+        else:
+            no_data(a, f"no {key} recorded")
+        a.set_xlabel(label)
+        a.set_ylabel(ylab)
+    failed = [d for d in summ.get("designs", []) if d.get("status") != "ok"]
+    if failed:
+        fig.text(0.07, 0.03, "failed/missing designs: " + ", ".join(fmt(d["value"]) for d in failed), color=RED,
+                 fontsize=8)
+    return fig

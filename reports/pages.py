@@ -1,0 +1,197 @@
+"""Text pages of the report: the summary (verdict and failures first, what was run, tolerances,
+metrics against their limits, continued over as many pages as needed) and the parameter set."""
+from __future__ import annotations
+
+import json
+import textwrap
+
+from .style import GREEN, GREY, ORANGE, PORTRAIT, RED, fit, fmt, new_figure, rows_per_page, table
+
+FS = 7.0           # table font size [pt]
+LINE = 1.55 * FS / 72 / PORTRAIT[1]  # one table row, figure fraction
+BOTTOM = 0.05
+METRIC_DESC = {"max_dF_rel": "max |F - F_ref| / max |F_ref|", "rms_dF_rel": "RMS(F - F_ref) / max |F_ref|",
+               "loop_area_rel": "|loop area - ref| / |ref|", "peak_force_rel": "|peak |F| - ref| / ref",
+               "region_shift_rel": "largest stiffness-region boundary shift / A",
+               "closure_max": "largest loop-closure violation", "tracking_error": "largest drive tracking error"}
+
+
+def _text(fig, y: float, text: str, size: float = 8.0, color: str = "black", weight: str = "normal",
+          x: float = 0.06) -> float:
+    fig.text(x, y, text, ha="left", va="top", fontsize=size, color=color, weight=weight)
+    return y - (text.count("\n") + 1) * 1.45 * size / 72 / PORTRAIT[1]
+
+
+def _heading(fig, y: float, text: str) -> float:
+    return _text(fig, y - 0.006, text, size=10, weight="bold") - 0.004
+
+
+def _overrides(c: dict) -> str:
+    parts = [f"{k}={fmt(v)}" for k, v in (c.get("params_overridden") or {}).items()]
+    parts += [f"{e}: {k}={fmt(v)}" for e, p in (c.get("engine_params") or {}).items() for k, v in p.items()]
+    parts += [f"{e} settings: " + ", ".join(f"{k}={fmt(v)}" for k, v in s.items())
+              for e, s in (c.get("settings") or {}).items() if s]
+    return "; ".join(parts) or "-"
+
+
+def metric_rows(data) -> tuple[list[tuple[str, float, str]], list[list[str]], list[list]]:
+    """Pivot of the metrics: one row per (case, engine, compared with), one column per metric."""
+    s = data.summary
+    names = [m for m in s["tolerances"] if any(r.get("metric") == m for r in s["metrics"])]
+    units = s.get("metric_units", {})
+    cols = [("case", 15, "l"), ("engine", 11, "l"), ("vs", 11, "l")] + [(m, 10, "r") for m in names] + \
+           [("result", 9, "c")]
+    rows, colors = [], []
+    limit_row = ["limit", "", ""] + [f"\u2264 {fmt(s['tolerances'][m], 2)}" + (f" {units[m]}" if units.get(m, "-") != "-"
+                                                                                else "") for m in names] + [""]
+    rows.append(limit_row)
+    colors.append([GREY] * len(limit_row))
+    keyed: dict[tuple, dict] = {}
+    for r in s["metrics"]:
+        keyed.setdefault((r["case"], r["engine"], r.get("reference") or "own"), {})[r["metric"]] = r
+    for (case, engine, vs), ms in keyed.items():
+        row, col = [case, engine, vs if vs != "own" else "(own)"], [None, None, None]
+        bad_gated = bad_free = False
+        for m in names:
+            r = ms.get(m)
+            row.append(fmt(r["value"], 3) if r else "")
+            if r and not r["pass"]:
+                col.append(RED if r["gated"] else ORANGE)
+                bad_gated |= bool(r["gated"])
+                bad_free |= not r["gated"]
+            else:
+                col.append(None)
+        gated = any(r["gated"] for r in ms.values())
+        row.append("FAIL" if bad_gated else ("over*" if bad_free else ("PASS" if gated else "ok*")))
+        col.append(RED if bad_gated else (ORANGE if bad_free else (GREEN if gated else None)))
+        rows.append(row)
+        colors.append(col)
+    for case, per in s["runs"].items():
+        for engine, run in per.items():
+            if run.get("status") != "ok":
+                rows.append([case, engine, "-", "ERROR: " + str(run.get("message", "?"))] + [""] * (len(names) - 1)
+                            + ["ERROR"])
+                colors.append([RED] * len(rows[-1]))
+    return cols, rows, colors
+
+
+def summary_pages(data) -> list:
+    """Page 1 (verdict, failures, what was run, tolerances, metrics) and the metrics' continuation."""
+    s = data.summary
+    cols, rows, colors = metric_rows(data)
+    fig = _page_one(data)
+    y = fig._nsd_y - 0.004
+    y = _heading(fig, y, "Metrics against their limits")
+    fit_rows = rows_per_page(y - 0.045, BOTTOM, FS)
+    note = ("Gated rows compare an engine with the reference; (own) rows are an engine's own checks. Red: "
+            "outside its limit. Rows marked * are engine pairs reported but not gated (orange: over the limit).")
+    _text(fig, y, "\n".join(textwrap.wrap(note, 140)), size=7, color=GREY)
+    y -= 2 * 1.45 * 7 / 72 / PORTRAIT[1] + 0.006
+    first = rows[:max(fit_rows, 0)]
+    if first:
+        table(fig, y, cols, first, colors[:len(first)], fontsize=FS)
+    else:
+        _text(fig, y, "(continued on the next page)", size=8, color=GREY)
+    figs = [lambda: fig]
+    rest, rest_c = rows[len(first):], colors[len(first):]
+    per_page = rows_per_page(0.90, BOTTOM, FS)
+    for i in range(0, len(rest), per_page):
+        chunk, cchunk = [rows[0]] + rest[i:i + per_page], [colors[0]] + rest_c[i:i + per_page]
+
+        def cont(chunk=chunk, cchunk=cchunk):
+            f = new_figure(PORTRAIT, "Metrics against their limits (continued)",
+                           f"verdict {s['verdict']} (exit code {s['exit_code']})")
+            table(f, 0.92, cols, chunk, cchunk, fontsize=FS)
+            return f
+        figs.append(cont)
+    return figs
+
+
+def _page_one(data):
+    s = data.summary
+    verdict, code = s["verdict"], s["exit_code"]
+    fig = new_figure(PORTRAIT)
+    good = verdict == "PASS"
+    y = 0.975
+    fig.text(0.06, y, "NSD cross-validation report", ha="left", va="top", fontsize=14, weight="bold")
+    fig.text(0.94, y, f"VERDICT: {verdict}", ha="right", va="top", fontsize=15, weight="bold",
+             color=GREEN if good else RED)
+    y = 0.952
+    y = _text(fig, y, f"exit code {code}  |  {len(data.cases)} case(s) x {len(data.engines)} engine(s), reference "
+                      f"{data.reference}  |  date {s.get('date', '?')}  |  git revision {s.get('git_revision', '?')}",
+              size=8, color=GREY)
+    if s["failures"] or not good:
+        y = _text(fig, y - 0.006, "WHAT FAILED", size=11, color=RED, weight="bold")
+        lines = []
+        for f in s["failures"] or [f"verdict {verdict} without a listed failure"]:
+            w = textwrap.wrap(str(f), 120)
+            lines += [("\u2022 " if i == 0 else "   ") + t for i, t in enumerate(w)]
+        if len(lines) > 14:
+            lines = lines[:13] + [f"   ... {len(lines) - 13} more line(s): see the metrics table below"]
+        y = _text(fig, y, "\n".join(lines), size=8.5, color=RED)
+    else:
+        y = _text(fig, y - 0.006, "Every gated metric is within its limit and every engine ran.", size=9,
+                  color=GREEN, weight="bold")
+    y = _heading(fig, y - 0.004, "What was run")
+    vers = s.get("versions") or {}
+    engine_v = []
+    for e in data.engines:
+        v = vers.get(e) or vers.get("nsd-harness" if e == "semirecursive" else e, "?")
+        engine_v.append(f"{e} {v}" + (" (reference)" if e == data.reference else ""))
+    other = ", ".join(f"{k} {v}" for k, v in vers.items() if k not in data.engines and k not in ("nsd-harness",))
+    info = [f"Engines: {', '.join(engine_v)}", f"Software: {other or '-'}",
+            f"Total wall time {fmt(s.get('total_wall_time'))} s on {s.get('workers', '?')} worker process(es); "
+            f"parameters: {len(s.get('params', []))} rows (next page)"]
+    y = _text(fig, y, "\n".join(fit(t, 140) for t in info), size=7.5)
+    crow = [[c["name"], fmt(c["amplitude"] * 1e3), fmt(c["frequency"]), fmt(c.get("direction_deg", 0.0)),
+             str(c.get("cycles", "?")), str(c.get("samples_per_cycle", "?")), _overrides(c)] for c in data.cases]
+    ccol = [[None] * 6 + [RED if (c.get("engine_params") or {}) else None] for c in data.cases]
+    y = table(fig, y - 0.006, [("case", 15, "l"), ("A [mm]", 7, "r"), ("f [Hz]", 6, "r"), ("psi [deg]", 8, "r"),
+                               ("cycles", 6, "r"), ("samples/cycle", 11, "r"),
+                               ("overrides (engine-specific in red)", 47, "l")], crow, ccol, fontsize=FS)
+    y = _heading(fig, y - 0.006, "Tolerances")
+    units = s.get("metric_units", {})
+    trow = [[m, fmt(v, 3), units.get(m, "-"), METRIC_DESC.get(m, "")] for m, v in s["tolerances"].items()]
+    y = table(fig, y, [("metric", 16, "l"), ("limit", 9, "r"), ("unit", 5, "c"), ("definition", 60, "l")], trow,
+              fontsize=FS)
+    fig._nsd_y = y
+    return fig
+
+
+def parameter_pages(data) -> list:
+    """The parameter set with its provenance (every row), then each engine's solver settings."""
+    params = data.summary.get("params") or []
+    rows = [[p.get("name", ""), fmt(p.get("value")), p.get("unit", ""), p.get("source", ""), p.get("doc", "")]
+            for p in params]
+    cols = [("parameter", 20, "l"), ("value", 9, "r"), ("unit", 6, "c"), ("source", 27, "l"), ("meaning", 45, "l")]
+    settings = _settings_rows(data)
+    per_page = rows_per_page(0.90, BOTTOM, FS)
+    chunks = [rows[i:i + per_page] for i in range(0, len(rows), per_page)] or [[]]
+    figs = []
+    for k, chunk in enumerate(chunks):
+        def page(chunk=chunk, k=k):
+            f = new_figure(PORTRAIT, "Parameter set and provenance" + (" (continued)" if k else ""),
+                           "values used by every case (per-case and per-engine overrides: summary page); "
+                           "'assumed' rows cite the model notes that argue for them")
+            y = table(f, 0.92, cols, chunk, fontsize=FS) if chunk else _text(f, 0.92, "no parameter rows recorded")
+            last = k == len(chunks) - 1
+            if last and settings and y - BOTTOM > (len(settings) + 3) * LINE:
+                y = _heading(f, y - 0.01, "Engine solver settings (as recorded by each engine, first case)")
+                table(f, y, [("engine", 12, "l"), ("settings", 88, "l")], settings, fontsize=FS)
+            return f
+        figs.append(page)
+    return figs
+
+
+def _settings_rows(data) -> list[list[str]]:
+    rows = []
+    for e in data.engines:
+        for c in data.cases:
+            run = data.run(c["name"], e)
+            st = (run.get("stats") or {}).get("settings")
+            if st:
+                text = ", ".join(f"{k}={json.dumps(v) if isinstance(v, (list, dict)) else fmt(v)}" for k, v in st.items())
+                for i, line in enumerate(textwrap.wrap(text, 120)):
+                    rows.append([e if i == 0 else "", line])
+                break
+    return rows
