@@ -92,7 +92,7 @@ def run(engine, params, drive, settings):
 def study_case(params: Params, drive: Drive, default_step: float, ref_step: float, quick: bool,
                use_in_house: bool) -> dict:
     eng = ExudynEngine()
-    finest, err = run(eng, params, drive, {"step_size": ref_step})
+    finest, err = run(eng, params, drive, {"step_size": ref_step, "min_steps_per_cycle": 1})
     if finest is None:
         return {"amplitude": drive.amplitude, "frequency": drive.frequency, "error": f"finest run failed: {err}"}
     house, note = in_house(params, drive) if use_in_house else (None, "in-house reference not requested")
@@ -104,7 +104,7 @@ def study_case(params: Params, drive: Drive, default_step: float, ref_step: floa
     if house is not None:
         case["finest"]["vs_in_house"] = compare(finest, house, drive)
     for label, settings in ladders(drive, default_step, ref_step, quick):
-        full = {"step_size": default_step, **settings}
+        full = {"step_size": default_step, "min_steps_per_cycle": 1, **settings}
         r, err = run(eng, params, drive, full)
         row = {"study": label, "settings": full}
         if r is None:

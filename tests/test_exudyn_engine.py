@@ -18,7 +18,7 @@ from nsd_core.results import column_units
 
 P = Params()
 G = device_geometry(P)
-STEP = {"step_size": 2e-5}  # 5000 steps per 0.1 s
+STEP = {"step_size": 2e-5, "min_steps_per_cycle": 1}  # 5000 steps per 0.1 s (default: 20000)
 
 
 @pytest.fixture(scope="module")
@@ -100,8 +100,8 @@ def test_per_step_forces_match_implicit_user_function_forces():
     """The cheap per-step loads (forces at the predicted end-of-step state) against the implicit
     per-residual ObjectGenericODE2 user function: the same to ~1e-5 of the peak force."""
     drive = Drive(0.015, 10.0, cycles=1, samples_per_cycle=100)
-    a = ExudynEngine().run(P, drive, {"step_size": 5e-5, "forces": "per_step"})
-    b = ExudynEngine().run(P, drive, {"step_size": 5e-5, "forces": "per_iteration"})
+    a = ExudynEngine().run(P, drive, {**STEP, "step_size": 5e-5, "forces": "per_step"})
+    b = ExudynEngine().run(P, drive, {**STEP, "step_size": 5e-5, "forces": "per_iteration"})
     assert np.max(np.abs(a["F"] - b["F"])) < 1e-4 * np.max(np.abs(b["F"]))
 
 
@@ -114,4 +114,4 @@ def test_bad_input_and_failures():
     with pytest.raises(DriveError):
         ExudynEngine().run(P, Drive(0.031, 1.0), STEP)
     with pytest.raises(EngineError):  # Newton cannot reach an absurd tolerance in 25 iterations
-        ExudynEngine().run(P, drive, {"step_size": 1e-3, "newton_rel_tol": 1e-30, "newton_abs_tol": 1e-30})
+        ExudynEngine().run(P, drive, {**STEP, "step_size": 1e-3, "newton_rel_tol": 1e-30, "newton_abs_tol": 1e-30})
