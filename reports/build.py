@@ -119,8 +119,11 @@ def _load_study(folder: Path) -> list[dict]:
             curves = []
             for d in s.get("designs", []):
                 if d.get("status") == "ok" and d.get("steady_csv") and (folder / d["steady_csv"]).is_file():
-                    arr = np.genfromtxt(folder / d["steady_csv"], delimiter=",", names=True, deletechars="")
-                    cols = {n.split(" [")[0]: arr[n] for n in arr.dtype.names}
+                    path = folder / d["steady_csv"]
+                    with open(path) as f:
+                        names = [h.split(" [")[0] for h in f.readline().strip().split(",")]
+                    arr = np.genfromtxt(path, delimiter=",", skip_header=1, ndmin=2)  # blanks (nan) allowed
+                    cols = {n: arr[:, i] for i, n in enumerate(names)}
                     curves.append({"value": d["value"], "engine": d.get("engine", "semirecursive"), "u": cols["u"],
                                    "F": cols["F"], "design": d})
             out.append({"name": name, "summary": s, "curves": curves})

@@ -6,6 +6,7 @@ import numpy as np
 from matplotlib.gridspec import GridSpecFromSubplotSpec
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
+from matplotlib.ticker import FuncFormatter
 
 from comparisons.metrics import phase_resample
 from nsd_core.cycle import loading_quarter, steady_cycle, tangent_stiffness
@@ -48,7 +49,7 @@ def _title(c: dict) -> str:
             + (f", psi = {fmt(psi)} deg" if psi else ""))
 
 
-def _engines_legend(fig, data, y: float = 0.925, extra: list | None = None) -> None:
+def _engines_legend(fig, data, y: float = 0.935, extra: list | None = None) -> None:
     handles = [Line2D([], [], **style(e), label=e + (" (reference)" if e == data.reference else ""))
                for e in data.engines] + (extra or [])
     fig.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, y), ncol=len(handles), frameon=False,
@@ -75,7 +76,7 @@ def cycles_figure(data, group: dict):
         f"plotted against the reference's displacement")
     _engines_legend(fig, data)
     rows, cols = group["shape"]
-    outer = fig.add_gridspec(rows, cols, left=0.07, right=0.98, top=0.88, bottom=0.07, hspace=0.32, wspace=0.2)
+    outer = fig.add_gridspec(rows, cols, left=0.07, right=0.98, top=0.86, bottom=0.09, hspace=0.32, wspace=0.2)
     for r, c, name in group["cells"]:
         inner = GridSpecFromSubplotSpec(2, 1, subplot_spec=outer[r, c], height_ratios=[3, 1.25], hspace=0.06)
         ax, axd = fig.add_subplot(inner[0]), fig.add_subplot(inner[1])
@@ -112,8 +113,7 @@ def cycles_figure(data, group: dict):
         axd.sharex(ax)
         axd.set_xlabel("displacement u [mm]")
         axd.set_ylabel("Delta F [N]")
-        axd.ticklabel_format(axis="y", style="sci", scilimits=(-2, 3))
-        axd.yaxis.get_offset_text().set_fontsize(7)
+        axd.yaxis.set_major_formatter(FuncFormatter(lambda v, _: fmt(v, 2)))
     return fig
 
 
@@ -127,7 +127,7 @@ def stiffness_figure(data, group: dict):
              Line2D([], [], color="k", ls="-.", lw=1.0, label="X_max (reference)")]
     _engines_legend(fig, data, extra=extra)
     rows, cols = group["shape"]
-    gs = fig.add_gridspec(rows, cols, left=0.08, right=0.98, top=0.87, bottom=0.07, hspace=0.35, wspace=0.22)
+    gs = fig.add_gridspec(rows, cols, left=0.08, right=0.98, top=0.86, bottom=0.09, hspace=0.35, wspace=0.22)
     for r, c, name in group["cells"]:
         ax = fig.add_subplot(gs[r, c])
         case = _case(data, name)
@@ -153,16 +153,17 @@ def stiffness_figure(data, group: dict):
         pad = 0.12 * (hi - lo or 1.0)
         ax.set_ylim(lo - pad, hi + pad)
         if summ:
-            for reg in summ.get("stiffness_regions", []):
-                ax.axvspan(reg["from"] * 1e3, reg["to"] * 1e3, color=SHADE.get(reg["sign"], "#eeeeee"), zorder=0,
-                           lw=0)
+            regs = summ.get("stiffness_regions", [])
+            for i, reg in enumerate(regs):  # each region runs on to where the next one starts
+                end = regs[i + 1]["from"] if i + 1 < len(regs) else max(reg["to"], case["amplitude"] * 1.02)
+                ax.axvspan(reg["from"] * 1e3, end * 1e3, color=SHADE.get(reg["sign"], "#eeeeee"), zorder=0, lw=0)
             xm = summ.get("x_max")
             if xm is not None and xm <= case["amplitude"] * (1 + 1e-9):
                 ax.axvline(xm * 1e3, color="k", ls="-.", lw=1.0)
                 ax.text(xm * 1e3, 0.97, f"X_max = {xm * 1e3:.2f} mm ", transform=ax.get_xaxis_transform(),
                         ha="right", va="top", fontsize=7.5, bbox=dict(fc="white", ec="none", alpha=0.8, pad=1))
         ax.axhline(0.0, color=GREY, lw=0.6)
-        ax.set_xlim(0, case["amplitude"] * 1e3)
+        ax.set_xlim(0, case["amplitude"] * 1.02e3)
         ax.set_title(_title(case), fontsize=9)
         ax.set_xlabel("displacement u [mm]")
         ax.set_ylabel("tangent stiffness dF/du [kN/m]")
@@ -170,7 +171,7 @@ def stiffness_figure(data, group: dict):
 
 
 PARTS = [("F_rod", "rod (F_rod)"), ("F_ropes", "ropes (F_ropes)"), ("F_wires", "SMA wires (F_wires)"),
-         ("spring_push", "spring push on the wall (vertical)")]
+         ("spring_push", "spring push (vertical)")]
 
 
 def breakdown_figure(data, names: list[str]):
@@ -180,8 +181,8 @@ def breakdown_figure(data, names: list[str]):
                      "column is the spring's push on the movable wall, not a part of F")
     _engines_legend(fig, data)
     n = max(len(names), 1)
-    gs = fig.add_gridspec(n, len(PARTS), left=0.07, right=0.985, top=0.87, bottom=0.07,
-                          hspace=0.55 if n > 1 else 0.3, wspace=0.32)
+    gs = fig.add_gridspec(n, len(PARTS), left=0.07, right=0.985, top=0.86, bottom=0.09,
+                          hspace=0.75 if n > 1 else 0.3, wspace=0.32)
     for i, name in enumerate(names):
         case = _case(data, name)
         for j, (col, label) in enumerate(PARTS):
@@ -194,8 +195,7 @@ def breakdown_figure(data, names: list[str]):
                 no_data(ax, "no engine output")
             ax.set_title(f"{name}: {label}", fontsize=8)
             ax.set_ylabel(f"{col} [N]", fontsize=7.5)
-            if i == n - 1:
-                ax.set_xlabel("displacement u [mm]")
+            ax.set_xlabel("displacement u [mm]", fontsize=7.5, labelpad=1)
             ax.ticklabel_format(axis="y", style="sci", scilimits=(-3, 4))
             ax.yaxis.get_offset_text().set_fontsize(7)
             ax.set_xlim(-case["amplitude"] * 1.05e3, case["amplitude"] * 1.05e3)
@@ -210,7 +210,7 @@ def closure_figure(data, names: list[str]):
                      f"zeros are drawn at {CLOSURE_FLOOR:g} m" + (f"; dashed red: the limit {limit:g} m" if limit else ""))
     _engines_legend(fig, data)
     shape = {0: (1, 1), 1: (1, 1), 2: (1, 2)}.get(len(names), (2, 2))
-    gs = fig.add_gridspec(*shape, left=0.08, right=0.98, top=0.87, bottom=0.07, hspace=0.35, wspace=0.2)
+    gs = fig.add_gridspec(*shape, left=0.08, right=0.98, top=0.86, bottom=0.09, hspace=0.35, wspace=0.2)
     for i, name in enumerate(names):
         ax = fig.add_subplot(gs[i // shape[1], i % shape[1]])
         case = _case(data, name)

@@ -14,6 +14,8 @@ SETTING_UNITS = {"rtol": "-", "atol": "-", "timestep": "s", "step_size": "s", "m
                  "solver_tolerance": "-", "newton_rel_tol": "-"}
 FLOOR = 1e-16  # relative discrepancies of exactly zero are drawn here on log axes
 MARKERS = ["o", "s", "^", "D", "v", "P", "X", "*"]
+GOALS = {"andrews": "\u2265 8 correct digits", "A04": "drift \u2264 1e-3 J, cuts \u2264 1e-6 m",
+         "A02": "error, drift \u2264 1e-3", "slider_crank": "error \u2264 1e-10"}
 
 
 def _setting_label(name: str) -> str:
@@ -88,7 +90,7 @@ def cost_figure(data):
     fig = new_figure(LANDSCAPE, "Cost: wall time per cycle, and accuracy against cost",
                      "wall time of each engine's run divided by its cycles (engines ran in parallel worker "
                      "processes on a shared machine); the reference has no discrepancy against itself")
-    gs = fig.add_gridspec(1, 2, left=0.07, right=0.98, top=0.86, bottom=0.16, wspace=0.25, width_ratios=[1.15, 1])
+    gs = fig.add_gridspec(1, 2, left=0.07, right=0.98, top=0.87, bottom=0.16, wspace=0.25, width_ratios=[1.15, 1])
     ax = fig.add_subplot(gs[0])
     names = [c["name"] for c in data.cases]
     ne = len(data.engines)
@@ -139,6 +141,8 @@ def cost_figure(data):
         sp.axhline(lim, color=RED, ls="--", lw=1.0)
     if not sp.lines:
         no_data(sp, "no engine besides the reference ran: nothing to compare")
+    else:
+        sp.margins(x=0.15, y=0.15)
     sp.set_xlabel("wall time per cycle [s]")
     sp.set_ylabel(f"max |F - F_ref| / max |F_ref| [-] (vs {ref})")
     sp.set_title("speed-accuracy", fontsize=9)
@@ -170,16 +174,16 @@ def benchmark_figure(data):
             extra.append(f"energy drift {fmt(p['energy_drift'], 2)} J")
         if "closure_max" in p:
             extra.append(f"closure {fmt(p['closure_max'], 2)}")
-        rows.append([name, p.get("problem", name) if isinstance(p.get("problem"), str) else name,
-                     fmt(err, 3), fmt(digits, 3) if digits is not None else "-",
-                     fmt(p.get("cpu_time", p.get("wall_time")), 3), fmt(p.get("goal", "-")),
-                     "; ".join(extra) or "-", "yes" if p.get("passed") else "NO"])
-        colors.append([None] * 7 + [GREEN if p.get("passed") else RED])
-    y = table(fig, 0.9, [("problem", 12, "l"), ("label", 12, "l"), ("error vs reference", 13, "r"),
-                         ("digits", 7, "r"), ("wall time [s]", 10, "r"), ("goal", 8, "r"),
-                         ("also", 30, "l"), ("met", 5, "c")], rows, colors, fontsize=8)
+        goal = GOALS.get(name, f"error \u2264 {fmt(p['goal'])}" if "goal" in p else "-")
+        rows.append([name, fmt(err, 3), fmt(digits, 3) if digits is not None else "-",
+                     fmt(p.get("cpu_time", p.get("wall_time")), 3), goal, "; ".join(extra) or "-",
+                     "yes" if p.get("passed") else "NO"])
+        colors.append([None] * 6 + [GREEN if p.get("passed") else RED])
+    y = table(fig, 0.9, [("problem", 12, "l"), ("error vs reference", 13, "r"), ("digits", 7, "r"),
+                         ("wall time [s]", 10, "r"), ("goal", 20, "l"), ("also", 32, "l"), ("met", 5, "c")], rows,
+              colors, fontsize=8)
     wp = probs.get("andrews", {}).get("work_precision") or []
-    ax = fig.add_axes([0.1, 0.08, 0.55, max(y - 0.16, 0.2)])
+    ax = fig.add_axes([0.1, 0.09, 0.55, max(y - 0.17, 0.2)])
     if wp:
         t = [r["wall_time"] for r in wp]
         d = [r["min_digits"] for r in wp]
@@ -188,6 +192,7 @@ def benchmark_figure(data):
             ax.annotate(f"rtol {r['rtol']:.0e}", (r["wall_time"], r["min_digits"]), textcoords="offset points",
                         xytext=(6, -10), fontsize=7)
         ax.axhline(8.0, color=GREY, ls=":", lw=1.0)
+        ax.margins(x=0.12, y=0.1)
         ax.set_title(f"Andrews' squeezing mechanism: work-precision ({wp[0].get('method', '')}, t = 0.03 s)",
                      fontsize=9)
     else:
@@ -207,13 +212,13 @@ def study_figure(data, s: dict):
     fig = new_figure(LANDSCAPE, f"Parametric study: {param}" + (f" ({summ['paper']})" if summ.get("paper") else ""),
                      f"steady cycles of the in-house model at f = {fmt(summ.get('frequency'))} Hz; amplitude per "
                      f"design as recorded (working-range rule)")
-    gs = fig.add_gridspec(2, 2, left=0.07, right=0.97, top=0.88, bottom=0.08, hspace=0.35, wspace=0.25,
+    gs = fig.add_gridspec(2, 2, left=0.07, right=0.97, top=0.88, bottom=0.09, hspace=0.35, wspace=0.25,
                           width_ratios=[1.4, 1])
     ax = fig.add_subplot(gs[:, 0])
     vals = [c["value"] for c in s["curves"]]
     if vals:
         norm = matplotlib.colors.Normalize(min(vals), max(vals) if max(vals) > min(vals) else min(vals) + 1)
-        cmap = matplotlib.colormaps["viridis"]
+        cmap = matplotlib.colors.ListedColormap(matplotlib.colormaps["viridis"](np.linspace(0, 0.85, 256)))
         for c in s["curves"]:
             ax.plot(c["u"] * 1e3, c["F"], color=cmap(norm(c["value"])), lw=1.2,
                     ls="-" if c["engine"] == "semirecursive" else "--")

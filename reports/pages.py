@@ -3,21 +3,28 @@ metrics against their limits, continued over as many pages as needed) and the pa
 from __future__ import annotations
 
 import json
-import textwrap
 
-from .style import GREEN, GREY, ORANGE, PORTRAIT, RED, fit, fmt, new_figure, rows_per_page, table
+from .style import (GREEN, GREY, ORANGE, PORTRAIT, RED, fmt, new_figure, rows_per_page, table, text_width,
+                    wrap_rows, wrap_width)
 
 FS = 7.0           # table font size [pt]
 LINE = 1.55 * FS / 72 / PORTRAIT[1]  # one table row, figure fraction
 BOTTOM = 0.05
+WIDTH_PT = 0.88 * PORTRAIT[0] * 72  # usable text width [pt]
 METRIC_DESC = {"max_dF_rel": "max |F - F_ref| / max |F_ref|", "rms_dF_rel": "RMS(F - F_ref) / max |F_ref|",
                "loop_area_rel": "|loop area - ref| / |ref|", "peak_force_rel": "|peak |F| - ref| / ref",
                "region_shift_rel": "largest stiffness-region boundary shift / A",
                "closure_max": "largest loop-closure violation", "tracking_error": "largest drive tracking error"}
 
 
+def _wrap(text: str, size: float, bold: bool = False) -> str:
+    """Wrap to the page's text width at font ``size`` (measured)."""
+    return "\n".join(wrap_width(text, WIDTH_PT, size, bold, indent="   "))
+
+
 def _text(fig, y: float, text: str, size: float = 8.0, color: str = "black", weight: str = "normal",
           x: float = 0.06) -> float:
+    text = _wrap(text, size, weight == "bold")
     fig.text(x, y, text, ha="left", va="top", fontsize=size, color=color, weight=weight)
     return y - (text.count("\n") + 1) * 1.45 * size / 72 / PORTRAIT[1]
 
@@ -34,16 +41,32 @@ def _overrides(c: dict) -> str:
     return "; ".join(parts) or "-"
 
 
+def _split_name(name: str, unit: str, width: float) -> str:
+    """A metric name over as many header lines as its column needs, broken before underscores."""
+    tokens = name.split("_")
+    parts = [tokens[0]] + ["_" + t for t in tokens[1:]] + ([f" [{unit}]"] if unit and unit != "-" else [])
+    lines = [""]
+    for p in parts:
+        if lines[-1] and text_width(lines[-1] + p, FS, True) > width:
+            lines.append(p.strip())
+        else:
+            lines[-1] += p
+    return "\n".join(lines)
+
+
 def metric_rows(data) -> tuple[list[tuple[str, float, str]], list[list[str]], list[list]]:
     """Pivot of the metrics: one row per (case, engine, compared with), one column per metric."""
     s = data.summary
     names = [m for m in s["tolerances"] if any(r.get("metric") == m for r in s["metrics"])]
     units = s.get("metric_units", {})
-    cols = [("case", 15, "l"), ("engine", 11, "l"), ("vs", 11, "l")] + [(m, 10, "r") for m in names] + \
-           [("result", 9, "c")]
+    texts = [[r["case"] for r in s["metrics"]] + ["case"], [r["engine"] for r in s["metrics"]] + ["engine"],
+             [r.get("reference") or "(own)" for r in s["metrics"]] + ["vs"], ["result", "over*", "ERROR"]]
+    fixed = [max(text_width(str(t), FS, True) for t in col) + 6 for col in texts]  # natural widths [pt]
+    share = max((WIDTH_PT - sum(fixed)) / max(len(names), 1), 30.0)
+    cols = [("case", fixed[0], "l"), ("engine", fixed[1], "l"), ("vs", fixed[2], "l")] + \
+        [(_split_name(m, units.get(m, "-"), share - 6), share, "r") for m in names] + [("result", fixed[3], "c")]
     rows, colors = [], []
-    limit_row = ["limit", "", ""] + [f"\u2264 {fmt(s['tolerances'][m], 2)}" + (f" {units[m]}" if units.get(m, "-") != "-"
-                                                                                else "") for m in names] + [""]
+    limit_row = ["limit", "", ""] + [f"\u2264 {fmt(s['tolerances'][m], 2)}" for m in names] + [""]
     rows.append(limit_row)
     colors.append([GREY] * len(limit_row))
     keyed: dict[tuple, dict] = {}
@@ -85,8 +108,7 @@ def summary_pages(data) -> list:
     fit_rows = rows_per_page(y - 0.045, BOTTOM, FS)
     note = ("Gated rows compare an engine with the reference; (own) rows are an engine's own checks. Red: "
             "outside its limit. Rows marked * are engine pairs reported but not gated (orange: over the limit).")
-    _text(fig, y, "\n".join(textwrap.wrap(note, 140)), size=7, color=GREY)
-    y -= 2 * 1.45 * 7 / 72 / PORTRAIT[1] + 0.006
+    y = _text(fig, y, note, size=7, color=GREY) - 0.006
     first = rows[:max(fit_rows, 0)]
     if first:
         table(fig, y, cols, first, colors[:len(first)], fontsize=FS)
@@ -124,8 +146,7 @@ def _page_one(data):
         y = _text(fig, y - 0.006, "WHAT FAILED", size=11, color=RED, weight="bold")
         lines = []
         for f in s["failures"] or [f"verdict {verdict} without a listed failure"]:
-            w = textwrap.wrap(str(f), 120)
-            lines += [("\u2022 " if i == 0 else "   ") + t for i, t in enumerate(w)]
+            lines += wrap_width("\u2022 " + str(f), WIDTH_PT, 8.5, indent="   ")
         if len(lines) > 14:
             lines = lines[:13] + [f"   ... {len(lines) - 13} more line(s): see the metrics table below"]
         y = _text(fig, y, "\n".join(lines), size=8.5, color=RED)
@@ -142,13 +163,14 @@ def _page_one(data):
     info = [f"Engines: {', '.join(engine_v)}", f"Software: {other or '-'}",
             f"Total wall time {fmt(s.get('total_wall_time'))} s on {s.get('workers', '?')} worker process(es); "
             f"parameters: {len(s.get('params', []))} rows (next page)"]
-    y = _text(fig, y, "\n".join(fit(t, 140) for t in info), size=7.5)
+    y = _text(fig, y, "\n".join(info), size=7.5)
     crow = [[c["name"], fmt(c["amplitude"] * 1e3), fmt(c["frequency"]), fmt(c.get("direction_deg", 0.0)),
              str(c.get("cycles", "?")), str(c.get("samples_per_cycle", "?")), _overrides(c)] for c in data.cases]
     ccol = [[None] * 6 + [RED if (c.get("engine_params") or {}) else None] for c in data.cases]
-    y = table(fig, y - 0.006, [("case", 15, "l"), ("A [mm]", 7, "r"), ("f [Hz]", 6, "r"), ("psi [deg]", 8, "r"),
-                               ("cycles", 6, "r"), ("samples/cycle", 11, "r"),
-                               ("overrides (engine-specific in red)", 47, "l")], crow, ccol, fontsize=FS)
+    ccols = [("case", 15, "l"), ("A [mm]", 7, "r"), ("f [Hz]", 6, "r"), ("psi [deg]", 8, "r"), ("cycles", 6, "r"),
+             ("samples\nper cycle", 8, "r"), ("overrides (engine-specific ones in red)", 50, "l")]
+    crow, ccol, stripe = wrap_rows(ccols, crow, ccol, FS)
+    y = table(fig, y - 0.006, ccols, crow, ccol, fontsize=FS, stripe=stripe)
     y = _heading(fig, y - 0.006, "Tolerances")
     units = s.get("metric_units", {})
     trow = [[m, fmt(v, 3), units.get(m, "-"), METRIC_DESC.get(m, "")] for m, v in s["tolerances"].items()]
@@ -163,21 +185,32 @@ def parameter_pages(data) -> list:
     params = data.summary.get("params") or []
     rows = [[p.get("name", ""), fmt(p.get("value")), p.get("unit", ""), p.get("source", ""), p.get("doc", "")]
             for p in params]
-    cols = [("parameter", 20, "l"), ("value", 9, "r"), ("unit", 6, "c"), ("source", 27, "l"), ("meaning", 45, "l")]
+    cols = [("parameter", 21, "l"), ("value", 9, "r"), ("unit", 6, "c"), ("source", 34, "l"), ("meaning", 48, "l")]
+    rows, _, stripe = wrap_rows(cols, rows, None, FS)
     settings = _settings_rows(data)
     per_page = rows_per_page(0.90, BOTTOM, FS)
-    chunks = [rows[i:i + per_page] for i in range(0, len(rows), per_page)] or [[]]
+    chunks, i = [], 0
+    while i < len(rows):  # a page break never splits a wrapped parameter
+        j = min(i + per_page, len(rows))
+        while j < len(rows) and j > i + 1 and stripe[j] == stripe[j - 1]:
+            j -= 1
+        chunks.append((rows[i:j], stripe[i:j]))
+        i = j
+    chunks = chunks or [([], [])]
     figs = []
     for k, chunk in enumerate(chunks):
         def page(chunk=chunk, k=k):
             f = new_figure(PORTRAIT, "Parameter set and provenance" + (" (continued)" if k else ""),
-                           "values used by every case (per-case and per-engine overrides: summary page); "
-                           "'assumed' rows cite the model notes that argue for them")
-            y = table(f, 0.92, cols, chunk, fontsize=FS) if chunk else _text(f, 0.92, "no parameter rows recorded")
+                           "SI values used by every case (overrides: summary page); source: the paper's table,\n"
+                           "or 'assumed' with the model notes that argue for the value")
+            y = (table(f, 0.915, cols, chunk[0], fontsize=FS, stripe=chunk[1]) if chunk[0]
+                 else _text(f, 0.915, "no parameter rows recorded"))
             last = k == len(chunks) - 1
-            if last and settings and y - BOTTOM > (len(settings) + 3) * LINE:
+            if last and settings and y - BOTTOM > (3 * len(settings) + 3) * LINE:
                 y = _heading(f, y - 0.01, "Engine solver settings (as recorded by each engine, first case)")
-                table(f, y, [("engine", 12, "l"), ("settings", 88, "l")], settings, fontsize=FS)
+                scols = [("engine", 12, "l"), ("settings", 88, "l")]
+                srows, _, sstripe = wrap_rows(scols, settings, None, FS)
+                table(f, y, scols, srows, fontsize=FS, stripe=sstripe)
             return f
         figs.append(page)
     return figs
@@ -190,8 +223,7 @@ def _settings_rows(data) -> list[list[str]]:
             run = data.run(c["name"], e)
             st = (run.get("stats") or {}).get("settings")
             if st:
-                text = ", ".join(f"{k}={json.dumps(v) if isinstance(v, (list, dict)) else fmt(v)}" for k, v in st.items())
-                for i, line in enumerate(textwrap.wrap(text, 120)):
-                    rows.append([e if i == 0 else "", line])
+                rows.append([e, ", ".join(f"{k}={json.dumps(v) if isinstance(v, (list, dict)) else fmt(v)}"
+                                          for k, v in st.items())])
                 break
     return rows

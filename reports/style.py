@@ -2,12 +2,14 @@
 and a plain text-table renderer that never lets a cell run into its neighbour."""
 from __future__ import annotations
 
+import functools
 import textwrap
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.font_manager import FontProperties  # noqa: E402
 
 # One fixed map for every figure: the reference is solid and drawn first, the others dashed/dotted,
 # so curves that agree to the line width stay distinguishable.
@@ -66,40 +68,133 @@ def fit(text: str, chars: int) -> str:
     return text if len(text) <= chars else text[: max(chars - 1, 1)] + "\u2026"
 
 
-def table(fig, top: float, columns: list[tuple[str, float, str]], rows: list[list[str]],
-          colors: list[list[str | None]] | None = None, fontsize: float = 7.0, left: float = 0.06,
-          right: float = 0.94, header_color: str = "#e6e6e6") -> float:
-    """Draw rows of strings as a table in figure coordinates; returns the y below the last row.
+CHAR = 0.6  # a safe average glyph width of DejaVu Sans, in units of the font size
 
-    ``columns``: (header, relative width, alignment 'l'/'r'/'c'). Cells are cut to what fits their
-    column (estimated from the font size), so no text crosses into the next column.
-    """
-    w_in, h_in = fig.get_size_inches()
-    row_h = fontsize * 1.55 / 72 / h_in
+
+@functools.lru_cache(maxsize=20000)
+def text_width(text: str, size: float, bold: bool = False) -> float:
+    """Width of ``text`` set in the report's font [pt], measured by the Agg renderer."""
+    global _RENDERER
+    if _RENDERER is None:
+        from matplotlib.backends.backend_agg import RendererAgg
+        _RENDERER = RendererAgg(10, 10, 720)  # fine pixels: hinting at 72 dpi understates widths by ~3 %
+    prop = FontProperties(size=size, weight="bold" if bold else "normal")
+    return _RENDERER.get_text_width_height_descent(text, prop, ismath=False)[0] * 0.1 * 1.03
+
+
+_RENDERER = None
+
+
+def fit_width(text: str, width: float, size: float, bold: bool = False) -> str:
+    """``text`` shortened with an ellipsis until it is at most ``width`` points wide."""
+    text = str(text)
+    if text_width(text, size, bold) <= width:
+        return text
+    lo, hi = 0, len(text)
+    while lo < hi:
+        mid = (lo + hi + 1) // 2
+        if text_width(text[:mid] + "\u2026", size, bold) <= width:
+            lo = mid
+        else:
+            hi = mid - 1
+    return text[:lo] + "\u2026"
+
+
+def wrap_width(text: str, width: float, size: float, bold: bool = False, indent: str = "") -> list[str]:
+    """Greedy word wrap of ``text`` to lines at most ``width`` points wide; continuation lines start
+    with ``indent``; words longer than a line are split."""
+    lines: list[str] = []
+    for para in str(text).split("\n"):
+        line = ""
+        for word in para.split(" "):
+            cand = f"{line} {word}" if line.strip() else line + word
+            if text_width(cand, size, bold) <= width:
+                line = cand
+                continue
+            if line.strip():
+                lines.append(line)
+                line = indent
+            word = line + word
+            while text_width(word, size, bold) > width and len(word) > len(indent) + 1:
+                cut = max(len(fit_width(word, width, size, bold)) - 1, len(indent) + 1)
+                lines.append(word[:cut])
+                word = indent + word[cut:]
+            line = word
+        lines.append(line)
+    return lines
+
+
+def _spans(fig, columns, left, right):
     total = sum(c[1] for c in columns)
-    span = right - left
     xs, x = [], left
     for _, w, _ in columns:
-        xs.append((x, x + span * w / total))
-        x += span * w / total
+        xs.append((x, x + (right - left) * w / total))
+        x += (right - left) * w / total
+    return xs
+
+
+def widths(fig, columns, left: float = 0.06, right: float = 0.94, pad: float = 0.004) -> list[float]:
+    """Usable width of each column [pt]."""
+    w_in = fig.get_size_inches()[0] if fig is not None else PORTRAIT[0]
+    return [(b - a - 2 * pad) * w_in * 72 for a, b in _spans(fig, columns, left, right)]
+
+
+def wrap_rows(columns, rows, colors=None, fontsize: float = 7.0, fig=None, left: float = 0.06,
+              right: float = 0.94):
+    """Split cells too long for their column over several physical rows. Returns (rows, colors,
+    stripe) where stripe[i] is the logical row a physical row belongs to (for the zebra shading)."""
+    ws = widths(fig, columns, left, right)
+    out, out_c, stripe = [], [], []
+    for i, row in enumerate(rows):
+        parts = [wrap_width(str(cell), ws[j], fontsize) or [""] for j, cell in enumerate(row)]
+        for k in range(max(len(p) for p in parts)):
+            out.append([p[k] if k < len(p) else "" for p in parts])
+            out_c.append(colors[i] if colors else [None] * len(row))
+            stripe.append(i)
+    return out, out_c, stripe
+
+
+def table(fig, top: float, columns: list[tuple[str, float, str]], rows: list[list[str]],
+          colors: list[list[str | None]] | None = None, fontsize: float = 7.0, left: float = 0.06,
+          right: float = 0.94, header_color: str = "#e6e6e6", stripe: list[int] | None = None) -> float:
+    """Draw rows of strings as a table in figure coordinates; returns the y below the last row.
+
+    ``columns``: (header, relative width, alignment 'l'/'r'/'c'); a header may hold a line break.
+    Cells are cut (measured, with an ellipsis) to their column's width, so no text crosses into the
+    next column (use ``wrap_rows`` first to wrap instead of cutting).
+    """
+    h_in = fig.get_size_inches()[1]
+    row_h = fontsize * 1.55 / 72 / h_in
+    xs = _spans(fig, columns, left, right)
     pad = 0.004
-    cap = [max(int((b - a - 2 * pad) * w_in * 72 / (0.53 * fontsize)), 2) for a, b in xs]
+    ws = widths(fig, columns, left, right, pad)
+    head_lines = max(c[0].count("\n") + 1 for c in columns)
+    stripe = stripe if stripe is not None else list(range(len(rows)))
     y = top
-    fig.patches.append(matplotlib.patches.Rectangle((left, y - row_h), span, row_h, transform=fig.transFigure,
+    hh = row_h * (1 + 0.85 * (head_lines - 1))
+    fig.patches.append(matplotlib.patches.Rectangle((left, y - hh), right - left, hh, transform=fig.transFigure,
                                                     facecolor=header_color, edgecolor="none", zorder=0))
-    for i, row in enumerate([[c[0] for c in columns]] + rows):
-        yc = y - row_h / 2
+    for j, (head, _, al) in enumerate(columns):
+        a, b = xs[j]
+        xt = {"l": a + pad, "r": b - pad, "c": (a + b) / 2}[al]
+        fig.text(xt, y - hh / 2, "\n".join(fit_width(t, ws[j], fontsize, True) for t in head.split("\n")),
+                 ha={"l": "left", "r": "right", "c": "center"}[al], va="center", fontsize=fontsize, weight="bold",
+                 linespacing=1.1)
+    y -= hh
+    for i, row in enumerate(rows):
+        if stripe[i] % 2 == 1:
+            fig.patches.append(matplotlib.patches.Rectangle((left, y - row_h), right - left, row_h,
+                                                            transform=fig.transFigure, facecolor="#f3f3f3",
+                                                            edgecolor="none", zorder=0))
         for j, cell in enumerate(row):
             a, b = xs[j]
             al = columns[j][2]
             xt = {"l": a + pad, "r": b - pad, "c": (a + b) / 2}[al]
-            col = colors[i - 1][j] if (colors and i > 0 and colors[i - 1][j]) else "black"
-            fig.text(xt, yc, fit(cell, cap[j]), ha={"l": "left", "r": "right", "c": "center"}[al], va="center",
-                     fontsize=fontsize, color=col, weight="bold" if i == 0 or col == RED else "normal")
-        if i > 0 and i % 2 == 0:
-            fig.patches.append(matplotlib.patches.Rectangle((left, y - row_h), span, row_h,
-                                                            transform=fig.transFigure, facecolor="#f5f5f5",
-                                                            edgecolor="none", zorder=0))
+            col = colors[i][j] if (colors and colors[i][j]) else "black"
+            bold = col == RED
+            fig.text(xt, y - row_h / 2, fit_width(cell, ws[j], fontsize, bold),
+                     ha={"l": "left", "r": "right", "c": "center"}[al], va="center", fontsize=fontsize, color=col,
+                     weight="bold" if bold else "normal")
         y -= row_h
     return y
 
@@ -109,14 +204,16 @@ def rows_per_page(top: float, bottom: float, fontsize: float = 7.0, height_in: f
 
 
 def fmt(v, digits: int = 3) -> str:
+    """A number as a reader wants it: 3 significant digits, plain between 1e-3 and 1e5, else 1.2e-07."""
     if v is None:
         return "-"
-    if isinstance(v, bool):
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
         return str(v)
-    if isinstance(v, (int, float)):
-        if v == 0:
-            return "0"
-        if 1e-3 <= abs(v) < 1e5:
-            return f"{v:.{digits}g}"
-        return f"{v:.{max(digits - 1, 1)}e}"
-    return str(v)
+    if v != v or v in (float("inf"), float("-inf")):
+        return str(v)
+    if v == 0:
+        return "0"
+    if 1e-3 <= abs(v) < 1e5:
+        text = f"{v:.{digits}g}"
+        return f"{v:.0f}" if "e" in text else text
+    return f"{v:.{max(digits - 1, 1)}e}"
