@@ -72,7 +72,7 @@ def cycles_figure(data, group: dict):
     """F(u) of every engine overlaid per case, Delta F(u) against the reference beneath."""
     fig = new_figure(LANDSCAPE, "Force-displacement cycles (steady cycle)" + (
         " - Figure 6 layout: rows amplitude, columns frequency" if group["grid"] else ""),
-        f"beneath each panel: Delta F = F(engine) - F({data.reference}) on a common phase grid, "
+        f"beneath each panel: \u0394F = F(engine) - F({data.reference}) on a common phase grid, "
         f"plotted against the reference's displacement")
     _engines_legend(fig, data)
     rows, cols = group["shape"]
@@ -90,7 +90,15 @@ def cycles_figure(data, group: dict):
                 drawn = True
         if not drawn:
             no_data(ax, f"no engine ran this case: {_failed_note(data, name)}")
-        ax.set_title(_title(case), fontsize=9)
+        bad = sorted({m["metric"] for m in data.summary["metrics"]
+                      if m["case"] == name and m.get("gated") and not m.get("pass")})
+        ax.set_title(_title(case) + (f"  FAIL: {', '.join(bad)}" if bad else ""), fontsize=9,
+                     color=RED if bad else "black")
+        own = "; ".join(f"{e}: " + ", ".join(f"{k} = {fmt(v)}" for k, v in p.items())
+                        for e, p in (case.get("engine_params") or {}).items() if p)
+        if own:
+            ax.text(0.98, 0.97, "engine-specific parameters:\n" + own, transform=ax.transAxes, ha="right", va="top",
+                    fontsize=7, color=RED, bbox=dict(fc="white", ec=RED, lw=0.6, alpha=0.9))
         ax.set_ylabel("force F [N]")
         ax.tick_params(labelbottom=False)
         note = _failed_note(data, name)
@@ -103,16 +111,16 @@ def cycles_figure(data, group: dict):
             for e in data.engines:
                 if e != ref and (name, e) in data.results:
                     dF = phase_resample(data.results[(name, e)], f, "F") - Fr
-                    axd.plot(ur * 1e3, dF, **style(e), label=f"{e}: max |dF| {fmt(np.max(np.abs(dF)), 2)} N")
+                    axd.plot(ur * 1e3, dF, **style(e), label=f"{e}: max |\u0394F| {fmt(np.max(np.abs(dF)), 2)} N")
             if len(axd.lines):
                 axd.legend(loc="upper left", fontsize=6.5, frameon=True, framealpha=0.8, handlelength=1.5)
             axd.axhline(0.0, color=GREY, lw=0.6)
         else:
-            axd.text(0.5, 0.5, f"reference {ref} did not run: no Delta F", transform=axd.transAxes, ha="center",
+            axd.text(0.5, 0.5, f"reference {ref} did not run: no \u0394F", transform=axd.transAxes, ha="center",
                      va="center", fontsize=7.5, color=RED)
         axd.sharex(ax)
         axd.set_xlabel("displacement u [mm]")
-        axd.set_ylabel("Delta F [N]")
+        axd.set_ylabel("\u0394F [N]")
         axd.yaxis.set_major_formatter(FuncFormatter(lambda v, _: fmt(v, 2)))
     return fig
 

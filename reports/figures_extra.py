@@ -105,7 +105,8 @@ def cost_figure(data):
         for xi, v in zip(x, w):
             xx = xi + (j - (ne - 1) / 2) * width
             if v:
-                ax.text(xx, v * 1.06, fmt(v, 2), ha="center", va="bottom", fontsize=6.5, rotation=90)
+                ax.text(xx, v * 1.04, fmt(v, 2), ha="center", va="bottom", fontsize=6.5,
+                        rotation=90 if len(names) * ne > 8 else 0)
             else:
                 ax.text(xx, 0.0, "failed", ha="center", va="bottom", fontsize=6.5, rotation=90, color=RED)
     if vals and max(vals) / max(min(vals), 1e-12) > 30:
@@ -113,6 +114,8 @@ def cost_figure(data):
         ax.set_ylim(min(vals) / 3, max(vals) * 6)
     elif vals:
         ax.set_ylim(0, max(vals) * 1.3)
+    if len(names) <= 2:
+        ax.set_xlim(-1.0, len(names))  # keep single bars from filling the panel
     ax.set_xticks(x, names, rotation=20 if len(names) > 2 else 0, ha="right" if len(names) > 2 else "center")
     ax.set_xlabel("case")
     ax.set_ylabel("wall time per cycle [s]")

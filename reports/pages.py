@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 
-from .style import (GREEN, GREY, ORANGE, PORTRAIT, RED, fmt, new_figure, rows_per_page, table, text_width,
+from .style import (GREEN, GREY, ORANGE, PORTRAIT, RED, fmt, natural, new_figure, rows_per_page, table, text_width,
                     wrap_rows, wrap_width)
 
 FS = 7.0           # table font size [pt]
@@ -169,13 +169,14 @@ def _page_one(data):
     ccol = [[None] * 6 + [RED if (c.get("engine_params") or {}) else None] for c in data.cases]
     ccols = [("case", 15, "l"), ("A [mm]", 7, "r"), ("f [Hz]", 6, "r"), ("psi [deg]", 8, "r"), ("cycles", 6, "r"),
              ("samples\nper cycle", 8, "r"), ("overrides (engine-specific ones in red)", 50, "l")]
+    ccols = natural(ccols, crow, flex=-1, fontsize=FS)
     crow, ccol, stripe = wrap_rows(ccols, crow, ccol, FS)
     y = table(fig, y - 0.006, ccols, crow, ccol, fontsize=FS, stripe=stripe)
     y = _heading(fig, y - 0.006, "Tolerances")
     units = s.get("metric_units", {})
     trow = [[m, fmt(v, 3), units.get(m, "-"), METRIC_DESC.get(m, "")] for m, v in s["tolerances"].items()]
-    y = table(fig, y, [("metric", 16, "l"), ("limit", 9, "r"), ("unit", 5, "c"), ("definition", 60, "l")], trow,
-              fontsize=FS)
+    y = table(fig, y, natural([("metric", 16, "l"), ("limit", 9, "r"), ("unit", 5, "c"), ("definition", 60, "l")],
+                              trow, flex=-1, fontsize=FS), trow, fontsize=FS)
     fig._nsd_y = y
     return fig
 
@@ -185,7 +186,8 @@ def parameter_pages(data) -> list:
     params = data.summary.get("params") or []
     rows = [[p.get("name", ""), fmt(p.get("value")), p.get("unit", ""), p.get("source", ""), p.get("doc", "")]
             for p in params]
-    cols = [("parameter", 21, "l"), ("value", 9, "r"), ("unit", 6, "c"), ("source", 34, "l"), ("meaning", 48, "l")]
+    cols = natural([("parameter", 21, "l"), ("value", 9, "r"), ("unit", 6, "c"), ("source", 34, "l"),
+                    ("meaning", 48, "l")], rows, flex=-1, fontsize=FS)
     rows, _, stripe = wrap_rows(cols, rows, None, FS)
     settings = _settings_rows(data)
     per_page = rows_per_page(0.90, BOTTOM, FS)
@@ -203,12 +205,12 @@ def parameter_pages(data) -> list:
             f = new_figure(PORTRAIT, "Parameter set and provenance" + (" (continued)" if k else ""),
                            "SI values used by every case (overrides: summary page); source: the paper's table,\n"
                            "or 'assumed' with the model notes that argue for the value")
-            y = (table(f, 0.915, cols, chunk[0], fontsize=FS, stripe=chunk[1]) if chunk[0]
-                 else _text(f, 0.915, "no parameter rows recorded"))
+            y = (table(f, 0.9, cols, chunk[0], fontsize=FS, stripe=chunk[1]) if chunk[0]
+                 else _text(f, 0.9, "no parameter rows recorded"))
             last = k == len(chunks) - 1
             if last and settings and y - BOTTOM > (3 * len(settings) + 3) * LINE:
                 y = _heading(f, y - 0.01, "Engine solver settings (as recorded by each engine, first case)")
-                scols = [("engine", 12, "l"), ("settings", 88, "l")]
+                scols = natural([("engine", 12, "l"), ("settings", 88, "l")], settings, flex=1, fontsize=FS)
                 srows, _, sstripe = wrap_rows(scols, settings, None, FS)
                 table(f, y, scols, srows, fontsize=FS, stripe=sstripe)
             return f

@@ -139,6 +139,20 @@ def widths(fig, columns, left: float = 0.06, right: float = 0.94, pad: float = 0
     return [(b - a - 2 * pad) * w_in * 72 for a, b in _spans(fig, columns, left, right)]
 
 
+def natural(columns, rows, flex: int = -1, fontsize: float = 7.0, total: float = 0.88 * PORTRAIT[0] * 72):
+    """Columns re-sized to their content (measured; header lines in bold), column ``flex`` taking
+    what is left of ``total`` points (it wraps or cuts)."""
+    out = []
+    for j, (head, w, al) in enumerate(columns):
+        cells = [str(r[j]) for r in rows] if rows else []
+        nat = max([text_width(h, fontsize, True) for h in head.split("\n")] +
+                  [text_width(c, fontsize) for c in cells]) + 8
+        out.append([head, nat, al])
+    k = flex % len(columns)
+    out[k][1] = max(total - sum(c[1] for i, c in enumerate(out) if i != k), 40.0)
+    return [tuple(c) for c in out]
+
+
 def wrap_rows(columns, rows, colors=None, fontsize: float = 7.0, fig=None, left: float = 0.06,
               right: float = 0.94):
     """Split cells too long for their column over several physical rows. Returns (rows, colors,
