@@ -43,8 +43,12 @@ Newton and its Jacobian see one smooth function, and the states are committed in
 Solver: generalized-alpha (index 3), fixed step dividing the output interval, spectral radius 0.8
 (damps the multipliers' step-to-step oscillation; at 0.9 they are noisy to ~5e-4 of the peak force,
 at 0.5 the 250 Hz mode's phase error is 1.5x larger), modified Newton with tight residual
-tolerances (rel 1e-10, abs 1e-12). Accuracy is limited by the phase of the ringing ~250 Hz vertical
-mode after the slack events at A = 0.0255 m: second order in h (benchmarks/convergence_exudyn.py).
+tolerances (rel 1e-12, abs 1e-14: the index-3 multiplier amplifies position residuals by
+M/(beta h^2) ~ 1e10). Accuracy is then limited by the phase of the ringing ~250 Hz vertical mode
+after the slack events at A = 0.0255 m, second order in h. Measured against nsd_core.device.simulate
+(rtol 1e-10), last cycle, max|dF|/peak: 1 Hz 1.3e-4 (A = 0.0255 m, h = 1e-5 s), 5e-7 (A = 0.015 m);
+10 Hz 5e-5 (A = 0.0255 m, h = 5e-6 s), 6e-6 (A = 0.015 m); loop areas within 1.3e-5
+(benchmarks/convergence_exudyn.py).
 """
 from __future__ import annotations
 
@@ -142,7 +146,8 @@ class _Elements:
         Each law is rate-independent and its strain is a scalar, so its path is an interval: the
         commit (eps_c -> eps_n) and the prediction (eps_c -> eps_p) start from the same committed
         state and run as one vectorised RK4 call (advance_*), twice the rows for the price of one.
-        Where the strain reverses at eps_n the prediction is redone from the new committed state.
+        Where the strain turns at eps_n (the next increment runs against the last one) the straight
+        path eps_c -> eps_p would miss the turn, so that prediction is redone from (eps_n, sigma_n).
         """
         g, nw = self.g, self.g.n_wires
         eps_n = self.wire_strain(cap, wall_z)[1]
@@ -152,14 +157,14 @@ class _Elements:
             s = self.advance_wire(np.concatenate([self.eps, self.eps]), np.concatenate([eps_n, eps_p]),
                                   np.concatenate([self.sigma, self.sigma]))
             sig_n, sig_p = s[:nw], s[nw:]
-            rev = np.sign(eps_p - self.eps) != np.sign(eps_n - self.eps)
+            rev = (eps_p - eps_n) * (eps_n - self.eps) <= 0.0  # the strain turns (or rests) at eps_n
             if rev.any():
                 sig_p = np.where(rev, self.advance_wire(eps_n, eps_p, sig_n), sig_p)
             self.eps, self.sigma = eps_n, sig_n
         z = self.advance_spring(np.array([self.x, self.x]), np.array([x_n, x_p]),
                                 np.array([self.zeta, self.zeta]))
         zeta_n, zeta_p = float(z[0]), float(z[1])
-        if np.sign(x_p - self.x) != np.sign(x_n - self.x):
+        if (x_p - x_n) * (x_n - self.x) <= 0.0:
             zeta_p = float(self.advance_spring(x_n, x_p, zeta_n))
         self.x, self.zeta = x_n, zeta_n
         return self.forces_with(cap_p, wall_p, v, L, sig_p if nw else self.sigma, zeta_p)
@@ -192,8 +197,8 @@ class ExudynEngine:
         "min_steps_per_cycle": 20000,  # and at most 1/(f n): 5e-6 s at 10 Hz, where steps are cheap
         "solver": "generalized_alpha",  # or "trapezoidal_index2" (needs drive_offsets=user_function)
         "spectral_radius": 0.8,       # generalized-alpha rho_inf (index 3 needs < 1)
-        "newton_rel_tol": 1e-10,      # Exudyn's defaults leave noisy multipliers at small steps
-        "newton_abs_tol": 1e-12,
+        "newton_rel_tol": 1e-12,      # 1e-10 leaves isolated multiplier spikes (~2e-4 of the peak
+        "newton_abs_tol": 1e-14,      # force at 1 Hz), 1e-8 errors of 2e-3; 1e-12 costs ~10 % more
         "newton_jacobian": "modified",  # "modified" (kept across steps), "per_step", "full"
         "forces": "per_step",         # "per_step": pre-step loads at the predicted end-of-step state;
                                       # "per_iteration": GenericODE2 user function (implicit, ~4x slower)
