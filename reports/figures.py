@@ -2,6 +2,8 @@
 Figure 6), tangent stiffness with the Figure 7 working regions, force breakdown, loop closure."""
 from __future__ import annotations
 
+import textwrap
+
 import numpy as np
 from matplotlib.gridspec import GridSpecFromSubplotSpec
 from matplotlib.lines import Line2D
@@ -92,13 +94,15 @@ def cycles_figure(data, group: dict):
             no_data(ax, f"no engine ran this case: {_failed_note(data, name)}")
         bad = sorted({m["metric"] for m in data.summary["metrics"]
                       if m["case"] == name and m.get("gated") and not m.get("pass")})
-        ax.set_title(_title(case) + (f"  FAIL: {', '.join(bad)}" if bad else ""), fontsize=9,
-                     color=RED if bad else "black")
+        ax.set_title(_title(case) + ("  - FAIL" if bad else ""), fontsize=9, color=RED if bad else "black")
         own = "; ".join(f"{e}: " + ", ".join(f"{k} = {fmt(v)}" for k, v in p.items())
                         for e, p in (case.get("engine_params") or {}).items() if p)
-        if own:
-            ax.text(0.98, 0.97, "engine-specific parameters:\n" + own, transform=ax.transAxes, ha="right", va="top",
-                    fontsize=7, color=RED, bbox=dict(fc="white", ec=RED, lw=0.6, alpha=0.9))
+        box = ([textwrap.fill("outside limits: " + ", ".join(bad), 48)] if bad else []) + \
+            (["engine-specific parameters:", textwrap.fill(own, 48)] if own else [])
+        if box:
+            ax.text(0.98, 0.97, "\n".join(box), transform=ax.transAxes, ha="right", va="top", fontsize=7, color=RED,
+                    multialignment="left",
+                    bbox=dict(fc="white", ec=RED, lw=0.6, alpha=0.9))
         ax.set_ylabel("force F [N]")
         ax.tick_params(labelbottom=False)
         note = _failed_note(data, name)
@@ -189,12 +193,14 @@ def breakdown_figure(data, names: list[str]):
                      "column is the spring's push on the movable wall, not a part of F")
     _engines_legend(fig, data)
     n = max(len(names), 1)
-    gs = fig.add_gridspec(n, len(PARTS), left=0.07, right=0.985, top=0.86, bottom=0.09,
-                          hspace=0.75 if n > 1 else 0.3, wspace=0.32)
+    if n == 1:  # one case: the four parts in a 2 x 2 grid rather than four tall strips
+        gs = fig.add_gridspec(2, 2, left=0.07, right=0.985, top=0.86, bottom=0.09, hspace=0.35, wspace=0.2)
+    else:
+        gs = fig.add_gridspec(n, len(PARTS), left=0.07, right=0.985, top=0.86, bottom=0.09, hspace=0.75, wspace=0.32)
     for i, name in enumerate(names):
         case = _case(data, name)
         for j, (col, label) in enumerate(PARTS):
-            ax = fig.add_subplot(gs[i, j])
+            ax = fig.add_subplot(gs[j // 2, j % 2] if n == 1 else gs[i, j])
             for e in data.engines:
                 if (name, e) in data.results and col in data.results[(name, e)].columns:
                     res, m = _steady(data, name, e)
