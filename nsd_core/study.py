@@ -84,17 +84,26 @@ class Design:
         return f"{self.study}={self.value:g}" + ("" if self.engine == "semirecursive" else f"@{self.engine}")
 
 
+def _engine(name: str):
+    """An engine instance, imported lazily: the comparisons registry if present, else ``Engine``."""
+    import importlib
+    try:
+        from comparisons.engines import get_engine
+    except ImportError:
+        return importlib.import_module(ENGINE_MODULES[name]).Engine()
+    return get_engine(name)
+
+
 def check_engines(names: list[str]) -> None:
     """Unknown or unavailable engines are bad input (exit 2), found before anything runs."""
-    import importlib
     for n in names:
         if n not in ENGINES:
             raise ParameterError(f"--engines {n}: unknown engine; allowed: {', '.join(ENGINES)}")
         if n in ENGINE_MODULES:
             try:
-                importlib.import_module(ENGINE_MODULES[n])
+                _engine(n)
             except Exception as e:  # noqa: BLE001 - any import failure means not usable here
-                raise ParameterError(f"--engines {n}: not available ({type(e).__name__}: {e})") from None
+                raise ParameterError(f"--engines {n}: not available ({type(e).__name__}: {e})".splitlines()[0]) from None
 
 
 def make_designs(param: str, values: list[float], base: Params | None = None, amplitude: float | None = None,
@@ -164,8 +173,7 @@ def run_design(d: Design) -> dict:
             from .device import simulate
             result = simulate(p, drive, **d.settings)
         else:
-            import importlib
-            result = importlib.import_module(ENGINE_MODULES[d.engine]).Engine().run(p, drive, d.settings or None)
+            result = _engine(d.engine).run(p, drive, d.settings or None)
         summary = analyse(result, d.amplitude, d.frequency)
         try:
             xq = x_max_at_slack(p, d.direction_deg)
