@@ -90,7 +90,9 @@ def cost_figure(data):
     fig = new_figure(LANDSCAPE, "Cost: wall time per cycle, and accuracy against cost",
                      "wall time of each engine's run divided by its cycles (engines ran in parallel worker "
                      "processes on a shared machine); the reference has no discrepancy against itself")
-    gs = fig.add_gridspec(1, 2, left=0.07, right=0.98, top=0.87, bottom=0.16, wspace=0.25, width_ratios=[1.15, 1])
+    many = len(data.cases) > 6
+    gs = fig.add_gridspec(1, 2, left=0.07, right=0.98, top=0.87, bottom=0.25 if many else 0.16, wspace=0.25,
+                          width_ratios=[1.15, 1])
     ax = fig.add_subplot(gs[0])
     names = [c["name"] for c in data.cases]
     ne = len(data.engines)
@@ -116,7 +118,8 @@ def cost_figure(data):
         ax.set_ylim(0, max(vals) * 1.3)
     if len(names) <= 2:
         ax.set_xlim(-1.0, len(names))  # keep single bars from filling the panel
-    ax.set_xticks(x, names, rotation=20 if len(names) > 2 else 0, ha="right" if len(names) > 2 else "center")
+    ax.set_xticks(x, names, rotation=(45 if many else 20) if len(names) > 2 else 0,
+                  ha="right" if len(names) > 2 else "center", fontsize=7 if many else 7.5)
     ax.set_xlabel("case")
     ax.set_ylabel("wall time per cycle [s]")
     ax.set_title("wall time per cycle per engine", fontsize=9)
@@ -125,7 +128,7 @@ def cost_figure(data):
 
     sp = fig.add_subplot(gs[1])
     ref = data.reference
-    marks = {n: MARKERS[i % len(MARKERS)] for i, n in enumerate(names)}
+    marks = {n: MARKERS[i] if len(names) <= len(MARKERS) else "o" for i, n in enumerate(names)}
     for m in data.summary["metrics"]:
         if m.get("metric") == "max_dF_rel" and m.get("reference") == ref:
             w = data.run(m["case"], m["engine"]).get("wall_time_per_cycle")
@@ -149,13 +152,17 @@ def cost_figure(data):
     sp.set_xlabel("wall time per cycle [s]")
     sp.set_ylabel(f"max |F - F_ref| / max |F_ref| [-] (vs {ref})")
     sp.set_title("speed-accuracy", fontsize=9)
-    handles = [Line2D([], [], ls="", marker=marks[n], color="w", mec="k", mfc=GREY, label=n) for n in names]
+    handles = [Line2D([], [], ls="", marker=marks[n], color="w", mec="k", mfc=GREY, label=n) for n in names
+               if len(names) <= len(MARKERS)]  # more cases than markers: one point per case, unlabelled
     handles += [Line2D([], [], ls="", marker="o", color=color(e), label=e) for e in data.engines if e != ref]
     if lim:
         handles.append(Line2D([], [], color=RED, ls="--", label=f"limit {fmt(lim)}"))
     if isinstance(conv, dict) and conv and "error" not in conv:
         handles.append(Line2D([], [], color=GREY, ls=":", marker=".", label="convergence study"))
-    sp.legend(handles=handles, fontsize=7, loc="best", ncol=2)
+    if len(handles) > 6:  # below the panel, clear of the points and the limit line
+        sp.legend(handles=handles, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=3)
+    else:
+        sp.legend(handles=handles, fontsize=7, loc="best", ncol=2)
     return fig
 
 

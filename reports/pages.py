@@ -66,7 +66,9 @@ def metric_rows(data) -> tuple[list[tuple[str, float, str]], list[list[str]], li
     cols = [("case", fixed[0], "l"), ("engine", fixed[1], "l"), ("vs", fixed[2], "l")] + \
         [(_split_name(m, units.get(m, "-"), share - 6), share, "r") for m in names] + [("result", fixed[3], "c")]
     rows, colors = [], []
-    limit_row = ["limit", "", ""] + [f"\u2264 {fmt(s['tolerances'][m], 2)}" for m in names] + [""]
+    short = [fmt(s["tolerances"][m], 2) for m in names]
+    short = [f"{s['tolerances'][m]:.0e}" if "e" in t else t for m, t in zip(names, short)]
+    limit_row = ["limit", "", ""] + [f"\u2264 {t}" for t in short] + [""]
     rows.append(limit_row)
     colors.append([GREY] * len(limit_row))
     keyed: dict[tuple, dict] = {}
