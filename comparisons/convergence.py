@@ -8,6 +8,7 @@
     [convergence.sweep]
     semirecursive = { setting = "rtol", values = [1e-5, 1e-6, 1e-7, 1e-8] }
     mujoco = { setting = "timestep", values = [4e-5, 2e-5, 1e-5, 5e-6] }
+    exudyn = { setting = "step_size", values = [...], settings = { min_steps_per_cycle = 1 } }
 
 The result shows whether a discrepancy is numerical error that vanishes or a floor.
 """
@@ -45,7 +46,8 @@ def convergence_study(spec: dict, engines: list[str], workers: int) -> dict:
     for e in engines:
         if e in spec["sweep"]:
             s = spec["sweep"][e]
-            jobs += [(e, {**case.settings.get(e, {}), s["setting"]: v}, v) for v in s["values"]]
+            fixed = {**case.settings.get(e, {}), **s.get("settings", {})}
+            jobs += [(e, {**fixed, s["setting"]: v}, v) for v in s["values"]]
     ctx = multiprocessing.get_context("spawn")
     with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
         futs = [pool.submit(run_job, e, case.params_for(e), drive, settings) for e, settings, _ in jobs]
