@@ -7,6 +7,7 @@ import textwrap
 import matplotlib
 import numpy as np
 from matplotlib.lines import Line2D
+from matplotlib.ticker import NullFormatter
 
 from .style import GREEN, GREY, LANDSCAPE, RED, color, fmt, new_figure, no_data, style, table
 
@@ -71,12 +72,14 @@ def convergence_figure(data):
         ax.set_title(f"{e}: {entry.get('setting', '?')} (case {entry.get('case', '?')})", fontsize=9, color=c)
         ax.set_xlabel(_setting_label(entry.get("setting", "?")))
         ax.set_ylabel("relative discrepancy [-]")
+        ax.xaxis.set_minor_formatter(NullFormatter())  # minor labels collide on short decades
         w = np.array([p.get("wall_time", np.nan) for p in pts], float)
         ok = np.isfinite(w) & (w > 0)
         speed.loglog(w[ok], d1[ok], "o-", color=c, lw=1.4, label=e)
     ref = next((conv[e].get("reference") for e in engines if conv[e].get("reference")), "")
     speed.set_title("max |dF| against cost", fontsize=9)
     speed.set_xlabel("wall time per cycle [s]")
+    speed.xaxis.set_minor_formatter(NullFormatter())
     speed.set_ylabel("max |dF| / max |F_ref| [-]")
     if "max_dF_rel" in tol:
         speed.axhline(tol["max_dF_rel"], color=GREY, ls=":", lw=1.0)
