@@ -20,7 +20,6 @@ per run, the step, wall and CPU times and the loop-closure violation.
 from __future__ import annotations
 
 import argparse
-import importlib
 import time
 from pathlib import Path
 
@@ -32,40 +31,7 @@ from nsd_core.drive import Drive
 from nsd_core.params import Params
 from nsd_core.results import atomic_write_json
 
-
-def last_cycle(t, drive: Drive) -> slice:
-    return slice(int(np.searchsorted(np.asarray(t), (drive.cycles - 1) / drive.frequency - 1e-12)), len(t))
-
-
-def loop_area(F, u) -> float:
-    """Closed integral of F du over the samples (trapezoid rule)."""
-    F, u = np.asarray(F, dtype=float), np.asarray(u, dtype=float)
-    return float(np.sum(0.5 * (F[1:] + F[:-1]) * np.diff(u)))
-
-
-def compare(result, ref, drive: Drive) -> dict:
-    """dF and dA of ``result`` against ``ref`` on the last cycle (both on drive.output_times())."""
-    sl = last_cycle(ref["t"], drive)
-    F = np.interp(np.asarray(ref["t"])[sl], result["t"], result["F"])
-    F_ref, u = np.asarray(ref["F"])[sl], np.asarray(ref["u"])[sl]
-    a, a_ref = loop_area(F, u), loop_area(F_ref, u)
-    return {"dF": float(np.max(np.abs(F - F_ref)) / np.max(np.abs(F_ref))),
-            "dA": float((a - a_ref) / abs(a_ref)), "area": a, "area_ref": a_ref,
-            "peak_F_ref": float(np.max(np.abs(F_ref)))}
-
-
-def in_house(params: Params, drive: Drive):
-    """(RunResult or None, note): nsd_core.device.simulate at tight tolerances when it exists."""
-    try:
-        simulate = getattr(importlib.import_module("nsd_core.device"), "simulate")
-    except (ImportError, AttributeError) as exc:
-        return None, f"no in-house reference: {type(exc).__name__}: {exc}"
-    try:
-        t0 = time.perf_counter()
-        r = simulate(params, drive, rtol=1e-10, atol=1e-12)
-        return r, f"nsd_core.device.simulate(rtol=1e-10, atol=1e-12), {time.perf_counter() - t0:.1f} s"
-    except Exception as exc:  # a reference under construction may fail: record it and go on
-        return None, f"nsd_core.device.simulate failed: {type(exc).__name__}: {exc}"
+from refcompare import discrepancy as compare, in_house_reference
 
 
 def ladders(drive: Drive, default_step: float, ref_step: float, quick: bool) -> list[tuple[str, dict]]:
@@ -95,7 +61,7 @@ def study_case(params: Params, drive: Drive, default_step: float, ref_step: floa
     finest, err = run(eng, params, drive, {"step_size": ref_step, "min_steps_per_cycle": 1})
     if finest is None:
         return {"amplitude": drive.amplitude, "frequency": drive.frequency, "error": f"finest run failed: {err}"}
-    house, note = in_house(params, drive) if use_in_house else (None, "in-house reference not requested")
+    house, note = in_house_reference(params, drive) if use_in_house else (None, "in-house reference not requested")
     case = {"amplitude": drive.amplitude, "frequency": drive.frequency, "cycles": drive.cycles,
             "default_step": default_step, "in_house": note,
             "finest": {"step_size": finest.stats["step_size"], "wall_time": finest.stats["wall_time"],

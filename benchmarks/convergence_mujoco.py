@@ -19,7 +19,6 @@ recorded; the JSON says which one each metric used.
 from __future__ import annotations
 
 import argparse
-import importlib
 import time
 from pathlib import Path
 
@@ -31,42 +30,7 @@ from nsd_core.drive import Drive
 from nsd_core.params import Params
 from nsd_core.results import atomic_write_json
 
-
-def last_cycle(result, drive: Drive) -> slice:
-    t = np.asarray(result["t"])
-    start = int(np.searchsorted(t, (drive.cycles - 1) / drive.frequency - 1e-12))
-    return slice(start, len(t))
-
-
-def loop_area(F, u) -> float:
-    """Closed integral of F du (trapezoid rule on the output samples)."""
-    F, u = np.asarray(F), np.asarray(u)
-    return float(np.sum(0.5 * (F[1:] + F[:-1]) * np.diff(u)))
-
-
-def metrics(result, ref, drive: Drive) -> dict:
-    sl = last_cycle(ref, drive)
-    t_ref = np.asarray(ref["t"])[sl]
-    F = np.interp(t_ref, result["t"], result["F"])
-    F_ref, u = np.asarray(ref["F"])[sl], np.asarray(ref["u"])[sl]
-    a, a_ref = loop_area(F, u), loop_area(F_ref, u)
-    return {"dF": float(np.max(np.abs(F - F_ref)) / np.max(np.abs(F_ref))),
-            "dA": float((a - a_ref) / abs(a_ref)), "area": a, "area_ref": a_ref,
-            "peak_F_ref": float(np.max(np.abs(F_ref)))}
-
-
-def in_house_reference(params: Params, drive: Drive):
-    """nsd_core.device.simulate if it exists, else None (with the reason)."""
-    try:
-        mod = importlib.import_module("nsd_core.device")
-    except ImportError as exc:
-        return None, f"nsd_core.device not importable ({exc})"
-    if not hasattr(mod, "simulate"):
-        return None, "nsd_core.device has no simulate()"
-    try:
-        return mod.simulate(params, drive, rtol=1e-10, atol=1e-12), "nsd_core.device.simulate(rtol=1e-10, atol=1e-12)"
-    except Exception as exc:  # a reference being written by someone else may fail: say so, go on
-        return None, f"nsd_core.device.simulate failed: {type(exc).__name__}: {exc}"
+from refcompare import discrepancy as metrics, in_house_reference
 
 
 def run_one(engine, params, drive, settings):
