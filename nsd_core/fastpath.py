@@ -6,7 +6,8 @@ ten-body tree. tests/test_engine.py checks that both paths agree to round-off.
     newton_kernel:    Newton on the independent loop equations for the dependent coordinates;
     velocity_kernel:  positions, Phi_z, the dependent velocities (Eq. 10), Z, vp and c (Eq. 5);
     dynamics_kernel:  Eqs. 7-8 recursively, Eq. 12 in the free coordinates, and the reactions.
-Each returns False when its dependent block is singular; the caller then takes the numpy path.
+Linear algebra is LAPACK's (numba's np.linalg), as in the numpy path; a singular block raises, and
+the caller then takes the numpy path, which handles it.
 """
 from __future__ import annotations
 
@@ -19,57 +20,8 @@ from .kinematics import positions_kernel, velocities_kernel
 
 
 @njit(cache=True)
-def _lu_solve_inplace(M, b):
-    """Gaussian elimination with partial pivoting on a copy; returns (ok, x)."""
-    n = M.shape[0]
-    A = M.copy()
-    x = b.copy()
-    scale = 0.0
-    for i in range(n):
-        for j in range(n):
-            scale = max(scale, abs(A[i, j]))
-    for k in range(n):
-        p = k
-        for i in range(k + 1, n):
-            if abs(A[i, k]) > abs(A[p, k]):
-                p = i
-        if abs(A[p, k]) <= 1e-14 * scale:
-            return False, x
-        if p != k:
-            for j in range(n):
-                A[k, j], A[p, j] = A[p, j], A[k, j]
-            x[k], x[p] = x[p], x[k]
-        for i in range(k + 1, n):
-            f = A[i, k] / A[k, k]
-            for j in range(k, n):
-                A[i, j] -= f * A[k, j]
-            x[i] -= f * x[k]
-    for k in range(n - 1, -1, -1):
-        acc = x[k]
-        for j in range(k + 1, n):
-            acc -= A[k, j] * x[j]
-        x[k] = acc / A[k, k]
-    return True, x
-
-
-@njit(cache=True)
-def _inverse(M):
-    n = M.shape[0]
-    inv = np.empty((n, n))
-    e = np.zeros(n)
-    for j in range(n):
-        e[:] = 0.0
-        e[j] = 1.0
-        ok, col = _lu_solve_inplace(M, e)
-        if not ok:
-            return False, inv
-        inv[:, j] = col
-    return True, inv
-
-
-@njit(cache=True)
 def newton_kernel(parent, jtype, axis, offset, ck, ca, cva, cb, cvb, z, rows, dep, tol, maxit, nc, A, r, B):
-    """Newton from z (updated in place). Returns 1 converged, 0 not converged, -1 singular."""
+    """Newton from z (updated in place). Returns 1 converged, 0 not converged."""
     Phi = np.zeros(nc)
     J = np.zeros((nc, z.shape[0]))
     dummy = np.zeros((z.shape[0], 6))
@@ -95,9 +47,7 @@ def newton_kernel(parent, jtype, axis, offset, ck, ca, cva, cb, cvb, z, rows, de
             rhs[i] = Phi[rows[i]]
             for j in range(nd):
                 Jd[i, j] = J[rows[i], dep[j]]
-        ok, step = _lu_solve_inplace(Jd, rhs)
-        if not ok:
-            return -1
+        step = np.linalg.solve(Jd, rhs)  # LAPACK, as the numpy path; singular raises to the caller
         smax, zmax = 0.0, 0.0
         for i in range(nd):
             z[dep[i]] -= step[i]
@@ -121,9 +71,7 @@ def velocity_kernel(parent, jtype, axis, offset, ck, ca, cva, cb, cvb, z, zd, ro
     for i in range(nd):
         for j in range(nd):
             Jd[i, j] = J[rows[i], dep[j]]
-    ok, inv = _inverse(Jd)
-    if not ok:
-        return False
+    inv = np.linalg.inv(Jd)  # LAPACK, as the numpy path; singular raises to the caller
     Jd_inv[:, :] = inv
     for j in range(nd):
         zd[dep[j]] = 0.0
@@ -182,9 +130,7 @@ def dynamics_kernel(parent, mass, com, inertia, gravity, A, r, B, Z, vp, wrench,
     MRz = M @ Rz
     lhs = Rz.T @ MRz
     rhs = Rz.T @ (Q - M @ zdd0)
-    ok, zfdd = _lu_solve_inplace(lhs, rhs)
-    if not ok:
-        return False
+    zfdd = np.linalg.solve(lhs, rhs)
     zdd[:] = Rz @ zfdd + zdd0
     res = M @ zdd - Q
     for j in range(nd):

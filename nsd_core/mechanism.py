@@ -81,7 +81,7 @@ class Mechanism:
     def n(self) -> int:
         return len(self.parent)
 
-    @property
+    @cached_property
     def n_constraints(self) -> int:
         return sum(c.size for c in self.cuts)
 

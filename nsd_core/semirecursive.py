@@ -163,10 +163,13 @@ class SemiRecursiveSystem:
             a, m = self.m.arrays, self.m
             n = m.n
             zz = z.copy()
-            code = newton_kernel(a.parent, a.jtype, m.joint_axis, m.joint_offset, a.cut_kind, a.cut_a,
-                                 a.cut_va, a.cut_b, a.cut_vb, zz, P.rows, P.dependent, self.newton_tol, 30,
-                                 m.n_constraints,
-                                 np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((n, 6)))
+            try:
+                code = newton_kernel(a.parent, a.jtype, m.joint_axis, m.joint_offset, a.cut_kind, a.cut_a,
+                                     a.cut_va, a.cut_b, a.cut_vb, zz, P.rows, P.dependent, self.newton_tol, 30,
+                                     m.n_constraints,
+                                     np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((n, 6)))
+            except np.linalg.LinAlgError:
+                code = -1  # singular block: the numpy loop below copes
             if code == 1:
                 return zz
         for _ in range(30):
@@ -203,8 +206,10 @@ class SemiRecursiveSystem:
         zd = np.zeros(n)
         zd[pr] = qd
         zd[P.free] = zfd
-        if not velocity_kernel(a.parent, a.jtype, m.joint_axis, m.joint_offset, a.cut_kind, a.cut_a, a.cut_va,
-                               a.cut_b, a.cut_vb, z, zd, P.rows, P.dependent, A, r, B, Z, vp, Phi, J, c, Jd_inv):
+        try:
+            velocity_kernel(a.parent, a.jtype, m.joint_axis, m.joint_offset, a.cut_kind, a.cut_a, a.cut_va,
+                            a.cut_b, a.cut_vb, z, zd, P.rows, P.dependent, A, r, B, Z, vp, Phi, J, c, Jd_inv)
+        except np.linalg.LinAlgError:
             return None
         S = -Jd_inv @ J[P.rows]
         S[:, P.dependent] = 0.0
@@ -212,10 +217,12 @@ class SemiRecursiveSystem:
         kin = Kinematics(A, r, B, Z, vp)
         wrench, gen, extra_rate = self.forces(t, kin, z, zd, extra)
         zdd, lam, tau = np.empty(n), np.empty(len(P.dependent)), np.empty(len(pr))
-        if not dynamics_kernel(a.parent, m.mass, m.com, m.inertia, m.gravity, A, r, B, Z, vp,
-                               np.ascontiguousarray(wrench, dtype=float),
-                               np.zeros(n) if gen is None else np.asarray(gen, dtype=float), J, c, P.rows,
-                               P.dependent, P.free, pr, np.asarray(qdd, dtype=float), Jd_inv, zdd, lam, tau):
+        try:
+            dynamics_kernel(a.parent, m.mass, m.com, m.inertia, m.gravity, A, r, B, Z, vp,
+                            np.ascontiguousarray(wrench, dtype=float),
+                            np.zeros(n) if gen is None else np.asarray(gen, dtype=float), J, c, P.rows,
+                            P.dependent, P.free, pr, np.asarray(qdd, dtype=float), Jd_inv, zdd, lam, tau)
+        except np.linalg.LinAlgError:
             return None
         return Evaluation(t, z, zd, zdd, kin, np.asarray(extra_rate, dtype=float), lam, tau, Phi)
 
