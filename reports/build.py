@@ -8,6 +8,7 @@ input (raised as ParameterError, one line) leaves nothing behind.
 """
 from __future__ import annotations
 
+import csv
 import json
 import os
 import time
@@ -33,6 +34,7 @@ class ReportData:
     results: dict[tuple[str, str], RunResult] = field(default_factory=dict)
     benchmark: dict | None = None
     study: list[dict] = field(default_factory=list)
+    tables: list[dict] = field(default_factory=list)  # rows of nsd tables' tables.csv, if present
 
     @property
     def cases(self) -> list[dict]:
@@ -102,7 +104,22 @@ def load(results_dir: str | Path) -> ReportData:
         b = _json(bench, "written by nsd benchmark")
         data.benchmark = b if isinstance(b, dict) and isinstance(b.get("problems"), dict) else None
     data.study = _load_study(root / "study")
+    data.tables = _load_tables(root / "study" / "tables.csv")
     return data
+
+
+def _load_tables(path: Path) -> list[dict]:
+    """Rows of ``nsd tables --out DIR/study`` (Tables 5 and 6 next to the model); [] if absent."""
+    if not path.is_file():
+        return []
+    try:
+        with open(path) as f:
+            rows = list(csv.DictReader(f))
+        return [{"table": r["table"], "parameter": r["parameter"], "value": float(r["value"]),
+                 "unit": r["unit"], "paper": float(r["paper_x_max [m]"]), "model": float(r["model_x_max [m]"]),
+                 "diff_mm": float(r["difference [mm]"])} for r in rows]
+    except (OSError, KeyError, ValueError):
+        return []
 
 
 def _load_study(folder: Path) -> list[dict]:
@@ -152,6 +169,8 @@ def pages(data: ReportData) -> list[tuple[str, Callable]]:
         out.append((f"closure{'' if i == 0 else f'_{i + 1}'}", lambda c=chunk: figures.closure_figure(data, c)))
     if data.benchmark:
         out.append(("benchmark", lambda: figures_extra.benchmark_figure(data)))
+    if data.tables:
+        out.append(("tables", lambda: figures_extra.tables_figure(data)))
     for s in data.study:
         out.append((f"study_{s['name']}", lambda s=s: figures_extra.study_figure(data, s)))
     return out

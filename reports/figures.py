@@ -152,7 +152,8 @@ def stiffness_figure(data, group: dict):
                 keep = np.concatenate([[True], np.diff(u) > 0])  # strictly rising: a defined gradient
                 k = tangent_stiffness(u[keep], F[keep])
                 ax.plot(u[keep] * 1e3, k / 1e3, **style(e))
-                ks.append(k)
+                # the y-range ignores the turning point (u -> A, du -> 0), where dF/du is noise
+                ks.append(k[u[keep] < 0.97 * case["amplitude"]])
         run = data.run(name, data.reference)
         summ = run.get("summary") or next((data.run(name, e).get("summary") for e in data.engines
                                           if data.run(name, e).get("summary")), None)

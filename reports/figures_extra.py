@@ -258,3 +258,36 @@ def study_figure(data, s: dict):
         fig.text(0.07, 0.03, "failed/missing designs: " + ", ".join(fmt(d["value"]) for d in failed), color=RED,
                  fontsize=8)
     return fig
+
+
+def tables_figure(data):
+    """The paper's Tables 5 and 6 (X_max) next to the model: values and differences."""
+    fig = new_figure(LANDSCAPE, "Tables 5 and 6: maximum displacement X_max, paper against model",
+                     "X_max: plate displacement at which every rope is slack (quasi-static, monotonic loading); "
+                     "goal: every entry within 0.3 mm")
+    gs = fig.add_gridspec(2, 2, left=0.08, right=0.97, top=0.86, bottom=0.08, hspace=0.35, wspace=0.25)
+    for col, name in enumerate(("Table 5", "Table 6")):
+        rows = [r for r in data.tables if r["table"] == name]
+        ax, dx = fig.add_subplot(gs[0, col]), fig.add_subplot(gs[1, col])
+        if not rows:
+            no_data(ax, f"{name}: not in tables.csv")
+            dx.set_visible(False)
+            continue
+        v = np.array([r["value"] for r in rows])
+        unit, par = rows[0]["unit"], rows[0]["parameter"]
+        ax.plot(v, [r["paper"] * 1e3 for r in rows], "o", color="k", mfc="none", label="paper")
+        ax.plot(v, [r["model"] * 1e3 for r in rows], **style("semirecursive"), label="model")
+        ax.set_title(f"{name}: X_max against {par}", fontsize=9)
+        ax.set_xlabel(f"{par} [{unit}]")
+        ax.set_ylabel("X_max [mm]")
+        ax.legend(fontsize=7.5)
+        d = np.array([r["diff_mm"] for r in rows])
+        dx.bar(np.arange(len(v)), d, color=[RED if abs(x) > 0.3 else GREEN for x in d])
+        dx.set_xticks(np.arange(len(v)), [fmt(x) for x in v])
+        dx.axhline(0.3, color=GREY, ls=":", lw=1.0)
+        dx.axhline(-0.3, color=GREY, ls=":", lw=1.0)
+        dx.set_ylim(-0.35, 0.35)
+        dx.set_title(f"model - paper (worst {np.max(np.abs(d)):.3f} mm; dotted: goal 0.3 mm)", fontsize=9)
+        dx.set_xlabel(f"{par} [{unit}]")
+        dx.set_ylabel("difference [mm]")
+    return fig

@@ -198,3 +198,16 @@ def test_extra_pages_when_the_folder_has_them(run_dir, tmp_path):
     assert paths["pages"] == EXPECTED + ["benchmark"]
     assert "max |dF| against cost" in _page_text(paths["pdf"], 5)
     assert "Andrews" in _page_text(paths["pdf"], len(EXPECTED))
+
+
+def test_tables_page_from_nsd_tables(run_dir, tmp_path):
+    """`nsd tables --out DIR/study` adds the Tables 5-6 page (paper against model)."""
+    from reports.build import build_report
+    dst = tmp_path / "run"
+    shutil.copytree(run_dir[0], dst)
+    p = nsd("tables", "--out", str(dst / "study"))
+    assert p.returncode == 0, p.stderr
+    paths = build_report(dst, tmp_path / "r")
+    assert paths["pages"] == EXPECTED + ["tables"]
+    text = _page_text(paths["pdf"], len(EXPECTED))
+    assert "Tables 5 and 6" in text and "worst" in text
