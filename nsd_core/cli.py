@@ -2,7 +2,8 @@
 3 solver or engine failure, 4 a drive the mechanism cannot follow.
 
 Subcommands live with the code they drive; each module listed in SUBCOMMANDS exposes
-``add_arguments(parser)`` and ``run(args) -> int``.
+``add_arguments(parser)`` (or ``add_arguments(parser, name)`` when one module serves several
+subcommands) and ``run(args) -> int``.
 """
 from __future__ import annotations
 
@@ -80,19 +81,13 @@ def add_cycle_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run_cycle(args) -> int:
-    from .cycle import analyse
-    from .device import DEFAULT_SOLVER, simulate
+    from .api import cycle
+    from .device import DEFAULT_SOLVER
     from .results import atomic_write_json, write_csv
     params = load_params(args.params, parse_set(args.set))
     drive = Drive(args.amplitude, args.frequency, args.direction, args.cycles, args.samples_per_cycle)
-    drive.check_followable(params)
     solver = {k: (getattr(args, k) if getattr(args, k, None) is not None else v) for k, v in DEFAULT_SOLVER.items()}
-    result = simulate(params, drive, progress=Progress("nsd cycle"), **solver)
-    summary = {"drive": {"amplitude": drive.amplitude, "frequency": drive.frequency,
-                         "direction_deg": drive.direction_deg, "cycles": drive.cycles},
-               **analyse(result, drive.amplitude, drive.frequency), "solver": result.stats,
-               "wall_time": result.stats["wall_time"], "versions": versions(),
-               "params": params.describe()}
+    result, summary = cycle(params, drive, progress=Progress("nsd cycle"), **solver)
     out = Path(args.out)
     write_csv(out / "cycle.csv", result)
     atomic_write_json(out / "summary.json", summary)

@@ -1,0 +1,33 @@
+"""The library entry point for one drive: what ``nsd cycle`` does, as a function.
+
+    from nsd_core.api import cycle
+    from nsd_core.drive import Drive
+    from nsd_core.params import Params
+    result, summary = cycle(Params().replace(rope_stiffness=7e5), Drive(0.015, 1.0))
+    result["F"], summary["loop_area"], summary["stiffness_regions"]
+"""
+from __future__ import annotations
+
+from typing import Any
+
+from .cycle import analyse
+from .device import simulate
+from .drive import Drive
+from .params import Params
+from .results import RunResult
+
+
+def cycle(params: Params, drive: Drive, progress=None, **solver) -> tuple[RunResult, dict[str, Any]]:
+    """Run ``drive`` on the in-house model; return the time series and the summary that summary.json holds.
+
+    Raises ParameterError (bad input), DriveError (a drive the mechanism cannot follow, or a state
+    outside the laws' validity) and SolverError (integration failure), as the CLI's exit codes 2, 4, 3.
+    """
+    from .cli import versions
+    drive.check_followable(params)
+    result = simulate(params, drive, progress=progress, **solver)
+    summary = {"drive": {"amplitude": drive.amplitude, "frequency": drive.frequency,
+                         "direction_deg": drive.direction_deg, "cycles": drive.cycles},
+               **analyse(result, drive.amplitude, drive.frequency), "solver": result.stats,
+               "wall_time": result.stats["wall_time"], "versions": versions(), "params": params.describe()}
+    return result, summary
