@@ -25,6 +25,13 @@ def loading_quarter(result: RunResult, frequency: float) -> np.ndarray:
     return (t >= t0 - 1e-9 / frequency) & (t <= t0 + 0.25 / frequency + 1e-9 / frequency)
 
 
+def unloading_quarter(result: RunResult, frequency: float) -> np.ndarray:
+    """Mask of the steady cycle's second quarter: u falling from +A back to 0 (the unloading branch)."""
+    t = result["t"]
+    t0 = t[-1] - 1.0 / frequency
+    return (t >= t0 + 0.25 / frequency - 1e-9 / frequency) & (t <= t0 + 0.5 / frequency + 1e-9 / frequency)
+
+
 def tangent_stiffness(u: np.ndarray, F: np.ndarray) -> np.ndarray:
     """dF/du along a monotonic branch [N/m]."""
     return np.gradient(F, u)
@@ -119,8 +126,17 @@ def analyse(result: RunResult, amplitude: float, frequency: float) -> dict:
         "loop_area": loop_area(u, F),
         "initial_stiffness": float(k[0]),
         "stiffness_regions": stiffness_regions(uq, k, min_width=0.02 * amplitude),
+        "stiffness_regions_unloading": _unloading_regions(result, amplitude, frequency),
         "x_max": xm,
         "outside_working_range": any(e["kind"] == "ropes_slack" for e in ev),
         "events": ev,
         "closure_max": float(np.max(np.abs(result["closure"]))),
     }
+
+
+def _unloading_regions(result: RunResult, amplitude: float, frequency: float) -> list[dict]:
+    """Stiffness regions on the unloading branch, listed from u = 0 outwards like the loading ones."""
+    m = unloading_quarter(result, frequency)
+    u, F = result["u"][m][::-1], result["F"][m][::-1]  # ascending u
+    keep = np.concatenate([[True], np.diff(u) > 0])
+    return stiffness_regions(u[keep], tangent_stiffness(u[keep], F[keep]), min_width=0.02 * amplitude)
