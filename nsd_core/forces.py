@@ -112,31 +112,41 @@ def spring_push(length, length_rate, zeta, law: SpringLaw):
     return np.maximum(raw, 0.0), bouc_wen_slope(zeta, xdot, law) * xdot, raw
 
 
-def _rk4_along(slope, x0, x1, state, substeps: int):
-    """Integrate d state/dx = slope(x, state) from x0 to x1 with classical RK4 (fixed direction)."""
+def _advance_along(slope, x0, x1, state, substeps: int, order: int):
+    """Integrate d state/dx = slope(x, state) from x0 to x1 (fixed direction) in ``substeps`` steps
+    of classical RK4 (order 4) or Heun's method (order 2, half the slope calls)."""
+    if order not in (2, 4):
+        raise ValueError(f"order = {order!r}: allowed 2 (Heun) or 4 (RK4)")
     x0 = np.asarray(x0, dtype=float)
-    h = (np.asarray(x1, dtype=float) - x0) / substeps
+    x1 = np.asarray(x1, dtype=float)
+    h = (x1 - x0) / substeps
     y = np.asarray(state, dtype=float)
     for k in range(substeps):
         x = x0 + k * h
+        x_end = x1 if k == substeps - 1 else x + h
         k1 = slope(x, y)
+        if order == 2:
+            y = y + 0.5 * h * (k1 + slope(x_end, y + h * k1))
+            continue
         k2 = slope(x + 0.5 * h, y + 0.5 * h * k1)
         k3 = slope(x + 0.5 * h, y + 0.5 * h * k2)
-        k4 = slope(x + h, y + h * k3)
+        k4 = slope(x_end, y + h * k3)
         y = y + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
     return y
 
 
-def advance_wire_stress(strain0, strain1, stress, law: WireLaw, substeps: int = 1):
+def advance_wire_stress(strain0, strain1, stress, law: WireLaw, substeps: int = 1, order: int = 4):
     """Stress after the strain moves from strain0 to strain1 (Eq. 17 integrated in strain)."""
     direction = np.sign(np.asarray(strain1, dtype=float) - strain0)
-    return _rk4_along(lambda e, s: sma_stress_slope(e, direction, s, law), strain0, strain1, stress, substeps)
+    return _advance_along(lambda e, s: sma_stress_slope(e, direction, s, law), strain0, strain1, stress,
+                          substeps, order)
 
 
-def advance_spring_zeta(compression0, compression1, zeta, law: SpringLaw, substeps: int = 1):
+def advance_spring_zeta(compression0, compression1, zeta, law: SpringLaw, substeps: int = 1, order: int = 4):
     """Hysteretic force after the compression moves from compression0 to compression1 (Eq. 18b)."""
     direction = np.sign(np.asarray(compression1, dtype=float) - compression0)
-    return _rk4_along(lambda x, z: bouc_wen_slope(z, direction, law), compression0, compression1, zeta, substeps)
+    return _advance_along(lambda x, z: bouc_wen_slope(z, direction, law), compression0, compression1, zeta,
+                          substeps, order)
 
 
 def precompressed_spring(kse, ksd, beta, gamma, n, push) -> tuple[float, float]:

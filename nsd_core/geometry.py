@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -58,6 +59,25 @@ class DeviceGeometry:
     @property
     def gravity_vector(self) -> np.ndarray:
         return np.array([0.0, 0.0, -self.params.gravity])
+
+    @cached_property
+    def rope_offsets(self) -> np.ndarray:
+        """(n_r, 3) rope vector (upper end minus lower end) minus the cap position."""
+        return self.rope_cap_points - self.rope_base_points
+
+    @cached_property
+    def wire_offsets(self) -> np.ndarray:
+        """(n_w, 3) wire vector minus (cap position - wall position)."""
+        return self.wire_cap_points - self.wire_wall_points
+
+    def element_vectors(self, cap_pos, wall_z):
+        """Rope and wire vectors (upper end minus lower end), shapes (..., n, 3), for cap positions
+        (..., 3) and wall heights (...). In the drive mode cap and wall only translate, so the body
+        frames stay parallel to the world frame and the attachment points are plain offsets."""
+        cap = np.asarray(cap_pos, dtype=float)[..., None, :]
+        wall = np.zeros_like(cap)
+        wall[..., 2] = np.asarray(wall_z, dtype=float)[..., None]
+        return cap + self.rope_offsets, cap - wall + self.wire_offsets
 
     def initial_wire_stress(self) -> np.ndarray:
         """Wires are not pretensioned (the paper: zero force in the undeformed configuration)."""

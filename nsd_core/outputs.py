@@ -10,23 +10,9 @@ from __future__ import annotations
 import numpy as np
 
 from .drive import Drive
-from .forces import rope_tension
+from .forces import rope_tension, wire_tension
 from .geometry import DeviceGeometry
 from .results import RunResult, column_units
-
-
-def element_vectors(g: DeviceGeometry, cap_pos: np.ndarray, wall_z: np.ndarray):
-    """Rope and wire vectors (upper end minus lower end), shapes (n_t, n_elem, 3).
-
-    In the drive mode the cap and the wall only translate, so the body frames stay parallel to the
-    world frame and the attachment points are plain offsets.
-    """
-    cap_pos = np.atleast_2d(cap_pos)
-    wall = np.zeros_like(cap_pos)
-    wall[:, 2] = wall_z
-    rope = cap_pos[:, None, :] + g.rope_cap_points[None] - g.rope_base_points[None]
-    wire = cap_pos[:, None, :] + g.wire_cap_points[None] - (wall[:, None, :] + g.wire_wall_points[None])
-    return rope, wire
 
 
 def device_columns(engine: str, g: DeviceGeometry, drive: Drive, t, cap_pos, wall_z, wire_stress,
@@ -36,12 +22,12 @@ def device_columns(engine: str, g: DeviceGeometry, drive: Drive, t, cap_pos, wal
     n = len(t)
     e = drive.unit_vector
     u, _, u_dd = drive.displacement(t)
-    rope_v, wire_v = element_vectors(g, cap_pos, wall_z)
+    rope_v, wire_v = g.element_vectors(np.atleast_2d(cap_pos), wall_z)
     rope_l = np.linalg.norm(rope_v, axis=2)
     wire_l = np.linalg.norm(wire_v, axis=2)
     rope_t = rope_tension(rope_l, g.rope_natural_length[None], g.rope_stiffness)
     wire_stress = np.asarray(wire_stress, dtype=float).reshape(n, g.n_wires)
-    wire_t = g.wire.area * np.maximum(wire_stress, 0.0)
+    wire_t = wire_tension(wire_stress, g.wire)
     # contribution to F = minus the force on the cap along psi; the force on the cap is -T * unit(v)
     rope_f = rope_t * (rope_v @ e) / rope_l
     wire_f = wire_t * (wire_v @ e) / np.where(wire_l > 0, wire_l, 1.0)

@@ -15,7 +15,7 @@ import math
 import numpy as np
 from scipy.optimize import brentq
 
-from .forces import advance_spring_zeta, advance_wire_stress, rope_tension
+from .forces import advance_spring_zeta, advance_wire_stress, rope_tension, wire_tension
 from .geometry import DeviceGeometry, device_geometry
 from .params import Params
 
@@ -24,16 +24,17 @@ def _element_state(g: DeviceGeometry, e: np.ndarray, u: float, z_w: float):
     """Cap position, element vectors (upper minus lower) and lengths at plate u, wall z_w."""
     z_c = z_w + math.sqrt(g.params.rod_length ** 2 - u * u)
     cap = u * e + np.array([0.0, 0.0, z_c])
-    rope_d = cap + g.rope_cap_points - g.rope_base_points
-    wire_d = cap + g.wire_cap_points - (g.wire_wall_points + [0.0, 0.0, z_w])
+    rope_d, wire_d = g.element_vectors(cap, z_w)
     return z_c, rope_d, np.linalg.norm(rope_d, axis=1), wire_d, np.linalg.norm(wire_d, axis=1)
 
 
 def quasi_static_path(params: Params | DeviceGeometry, u: np.ndarray, direction_deg: float = 0.0,
-                      u_ddot: np.ndarray | None = None, substeps: int = 4) -> dict[str, np.ndarray]:
+                      u_ddot: np.ndarray | None = None, substeps: int = 4,
+                      stop_at_slack: bool = False) -> dict[str, np.ndarray]:
     """Quasi-static equilibria along the plate displacement path u[0..], starting from rest (u[0] = 0).
 
-    Returns arrays: u, F, F_device, z_w, z_c, spring push, rope tensions (n, n_r), wire stresses.
+    Returns arrays: u, F, F_device, z_w, z_c, spring push, rope tensions (n, n_r), wire stresses;
+    with stop_at_slack, only up to the first point where every rope is slack.
     """
     g = params if isinstance(params, DeviceGeometry) else device_geometry(params)
     p = g.params
@@ -77,7 +78,7 @@ def quasi_static_path(params: Params | DeviceGeometry, u: np.ndarray, direction_
             z_w = brentq(vertical_residual, lo, hi, args=(uk,), xtol=1e-15, rtol=1e-15, maxiter=200)
         z_c, rope_d, rl, wire_d, wl, eps, sig, x, zt = states_at(uk, z_w)
         t_rope = rope_tension(rl, g.rope_natural_length, g.rope_stiffness)
-        t_wire = g.wire.area * np.maximum(sig, 0.0)
+        t_wire = wire_tension(sig, g.wire)
         f_cap = -(t_rope[:, None] * rope_d / rl[:, None]).sum(0) - (t_wire[:, None] * wire_d / wl[:, None]).sum(0)
         dzc_du = -uk / math.sqrt(p.rod_length ** 2 - uk * uk)
         dr_du = e + np.array([0.0, 0.0, dzc_du])
@@ -90,6 +91,10 @@ def quasi_static_path(params: Params | DeviceGeometry, u: np.ndarray, direction_
         out["rope_stretch"][k] = float(np.max(rl - g.rope_natural_length))
         out["wire_stress"][k], out["wire_strain"][k] = sig, eps
         sigma, zeta, eps_prev, x_prev = sig, zt, eps, x
+        if stop_at_slack and out["rope_stretch"][k] <= 0.0:  # every rope slack: the path ends here
+            out = {key: v[:k + 1] for key, v in out.items()}
+            u = u[:k + 1]
+            break
     out["u"] = u
     return out
 
@@ -103,7 +108,7 @@ def x_max(params: Params, direction_deg: float = 0.0, step: float = 2e-5) -> flo
     g = device_geometry(params)
     n = int(params.rod_length * 0.999 / step)
     u = np.linspace(0.0, step * n, n + 1)
-    stretch = quasi_static_path(g, u, direction_deg, substeps=2)["rope_stretch"]
+    stretch = quasi_static_path(g, u, direction_deg, substeps=2, stop_at_slack=True)["rope_stretch"]
     slack = np.nonzero(stretch <= 0.0)[0]
     if len(slack) == 0:
         return float("nan")

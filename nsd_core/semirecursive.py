@@ -109,10 +109,13 @@ class SemiRecursiveSystem:
         return self.partition
 
     # ---- positions and velocities on the constraint manifold ----
-    def assemble(self, t: float, zf: np.ndarray) -> np.ndarray:
+    def assemble(self, t: float, zf: np.ndarray, q: np.ndarray | None = None) -> np.ndarray:
+        """Full configuration on the loop manifold for free coordinates zf at time t (q: the prescribed
+        positions at t, when the caller already has them)."""
         P = self.partition
         z = self._z.copy()
-        q, _, _ = self.motion(t)
+        if q is None:
+            q = self.motion(t)[0]
         z[self.prescribed] = q
         z[P.free] = zf
         if len(P.dependent) == 0:
@@ -188,8 +191,8 @@ class SemiRecursiveSystem:
 
     def rhs_parts(self, t: float, zf: np.ndarray, zfd: np.ndarray, extra: np.ndarray) -> Evaluation:
         P, m, pr = self.partition, self.m, self.prescribed
-        z = self.assemble(t, zf)
         q, qd, qdd = self.motion(t)
+        z = self.assemble(t, zf, q)
         if self.fast and len(P.dependent):
             ev = self._rhs_compiled(t, z, zfd, qd, qdd, extra)
             if ev is not None:

@@ -107,7 +107,7 @@ def x_max_at_slack(p: Params, direction_deg: float = 0.0) -> float:
     def stretch(u):  # longest rope's stretch with the wall at z_w and the plate at u (u: array)
         u = np.atleast_1d(u)
         cap = u[:, None] * e + np.column_stack([0 * u, 0 * u, z_w + np.sqrt(l_d ** 2 - u * u)])
-        d = cap[:, None, :] + g.rope_cap_points[None] - g.rope_base_points[None]
+        d = g.element_vectors(cap, z_w)[0]
         return np.max(np.linalg.norm(d, axis=2) - g.rope_natural_length[None], axis=1)
 
     us = np.linspace(0.0, 0.999 * l_d, 400)

@@ -33,9 +33,9 @@ the moments of the off-centre attachment points go only into the rotation locks'
 Hysteretic states (SMA stress per wire, Eq. 17; Bouc-Wen zeta, Eq. 18). The laws are rate-
 independent and each state's driving strain is a scalar, so they are integrated in strain, once per
 accepted step, from the committed states (eps_c, sigma_c), (x_c, zeta_c) at the last converged
-configuration along the straight increment to the new one: Heun's method (two slope evaluations,
-``sma_stress_slope`` / ``bouc_wen_slope``, second order; "rk4" uses advance_wire_stress /
-advance_spring_zeta, and gives the same loops to < 1e-6, since a step moves the strain < 1e-4).
+configuration along the straight increment to the new one, with nsd_core's advance_wire_stress /
+advance_spring_zeta: Heun's method by default (order 2, two slope evaluations); "rk4" (order 4)
+gives the same loops to < 1e-6, since a step moves the strain < 1e-4.
 "per_step" commits the converged step and predicts the next one in one batched call; in
 "per_iteration" the force function is pure (it starts from the committed states every residual) so
 Newton and its Jacobian see one smooth function, and the states are committed in the pre-step.
@@ -64,8 +64,7 @@ from exudyn.rigidBodyUtilities import RigidBodyInertia
 
 from comparisons.engines.base import EngineError, merged_settings
 from nsd_core.drive import Drive
-from nsd_core.forces import (advance_spring_zeta, advance_wire_stress, bouc_wen_slope, rope_tension,
-                             sma_stress_slope, spring_push)
+from nsd_core.forces import advance_spring_zeta, advance_wire_stress, rope_tension, spring_push, wire_tension
 from nsd_core.geometry import device_geometry
 from nsd_core.outputs import device_columns
 from nsd_core.params import ParameterError, Params
@@ -81,26 +80,24 @@ class _Elements:
 
     def __init__(self, g, integrator="heun"):
         self.g = g
-        self.heun = integrator == "heun"
-        self.rope_offset = g.rope_cap_points - g.rope_base_points   # rope vector = cap_pos + this
-        self.wire_offset = g.wire_cap_points - g.wire_wall_points   # wire vector = cap - wall + this
+        self.order = 2 if integrator == "heun" else 4  # Heun or RK4 along the strain (nsd_core.forces)
         self.sigma = g.initial_wire_stress().astype(float)
         self.zeta = float(g.spring_zeta0)
         self.eps = self.wire_strain(np.array([0.0, 0.0, g.cap_rest_z]), g.wall_rest_z)[1]
         self.x = g.spring.free_length - g.wall_rest_z
 
     def wire_strain(self, cap, wall_z):
-        v = self.wire_offset + (cap - [0.0, 0.0, wall_z])
+        v = self.g.wire_offsets + (cap - [0.0, 0.0, wall_z])
         L = np.sqrt((v * v).sum(1))
         return v, (L - self.g.wire.natural_length) / self.g.wire.natural_length, L
 
     def forces_with(self, cap, wall_z, v, L, sigma, zeta):
         """Force on the cap (3) and on the wall (3) for given wire stresses and spring zeta."""
         g = self.g
-        r = self.rope_offset + cap
+        r = self.g.rope_offsets + cap
         rl = np.sqrt((r * r).sum(1))
         t_rope = rope_tension(rl, g.rope_natural_length, g.rope_stiffness)          # Eq. 16
-        t_wire = g.wire.area * np.maximum(sigma, 0.0)                                  # Eq. 17a
+        t_wire = wire_tension(sigma, g.wire)                                           # Eq. 17a
         f_wire = ((t_wire / L)[:, None] * v).sum(0)
         f_cap = -((t_rope / rl)[:, None] * r).sum(0) - f_wire
         push = float(spring_push(wall_z, 0.0, zeta, g.spring)[0])                      # Eq. 18, push only
@@ -108,19 +105,11 @@ class _Elements:
 
     def advance_wire(self, eps0, eps1, sigma):
         """Eq. 17 integrated in strain from eps0 to eps1 (one straight, monotonic strain increment)."""
-        if not self.heun:
-            return advance_wire_stress(eps0, eps1, sigma, self.g.wire)
-        d, de, law = np.sign(eps1 - eps0), eps1 - eps0, self.g.wire
-        k1 = sma_stress_slope(eps0, d, sigma, law)
-        return sigma + 0.5 * de * (k1 + sma_stress_slope(eps1, d, sigma + de * k1, law))
+        return advance_wire_stress(eps0, eps1, sigma, self.g.wire, order=self.order)
 
     def advance_spring(self, x0, x1, zeta):
         """Eq. 18b integrated in the compression x_s from x0 to x1."""
-        if not self.heun:
-            return advance_spring_zeta(x0, x1, zeta, self.g.spring)
-        d, dx, law = np.sign(x1 - x0), x1 - x0, self.g.spring
-        k1 = bouc_wen_slope(zeta, d, law)
-        return zeta + 0.5 * dx * (k1 + bouc_wen_slope(zeta + dx * k1, d, law))
+        return advance_spring_zeta(x0, x1, zeta, self.g.spring, order=self.order)
 
     # ---- "per_iteration": a pure function of the configuration, from the committed states ----
     def states(self, cap, wall_z):

@@ -62,7 +62,7 @@ import numpy as np
 
 from nsd_core.drive import Drive
 from nsd_core.forces import (advance_spring_zeta, advance_wire_stress, bouc_wen_slope, rope_tension,
-                             sma_stress_slope, spring_push)
+                             sma_stress_slope, spring_push, wire_tension)
 from nsd_core.geometry import DeviceGeometry, device_geometry
 from nsd_core.outputs import device_columns
 from nsd_core.params import Params
@@ -124,7 +124,7 @@ class _Device:
         self.e0, self.e1 = float(e[0]), float(e[1])
         self.zc0, self.zw0 = g.cap_rest_z, g.wall_rest_z
         # element vector = cap position + D (- wall z for wires): upper end minus lower end
-        self.D = np.vstack([g.rope_cap_points - g.rope_base_points, g.wire_cap_points - g.wire_wall_points])
+        self.D = np.vstack([g.rope_offsets, g.wire_offsets])
         self.T = np.zeros(self.nr + self.nw)
         self.data, self.qpos, self.qfrc = data, data.qpos, data.qfrc_passive
         self.predict, self.substeps = predict, substeps
@@ -177,7 +177,7 @@ class _Device:
             sigma = sigma + np.where(de > 0.0, self.s_up, self.s_dn) * de
             dx = g.spring.free_length - wz - self.x_c
             zeta = zeta + (self.z_up if dx > 0.0 else self.z_dn) * dx
-        T[nr:] = g.wire.area * np.maximum(sigma, 0.0)                               # Eq. 17a
+        T[nr:] = wire_tension(sigma, g.wire)                                        # Eq. 17a
         push = spring_push(wz, 0.0, zeta, g.spring)[0]                              # Eq. 18
         w = T / L
         f_cap = -(w @ v)                  # every element pulls the cap towards its lower end
