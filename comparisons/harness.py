@@ -16,7 +16,7 @@ from typing import Any, Callable
 
 from nsd_core.cycle import analyse
 from nsd_core.params import Params
-from nsd_core.results import RunResult, atomic_write_json, write_csv
+from nsd_core.results import RunResult, atomic_write_json, versions, write_csv
 
 from .config import METRICS, Case
 from .engines import REFERENCE, get_engine
@@ -90,7 +90,6 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
         "params": cases[0].params.describe() if cases else [], "runs": runs, "metrics": metrics,
         "total_wall_time": time.perf_counter() - started, "workers": workers,
     }
-    from nsd_core.cli import versions
     summary["versions"] = versions()
     if convergence:
         from .convergence import convergence_study

@@ -14,7 +14,7 @@ from .cycle import analyse
 from .device import simulate
 from .drive import Drive
 from .params import Params
-from .results import RunResult
+from .results import RunResult, versions
 
 
 def cycle(params: Params, drive: Drive, progress=None, **solver) -> tuple[RunResult, dict[str, Any]]:
@@ -23,7 +23,6 @@ def cycle(params: Params, drive: Drive, progress=None, **solver) -> tuple[RunRes
     Raises ParameterError (bad input), DriveError (a drive the mechanism cannot follow, or a state
     outside the laws' validity) and SolverError (integration failure), as the CLI's exit codes 2, 4, 3.
     """
-    from .cli import versions
     drive.check_followable(params)
     result = simulate(params, drive, progress=progress, **solver)
     summary = {"drive": {"amplitude": drive.amplitude, "frequency": drive.frequency,

@@ -9,8 +9,6 @@ from __future__ import annotations
 
 import argparse
 import importlib
-import importlib.metadata as md
-import platform
 import sys
 import time
 from pathlib import Path
@@ -49,16 +47,6 @@ class Progress:
         end = "\r" if tty and pct < 100 else "\n"
         self.stream.write(f"{self.label} [{bar}] {pct:3d}%{end}")
         self.stream.flush()
-
-
-def versions() -> dict[str, str]:
-    out = {"python": platform.python_version()}
-    for pkg in ("nsd-harness", "numpy", "scipy", "numba", "mujoco", "exudyn", "matplotlib"):
-        try:
-            out[pkg] = md.version(pkg)
-        except md.PackageNotFoundError:
-            pass
-    return out
 
 
 def add_param_arguments(p: argparse.ArgumentParser) -> None:

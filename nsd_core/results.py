@@ -7,8 +7,10 @@ F_device = F_rod + F_ropes + F_wires and F = m_c u'' + F_device.
 """
 from __future__ import annotations
 
+import importlib.metadata as md
 import json
 import os
+import platform
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -98,3 +100,14 @@ def read_csv(path: str | Path, engine: str = "") -> RunResult:
         units[name] = unit.rstrip("]")
     data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
     return RunResult(engine, {n: data[:, i] for i, n in enumerate(names)}, units)
+
+
+def versions() -> dict[str, str]:
+    """Python and package versions, recorded with every result."""
+    out = {"python": platform.python_version()}
+    for pkg in ("nsd-harness", "numpy", "scipy", "numba", "mujoco", "exudyn", "matplotlib"):
+        try:
+            out[pkg] = md.version(pkg)
+        except md.PackageNotFoundError:
+            pass
+    return out
