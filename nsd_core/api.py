@@ -5,6 +5,8 @@
     from nsd_core.params import Params
     result, summary = cycle(Params().replace(rope_stiffness=7e5), Drive(0.015, 1.0))
     result["F"], summary["loop_area"], summary["stiffness_regions"]
+    result, summary = cycle(Params(), Drive(0.015, 1.0, cycles=3, path="circle"))
+    result["F_x"], result["F_y"], summary["peak_force_magnitude"], summary["work_per_cycle"]
 """
 from __future__ import annotations
 
@@ -25,8 +27,7 @@ def cycle(params: Params, drive: Drive, progress=None, **solver) -> tuple[RunRes
     """
     drive.check_followable(params)
     result = simulate(params, drive, progress=progress, **solver)
-    summary = {"drive": {"amplitude": drive.amplitude, "frequency": drive.frequency,
-                         "direction_deg": drive.direction_deg, "cycles": drive.cycles},
-               **analyse(result, drive.amplitude, drive.frequency), "solver": result.stats,
+    summary = {"drive": drive.describe(),
+               **analyse(result, drive.amplitude, drive.frequency, drive.path), "solver": result.stats,
                "wall_time": result.stats["wall_time"], "versions": versions(), "params": params.describe()}
     return result, summary

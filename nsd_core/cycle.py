@@ -1,5 +1,6 @@
 """Cycle analysis, engine-independent: steady cycle, loop area, tangent stiffness, working regions
-(Figure 7), X_max and the run's events (ropes slack, spring lifted off its seat)."""
+(Figure 7), X_max and the run's events (ropes slack, spring lifted off its seat); for any path in
+the plane the force vector's peak, the work per cycle and each component's loop."""
 from __future__ import annotations
 
 import numpy as np
@@ -111,8 +112,33 @@ def x_max_from_run(result: RunResult) -> float | None:
     return float(u1)
 
 
-def analyse(result: RunResult, amplitude: float, frequency: float) -> dict:
-    """The summary every engine's run gets: peak force, loop area, stiffness regions, X_max, events."""
+def vector_summary(result: RunResult, frequency: float) -> dict:
+    """The force as a vector over the steady cycle (any path in the plane): peak |F|, the work the
+    drive does per cycle (the closed integral of F . dp, the energy dissipated), the loop of each
+    component (closed integrals of F_x dx and F_y dy, summing to the work)."""
+    cyc = steady_cycle(result, frequency)
+    x, y, Fx, Fy = (result[k][cyc] for k in ("x", "y", "F_x", "F_y"))
+    loop_x, loop_y = loop_area(x, Fx), loop_area(y, Fy)
+    mag = np.hypot(Fx, Fy)
+    k = int(np.argmax(mag))
+    return {"peak_force_magnitude": float(mag[k]), "peak_force_at": [float(x[k]), float(y[k])],
+            "min_force_magnitude": float(np.min(mag)), "work_per_cycle": loop_x + loop_y,
+            "loop_area_x": loop_x, "loop_area_y": loop_y}
+
+
+def analyse(result: RunResult, amplitude: float, frequency: float, path: str = "line") -> dict:
+    """The summary every engine's run gets.
+
+    Line: peak force, loop area, stiffness regions, X_max, events (the paper's quantities), plus the
+    vector summary. Any other path: the vector summary, with peak_force = peak |F| and loop_area =
+    the work per cycle, events and loop closure.
+    """
+    if path != "line":
+        vec = vector_summary(result, frequency)
+        ev = events(result)
+        return {"peak_force": vec["peak_force_magnitude"], "loop_area": vec["work_per_cycle"], **vec,
+                "outside_working_range": any(e["kind"] == "ropes_slack" for e in ev), "events": ev,
+                "closure_max": float(np.max(np.abs(result["closure"])))}
     cyc = steady_cycle(result, frequency)
     u, F = result["u"][cyc], result["F"][cyc]
     q = loading_quarter(result, frequency)
@@ -131,6 +157,7 @@ def analyse(result: RunResult, amplitude: float, frequency: float) -> dict:
         "outside_working_range": any(e["kind"] == "ropes_slack" for e in ev),
         "events": ev,
         "closure_max": float(np.max(np.abs(result["closure"]))),
+        **(vector_summary(result, frequency) if "F_x" in result.columns else {}),
     }
 
 

@@ -111,13 +111,11 @@ def check_validity(t: float, kin, forces: DeviceForces) -> None:
 def device_system(params: Params, drive: Drive) -> tuple[SemiRecursiveSystem, DeviceGeometry]:
     g = device_geometry(params)
     mech = device_mechanism(g)
-    e = drive.unit_vector
 
-    def motion(t):
-        u, ud, udd = drive.displacement(t)
-        return (np.array([u * e[0], u * e[1], 0.0, 0.0, 0.0, 0.0]),
-                np.array([ud * e[0], ud * e[1], 0.0, 0.0, 0.0, 0.0]),
-                np.array([udd * e[0], udd * e[1], 0.0, 0.0, 0.0, 0.0]))
+    def motion(t):  # the plate's X and Y follow the drive's path; its rotation and the base stay 0
+        x, y, xd, yd, xdd, ydd = drive.plate_at(t)
+        return (np.array([x, y, 0.0, 0.0, 0.0, 0.0]), np.array([xd, yd, 0.0, 0.0, 0.0, 0.0]),
+                np.array([xdd, ydd, 0.0, 0.0, 0.0, 0.0]))
 
     system = SemiRecursiveSystem(mech, DRIVEN + LOCKED, motion, DeviceForces(g, mech.n),
                                  n_extra=g.n_wires + 1, prefer_free=[BODY["cap"]])
@@ -147,8 +145,7 @@ def simulate(params: Params, drive: Drive, method: str = DEFAULT_SOLVER["method"
         lam = np.zeros(3)
         lam[system.partition.rows] = ev.lam
         cap_pos = ev.kin.r[BODY["cap"]]
-        e = drive.unit_vector
-        F = ev.drive_force[0] * e[0] + ev.drive_force[1] * e[1]
+        F = (float(ev.drive_force[0]), float(ev.drive_force[1]))  # the multipliers of the plate's X and Y
         check_validity(t, ev.kin, system.forces)
         rows.append((t, cap_pos.copy(), ev.z[BODY["wall"]], y[-g.n_wires - 1:-1].copy(), y[-1],
                      float(np.max(np.abs(ev.Phi))), F, lam))

@@ -1,12 +1,31 @@
-"""The prescribed drive of the parametric analysis (Table 1, first row): u(t) = A sin(2 pi f t)."""
+"""The prescribed drive of the parametric analysis (Table 1, first row): the plate's path in the plane.
+
+nsd-model.md, "Drive and outputs" and "Two-dimensional drive paths". The plate's rotation is held
+at 0 and its position p(t) = (x, y) follows one of these paths, written in the path's own frame
+(a along e_psi, b along e_z x e_psi) and rotated by psi:
+
+- line:     a = A sin(w t), b = 0 (the paper's drive, along azimuth psi);
+- circle:   a = r(t) sin(w t), b = r(t) cos(w t), r(t) = A (1 - cos(pi f t))/2 in the first
+            cycle, then A (starts from rest at the centre and spirals out);
+- ellipse:  as the circle with semi-axes A (along psi) and B (``minor``);
+- figure8:  a = A sin(w t), b = B sin(2 w t) (starts at the centre as it is; B defaults to A/2);
+- a table (t, x, y) read from a CSV file, interpolated by a clamped cubic spline (continuous
+  velocity and acceleration, at rest at both ends); x and y are world coordinates, psi is ignored.
+
+Every engine asks the Drive for the plate's position, velocity and acceleration vectors
+(``plate``/``plate_at``) instead of re-deriving a sine.
+"""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
 from .params import ParameterError, Params
+
+PATHS = ("line", "circle", "ellipse", "figure8")
 
 
 class DriveError(ValueError):
@@ -14,19 +33,66 @@ class DriveError(ValueError):
     lies outside the force laws' validity: exit code 4."""
 
 
+def read_path_table(path: str | Path):
+    """A (t, x, y) table [s, m, m] from CSV (an optional header line), validated; one-line errors.
+
+    Returns a scipy CubicSpline of (x, y) in t, clamped (zero velocity) at both ends so that the
+    plate starts from rest, as the rest state the engines start from requires.
+    """
+    from scipy.interpolate import CubicSpline
+    where = f"path = {str(path)!r}"
+    try:
+        lines = Path(path).read_text().splitlines()
+    except (FileNotFoundError, IsADirectoryError):
+        raise ParameterError(f"{where}: no such file; allowed: {', '.join(PATHS)} or a CSV file of t,x,y") from None
+    except (OSError, UnicodeDecodeError) as e:
+        raise ParameterError(f"{where}: cannot read the file ({type(e).__name__})") from None
+    rows, seen = [], 0
+    for k, line in enumerate(lines, start=1):
+        if not line.strip() or line.lstrip().startswith("#"):
+            continue
+        seen += 1
+        cells = [c.strip() for c in line.split(",")]
+        try:
+            vals = [float(c) for c in cells]
+        except ValueError:
+            if seen == 1:
+                continue  # a header line
+            raise ParameterError(f"{where}, line {k}: {line.strip()!r} is not three numbers t,x,y") from None
+        if len(vals) != 3 or not all(math.isfinite(v) for v in vals):
+            raise ParameterError(f"{where}, line {k}: {line.strip()!r} must be three finite numbers t,x,y")
+        rows.append(vals)
+    if len(rows) < 4:
+        raise ParameterError(f"{where}: {len(rows)} rows; a path table needs at least 4 rows of t,x,y")
+    a = np.array(rows)
+    if a[0, 0] != 0.0:
+        raise ParameterError(f"{where}: first t = {a[0, 0]!r}; the table must start at t = 0")
+    if a[0, 1] != 0.0 or a[0, 2] != 0.0:
+        raise ParameterError(f"{where}: first (x, y) = ({a[0, 1]!r}, {a[0, 2]!r}); the plate must start at the "
+                             "centre (0, 0), the rest state")
+    dt = np.diff(a[:, 0])
+    if np.any(dt <= 0.0):
+        k = int(np.flatnonzero(dt <= 0.0)[0]) + 1
+        raise ParameterError(f"{where}: t = {a[k, 0]!r} at row {k + 1} does not increase; t must be strictly increasing")
+    return CubicSpline(a[:, 0], a[:, 1:], bc_type="clamped")
+
+
 @dataclass(frozen=True)
 class Drive:
-    """Plate displacement u(t) = A sin(2 pi f t) along azimuth psi in the horizontal plane."""
-    amplitude: float          # A [m]
+    """The plate's path p(t) = (x, y) in the horizontal plane (see the module docstring)."""
+    amplitude: float          # A [m]: the line's amplitude, the circle's radius, the major semi-axis
     frequency: float          # f [Hz]
     direction_deg: float = 0.0  # psi [deg], 0 = +X (the first wire's direction)
     cycles: int = 2           # the last one is the steady cycle that is compared
     samples_per_cycle: int = 1000
+    path: str = "line"        # line | circle | ellipse | figure8 | a CSV file of t,x,y
+    minor: float | None = None  # B [m]: ellipse (required), figure8 (default A/2)
+    _table: object = field(default=None, init=False, repr=False, compare=False)
 
     def __post_init__(self):
         for name in ("amplitude", "frequency", "direction_deg"):
             v = getattr(self, name)
-            if not isinstance(v, (int, float)) or not math.isfinite(v):
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
                 raise ParameterError(f"{name} = {v!r}: must be a finite number")
         if self.amplitude < 0:
             raise ParameterError(f"amplitude = {self.amplitude}: must be >= 0 m (0 holds the device at rest)")
@@ -36,11 +102,50 @@ class Drive:
             raise ParameterError(f"cycles = {self.cycles!r}: must be a whole number >= 1")
         if not isinstance(self.samples_per_cycle, int) or self.samples_per_cycle < 16:
             raise ParameterError(f"samples_per_cycle = {self.samples_per_cycle!r}: must be a whole number >= 16")
+        if not isinstance(self.path, str) or not self.path:
+            raise ParameterError(f"path = {self.path!r}: allowed: {', '.join(PATHS)} or a CSV file of t,x,y")
+        if self.minor is not None and (isinstance(self.minor, bool) or not isinstance(self.minor, (int, float))
+                                       or not math.isfinite(self.minor) or self.minor < 0):
+            raise ParameterError(f"minor = {self.minor!r}: must be a finite number >= 0 m")
+        if self.path == "ellipse" and self.minor is None:
+            raise ParameterError("minor: missing; an ellipse needs its minor semi-axis B (--minor) [m]")
+        if self.path in ("line", "circle") and self.minor is not None:
+            raise ParameterError(f"minor = {self.minor}: only an ellipse or a figure8 takes a minor semi-axis")
+        if self.path not in PATHS:
+            spline = read_path_table(self.path)
+            if spline.x[-1] < self.duration * (1 - 1e-12):
+                raise ParameterError(f"path = {self.path!r}: the table ends at t = {spline.x[-1]:g} s, before "
+                                     f"cycles/frequency = {self.duration:g} s")
+            object.__setattr__(self, "_table", spline)
+
+    @property
+    def is_line(self) -> bool:
+        return self.path == "line"
+
+    @property
+    def minor_axis(self) -> float:
+        """B [m] of the ellipse / figure eight (A for a circle, 0 for a line)."""
+        if self.path == "circle":
+            return self.amplitude
+        if self.path == "figure8" and self.minor is None:
+            return 0.5 * self.amplitude
+        return float(self.minor or 0.0)
 
     def check_followable(self, p: Params) -> None:
-        if self.amplitude >= p.rod_length:
-            raise DriveError(f"amplitude = {self.amplitude} m: the mechanism cannot follow a drive with "
+        reach = self.extent()
+        if reach >= p.rod_length:
+            raise DriveError(f"amplitude = {reach} m: the mechanism cannot follow a drive with "
                              f"|u| >= rod_length = {p.rod_length} m")
+
+    def extent(self) -> float:
+        """The largest distance of the plate from the centre along the path [m]."""
+        if self._table is not None:
+            t = np.linspace(0.0, self.duration, 20 * self.cycles * self.samples_per_cycle + 1)
+            return float(np.max(np.linalg.norm(self._table(t), axis=1)))
+        if self.path == "figure8":  # max over s of A^2 sin^2 s + B^2 sin^2 2s, on a fine grid
+            s = np.linspace(0.0, 0.5 * math.pi, 20001)
+            return float(np.sqrt(np.max((self.amplitude * np.sin(s)) ** 2 + (self.minor_axis * np.sin(2 * s)) ** 2)))
+        return max(self.amplitude, self.minor_axis)
 
     @property
     def omega(self) -> float:
@@ -55,12 +160,53 @@ class Drive:
         a = math.radians(self.direction_deg)
         return np.array([math.cos(a), math.sin(a), 0.0])
 
-    def displacement(self, t):
-        """u, du/dt, d2u/dt2 at time t."""
-        w = self.omega
+    def plate(self, t):
+        """Plate position, velocity and acceleration (x, y) at times t: three arrays of shape t.shape + (2,)."""
+        t = np.asarray(t, dtype=float)
+        if self._table is not None:
+            return self._table(t), self._table(t, 1), self._table(t, 2)
+        A, B, w = self.amplitude, self.minor_axis, self.omega
         s, c = np.sin(w * t), np.cos(w * t)
-        return self.amplitude * s, self.amplitude * w * c, -self.amplitude * w * w * s
+        if self.path == "line":
+            a, b = (A * s, A * w * c, -A * w * w * s), (0.0 * t,) * 3
+        elif self.path == "figure8":
+            s2, c2 = np.sin(2 * w * t), np.cos(2 * w * t)
+            a = (A * s, A * w * c, -A * w * w * s)
+            b = (B * s2, 2 * B * w * c2, -4 * B * w * w * s2)
+        else:  # circle / ellipse with the spiral-out ramp r(t)/R = (1 - cos(pi f t))/2 in cycle one
+            ramp = t < 1.0 / self.frequency
+            k = 0.5 * w  # pi f
+            r = np.where(ramp, 0.5 * (1.0 - np.cos(k * t)), 1.0)
+            rd = np.where(ramp, 0.5 * k * np.sin(k * t), 0.0)
+            rdd = np.where(ramp, 0.5 * k * k * np.cos(k * t), 0.0)
+            a = (A * r * s, A * (rd * s + r * w * c), A * (rdd * s + 2 * rd * w * c - r * w * w * s))
+            b = (B * r * c, B * (rd * c - r * w * s), B * (rdd * c - 2 * rd * w * s - r * w * w * c))
+        e0, e1 = self.unit_vector[:2]
+        return tuple(np.stack([e0 * ai - e1 * bi, e1 * ai + e0 * bi], axis=-1) for ai, bi in zip(a, b))
+
+    def plate_at(self, t: float) -> tuple[float, float, float, float, float, float]:
+        """x, y, x', y', x'', y'' at one time t (a cheap scalar call for the integrators' rhs)."""
+        if self.path == "line":
+            w = self.omega
+            s = math.sin(w * t)
+            u, ud, udd = self.amplitude * s, self.amplitude * w * math.cos(w * t), -self.amplitude * w * w * s
+            e0, e1 = self.unit_vector[:2]
+            return u * e0, u * e1, ud * e0, ud * e1, udd * e0, udd * e1
+        p, v, a = self.plate(float(t))
+        return float(p[0]), float(p[1]), float(v[0]), float(v[1]), float(a[0]), float(a[1])
+
+    def displacement(self, t):
+        """u, du/dt, d2u/dt2 at time t: the plate's motion projected on e_psi (the whole motion for a line)."""
+        e = self.unit_vector[:2]
+        return tuple(q @ e for q in self.plate(t))
 
     def output_times(self) -> np.ndarray:
         n = self.cycles * self.samples_per_cycle
         return np.linspace(0.0, self.duration, n + 1)
+
+    def describe(self) -> dict:
+        d = {"path": self.path, "amplitude": self.amplitude, "frequency": self.frequency,
+             "direction_deg": self.direction_deg, "cycles": self.cycles}
+        if not self.is_line and self._table is None:
+            d["minor"] = self.minor_axis
+        return d

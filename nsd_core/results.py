@@ -4,6 +4,10 @@ Sign convention (nsd-model.md, "Drive and outputs"): F is the horizontal force t
 the cap along psi, F = m_c u'' - (rod + ropes + wires on the cap) . e_psi. Each part column is the
 part's contribution to F, i.e. minus its force on the cap along psi, so that
 F_device = F_rod + F_ropes + F_wires and F = m_c u'' + F_device.
+For any path in the plane (nsd-model.md, "Two-dimensional drive paths"): x, y are the plate's
+position, F_x, F_y the drive's force vector on the cap, F_tangent and F_radial its projections on
+the path's unit tangent and on the unit vector from the centre (nsd_core.outputs.path_directions);
+F and its parts stay the projections on e_psi.
 """
 from __future__ import annotations
 
@@ -21,6 +25,7 @@ import numpy as np
 BASE_COLUMNS = {
     "t": "s", "u": "m", "F": "N", "F_device": "N", "F_rod": "N", "F_ropes": "N", "F_wires": "N",
     "spring_push": "N", "spring_zeta": "N", "cap_z": "m", "wall_z": "m", "closure": "m",
+    "x": "m", "y": "m", "F_x": "N", "F_y": "N", "F_tangent": "N", "F_radial": "N",
 }
 
 

@@ -9,12 +9,12 @@ an algebraic equation: Exudyn's redundant coordinates). Constraints (index 3, La
   about the axis), but it needs a non-zero axial inertia for a regular mass matrix:
   ``rod_axial_inertia`` x the transverse inertia (1e-3, i.e. ~1.3e-9 kg m^2);
 - the cap's guide: a GenericJoint ground-cap locking its rotations (the plate holds it level); the
-  drive: two CoordinateConstraints on the cap's X and Y coordinates with offsets u(t) cos(psi),
-  u(t) sin(psi), set once per step to u(t_end) in a PreStepUserFunction (exact at index 3 with a
+  drive: two CoordinateConstraints on the cap's X and Y coordinates with offsets x(t), y(t), the
+  plate's path (nsd_core.drive.Drive.plate_at), set once per step to u(t_end) in a PreStepUserFunction (exact at index 3 with a
   fixed step), or as offset user functions (position and velocity, needed by the index-2 solver).
-  The cap's Z is free (it slides in the plate). The initial velocities (cap u'(0) e_psi, the rod
+  The cap's Z is free (it slides in the plate). The initial velocities (the cap's p'(0), the rod
   swinging about its lower joint) are consistent with the drive.
-The drive force F = -(lambda_x cos psi + lambda_y sin psi) is read from the multipliers of those two
+The drive force vector (F_x, F_y) = -(lambda_x, lambda_y) is read from the multipliers of those two
 constraints through SensorObject(OutputVariableType.Force) (sign checked against
 nsd_core.quasistatic); nsd_core.outputs.device_columns builds the other columns.
 
@@ -226,8 +226,7 @@ class ExudynEngine:
         n_out = len(t_out)
         n_steps = per_out * (n_out - 1)
         h = drive.duration / n_steps
-        e, w, A = drive.unit_vector, drive.omega, drive.amplitude
-        v0 = A * w  # du/dt at t = 0: start with velocities consistent with the drive
+        v0 = np.append(drive.plate(0.0)[1], 0.0)  # plate velocity at t = 0: start consistent with the drive
         grav = list(g.gravity_vector)
         SC = exu.SystemContainer()
         mbs = SC.AddSystem()
@@ -246,9 +245,9 @@ class ExudynEngine:
         rod_I[2, 2] = float(s["rod_axial_inertia"]) * rod_I[0, 0]  # spin inertia: only for a regular M
         wall_n, wall_o = body("wall", g.wall.mass, g.wall.inertia, [0.0, 0.0, wall_z])
         # rod node at its centre of mass (mid-length); at t = 0 it swings about the lower joint
-        rod_n, rod_o = body("rod", g.rod.mass, rod_I, [0.0, 0.0, wall_z + ld / 2], vel=0.5 * v0 * e,
-                            omega=(v0 / ld) * np.cross([0.0, 0.0, 1.0], e))
-        cap_n, cap_o = body("cap", g.cap.mass, g.cap.inertia, [0.0, 0.0, cap_z], vel=v0 * e)
+        rod_n, rod_o = body("rod", g.rod.mass, rod_I, [0.0, 0.0, wall_z + ld / 2], vel=0.5 * v0,
+                            omega=np.cross([0.0, 0.0, 1.0], v0) / ld)
+        cap_n, cap_o = body("cap", g.cap.mass, g.cap.inertia, [0.0, 0.0, cap_z], vel=v0)
 
         mbs.CreateGenericJoint(itemNumbers=[ground, wall_o], position=[0.0, 0.0, wall_z],
                                constrainedAxes=[1, 1, 0, 1, 1, 1], show=False)   # wall: Z guide
@@ -257,16 +256,15 @@ class ExudynEngine:
         mbs.CreateSphericalJoint(itemNumbers=[wall_o, rod_o], position=[0.0, 0.0, wall_z], show=False)
         mbs.CreateSphericalJoint(itemNumbers=[rod_o, cap_o], position=[0.0, 0.0, cap_z], show=False)
 
-        # the drive: cap X = u cos psi, cap Y = u sin psi (coordinate constraints to the ground)
+        # the drive: cap X = x(t), cap Y = y(t), the plate's path (coordinate constraints to the ground)
         drives = []
         for k in (0, 1):
-            c = float(e[k])
             kw = {"offset": 0.0}
             if s["drive_offsets"] == "user_function":
-                kw = {"offsetUserFunction": lambda mbs_, t, i, off, c=c: c * A * math.sin(w * t),
-                      "offsetUserFunction_t": lambda mbs_, t, i, off, c=c: c * A * w * math.cos(w * t)}
-            drives.append((mbs.CreateCoordinateConstraint(itemNumbers=[None, cap_n], coordinates=[None, k],
-                                                          show=False, **kw), c))
+                kw = {"offsetUserFunction": lambda mbs_, t, i, off, k=k: drive.plate_at(t)[k],
+                      "offsetUserFunction_t": lambda mbs_, t, i, off, k=k: drive.plate_at(t)[2 + k]}
+            drives.append(mbs.CreateCoordinateConstraint(itemNumbers=[None, cap_n], coordinates=[None, k],
+                                                         show=False, **kw))
 
         el = _Elements(g, s["state_integrator"])
         cap_ref = np.array([0.0, 0.0, cap_z])
@@ -287,16 +285,16 @@ class ExudynEngine:
 
         OV = exu.OutputVariableType
         sens_l = [mbs.AddSensor(SensorObject(objectNumber=cc, outputVariableType=OV.Force,
-                                                   writeToFile=False)) for cc, _ in drives]
+                                                   writeToFile=False)) for cc in drives]
         sens_cap = mbs.AddSensor(SensorNode(nodeNumber=cap_n, outputVariableType=OV.Position, writeToFile=False))
         sens_wall = mbs.AddSensor(SensorNode(nodeNumber=wall_n, outputVariableType=OV.Position, writeToFile=False))
         rec = {"sigma": np.zeros((n_out, g.n_wires)), "zeta": np.zeros(n_out), "closure": np.zeros(n_out),
-               "lam": np.zeros(n_out), "cap": np.zeros((n_out, 3)), "wall": np.zeros(n_out)}
+               "lam": np.zeros((n_out, 2)), "cap": np.zeros((n_out, 3)), "wall": np.zeros(n_out)}
         counter = [0]
 
         def record(k):
             """Converged state at output time k: sensors, committed states, loop closure."""
-            rec["lam"][k] = sum(c * mbs.GetSensorValues(sl) for sl, (_, c) in zip(sens_l, drives))
+            rec["lam"][k] = [float(np.ravel(mbs.GetSensorValues(sl))[0]) for sl in sens_l]
             rec["cap"][k] = mbs.GetSensorValues(sens_cap)
             wp = mbs.GetSensorValues(sens_wall)
             rec["wall"][k] = wp[2]
@@ -310,14 +308,14 @@ class ExudynEngine:
             """t is the END of the step (Exudyn's convention); the state is the converged one at t - h."""
             n = counter[0]
             counter[0] += 1
-            u = A * math.sin(w * t)
+            px, py = drive.plate_at(t)[:2]
             cap = mbs_.GetNodeOutput(cap_n, OV.Position)
             wz = mbs_.GetNodeOutput(wall_n, OV.Position)[2]
             if per_step:  # forces at the end-of-step state predicted by a second-order Taylor step
                 cv, wv = mbs_.GetNodeOutput(cap_n, OV.Velocity), mbs_.GetNodeOutput(wall_n, OV.Velocity)[2]
                 ca, wa = mbs_.GetNodeOutput(cap_n, OV.Acceleration), mbs_.GetNodeOutput(wall_n, OV.Acceleration)[2]
                 cap_p = cap + h * cv + 0.5 * h * h * ca
-                cap_p[0:2] = u * e[0:2]  # the horizontal end-of-step position is prescribed: exact
+                cap_p[0], cap_p[1] = px, py  # the horizontal end-of-step position is prescribed: exact
                 f_cap, f_wall = el.step(cap, wz, cap_p, wz + h * wv + 0.5 * h * h * wa)
                 mbs_.SetLoadParameter(loads[0], "loadVector", f_cap)
                 mbs_.SetLoadParameter(loads[1], "loadVector", f_wall)
@@ -326,8 +324,8 @@ class ExudynEngine:
             if n % per_out == 0:
                 record(n // per_out)
             if s["drive_offsets"] != "user_function":
-                for cc, c in drives:
-                    mbs_.SetObjectParameter(cc, "offset", c * u)
+                for cc, off in zip(drives, (px, py)):
+                    mbs_.SetObjectParameter(cc, "offset", off)
             return True
 
         mbs.SetPreStepUserFunction(pre_step)
@@ -363,7 +361,7 @@ class ExudynEngine:
         record(n_out - 1)
         stats = {"wall_time": wall_time, "cpu_time": cpu_time, "steps": n_steps, "step_size": h,
                  "newton_iterations": mbs.sys["dynamicSolver"].it.newtonStepsCount if "dynamicSolver" in mbs.sys else None,
-                 "tracking_error": float(np.max(np.abs(rec["cap"] @ e - drive.displacement(t_out)[0]))),
+                 "tracking_error": float(np.max(np.linalg.norm(rec["cap"][:, :2] - drive.plate(t_out)[0], axis=1))),
                  "closure_max": float(np.max(rec["closure"])), "settings": dict(s)}
         return device_columns(self.name, g, drive, t_out, rec["cap"], rec["wall"], rec["sigma"], rec["zeta"],
                               rec["closure"], drive_force=-rec["lam"], stats=stats)

@@ -2,7 +2,8 @@
 
 Model (MJCF generated in code from ``device_geometry(params)``; no XML file):
 - world -> ``cap``: three slide joints, ``drive`` along e_psi, ``lateral`` along e_z x e_psi (both
-  prescribed) and ``cap_z`` (free: the cap slides vertically in the massless plate);
+  prescribed: the plate's path p(t) from nsd_core.drive.Drive.plate, projected on the two axes) and
+  ``cap_z`` (free: the cap slides vertically in the massless plate);
 - world -> ``wall``: slide ``wall_z``; wall -> ``rod``: ball joint at the wall reference point;
 - the loop wall -> rod -> cap is closed by an equality ``connect`` at the rod's upper end;
 - the base is fixed (the world), gravity is -g along Z.
@@ -31,9 +32,10 @@ feed-forward force (M + m_c) a - f_prev, where f_prev is the device's force on t
 the previous step and a is the acceleration that makes the integrator land on u(t_{n+1}) exactly
 (Euler: the central difference (u_{n+1} - 2u_n + u_{n-1})/h^2); the driven qpos/qvel are then
 reset to the prescribed values every step, so the tracking error is the (reported) drift of one
-step, ~1e-15 m. The drive force is measured from the equation of motion of the drive joint,
-F = m_c u'' - (qfrc_passive + qfrc_constraint - qfrc_bias)[drive], i.e. m_c u'' minus rod, ropes
-and wires on the cap along psi (the rod's share is the connect's constraint force).
+step, ~1e-15 m. The same holds for the lateral slide. The drive force vector is measured from the
+equations of motion of the two driven joints, F_k = m_c a_k - (qfrc_passive + qfrc_constraint -
+qfrc_bias)[k], i.e. m_c a minus rod, ropes and wires on the cap along each axis (the rod's share is
+the connect's constraint force), rotated back to (F_x, F_y).
 
 Constraint softness: MuJoCo's equality constraints are soft. solref time constant
 ``solref_factor`` x timestep (2 = the smallest MuJoCo accepts) with solimp d = 0.9999 keeps the loop
@@ -226,22 +228,32 @@ class MujocoEngine:
         dev = _Device(g, drive, data, predict=(not euler) or commit_every > 1,
                       substeps=int(s["hysteresis_substeps"]))
 
-        # prescribed drive on the step grid (one extra point on each side for the differences)
+        # prescribed drive on the step grid (one extra point on each side for the differences):
+        # the plate's path in the joints' frame, u along e_psi (slide "drive"), v across (slide "lateral")
         tn = h * np.arange(-1, n_steps + 2)
-        u, ud, udd = (np.zeros_like(tn),) * 3 if zero_drive else drive.displacement(tn)
+        e, lat = drive.unit_vector[:2], np.array([-drive.unit_vector[1], drive.unit_vector[0]])
+        pos, vel_p, acc_p = drive.plate(tn)
+        if zero_drive:
+            pos, vel_p, acc_p = (np.zeros_like(pos),) * 3
+        u, ud, udd = pos @ e, vel_p @ e, acc_p @ e
+        v, vd, vdd = pos @ lat, vel_p @ lat, acc_p @ lat
         if euler:   # semi-implicit Euler lands on u_{n+1} exactly with the central difference
-            vel = np.diff(u) / h                     # vel[n] = (u_n - u_{n-1})/h  (index shift +1)
+            vel_at = (np.diff(u) / h).tolist()       # vel[n] = (u_n - u_{n-1})/h  (index shift +1)
             acc = (u[2:] - 2 * u[1:-1] + u[:-2]) / (h * h)
-            vel_at = vel.tolist()                    # qvel for step n: vel_at[n]
+            lvel_at = (np.diff(v) / h).tolist()
+            lacc = (v[2:] - 2 * v[1:-1] + v[:-2]) / (h * h)
         else:       # RK4: constant acceleration that lands on u_{n+1}; qvel = u'
             acc = 2.0 * (u[2:] - u[1:-1] - h * ud[1:-1]) / (h * h)
             vel_at = ud[1:].tolist()
+            lacc = 2.0 * (v[2:] - v[1:-1] - h * vd[1:-1]) / (h * h)
+            lvel_at = vd[1:].tolist()
         u_at, acc_at = u[1:].tolist(), acc.tolist()
+        v_at, lacc_at = v[1:].tolist(), lacc.tolist()
         m_c, M = g.cap.mass, float(s["drive_armature"])
 
         n_out = len(t_out)
         cap_pos, wall_z = np.zeros((n_out, 3)), np.zeros(n_out)
-        sig, zet, clo, F = np.zeros((n_out, g.n_wires)), np.zeros(n_out), np.zeros(n_out), np.zeros(n_out)
+        sig, zet, clo, F = np.zeros((n_out, g.n_wires)), np.zeros(n_out), np.zeros(n_out), np.zeros((n_out, 2))
         qpos, qvel, qfa = data.qpos, data.qvel, data.qfrc_applied
         qpas, qcon, qbias = data.qfrc_passive, data.qfrc_constraint, data.qfrc_bias
         tip, cap_id = model.site("rod_tip").id, model.body("cap").id
@@ -251,18 +263,22 @@ class MujocoEngine:
         try:
             mujoco.set_mjcb_passive(dev.passive)
             mujoco.mj_forward(model, data)
-            f_prev = qpas[0] + qcon[0] - qbias[0]
-            # consistent initial velocities: the rod (vertical at u = 0) swings with the plate
-            qpos[0], qvel[0] = u_at[0], vel_at[0]
-            qvel[4:7] = vel_at[0] / params.rod_length * np.array([-drive.unit_vector[1], drive.unit_vector[0], 0.0])
+            # consistent initial velocities: the rod (vertical at the centre) swings with the plate
+            qpos[0], qvel[0], qpos[1], qvel[1] = u_at[0], vel_at[0], v_at[0], lvel_at[0]
+            v_xy = vel_at[0] * e + lvel_at[0] * lat
+            qvel[4:7] = np.array([-v_xy[1], v_xy[0], 0.0]) / params.rod_length
             mujoco.mj_forward(model, data)
             f_prev = qpas[0] + qcon[0] - qbias[0]
+            l_prev = qpas[1] + qcon[1] - qbias[1]
             for n in range(n_steps + 1):
                 qfa[0] = (M + m_c) * acc_at[n] - f_prev
+                qfa[1] = (M + m_c) * lacc_at[n] - l_prev
                 if n % n_sub == 0:
                     k = n // n_sub
                     mujoco.mj_forward(model, data)
-                    F[k] = m_c * udd[n + 1] - (qpas[0] + qcon[0] - qbias[0])
+                    F_u = m_c * udd[n + 1] - (qpas[0] + qcon[0] - qbias[0])
+                    F_v = m_c * vdd[n + 1] - (qpas[1] + qcon[1] - qbias[1])
+                    F[k] = F_u * e + F_v * lat
                     cap_pos[k] = data.xpos[cap_id]
                     wall_z[k] = g.wall_rest_z + qpos[3]
                     sig[k], zet[k] = dev.sigma, dev.zeta
@@ -273,8 +289,9 @@ class MujocoEngine:
                         break
                 mujoco.mj_step(model, data)
                 f_prev = qpas[0] + qcon[0] - qbias[0]
-                track = max(track, abs(qpos[0] - u_at[n + 1]), abs(qpos[1]))
-                qpos[0], qvel[0], qpos[1], qvel[1] = u_at[n + 1], vel_at[n + 1], 0.0, 0.0
+                l_prev = qpas[1] + qcon[1] - qbias[1]
+                track = max(track, abs(qpos[0] - u_at[n + 1]), abs(qpos[1] - v_at[n + 1]))
+                qpos[0], qvel[0], qpos[1], qvel[1] = u_at[n + 1], vel_at[n + 1], v_at[n + 1], lvel_at[n + 1]
                 if (n + 1) % commit_every == 0 or (n + 1) % n_sub == 0:
                     dev.commit()
         finally:
