@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .params import ParameterError, Params
+from nsd_core.device.params import ParameterError, Params
 
 
 class DriveError(ValueError):

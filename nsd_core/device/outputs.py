@@ -9,10 +9,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .drive import Drive
-from .forces import rope_tension, wire_tension
-from .geometry import DeviceGeometry
-from .results import RunResult, column_units
+from nsd_core.device.drive import Drive
+from nsd_core.device.forces import rope_tension, wire_tension
+from nsd_core.device.geometry import DeviceGeometry
+from nsd_core.device.results import RunResult, column_units
 
 
 def device_columns(engine: str, g: DeviceGeometry, drive: Drive, t, cap_pos, wall_z, wire_stress,
