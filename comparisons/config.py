@@ -7,8 +7,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from nsd_core.drive import Drive
-from nsd_core.params import ParameterError, Params, load_params
+from nsd_core.device.drive import Drive
+from nsd_core.device.params import ParameterError, Params, load_params
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_CASES = HERE / "cases.toml"
@@ -65,7 +65,7 @@ def _number(where: str, v, positive=True) -> float:
 
 def load_convergence(path: str | Path | None, cases: list[Case]) -> dict | None:
     """The [convergence] table of a case file, validated; None when the file has none."""
-    from .convergence import parse_convergence
+    from comparisons.convergence import parse_convergence
     raw = _read(Path(path or DEFAULT_CASES), "--cases").get("convergence")
     return parse_convergence(raw, cases) if raw else None
 

@@ -18,13 +18,13 @@ import dataclasses
 import multiprocessing
 from concurrent.futures import ProcessPoolExecutor
 
-from nsd_core.params import ParameterError
+from nsd_core.device.params import ParameterError
 
-from .config import Case
-from .engines import REFERENCE
-from .harness import run_job
-from .metrics import pair_metrics
-from nsd_core.cycle import analyse
+from comparisons.config import Case
+from comparisons.engines import REFERENCE
+from comparisons.harness import run_job
+from comparisons.metrics import pair_metrics
+from nsd_core.device.cycle import analyse
 
 
 def parse_convergence(raw: dict, cases: list[Case]) -> dict:

@@ -14,13 +14,13 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Any, Callable
 
-from nsd_core.cycle import analyse
-from nsd_core.params import Params
-from nsd_core.results import RunResult, atomic_write_json, versions, write_csv
+from nsd_core.device.cycle import analyse
+from nsd_core.device.params import Params
+from nsd_core.device.results import RunResult, atomic_write_json, versions, write_csv
 
-from .config import METRICS, Case
-from .engines import REFERENCE, get_engine
-from .metrics import own_metrics, pair_metrics
+from comparisons.config import METRICS, Case
+from comparisons.engines import REFERENCE, get_engine
+from comparisons.metrics import own_metrics, pair_metrics
 
 ENGINE_COST = {"semirecursive": 1.0, "mujoco": 1.0, "exudyn": 3.0}  # rough relative cost, for scheduling
 
@@ -92,7 +92,7 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
     }
     summary["versions"] = versions()
     if convergence:
-        from .convergence import convergence_study
+        from comparisons.convergence import convergence_study
         log("  convergence study ...")
         summary["convergence"] = convergence_study(convergence, engines, workers)
     atomic_write_json(out / "results.json", summary)

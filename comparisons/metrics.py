@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from nsd_core.cycle import loop_area, steady_cycle
-from nsd_core.results import RunResult
+from nsd_core.device.cycle import loop_area, steady_cycle
+from nsd_core.device.results import RunResult
 
 
 def phase_resample(result: RunResult, frequency: float, column: str, n: int = 2000) -> np.ndarray:

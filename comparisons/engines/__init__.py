@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import importlib
 
-from nsd_core.params import ParameterError
+from nsd_core.device.params import ParameterError
 
 ENGINES = {
     "semirecursive": ("comparisons.engines.semirecursive_engine", "SemirecursiveEngine"),

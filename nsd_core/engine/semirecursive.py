@@ -18,11 +18,11 @@ from typing import Callable
 
 import numpy as np
 
-from .fastpath import dynamics_kernel, newton_kernel, velocity_kernel
-from .closure import closure, full_pivot_elimination
-from .dynamics import tree_equations
-from .kinematics import Kinematics, positions, velocities
-from .mechanism import Mechanism
+from nsd_core.engine.fastpath import dynamics_kernel, newton_kernel, velocity_kernel
+from nsd_core.engine.closure import closure, full_pivot_elimination
+from nsd_core.engine.dynamics import tree_equations
+from nsd_core.engine.kinematics import Kinematics, positions, velocities
+from nsd_core.engine.mechanism import Mechanism
 
 # forces(t, kin, z, zd, extra) -> (wrench (n,6) about the origin, joint forces (n,) or None, extra rates)
 ForceFn = Callable[[float, Kinematics, np.ndarray, np.ndarray, np.ndarray], tuple]

@@ -15,17 +15,17 @@ import time
 
 import numpy as np
 
-from . import __version__
-from .drive import Drive, DriveError
-from .forces import rope_tension, sma_wire, spring_push
-from .geometry import DeviceGeometry, device_geometry
-from .integrate import SolverError, integrate
-from .elements import AxialElements
-from .mechanism import Cut, Mechanism, mechanism
-from .outputs import device_columns
-from .params import Params
-from .results import RunResult
-from .semirecursive import ConstraintError, SemiRecursiveSystem
+from nsd_core import __version__
+from nsd_core.device.drive import Drive, DriveError
+from nsd_core.device.forces import rope_tension, sma_wire, spring_push
+from nsd_core.device.geometry import DeviceGeometry, device_geometry
+from nsd_core.engine.integrate import SolverError, integrate
+from nsd_core.engine.elements import AxialElements
+from nsd_core.engine.mechanism import Cut, Mechanism, mechanism
+from nsd_core.device.outputs import device_columns
+from nsd_core.device.params import Params
+from nsd_core.device.results import RunResult
+from nsd_core.engine.semirecursive import ConstraintError, SemiRecursiveSystem
 
 BODY = {name: i for i, name in enumerate(
     ["plate_x", "plate_y", "plate", "cap", "base_x", "base_y", "base", "wall", "rod_x", "rod"])}

@@ -11,7 +11,7 @@ import math
 import os
 from pathlib import Path
 
-from .params import ParameterError, load_params, parse_set
+from nsd_core.device.params import ParameterError, load_params, parse_set
 
 
 def _params_args(p: argparse.ArgumentParser) -> None:
@@ -79,8 +79,8 @@ def run(args) -> int:
 
 
 def run_sweep_cmd(args) -> int:
-    from .params import FIELDS
-    from .study import check_engines, make_designs, paper_designs, run_sweep
+    from nsd_core.device.params import FIELDS
+    from nsd_core.study.study import check_engines, make_designs, paper_designs, run_sweep
     base = load_params(args.params, parse_set(args.set))
     for n in ("amplitude", "frequency", "max_step", "rtol", "atol"):
         _positive(f"--{n.replace('_', '-')}", getattr(args, n))
@@ -117,7 +117,7 @@ def run_sweep_cmd(args) -> int:
 
 
 def run_tables(args) -> int:
-    from .tables import format_rows, table_rows, write_csv
+    from nsd_core.study.tables import format_rows, table_rows, write_csv
     base = load_params(args.params, parse_set(args.set))
     if args.method not in ("slack", "path"):
         raise ParameterError(f"--method {args.method!r}: allowed: slack, path")
@@ -132,7 +132,7 @@ def run_tables(args) -> int:
 
 
 def run_calibrate(args) -> int:
-    from .calibrate import DEFAULT_FIT, calibrate, format_report, write_outputs
+    from nsd_core.study.calibrate import DEFAULT_FIT, calibrate, format_report, write_outputs
     base = load_params(args.params, parse_set(args.set))
     fit = DEFAULT_FIT if not args.fit else tuple(s.strip() for s in args.fit.split(",") if s.strip())
     result = calibrate(base, fit)

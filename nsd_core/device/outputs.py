@@ -10,10 +10,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .drive import Drive
-from .forces import rope_tension, wire_tension
-from .geometry import DeviceGeometry
-from .results import RunResult, column_units
+from nsd_core.device.drive import Drive
+from nsd_core.device.forces import rope_tension, wire_tension
+from nsd_core.device.geometry import DeviceGeometry
+from nsd_core.device.results import RunResult, column_units
 
 
 def path_directions(pos: np.ndarray, vel: np.ndarray, acc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -36,9 +36,9 @@ from typing import Callable, Iterator
 
 import numpy as np
 
-from . import __version__
-from .params import ParameterError, Params, with_overrides
-from .results import RunResult, atomic_write_json, atomic_write_text, write_csv
+from nsd_core import __version__
+from nsd_core.device.params import ParameterError, Params, with_overrides
+from nsd_core.device.results import RunResult, atomic_write_json, atomic_write_text, write_csv
 
 # Section 4.3 (paper-data.toml [parametric]): f = 10 Hz, A = 0.024 m, drive along +X.
 PAPER_FREQUENCY, PAPER_AMPLITUDE = 10.0, 0.024
@@ -111,8 +111,8 @@ def make_designs(param: str, values: list[float], base: Params | None = None, am
                  settings: dict | None = None, cycles: int = 2, samples_per_cycle: int = 500,
                  direction_deg: float = 0.0) -> list[Design]:
     """One design per value (and engine). amplitude None: min(0.024, 0.95 X_max) per design."""
-    from .device import DEFAULT_SOLVER
-    from .tables import SlackPointError, x_max_at_slack
+    from nsd_core.device.model import DEFAULT_SOLVER
+    from nsd_core.study.tables import SlackPointError, x_max_at_slack
     base = base or Params()
     if not values:
         raise ParameterError(f"--values for {param}: give at least one value")
@@ -143,7 +143,7 @@ def paper_designs(**kw) -> list[Design]:
 # ---------------------------------------------------------------- one design (runs in a worker)
 def steady_table(result: RunResult, d: Design, wire_length: float) -> dict[str, tuple[str, np.ndarray]]:
     """The last cycle: u, F, tangent stiffness dF/du (Figures 8-17 B), wire elongations (15, 18)."""
-    from .cycle import steady_cycle
+    from nsd_core.device.cycle import steady_cycle
     m = steady_cycle(result, d.frequency)
     t = result["t"][m]
     w = 2 * math.pi * d.frequency
@@ -163,14 +163,14 @@ def run_design(d: Design) -> dict:
     """Run one design and analyse it; never raises for the design's own failure (status failed)."""
     start = time.perf_counter()
     try:
-        from .cycle import analyse
-        from .drive import Drive
-        from .geometry import device_geometry
-        from .tables import SlackPointError, x_max_at_slack
+        from nsd_core.device.cycle import analyse
+        from nsd_core.device.drive import Drive
+        from nsd_core.device.geometry import device_geometry
+        from nsd_core.study.tables import SlackPointError, x_max_at_slack
         p = Params(**d.params)
         drive = Drive(d.amplitude, d.frequency, d.direction_deg, d.cycles, d.samples_per_cycle)
         if d.engine == "semirecursive":
-            from .device import simulate
+            from nsd_core.device.model import simulate
             result = simulate(p, drive, **d.settings)
         else:
             result = _engine(d.engine).run(p, drive, d.settings or None)
@@ -348,7 +348,7 @@ def quasi_static_cycle(params: Params, amplitude: float, points_per_cycle: int =
     Returns the quasi-static path's arrays plus 's' (cycle phase, 0..1) and 'stiffness' on the
     loading quarter (u from 0 to A), used by the qualitative checks of Figures 7-20.
     """
-    from .quasistatic import quasi_static_path
+    from nsd_core.device.quasistatic import quasi_static_path
     s = np.linspace(0.0, cycles, cycles * points_per_cycle + 1)
     out = quasi_static_path(params, amplitude * np.sin(2 * np.pi * s), substeps=substeps)
     m = s >= cycles - 1 - 1e-12

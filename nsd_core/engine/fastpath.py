@@ -14,9 +14,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .closure import closure_kernel
-from .dynamics import body_terms_kernel, tree_kernel
-from .kinematics import positions_kernel, velocities_kernel
+from nsd_core.engine.closure import closure_kernel
+from nsd_core.engine.dynamics import body_terms_kernel, tree_kernel
+from nsd_core.engine.kinematics import positions_kernel, velocities_kernel
 
 
 @njit(cache=True)

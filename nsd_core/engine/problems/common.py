@@ -13,10 +13,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..dynamics import kinetic_energy, potential_energy_gravity
-from ..integrate import integrate
-from ..kinematics import positions, velocities
-from ..semirecursive import SemiRecursiveSystem
+from nsd_core.engine.dynamics import kinetic_energy, potential_energy_gravity
+from nsd_core.engine.integrate import integrate
+from nsd_core.engine.kinematics import positions, velocities
+from nsd_core.engine.semirecursive import SemiRecursiveSystem
 
 REFERENCES = Path(__file__).resolve().parents[2] / "references"
 

@@ -5,12 +5,12 @@ import argparse
 from pathlib import Path
 from xml.sax.saxutils import escape, quoteattr
 
-from nsd_core.params import ParameterError, load_params, parse_set
-from nsd_core.results import atomic_write_text
+from nsd_core.device.params import ParameterError, load_params, parse_set
+from nsd_core.device.results import atomic_write_text
 
-from .config import load_cases, load_convergence, load_tolerances
-from .engines import ENGINES, REFERENCE
-from .harness import compare
+from comparisons.config import load_cases, load_convergence, load_tolerances
+from comparisons.engines import ENGINES, REFERENCE
+from comparisons.harness import compare
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -40,8 +40,8 @@ def parse_engines(text: str) -> list[str]:
 
 def check_settings(cases, engines) -> None:
     """Unknown solver settings are bad input (exit 2), found before anything runs or is written."""
-    from .engines import get_engine
-    from .engines.base import merged_settings
+    from comparisons.engines import get_engine
+    from comparisons.engines.base import merged_settings
     for e in engines:
         defaults = get_engine(e).default_settings
         for c in cases:

@@ -19,9 +19,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..mechanism import mechanism, revolute_cut
-from ..semirecursive import SemiRecursiveSystem
-from .common import mechanical_energy, run_system
+from nsd_core.engine.mechanism import mechanism, revolute_cut
+from nsd_core.engine.semirecursive import SemiRecursiveSystem
+from nsd_core.engine.problems.common import mechanical_energy, run_system
 
 G = 9.81
 X, Y, Z = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)

@@ -26,10 +26,10 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from .forces import bouc_wen_slope
-from .geometry import device_geometry
-from .params import ParameterError, Params
-from .results import atomic_write_text
+from nsd_core.device.forces import bouc_wen_slope
+from nsd_core.device.geometry import device_geometry
+from nsd_core.device.params import ParameterError, Params
+from nsd_core.device.results import atomic_write_text
 
 # Transcribed from the paper (paper-data.toml [table5], [table6]); tests compare with that file.
 TABLE5 = {"where": "Table 5", "parameter": "rod_length", "unit": "m",
@@ -122,7 +122,7 @@ def model_x_max(p: Params, method: str = "slack", step: float = 2e-5) -> float:
     if method == "slack":
         return x_max_at_slack(p)
     if method == "path":
-        from .quasistatic import x_max
+        from nsd_core.device.quasistatic import x_max
         return x_max(p, step=step)
     raise ParameterError(f"method = {method!r}: allowed: slack, path")
 

@@ -17,8 +17,8 @@ import time
 
 import numpy as np
 
-from ..mechanism import Cut, mechanism
-from ..semirecursive import SemiRecursiveSystem
+from nsd_core.engine.mechanism import Cut, mechanism
+from nsd_core.engine.semirecursive import SemiRecursiveSystem
 
 X, Z = (1.0, 0.0, 0.0), (0.0, 0.0, 1.0)
 

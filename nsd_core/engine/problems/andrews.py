@@ -24,10 +24,10 @@ import tomllib
 
 import numpy as np
 
-from ..elements import AxialElements
-from ..mechanism import Cut, Mechanism, mechanism
-from ..semirecursive import SemiRecursiveSystem
-from .common import REFERENCES, Run, digits, run_system
+from nsd_core.engine.elements import AxialElements
+from nsd_core.engine.mechanism import Cut, Mechanism, mechanism
+from nsd_core.engine.semirecursive import SemiRecursiveSystem
+from nsd_core.engine.problems.common import REFERENCES, Run, digits, run_system
 
 Z = (0.0, 0.0, 1.0)
 # engine body order (parents first) and where each sits in the test set's y(1..7)

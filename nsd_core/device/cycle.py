@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .results import RunResult
+from nsd_core.device.results import RunResult
 
 
 def steady_cycle(result: RunResult, frequency: float) -> np.ndarray:

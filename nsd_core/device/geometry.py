@@ -15,8 +15,8 @@ from functools import cached_property
 
 import numpy as np
 
-from .forces import SpringLaw, WireLaw, precompressed_spring
-from .params import Params
+from nsd_core.device.forces import SpringLaw, WireLaw, precompressed_spring
+from nsd_core.device.params import Params
 
 
 @dataclass(frozen=True)

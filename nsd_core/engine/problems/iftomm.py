@@ -24,9 +24,9 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.special import ellipj, ellipk
 
-from ..mechanism import Cut, mechanism
-from ..semirecursive import SemiRecursiveSystem
-from .common import library_error, mechanical_energy, run_system
+from nsd_core.engine.mechanism import Cut, mechanism
+from nsd_core.engine.semirecursive import SemiRecursiveSystem
+from nsd_core.engine.problems.common import library_error, mechanical_energy, run_system
 
 G = 9.81
 Z = (0.0, 0.0, 1.0)

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import andrews, bricard, iftomm, slider_crank
+from nsd_core.engine.problems import andrews, bricard, iftomm, slider_crank
 
 FULL = {"andrews_tol": 1e-12, "wp_tols": (1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12),
         "a01": dict(duration=2000.0, outputs=4000, rtol=1e-9, atol=1e-11),

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .params import ParameterError, Params
+from nsd_core.device.params import ParameterError, Params
 
 PATHS = ("line", "circle", "ellipse", "figure8")
 

@@ -14,8 +14,8 @@ from typing import Callable
 import numpy as np
 from scipy.integrate import DOP853, LSODA, RK23, RK45, Radau
 
-from .params import ParameterError
-from .semirecursive import SemiRecursiveSystem
+from nsd_core.device.params import ParameterError
+from nsd_core.engine.semirecursive import SemiRecursiveSystem
 
 METHODS = {"RK45": RK45, "DOP853": DOP853, "RK23": RK23, "Radau": Radau, "LSODA": LSODA}
 

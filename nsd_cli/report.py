@@ -15,7 +15,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args) -> int:
-    from .build import build_report
+    from reports.build import build_report
     paths = build_report(args.source, args.out)
     print(f"report: {paths['pdf']} ({len(paths['pngs'])} pages, {paths['seconds']:.1f} s); "
           f"PNGs in {Path(paths['pdf']).parent}")

@@ -15,9 +15,9 @@ import math
 import numpy as np
 from scipy.optimize import brentq
 
-from .forces import advance_spring_zeta, advance_wire_stress, rope_tension, wire_tension
-from .geometry import DeviceGeometry, device_geometry
-from .params import Params
+from nsd_core.device.forces import advance_spring_zeta, advance_wire_stress, rope_tension, wire_tension
+from nsd_core.device.geometry import DeviceGeometry, device_geometry
+from nsd_core.device.params import Params
 
 
 def _element_state(g: DeviceGeometry, e: np.ndarray, u: float, z_w: float):

@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .kinematics import Kinematics, _cross3
-from .mechanism import Mechanism
+from nsd_core.engine.kinematics import Kinematics, _cross3
+from nsd_core.engine.mechanism import Mechanism
 
 
 @njit(cache=True)

@@ -9,7 +9,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from ..results import atomic_write_json
+from nsd_core.device.results import atomic_write_json
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -19,7 +19,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args) -> int:
-    from .runner import run_all, table
+    from nsd_core.engine.problems.runner import run_all, table
     res = run_all(quick=args.quick, repeats=args.repeats, log=lambda m: print(m, file=sys.stderr))
     print(table(res))
     out = Path(args.out)

@@ -13,17 +13,17 @@ import sys
 import time
 from pathlib import Path
 
-from .drive import Drive, DriveError
-from .integrate import SolverError
-from .params import ParameterError, load_params, parse_set
+from nsd_core.device.drive import Drive, DriveError
+from nsd_core.engine.integrate import SolverError
+from nsd_core.device.params import ParameterError, load_params, parse_set
 
 SUBCOMMANDS = {
-    "compare": ("comparisons.harness_cli", "run engines side by side against tolerances"),
-    "report": ("reports.cli", "write the validation report (PDF and PNGs) from a results folder"),
-    "sweep": ("nsd_core.study_cli", "parametric sweeps (the paper's Section 4.3)"),
-    "tables": ("nsd_core.study_cli", "the paper's Tables 5 and 6 next to the model"),
-    "calibrate": ("nsd_core.study_cli", "fit the unprinted parameters to Tables 5 and 6"),
-    "benchmark": ("nsd_core.problems.cli", "standard multibody benchmarks on the generic engine"),
+    "compare": ("nsd_cli.compare", "run engines side by side against tolerances"),
+    "report": ("nsd_cli.report", "write the validation report (PDF and PNGs) from a results folder"),
+    "sweep": ("nsd_cli.study", "parametric sweeps (the paper's Section 4.3)"),
+    "tables": ("nsd_cli.study", "the paper's Tables 5 and 6 next to the model"),
+    "calibrate": ("nsd_cli.study", "fit the unprinted parameters to Tables 5 and 6"),
+    "benchmark": ("nsd_cli.benchmark", "standard multibody benchmarks on the generic engine"),
 }
 
 
@@ -69,9 +69,9 @@ def add_cycle_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run_cycle(args) -> int:
-    from .api import cycle
-    from .device import DEFAULT_SOLVER
-    from .results import atomic_write_json, write_csv
+    from nsd_core.api import cycle
+    from nsd_core.device.model import DEFAULT_SOLVER
+    from nsd_core.device.results import atomic_write_json, write_csv
     params = load_params(args.params, parse_set(args.set))
     drive = Drive(args.amplitude, args.frequency, args.direction, args.cycles, args.samples_per_cycle)
     solver = {k: (getattr(args, k) if getattr(args, k, None) is not None else v) for k, v in DEFAULT_SOLVER.items()}

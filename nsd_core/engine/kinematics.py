@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from .mechanism import Mechanism
+from nsd_core.engine.mechanism import Mechanism
 
 
 def cross(a, b) -> np.ndarray:
