@@ -15,16 +15,16 @@ DEFAULT_CASES = HERE / "cases.toml"
 DEFAULT_TOLERANCES = HERE / "tolerances.toml"
 
 METRICS = {  # name -> (unit, description)
-    "max_dF_rel": ("-", "max |F - F_ref| / max |F_ref|"),
-    "rms_dF_rel": ("-", "RMS (F - F_ref) / max |F_ref|"),
-    "loop_area_rel": ("-", "|loop area - reference| / |reference|"),
+    "max_dF_rel": ("-", "max |F - F_ref| / max |F_ref|, F the force vector (F_x, F_y)"),
+    "rms_dF_rel": ("-", "RMS |F - F_ref| / max |F_ref|, F the force vector"),
+    "loop_area_rel": ("-", "|loop work - reference| / |reference|, work = closed integral of F . dp"),
     "peak_force_rel": ("-", "|peak |F| - reference| / reference"),
-    "region_shift_rel": ("-", "largest stiffness-region boundary shift / amplitude"),
+    "region_shift_rel": ("-", "largest stiffness-region boundary shift / amplitude (lines only)"),
     "closure_max": ("m", "largest loop-closure violation"),
     "tracking_error": ("m", "largest drive tracking error"),
 }
 CASE_KEYS = {"name", "amplitude", "frequency", "direction_deg", "cycles", "samples_per_cycle", "params",
-             "settings", "engine_params"}
+             "settings", "engine_params", "path", "minor"}
 
 
 @dataclass(frozen=True)
@@ -42,6 +42,7 @@ class Case:
         d = self.drive
         return {"name": self.name, "amplitude": d.amplitude, "frequency": d.frequency,
                 "direction_deg": d.direction_deg, "cycles": d.cycles, "samples_per_cycle": d.samples_per_cycle,
+                "path": d.path, **({"minor": d.minor_axis} if d.path in ("ellipse", "figure8") else {}),
                 "params_overridden": {k: v for k, v in self.params.to_dict().items() if v != getattr(Params(), k)},
                 "settings": self.settings,
                 "engine_params": {e: {k: v for k, v in p.to_dict().items() if v != getattr(self.params, k)}
@@ -68,6 +69,16 @@ def load_convergence(path: str | Path | None, cases: list[Case]) -> dict | None:
     from comparisons.convergence import parse_convergence
     raw = _read(Path(path or DEFAULT_CASES), "--cases").get("convergence")
     return parse_convergence(raw, cases) if raw else None
+
+
+def _path(name: str, value, case_file) -> str:
+    """A case's path: a named path, or a CSV file relative to the case file's folder."""
+    from nsd_core.device.drive import PATHS
+    if not isinstance(value, str) or not value:
+        raise ParameterError(f"case {name}.path = {value!r}: allowed: {', '.join(PATHS)} or a CSV file of t,x,y")
+    if value in PATHS:
+        return value
+    return str((Path(case_file or DEFAULT_CASES).resolve().parent / value))
 
 
 def load_cases(path: str | Path | None = None, base_params: Params | None = None) -> list[Case]:
@@ -97,8 +108,10 @@ def load_cases(path: str | Path | None = None, base_params: Params | None = None
         params = load_params(None, {**base, **overrides})
         drive = Drive(_number(f"case {name}.amplitude", merged["amplitude"], positive=False),
                       _number(f"case {name}.frequency", merged["frequency"]),
-                      float(merged.get("direction_deg", 0.0)), int(merged.get("cycles", 2)),
-                      int(merged.get("samples_per_cycle", 2000)))
+                      _number(f"case {name}.direction_deg", merged.get("direction_deg", 0.0), positive=False),
+                      int(merged.get("cycles", 2)), int(merged.get("samples_per_cycle", 2000)),
+                      path=_path(name, merged.get("path", "line"), path),
+                      minor=None if merged.get("minor") is None else _number(f"case {name}.minor", merged["minor"]))
         settings = {e: dict(s) for e, s in defaults.get("settings", {}).items()}
         for e, s in raw.get("settings", {}).items():
             settings[e] = {**settings.get(e, {}), **s}

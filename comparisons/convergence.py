@@ -55,7 +55,7 @@ def convergence_study(spec: dict, engines: list[str], workers: int) -> dict:
     if outs[0]["status"] != "ok":
         return {"error": f"reference run failed: {outs[0]['message']}"}
     ref = outs[0]["result"]
-    ref_summary = analyse(ref, drive.amplitude, drive.frequency)
+    ref_summary = analyse(ref, drive.amplitude, drive.frequency, drive.path)
     result: dict = {}
     for (e, settings, v), out in zip(jobs[1:], outs[1:]):
         entry = result.setdefault(e, {"setting": spec["sweep"][e]["setting"], "case": case.name,
@@ -64,7 +64,7 @@ def convergence_study(spec: dict, engines: list[str], workers: int) -> dict:
             entry["points"].append({"value": v, "error": out["message"]})
             continue
         r = out["result"]
-        m = pair_metrics(r, ref, analyse(r, drive.amplitude, drive.frequency), ref_summary, drive.amplitude,
+        m = pair_metrics(r, ref, analyse(r, drive.amplitude, drive.frequency, drive.path), ref_summary, drive.amplitude,
                          drive.frequency)
         entry["points"].append({"value": v, "max_dF_rel": m["max_dF_rel"], "loop_area_rel": m["loop_area_rel"],
                                 "wall_time": r.stats.get("wall_time", out["wall_time"]) / drive.cycles})

@@ -69,7 +69,7 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
                 csv = out / "cycles" / f"{case.name}__{engine}.csv"
                 write_csv(csv, res)
                 entry.update(csv=str(csv.relative_to(out)), stats=res.stats,
-                             summary=analyse(res, case.drive.amplitude, case.drive.frequency),
+                             summary=analyse(res, case.drive.amplitude, case.drive.frequency, case.drive.path),
                              wall_time_per_cycle=res.stats.get("wall_time", job["wall_time"]) / case.drive.cycles)
                 log(f"  {case.name:16s} {engine:14s} ok     {entry['wall_time_per_cycle']:7.2f} s/cycle")
             else:

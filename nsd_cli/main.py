@@ -24,6 +24,7 @@ SUBCOMMANDS = {
     "tables": ("nsd_cli.study", "the paper's Tables 5 and 6 next to the model"),
     "calibrate": ("nsd_cli.study", "fit the unprinted parameters to Tables 5 and 6"),
     "benchmark": ("nsd_cli.benchmark", "standard multibody benchmarks on the generic engine"),
+    "polar": ("nsd_cli.polar", "the device's response versus drive direction, per number of wires"),
 }
 
 
@@ -55,9 +56,13 @@ def add_param_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def add_cycle_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--amplitude", type=float, required=True, help="A [m]")
+    p.add_argument("--path", default="line", metavar="line|circle|ellipse|figure8|FILE",
+                   help="the plate's path in the plane; FILE: a CSV table of t [s], x [m], y [m] (default line)")
+    p.add_argument("--amplitude", type=float, default=None,
+                   help="A [m]: amplitude, circle radius or major semi-axis (not for a FILE path)")
+    p.add_argument("--minor", type=float, default=None, help="B [m]: ellipse (required), figure8 (default A/2)")
     p.add_argument("--frequency", type=float, required=True, help="f [Hz]")
-    p.add_argument("--direction", type=float, default=0.0, help="psi [deg], 0 = +X")
+    p.add_argument("--direction", type=float, default=0.0, help="psi [deg], 0 = +X: the line's or major axis' azimuth")
     p.add_argument("--cycles", type=int, default=2)
     p.add_argument("--samples-per-cycle", type=int, default=2000)
     add_param_arguments(p)
@@ -68,21 +73,42 @@ def add_cycle_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", required=True, help="output folder")
 
 
+def drive_from_args(args) -> Drive:
+    """The Drive of ``nsd cycle``'s options; bad input is a one-line ParameterError."""
+    from nsd_core.device.drive import PATHS
+    if args.path in PATHS:
+        if args.amplitude is None:
+            raise ParameterError(f"--amplitude: missing; the {args.path} path needs A [m]")
+        amplitude = args.amplitude
+    else:
+        if args.amplitude is not None:
+            raise ParameterError(f"--amplitude = {args.amplitude}: a table path {args.path!r} gives its own "
+                                 "positions; leave --amplitude out")
+        amplitude = 0.0
+    return Drive(amplitude, args.frequency, args.direction, args.cycles, args.samples_per_cycle,
+                 path=args.path, minor=args.minor)
+
+
 def run_cycle(args) -> int:
     from nsd_core.api import cycle
     from nsd_core.device.model import DEFAULT_SOLVER
     from nsd_core.device.results import atomic_write_json, write_csv
     params = load_params(args.params, parse_set(args.set))
-    drive = Drive(args.amplitude, args.frequency, args.direction, args.cycles, args.samples_per_cycle)
+    drive = drive_from_args(args)
     solver = {k: (getattr(args, k) if getattr(args, k, None) is not None else v) for k, v in DEFAULT_SOLVER.items()}
     result, summary = cycle(params, drive, progress=Progress("nsd cycle"), **solver)
     out = Path(args.out)
     write_csv(out / "cycle.csv", result)
     atomic_write_json(out / "summary.json", summary)
-    regions = " ".join(f"{r['sign']}[{r['from'] * 1e3:.2f},{r['to'] * 1e3:.2f}]mm" for r in summary["stiffness_regions"])
-    print(f"A = {drive.amplitude} m, f = {drive.frequency} Hz: peak |F| = {summary['peak_force']:.2f} N, "
-          f"loop area = {summary['loop_area']:.4f} J, stiffness {regions}, "
-          f"{result.stats['steps']} steps in {result.stats['wall_time']:.2f} s")
+    if drive.is_line:
+        regions = " ".join(f"{r['sign']}[{r['from'] * 1e3:.2f},{r['to'] * 1e3:.2f}]mm" for r in summary["stiffness_regions"])
+        print(f"A = {drive.amplitude} m, f = {drive.frequency} Hz: peak |F| = {summary['peak_force']:.2f} N, "
+              f"loop area = {summary['loop_area']:.4f} J, stiffness {regions}, "
+              f"{result.stats['steps']} steps in {result.stats['wall_time']:.2f} s")
+    else:
+        print(f"path {drive.path}, f = {drive.frequency} Hz: peak |F| = {summary['peak_force_magnitude']:.2f} N, "
+              f"work per cycle = {summary['work_per_cycle']:.4f} J (x {summary['loop_area_x']:.4f}, "
+              f"y {summary['loop_area_y']:.4f}), {result.stats['steps']} steps in {result.stats['wall_time']:.2f} s")
     for e in summary["events"]:
         print(f"  event {e['kind']}: t = {e['start']:.5f} s for {e['duration'] * 1e3:.3f} ms (u = {e['u_start'] * 1e3:.2f} mm)")
     if summary["outside_working_range"]:

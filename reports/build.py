@@ -35,6 +35,7 @@ class ReportData:
     benchmark: dict | None = None
     study: list[dict] = field(default_factory=list)
     tables: list[dict] = field(default_factory=list)  # rows of nsd tables' tables.csv, if present
+    polar: dict | None = None  # nsd polar's polar.json under DIR/polar, if present
 
     @property
     def cases(self) -> list[dict]:
@@ -105,6 +106,10 @@ def load(results_dir: str | Path) -> ReportData:
         data.benchmark = b if isinstance(b, dict) and isinstance(b.get("problems"), dict) else None
     data.study = _load_study(root / "study")
     data.tables = _load_tables(root / "study" / "tables.csv")
+    polar = root / "polar" / "polar.json"
+    if polar.is_file():
+        p = _json(polar, "written by nsd polar")
+        data.polar = p if isinstance(p, dict) and isinstance(p.get("designs"), dict) else None
     return data
 
 
@@ -173,6 +178,9 @@ def pages(data: ReportData) -> list[tuple[str, Callable]]:
         out.append(("tables", lambda: figures_extra.tables_figure(data)))
     for s in data.study:
         out.append((f"study_{s['name']}", lambda s=s: figures_extra.study_figure(data, s)))
+    if data.polar:
+        from reports.polar import polar_figure
+        out.append(("polar", lambda: polar_figure(data.polar)))
     return out
 
 

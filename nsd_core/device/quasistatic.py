@@ -1,7 +1,7 @@
 """An independent quasi-static solution of the driven device, by virtual work in closed form.
 
 It shares only the force laws and the geometry with the multibody engines: no tree, no path matrix,
-no Lagrange multipliers. For the plate at u along psi, the cap sits at (u e_psi, z_c), the wall at
+no Lagrange multipliers. For the plate at u along psi (any path p = (x, y): quasi_static_plane), the cap sits at (u e_psi, z_c), the wall at
 z_w and the rod closes the loop, z_c = z_w + sqrt(l_d^2 - u^2). The single free coordinate z_w
 moves cap, rod and wall together, so its equilibrium reads P(z_w) + sum(rope pulls on the cap)_z = W
 (the wires are internal to that motion). The drive force follows from a virtual displacement du at
@@ -20,70 +20,73 @@ from nsd_core.device.geometry import DeviceGeometry, device_geometry
 from nsd_core.device.params import Params
 
 
-def _element_state(g: DeviceGeometry, e: np.ndarray, u: float, z_w: float):
-    """Cap position, element vectors (upper minus lower) and lengths at plate u, wall z_w."""
-    z_c = z_w + math.sqrt(g.params.rod_length ** 2 - u * u)
-    cap = u * e + np.array([0.0, 0.0, z_c])
+def _element_state(g: DeviceGeometry, p: np.ndarray, z_w: float):
+    """Cap position, element vectors (upper minus lower) and lengths at plate position p = (x, y), wall z_w."""
+    z_c = z_w + math.sqrt(g.params.rod_length ** 2 - float(p @ p))
+    cap = np.array([p[0], p[1], z_c])
     rope_d, wire_d = g.element_vectors(cap, z_w)
     return z_c, rope_d, np.linalg.norm(rope_d, axis=1), wire_d, np.linalg.norm(wire_d, axis=1)
 
 
-def quasi_static_path(params: Params | DeviceGeometry, u: np.ndarray, direction_deg: float = 0.0,
-                      u_ddot: np.ndarray | None = None, substeps: int = 4,
-                      stop_at_slack: bool = False) -> dict[str, np.ndarray]:
-    """Quasi-static equilibria along the plate displacement path u[0..], starting from rest (u[0] = 0).
+def quasi_static_plane(params: Params | DeviceGeometry, xy: np.ndarray, xy_ddot: np.ndarray | None = None,
+                       substeps: int = 4, stop_at_slack: bool = False) -> dict[str, np.ndarray]:
+    """Quasi-static equilibria along a plate path xy[0..] (n, 2) in the plane, from rest (xy[0] = 0).
 
-    Returns arrays: u, F, F_device, z_w, z_c, spring push, rope tensions (n, n_r), wire stresses;
-    with stop_at_slack, only up to the first point where every rope is slack.
+    For any path (nsd-model.md, "Two-dimensional drive paths"): the cap at (x, y, z_c) with
+    z_c = z_w + sqrt(l_d^2 - x^2 - y^2); a virtual plate displacement dp at fixed z_w gives the
+    drive force vector F = m_c p'' - (f_cap,xy + f_cap,z dz_c/dp) + (m_c + m_d/2) g dz_c/dp,
+    dz_c/dp = -p / sqrt(l_d^2 - |p|^2). Returns arrays: F (n, 2), F_device (n, 2), z_w, z_c, spring
+    push and zeta, rope tensions (n, n_r), wire stresses and strains (n, n_w), rope_stretch; with
+    stop_at_slack, only up to the first point where every rope is slack.
     """
     g = params if isinstance(params, DeviceGeometry) else device_geometry(params)
     p = g.params
-    e = np.array([math.cos(math.radians(direction_deg)), math.sin(math.radians(direction_deg)), 0.0])
-    u = np.asarray(u, dtype=float)
+    xy = np.asarray(xy, dtype=float).reshape(-1, 2)
     L0w = g.wire.natural_length
     sigma = g.initial_wire_stress()
     zeta = g.spring_zeta0
     z_w = g.wall_rest_z
-    _, _, _, _, wl = _element_state(g, e, 0.0, z_w)
+    _, _, _, _, wl = _element_state(g, np.zeros(2), z_w)
     eps_prev = (wl - L0w) / L0w
     x_prev = g.spring.free_length - z_w
-    n = len(u)
-    out = {k: np.zeros(n) for k in ("F", "F_device", "z_w", "z_c", "spring_push", "spring_zeta")}
+    n = len(xy)
+    out = {k: np.zeros(n) for k in ("z_w", "z_c", "spring_push", "spring_zeta")}
+    out["F"], out["F_device"] = np.zeros((n, 2)), np.zeros((n, 2))
     out["rope_tension"] = np.zeros((n, g.n_ropes))
     out["wire_stress"] = np.zeros((n, g.n_wires))
     out["wire_strain"] = np.zeros((n, g.n_wires))
     out["rope_stretch"] = np.zeros(n)  # max over ropes of L - L_r0 (negative: all slack)
 
-    def states_at(uk, zw):
-        z_c, rope_d, rl, wire_d, wl = _element_state(g, e, uk, zw)
+    def states_at(pk, zw):
+        z_c, rope_d, rl, wire_d, wl = _element_state(g, pk, zw)
         eps = (wl - L0w) / L0w
         sig = advance_wire_stress(eps_prev, eps, sigma, g.wire, substeps) if g.n_wires else sigma
         x = g.spring.free_length - zw
         zt = float(advance_spring_zeta(x_prev, x, zeta, g.spring, substeps))
         return z_c, rope_d, rl, wire_d, wl, eps, sig, x, zt
 
-    def vertical_residual(zw, uk):
-        _, rope_d, rl, *_rest, x, zt = states_at(uk, zw)
+    def vertical_residual(zw, pk):
+        _, rope_d, rl, *_rest, x, zt = states_at(pk, zw)
         push = max(g.spring.kse * x + zt, 0.0)
         t = rope_tension(rl, g.rope_natural_length, g.rope_stiffness)
         return push - np.sum(t * rope_d[:, 2] / rl) - p.carried_weight
 
-    for k, uk in enumerate(u):
-        if abs(uk) >= p.rod_length:
-            raise ValueError(f"u = {uk}: beyond the rod length {p.rod_length}")
+    for k, pk in enumerate(xy):
+        r2 = float(pk @ pk)
+        if r2 >= p.rod_length ** 2:
+            raise ValueError(f"|p| = {math.sqrt(r2)}: beyond the rod length {p.rod_length}")
         if k > 0:
             lo, hi = z_w - 2e-3, z_w + 2e-3
-            while vertical_residual(lo, uk) * vertical_residual(hi, uk) > 0:
+            while vertical_residual(lo, pk) * vertical_residual(hi, pk) > 0:
                 lo, hi = lo - 2e-3, hi + 2e-3
-            z_w = brentq(vertical_residual, lo, hi, args=(uk,), xtol=1e-15, rtol=1e-15, maxiter=200)
-        z_c, rope_d, rl, wire_d, wl, eps, sig, x, zt = states_at(uk, z_w)
+            z_w = brentq(vertical_residual, lo, hi, args=(pk,), xtol=1e-15, rtol=1e-15, maxiter=200)
+        z_c, rope_d, rl, wire_d, wl, eps, sig, x, zt = states_at(pk, z_w)
         t_rope = rope_tension(rl, g.rope_natural_length, g.rope_stiffness)
         t_wire = wire_tension(sig, g.wire)
         f_cap = -(t_rope[:, None] * rope_d / rl[:, None]).sum(0) - (t_wire[:, None] * wire_d / wl[:, None]).sum(0)
-        dzc_du = -uk / math.sqrt(p.rod_length ** 2 - uk * uk)
-        dr_du = e + np.array([0.0, 0.0, dzc_du])
-        f_dev = -float(f_cap @ dr_du) + (p.cap_mass + 0.5 * p.rod_mass) * p.gravity * dzc_du
-        acc = 0.0 if u_ddot is None else p.cap_mass * u_ddot[k]
+        dzc_dp = -pk / math.sqrt(p.rod_length ** 2 - r2)
+        f_dev = -(f_cap[:2] + f_cap[2] * dzc_dp) + (p.cap_mass + 0.5 * p.rod_mass) * p.gravity * dzc_dp
+        acc = 0.0 if xy_ddot is None else p.cap_mass * np.asarray(xy_ddot[k])
         out["F"][k], out["F_device"][k] = f_dev + acc, f_dev
         out["z_w"][k], out["z_c"][k] = z_w, z_c
         out["spring_push"][k], out["spring_zeta"][k] = max(g.spring.kse * x + zt, 0.0), zt
@@ -93,9 +96,26 @@ def quasi_static_path(params: Params | DeviceGeometry, u: np.ndarray, direction_
         sigma, zeta, eps_prev, x_prev = sig, zt, eps, x
         if stop_at_slack and out["rope_stretch"][k] <= 0.0:  # every rope slack: the path ends here
             out = {key: v[:k + 1] for key, v in out.items()}
-            u = u[:k + 1]
+            xy = xy[:k + 1]
             break
-    out["u"] = u
+    out["xy"] = xy
+    return out
+
+
+def quasi_static_path(params: Params | DeviceGeometry, u: np.ndarray, direction_deg: float = 0.0,
+                      u_ddot: np.ndarray | None = None, substeps: int = 4,
+                      stop_at_slack: bool = False) -> dict[str, np.ndarray]:
+    """Quasi-static equilibria along the line drive u[0..] at azimuth psi, starting from rest (u[0] = 0).
+
+    Returns arrays: u, F, F_device (projected on e_psi), z_w, z_c, spring push, rope tensions
+    (n, n_r), wire stresses; with stop_at_slack, only up to the first point where every rope is slack.
+    """
+    e = np.array([math.cos(math.radians(direction_deg)), math.sin(math.radians(direction_deg))])
+    u = np.asarray(u, dtype=float)
+    acc = None if u_ddot is None else np.asarray(u_ddot, dtype=float)[:, None] * e
+    out = quasi_static_plane(params, u[:, None] * e, acc, substeps, stop_at_slack)
+    out["F"], out["F_device"] = out["F"] @ e, out["F_device"] @ e
+    out["u"] = out.pop("xy") @ e
     return out
 
 

@@ -1,0 +1,83 @@
+"""The device's symmetries in the plane (issue 13, nsd-model.md "Two-dimensional drive paths"):
+with n_w = n_r = 4 (a square) a drive along 90 deg repeats the one along 0 deg and 180 deg mirrors
+it; with 8, 45 deg repeats 0 deg; on a circle at constant speed the force's magnitude is constant
+up to the 8-fold pattern's residual anisotropy. In-house, then a cheap check in MuJoCo and Exudyn."""
+import math
+
+import numpy as np
+import pytest
+
+from nsd_core.device.cycle import steady_cycle
+from nsd_core.device.drive import Drive
+from nsd_core.device.model import simulate
+from nsd_core.device.params import Params
+
+P4, P8 = Params(), Params().replace(n_wires=8, n_ropes=8)
+
+
+def _rotate(F, deg):
+    c, s = math.cos(math.radians(deg)), math.sin(math.radians(deg))
+    return np.column_stack([c * F[:, 0] - s * F[:, 1], s * F[:, 0] + c * F[:, 1]])
+
+
+def _F(r):
+    return np.column_stack([r["F_x"], r["F_y"]])
+
+
+def _check_rotation(run, params, psi, rel):
+    """run(params, drive) along 0 and along psi: the force vector turns with the drive."""
+    a = run(params, Drive(0.015, 10.0, 0.0, cycles=1, samples_per_cycle=200))
+    b = run(params, Drive(0.015, 10.0, psi, cycles=1, samples_per_cycle=200))
+    scale = np.max(np.abs(_F(a)))
+    return np.max(np.abs(_F(b) - _rotate(_F(a), psi))) / scale
+
+
+def _in_house(params, drive):
+    return simulate(params, drive)
+
+
+@pytest.mark.parametrize("params, psi", [(P4, 90.0), (P4, 180.0), (P4, 270.0), (P8, 45.0)])
+def test_in_house_symmetries(params, psi):
+    # the same equations in a rotated frame: equal to the integrator's tolerance (rtol 1e-7)
+    assert _check_rotation(_in_house, params, psi, 0) < 1e-6
+
+
+def test_in_house_four_fold_device_is_not_isotropic():
+    """45 deg differs from 0 deg for the square pattern, so the tests above can fail (issue: 11 %)."""
+    assert _check_rotation(_in_house, P4, 45.0, 0) > 0.05
+
+
+# residual anisotropy of |F| on a constant-speed circle (A = 15 mm, 10 Hz, steady third cycle), measured
+# on the in-house model: n = 8: (max - min)/mean |F| = 2.6e-3; n = 4: 0.12 (see the README)
+ANISOTROPY_8 = 2.6e-3
+MARGIN = 1.5
+
+
+def _anisotropy(params):
+    d = Drive(0.015, 10.0, cycles=3, samples_per_cycle=400, path="circle")
+    r = simulate(params, d)
+    mag = np.linalg.norm(_F(r)[steady_cycle(r, d.frequency)], axis=1)
+    return (mag.max() - mag.min()) / mag.mean()
+
+
+def test_circle_force_is_nearly_constant_for_eight_wires():
+    a8, a4 = _anisotropy(P8), _anisotropy(P4)
+    assert a8 <= MARGIN * ANISOTROPY_8
+    assert a4 > 10 * a8  # the square pattern is far less isotropic
+
+
+def _mujoco(params, drive):
+    from comparisons.engines.mujoco_engine import MujocoEngine
+    return MujocoEngine().run(params, drive)
+
+
+def _exudyn(params, drive):
+    from comparisons.engines.exudyn_engine import ExudynEngine
+    return ExudynEngine().run(params, drive)
+
+
+@pytest.mark.parametrize("run, psi", [(_mujoco, 90.0), (_mujoco, 180.0), (_exudyn, 90.0)])
+def test_other_engines_symmetries(run, psi):
+    # each engine against itself: its step-size error is the same in a rotated frame, up to round-off
+    # in the rotated joint axes (MuJoCo) and the constraint multipliers (Exudyn)
+    assert _check_rotation(run, P4, psi, 0) < 1e-5
