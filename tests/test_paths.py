@@ -54,7 +54,8 @@ def test_table_path_interpolates_with_continuous_velocity(tmp_path):
     tt = np.linspace(0.0, 2.0, 2001)
     p, v, a = d.plate(tt)
     np.testing.assert_allclose(p[:, 0], 0.01 * np.sin(math.pi * tt) ** 2, atol=2e-6)
-    assert np.max(np.abs(np.diff(v, axis=0))) < 1e-4  # no jumps in velocity between knots
+    # no jumps in velocity between knots: each change is bounded by max |a| times the time step
+    assert np.max(np.abs(np.diff(v, axis=0))) <= 1.01 * np.max(np.abs(a)) * (tt[1] - tt[0])
     assert abs(d.extent() - 0.01) < 1e-4
 
 
@@ -107,8 +108,9 @@ def test_vector_outputs_and_cycle_summary_of_a_circle():
     r = simulate(P, d)
     s = analyse(r, d.amplitude, d.frequency, d.path)
     F = np.column_stack([r["F_x"], r["F_y"]])
-    np.testing.assert_allclose(np.hypot(r["F_tangent"], r["F_radial"]), np.linalg.norm(F, axis=1), rtol=1e-9,
-                               atol=1e-9)  # on a circle the tangent and the radius are orthogonal
+    orbit = r["t"] >= 1.0 / d.frequency  # after the spiral: tangent and radius are orthogonal
+    np.testing.assert_allclose(np.hypot(r["F_tangent"], r["F_radial"])[orbit], np.linalg.norm(F, axis=1)[orbit],
+                               rtol=1e-9)
     pos, _, _ = d.plate(r["t"])
     np.testing.assert_allclose(np.column_stack([r["x"], r["y"]]), pos, atol=1e-15)
     np.testing.assert_allclose(r["F"], F @ d.unit_vector[:2], atol=1e-9)
@@ -116,7 +118,10 @@ def test_vector_outputs_and_cycle_summary_of_a_circle():
     assert abs(s["loop_area_x"] + s["loop_area_y"] - s["work_per_cycle"]) < 1e-12
     # the drive pushes the plate outwards against the negative stiffness: the radial force is negative
     c = steady_cycle(r, d.frequency)
-    assert np.all(r["F_radial"][c] < 0) and np.all(r["F_tangent"][c] > 0)  # tangential: dissipation
+    assert np.all(r["F_radial"][c] < 0)
+    # the work per cycle is the tangential force along the circumference: mean(F_tangent) 2 pi A
+    ft = r["F_tangent"][c][:-1]
+    assert abs(np.mean(ft) * 2 * np.pi * d.amplitude - s["work_per_cycle"]) < 1e-3 * s["work_per_cycle"]
 
 
 def test_line_summary_keeps_everything_and_adds_the_vector():
