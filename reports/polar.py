@@ -1,51 +1,61 @@
-"""The direction study's page (``nsd polar``): X_max, K0, |K_min| and the loop area versus the drive's
-azimuth psi, one curve per number of wires n = n_w = n_r, and each quantity's spread over the turn.
+"""The direction study's page (``nsd polar``): X_max, K0, K_min, the loop area and the peak force
+versus the drive's azimuth psi, one curve per number of wires n = n_w = n_r.
 
-It answers "how many wires, and does direction matter?": a circle means the design responds the
-same in every direction; petals show the directions it favours.
+It answers "how many wires, and does direction matter?" at a glance: each polar panel shows a
+quantity divided by its mean over the turn (a circle of radius 1: the same in every direction;
+petals: the directions the design favours), and the table beneath gives each design's mean and
+spread, (max - min) / |mean| over the turn.
 """
 from __future__ import annotations
 
 import numpy as np
+from matplotlib.lines import Line2D
 
 from reports.style import GREY, LANDSCAPE, fmt, new_figure
 
 COLORS = ["#7570b3", "#1f4e9c", "#d95f02", "#1b9e77", "#e7298a", "#66a61e"]
-PANELS = [("x_max", 1e3, "working range X_max [mm]"), ("k0", 1e-3, "initial stiffness K0 [kN/m]"),
-          ("k_min", -1e-3, "most negative stiffness |K_min| [kN/m]"), ("loop_area", 1.0, "loop area [J]")]
+PANELS = [("x_max", 1e3, "X_max", "mm"), ("k0", 1e-3, "K0", "kN/m"), ("k_min", 1e-3, "K_min", "kN/m"),
+          ("loop_area", 1.0, "loop area", "J"), ("peak_force", 1.0, "peak force", "N")]
 
 
 def polar_figure(polar: dict):
     designs = polar["designs"]
     fig = new_figure(LANDSCAPE, "Direction study: does direction matter, and how many wires?",
                      f"quasi-static, n_w = n_r = n, drive along psi (0 = the first wire), every "
-                     f"{fmt(polar['step_deg'])} deg; loop area and K_min at A = {fmt(polar['amplitude'] * 1e3)} mm. "
-                     "A circle: the same in every direction.")
-    for i, (key, scale, label) in enumerate(PANELS):
-        ax = fig.add_axes([0.04 + 0.245 * i, 0.36, 0.2, 0.48], projection="polar")
+                     f"{fmt(polar['step_deg'])} deg; K_min, loop area and peak force at A = "
+                     f"{fmt(polar['amplitude'] * 1e3)} mm.\nEach curve is divided by its mean over the turn: "
+                     "a unit circle = the same in every direction.")
+    for i, (key, _scale, name, _unit) in enumerate(PANELS):
+        ax = fig.add_axes([0.025 + 0.197 * i, 0.43, 0.16, 0.4], projection="polar")
+        lo, hi = 1.0, 1.0
         for j, (n, d) in enumerate(designs.items()):
+            v = np.asarray(d[key], dtype=float)
+            rel = v / v.mean() if v.mean() else v  # K_min < 0 too: its magnitude relative to the mean
             psi = np.radians(np.append(d["psi_deg"], d["psi_deg"][0]))
-            v = scale * np.append(d[key], d[key][0])
-            ax.plot(psi, v, color=COLORS[j % len(COLORS)], lw=1.4, label=f"n = {n}")
-        lo = min(scale * min(d[key]) for d in designs.values())
-        hi = max(scale * max(d[key]) for d in designs.values())
-        pad = 0.1 * (hi - lo) if hi > lo else 0.05 * abs(hi) or 1.0
-        ax.set_ylim(max(0.0, lo - 3 * pad) if lo > 0 else lo - pad, hi + pad)  # zoomed: spreads are small
-        ax.set_title(label, fontsize=9, pad=14)
+            ax.plot(psi, np.append(rel, rel[0]), color=COLORS[j % len(COLORS)], lw=1.4)
+            lo, hi = min(lo, rel.min()), max(hi, rel.max())
+        ax.set_ylim(min(0.0, lo - 0.1), max(1.3, hi + 0.05))
+        ax.set_title(f"{name} / its mean", fontsize=9.5, pad=12)
         ax.tick_params(labelsize=6.5)
-        if i == 0:
-            ax.legend(loc="upper left", bbox_to_anchor=(-0.25, 1.25), fontsize=7.5, frameon=False)
-    # the spreads as a table: (max - min) / |mean| over the full turn, per design and quantity
-    rows = [["n"] + [p[2].split(" [")[0] for p in PANELS] + ["peak force"]]
-    for n, d in designs.items():
-        rows.append([n] + [f"{100 * d['spread'][k]:.2f} %" for k, _, _ in PANELS] + [f"{100 * d['spread']['peak_force']:.2f} %"])
-    y = 0.27
-    fig.text(0.06, y + 0.035, "Spread over the turn, (max - min) / |mean|:", fontsize=9, weight="bold")
-    for r, row in enumerate(rows):
-        for c, cell in enumerate(row):
-            fig.text(0.06 + (0.05 if c else 0) + 0.16 * max(c - 0, 0) * (1 if c else 0), y - 0.03 * r, cell,
-                     fontsize=8.5, weight="bold" if r == 0 else "normal")
-    fig.text(0.06, y - 0.03 * len(rows) - 0.02,
-             "Reading: a design whose spreads are ~0 responds alike in every direction of the plane; the paper's "
-             "guideline (multiples of 4 wires) predicts n = 4 and 8 symmetric about X and Y.", fontsize=8, color=GREY)
+        ax.set_rlabel_position(200)
+    fig.legend(handles=[Line2D([], [], color=COLORS[j % len(COLORS)], lw=1.6, label=f"n = {n}")
+                        for j, n in enumerate(designs)], loc="upper center", bbox_to_anchor=(0.5, 0.905),
+               ncol=len(designs), frameon=False, fontsize=9)
+    top = 0.33
+    fig.text(0.06, top + 0.04, "Mean over the turn (spread = (max - min) / |mean|):", fontsize=9.5, weight="bold")
+    cols = [0.06] + [0.13 + 0.165 * i for i in range(len(PANELS))]
+    head = ["n"] + [f"{name} [{unit}]" for _, _, name, unit in PANELS]
+    for c, h in enumerate(head):
+        fig.text(cols[c], top, h, fontsize=9, weight="bold")
+    for r, (n, d) in enumerate(designs.items(), start=1):
+        fig.text(cols[0], top - 0.032 * r, n, fontsize=9, color=COLORS[(r - 1) % len(COLORS)], weight="bold")
+        for c, (key, scale, _, _) in enumerate(PANELS, start=1):
+            mean = scale * float(np.mean(d[key]))
+            fig.text(cols[c], top - 0.032 * r, f"{mean:.4g}  ({100 * d['spread'][key]:.1f} %)", fontsize=9)
+    worst = {n: max(d["spread"].values()) for n, d in designs.items()}
+    best = min(worst, key=worst.get)
+    fig.text(0.06, top - 0.032 * (len(designs) + 1) - 0.02,
+             "Reading: the smaller a design's spreads, the less the drive's direction matters.\nLargest spread per "
+             "design: " + ", ".join(f"n = {n}: {100 * w:.1f} %" for n, w in worst.items())
+             + f"; the most isotropic is n = {best}.", fontsize=8.5, color=GREY)
     return fig
