@@ -12,6 +12,9 @@ from pathlib import Path
 from nsd_core.device.results import atomic_write_json
 
 
+HELP = "standard multibody benchmarks on the generic engine"
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", required=True, help="output folder (results.json)")
     parser.add_argument("--quick", action="store_true", help="shorter runs and fewer tolerances (about a minute)")

@@ -5,12 +5,14 @@ import argparse
 from pathlib import Path
 from xml.sax.saxutils import escape, quoteattr
 
-from nsd_core.device.params import ParameterError, load_params, parse_set
+from comparisons.config import load_cases, load_convergence, load_tolerances
+from comparisons.engines import REFERENCE
+from comparisons.harness import compare
+from nsd_cli.options import add_param_arguments, base_params, parse_engines
+from nsd_core.device.params import ParameterError
 from nsd_core.device.results import atomic_write_text
 
-from comparisons.config import load_cases, load_convergence, load_tolerances
-from comparisons.engines import ENGINES, REFERENCE
-from comparisons.harness import compare
+HELP = "run engines side by side against tolerances"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -18,8 +20,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--tolerances", help="tolerance file (TOML); default: comparisons/tolerances.toml")
     p.add_argument("--engines", default="semirecursive,mujoco,exudyn",
                    help="comma-separated engines; the first reference is semirecursive")
-    p.add_argument("--params", help="TOML file of parameter overrides applied to every case")
-    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE")
+    add_param_arguments(p, "parameter overrides applied to every case")
     p.add_argument("--workers", type=int, default=None, help="parallel processes (default: all cores)")
     p.add_argument("--junit", help="write JUnit XML here (one test per case and engine)")
     p.add_argument("--convergence", action="store_true",
@@ -28,14 +29,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", required=True, help="output folder")
 
 
-def parse_engines(text: str) -> list[str]:
-    names = [e.strip() for e in text.split(",") if e.strip()]
-    for e in names:
-        if e not in ENGINES:
-            raise ParameterError(f"--engines {e!r}: unknown engine; allowed: {', '.join(ENGINES)}")
-    if not names or len(set(names)) != len(names):
-        raise ParameterError(f"--engines {text!r}: give each engine once")
-    return names
 
 
 def check_settings(cases, engines) -> None:
@@ -88,7 +81,7 @@ def junit_xml(summary: dict) -> str:
 
 def run(args) -> int:
     engines = parse_engines(args.engines)
-    base = load_params(args.params, parse_set(args.set))
+    base = base_params(args)
     cases = load_cases(args.cases, base)
     tolerances = load_tolerances(args.tolerances)
     check_settings(cases, engines)

@@ -8,6 +8,9 @@ import argparse
 from pathlib import Path
 
 
+HELP = "write the validation report (PDF and PNGs) from a results folder"
+
+
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--from", dest="source", required=True, metavar="DIR",
                    help="results folder written by nsd compare --out DIR")

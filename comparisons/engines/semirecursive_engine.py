@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from nsd_core.device.model import DEFAULT_SOLVER, simulate
 from nsd_core.device.drive import Drive
-from nsd_core.engine.integrate import SolverError
+from nsd_core.engine.errors import SolverError
 from nsd_core.device.params import Params
 from nsd_core.device.results import RunResult
 

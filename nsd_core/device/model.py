@@ -10,7 +10,6 @@ free coordinate and the rod's angles and the wall's height are dependent.
 """
 from __future__ import annotations
 
-import math
 import time
 
 import numpy as np

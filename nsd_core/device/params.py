@@ -13,8 +13,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
+from nsd_core.engine.errors import InputError
 
-class ParameterError(ValueError):
+
+class ParameterError(InputError):
     """Bad input: one line naming the field, the value and what is allowed (exit code 2)."""
 
 

@@ -14,14 +14,10 @@ from typing import Callable
 import numpy as np
 from scipy.integrate import DOP853, LSODA, RK23, RK45, Radau
 
-from nsd_core.device.params import ParameterError
+from nsd_core.engine.errors import InputError, SolverError
 from nsd_core.engine.semirecursive import SemiRecursiveSystem
 
 METHODS = {"RK45": RK45, "DOP853": DOP853, "RK23": RK23, "Radau": Radau, "LSODA": LSODA}
-
-
-class SolverError(RuntimeError):
-    """The integrator failed (exit code 3)."""
 
 
 @dataclass
@@ -40,7 +36,7 @@ def integrate(system: SemiRecursiveSystem, y0: np.ndarray, t_eval: np.ndarray, m
               outputs: Callable[[float, np.ndarray], None] | None = None) -> Trajectory:
     """Integrate from t_eval[0] to t_eval[-1]; ``outputs(t, y)`` is called at every t_eval."""
     if method not in METHODS:
-        raise ParameterError(f"method = {method!r}: allowed {', '.join(METHODS)}")
+        raise InputError(f"method = {method!r}: allowed {', '.join(METHODS)}")
     t0, t1 = float(t_eval[0]), float(t_eval[-1])
     start = time.perf_counter()
     nfev = [0]

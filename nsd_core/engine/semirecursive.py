@@ -22,6 +22,7 @@ from nsd_core.engine.fastpath import dynamics_kernel, newton_kernel, velocity_ke
 from nsd_core.engine.closure import closure, full_pivot_elimination
 from nsd_core.engine.dynamics import tree_equations
 from nsd_core.engine.kinematics import Kinematics, positions, velocities
+from nsd_core.engine.errors import ConstraintError
 from nsd_core.engine.mechanism import Mechanism
 
 # forces(t, kin, z, zd, extra) -> (wrench (n,6) about the origin, joint forces (n,) or None, extra rates)
@@ -44,10 +45,6 @@ def _inverse(A: np.ndarray) -> np.ndarray:
         return np.linalg.inv(A)
     except np.linalg.LinAlgError:
         return np.linalg.pinv(A)
-
-
-class ConstraintError(RuntimeError):
-    """The loop equations could not be solved (the mechanism cannot follow, or a singular position)."""
 
 
 @dataclass(frozen=True)
