@@ -15,28 +15,14 @@ The result shows whether a discrepancy is numerical error that vanishes or a flo
 from __future__ import annotations
 
 import dataclasses
-import multiprocessing
-from concurrent.futures import ProcessPoolExecutor
 
-from nsd_core.device.params import ParameterError
 
 from comparisons.config import Case
-from comparisons.engines import REFERENCE
-from comparisons.harness import run_job
+from comparisons.engines import REFERENCE, run_job
 from comparisons.metrics import pair_metrics
 from nsd_core.device.cycle import analyse
 
 
-def parse_convergence(raw: dict, cases: list[Case]) -> dict:
-    by_name = {c.name: c for c in cases}
-    if raw.get("case") not in by_name:
-        raise ParameterError(f"convergence.case = {raw.get('case')!r}: must name a case of the file")
-    sweep = raw.get("sweep", {})
-    for engine, spec in sweep.items():
-        if not isinstance(spec, dict) or "setting" not in spec or not spec.get("values"):
-            raise ParameterError(f"convergence.sweep.{engine}: needs setting = NAME and values = [..]")
-    return {"case": by_name[raw["case"]], "cycles": int(raw.get("cycles", 1)),
-            "reference": dict(raw.get("reference", {"rtol": 1e-10})), "sweep": sweep}
 
 
 def convergence_study(spec: dict, engines: list[str], workers: int) -> dict:
@@ -48,8 +34,8 @@ def convergence_study(spec: dict, engines: list[str], workers: int) -> dict:
             s = spec["sweep"][e]
             fixed = {**case.settings.get(e, {}), **s.get("settings", {})}
             jobs += [(e, {**fixed, s["setting"]: v}, v) for v in s["values"]]
-    ctx = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+    from nsd_core.engine.workers import worker_pool
+    with worker_pool(workers) as pool:
         futs = [pool.submit(run_job, e, case.params_for(e), drive, settings) for e, settings, _ in jobs]
         outs = [f.result() for f in futs]
     if outs[0]["status"] != "ok":

@@ -10,7 +10,10 @@ import argparse
 import os
 from pathlib import Path
 
-from nsd_core.device.params import ParameterError, load_params, parse_set
+from nsd_cli.options import add_param_arguments, base_params, check_out_dir
+from nsd_core.device.params import ParameterError
+
+HELP = "the device's response versus drive direction, per number of wires"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -18,8 +21,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--step", type=float, default=15.0, help="azimuth step [deg], dividing 360 (default 15)")
     p.add_argument("--amplitude", type=float, default=0.015, help="A [m] for the loop area and K_min (default 0.015)")
     p.add_argument("--points-per-cycle", type=int, default=100, help="quasi-static points per cycle (default 100)")
-    p.add_argument("--params", help="TOML file of parameter overrides (the base set)")
-    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="override one parameter")
+    add_param_arguments(p)
     p.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="local processes")
     p.add_argument("--out", required=True, help="output folder (put it under a compare folder as DIR/polar for the report)")
 
@@ -35,9 +37,13 @@ def run(args) -> int:
         raise ParameterError(f"--points-per-cycle = {args.points_per_cycle}: must be >= 16")
     if args.workers < 1:
         raise ParameterError(f"--workers = {args.workers}: must be >= 1")
-    base = load_params(args.params, parse_set(args.set))
+    if args.workers > 64:
+        raise ParameterError(f"--workers = {args.workers}: must be in [1, 64]")
+    if args.points_per_cycle > 10000:
+        raise ParameterError(f"--points-per-cycle = {args.points_per_cycle}: must be in [16, 10000]")
+    base = base_params(args)
+    out = check_out_dir("--out", args.out)
     result = polar_study(wires, args.step, args.amplitude, base, args.points_per_cycle, args.workers)
-    out = Path(args.out)
     atomic_write_json(out / "polar.json", result)
     atomic_write_text(out / "polar.csv", polar_csv(result))
     _png(result, out / "polar.png")

@@ -10,8 +10,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 from matplotlib.ticker import FuncFormatter
 
-from comparisons.metrics import phase_resample
-from nsd_core.device.cycle import loading_quarter, steady_cycle, tangent_stiffness
+from nsd_core.device.cycle import loading_quarter, phase_resample, steady_cycle, tangent_stiffness
 
 from reports.style import GREY, LANDSCAPE, RED, SHADE, fmt, new_figure, no_data, style
 

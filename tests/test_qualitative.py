@@ -15,7 +15,7 @@ import pytest
 
 from nsd_core.device.cycle import loop_area
 from nsd_core.device.params import Params
-from nsd_core.study.study import quasi_static_cycle
+from nsd_core.device.quasistatic import quasi_static_cycle
 
 A = 0.024
 

@@ -18,13 +18,16 @@ from pathlib import Path
 
 import pytest
 
-from nsd_core import cli
+from nsd_cli import main as cli
 from nsd_core.device.params import Params, load_params
-from nsd_core.study.study import PAPER_STUDIES, Store, make_designs, paper_designs, run_sweep
-from nsd_core.study.tables import TABLE5, TABLE6, table_rows, x_max_at_slack
+from nsd_core.device.working_range import x_max_at_slack
+from nsd_core.study.designs import PAPER_STUDIES, make_designs, paper_designs
+from nsd_core.study.store import Store
+from nsd_core.study.sweep import run_sweep
+from nsd_core.study.tables import TABLE5, TABLE6, table_rows
 
 ROOT = Path(__file__).resolve().parents[1]
-PAPER_DATA = Path("/work/shared/reference/paper-data.toml")
+PAPER_DATA = Path(__file__).resolve().parents[1] / "references" / "paper-data.toml"
 FAST = dict(rtol=1e-5, atol=1e-8)
 TINY = ["--cycles", "1", "--samples-per-cycle", "32", "--rtol", "1e-5", "--atol", "1e-8"]
 

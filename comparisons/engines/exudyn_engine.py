@@ -1,6 +1,6 @@
 """The device in Exudyn: redundant-coordinate rigid bodies, joints as constraints, the drive as motion.
 
-Model (nsd-model.md, drive mode). Base = ground. Wall, rod and cap are ``ObjectRigidBody`` bodies on
+Model (docs/model.md, drive mode). Base = ground. Wall, rod and cap are ``ObjectRigidBody`` bodies on
 ``NodeRigidBodyEP`` nodes (3 positions + 4 Euler parameters each, the Euler-parameter normalisation
 an algebraic equation: Exudyn's redundant coordinates). Constraints (index 3, Lagrange multipliers):
 - the wall's vertical guide: a GenericJoint ground-wall locking X, Y and the three rotations;
@@ -62,7 +62,7 @@ from exudyn.itemInterface import (LoadForceVector, MarkerNodePosition, ObjectGen
                                   SensorObject)
 from exudyn.rigidBodyUtilities import RigidBodyInertia
 
-from comparisons.engines.base import EngineError, merged_settings
+from comparisons.engines.base import check_step_count, EngineError, merged_settings
 from nsd_core.device.drive import Drive
 from nsd_core.device.forces import advance_spring_zeta, advance_wire_stress, rope_tension, spring_push, wire_tension
 from nsd_core.device.geometry import device_geometry
@@ -181,6 +181,7 @@ def _check_settings(s):
 
 class ExudynEngine:
     name = "exudyn"
+    validate_settings = staticmethod(lambda s: _check_settings(s))
     default_settings = {
         "step_size": 1.0e-5,          # largest step [s]; the step used divides the output interval
         "min_steps_per_cycle": 20000,  # and at most 1/(f n): 5e-6 s at 10 Hz, where steps are cheap
@@ -225,6 +226,7 @@ class ExudynEngine:
         p = g.params
         n_out = len(t_out)
         n_steps = per_out * (n_out - 1)
+        check_step_count(self.name, n_steps)
         h = drive.duration / n_steps
         v0 = np.append(drive.plate(0.0)[1], 0.0)  # plate velocity at t = 0: start consistent with the drive
         grav = list(g.gravity_vector)

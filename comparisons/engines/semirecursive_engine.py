@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from nsd_core.device.model import DEFAULT_SOLVER, simulate
 from nsd_core.device.drive import Drive
-from nsd_core.engine.integrate import SolverError
+from nsd_core.engine.errors import SolverError
 from nsd_core.device.params import Params
 from nsd_core.device.results import RunResult
 
@@ -13,6 +13,13 @@ from comparisons.engines.base import EngineError, merged_settings
 class SemirecursiveEngine:
     name = "semirecursive"
     default_settings = dict(DEFAULT_SOLVER)
+
+    @staticmethod
+    def validate_settings(s: dict) -> None:
+        from nsd_core.device.params import ParameterError
+        from nsd_core.engine.integrate import METHODS
+        if s["method"] not in METHODS:
+            raise ParameterError(f"semirecursive.method = {s['method']!r}: allowed: {', '.join(METHODS)}")
 
     def run(self, params: Params, drive: Drive, settings: dict | None = None) -> RunResult:
         s = merged_settings(self.default_settings, settings, self.name)

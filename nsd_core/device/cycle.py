@@ -167,3 +167,12 @@ def _unloading_regions(result: RunResult, amplitude: float, frequency: float) ->
     u, F = result["u"][m][::-1], result["F"][m][::-1]  # ascending u
     keep = np.concatenate([[True], np.diff(u) > 0])
     return stiffness_regions(u[keep], tangent_stiffness(u[keep], F[keep]), min_width=0.02 * amplitude)
+
+
+def phase_resample(result: RunResult, frequency: float, column: str, n: int = 2000) -> np.ndarray:
+    """The steady cycle of ``column`` on the phase grid 0 .. 1 (n + 1 points)."""
+    cyc = steady_cycle(result, frequency)
+    t = result["t"][cyc]
+    phase = (t - t[0]) * frequency
+    return np.interp(np.linspace(0.0, 1.0, n + 1), phase, result[column][cyc])
+

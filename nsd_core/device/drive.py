@@ -89,6 +89,14 @@ class Drive:
     minor: float | None = None  # B [m]: ellipse (required), figure8 (default A/2)
     _table: object = field(default=None, init=False, repr=False, compare=False)
 
+    # Bounds that keep one run's work finite (issue 12): below F_MIN a cycle is so long that the
+    # 250 Hz vertical mode must be resolved over minutes of simulated time; above F_MAX the drive's
+    # inertia force m_c A (2 pi f)^2 leaves the range any force law here was written for.
+    F_MIN, F_MAX = 0.05, 100.0   # Hz
+    CYCLES_MAX = 1000
+    SAMPLES_MAX = 200_000        # per cycle
+    TOTAL_SAMPLES_MAX = 2_000_000
+
     def __post_init__(self):
         for name in ("amplitude", "frequency", "direction_deg"):
             v = getattr(self, name)
@@ -96,12 +104,18 @@ class Drive:
                 raise ParameterError(f"{name} = {v!r}: must be a finite number")
         if self.amplitude < 0:
             raise ParameterError(f"amplitude = {self.amplitude}: must be >= 0 m (0 holds the device at rest)")
-        if self.frequency <= 0:
-            raise ParameterError(f"frequency = {self.frequency}: must be > 0 Hz")
-        if not isinstance(self.cycles, int) or self.cycles < 1:
-            raise ParameterError(f"cycles = {self.cycles!r}: must be a whole number >= 1")
-        if not isinstance(self.samples_per_cycle, int) or self.samples_per_cycle < 16:
-            raise ParameterError(f"samples_per_cycle = {self.samples_per_cycle!r}: must be a whole number >= 16")
+        if not self.F_MIN <= self.frequency <= self.F_MAX:
+            raise ParameterError(f"frequency = {self.frequency}: must be in [{self.F_MIN}, {self.F_MAX}] Hz")
+        if not -360.0 <= self.direction_deg <= 360.0:
+            raise ParameterError(f"direction_deg = {self.direction_deg}: must be in [-360, 360] deg")
+        for name, top in (("cycles", self.CYCLES_MAX), ("samples_per_cycle", self.SAMPLES_MAX)):
+            v = getattr(self, name)
+            low = 1 if name == "cycles" else 16
+            if isinstance(v, bool) or not isinstance(v, int) or not low <= v <= top:
+                raise ParameterError(f"{name} = {v!r}: must be a whole number in [{low}, {top}]")
+        if self.cycles * self.samples_per_cycle > self.TOTAL_SAMPLES_MAX:
+            raise ParameterError(f"cycles x samples_per_cycle = {self.cycles * self.samples_per_cycle}: must be "
+                                 f"<= {self.TOTAL_SAMPLES_MAX} output samples")
         if not isinstance(self.path, str) or not self.path:
             raise ParameterError(f"path = {self.path!r}: allowed: {', '.join(PATHS)} or a CSV file of t,x,y")
         if self.minor is not None and (isinstance(self.minor, bool) or not isinstance(self.minor, (int, float))
@@ -140,7 +154,8 @@ class Drive:
     def extent(self) -> float:
         """The largest distance of the plate from the centre along the path [m]."""
         if self._table is not None:
-            t = np.linspace(0.0, self.duration, 20 * self.cycles * self.samples_per_cycle + 1)
+            t = np.union1d(self._table.x[self._table.x <= self.duration],
+                           np.linspace(0.0, self.duration, 200_001))
             return float(np.max(np.linalg.norm(self._table(t), axis=1)))
         if self.path == "figure8":  # max over s of A^2 sin^2 s + B^2 sin^2 2s, on a fine grid
             s = np.linspace(0.0, 0.5 * math.pi, 20001)

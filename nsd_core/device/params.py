@@ -1,7 +1,7 @@
 """The device's parameter set: one typed, immutable object.
 
 Every field carries its SI unit and its provenance (a table of Dai et al. 2024, or "assumed" with
-the place in ``nsd-model.md`` that argues for it). Angles are stored in degrees, and their field
+the place in ``docs/model.md`` that argues for it). Angles are stored in degrees, and their field
 names end in ``_deg`` so that no reader mistakes them for radians.
 """
 from __future__ import annotations
@@ -13,8 +13,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
+from nsd_core.engine.errors import InputError
 
-class ParameterError(ValueError):
+
+class ParameterError(InputError):
     """Bad input: one line naming the field, the value and what is allowed (exit code 2)."""
 
 
@@ -23,14 +25,14 @@ def _p(default, unit: str, source: str, doc: str, kind=float):
 
 
 T2 = "Table 2"
-MODEL = "assumed: nsd-model.md"
-WIRE = "assumed: nsd-model.md (Table 3 missing)"
-SPRING = "assumed: nsd-model.md (Table 4 missing)"
+MODEL = "assumed: docs/model.md"
+WIRE = "assumed: docs/model.md (Table 3 missing)"
+SPRING = "assumed: docs/model.md (Table 4 missing)"
 
 
 @dataclass(frozen=True)
 class Params:
-    """Device parameters (SI units; angles in degrees). Defaults: Table 2, Section 4.1, nsd-model.md."""
+    """Device parameters (SI units; angles in degrees). Defaults: Table 2, Section 4.1, docs/model.md."""
 
     # Geometry and masses (Table 2)
     cap_diameter: float = _p(0.128, "m", T2, "R_c, diameter of the cap")
@@ -42,14 +44,14 @@ class Params:
     base_diameter: float = _p(0.128, "m", T2, "R_b, diameter of the base")
     base_mass: float = _p(1.082, "kg", T2, "m_b, mass of the base")
     spring_length: float = _p(0.062, "m", T2, "l_s, spring length after precompression")
-    # Ropes (Table 2, Section 4.1, nsd-model.md)
+    # Ropes (Table 2, Section 4.1, docs/model.md)
     n_ropes: int = _p(4, "-", T2, "n_r, number of ropes", int)
     rope_upper_radius: float = _p(0.055, "m", T2, "R_r,u, radius of the ropes' upper ends")
     rope_lower_radius: float = _p(0.055, "m", T2, "R_r,l, radius of the ropes' lower ends")
     rope_stiffness: float = _p(5.0e5, "N/m", "Section 4.1", "k_r, axial stiffness of each rope")
     rope_upper_height: float = _p(0.0189, "m", MODEL, "h_ru, rope upper end above the cap reference")
     precompression_force: float = _p(3800.0, "N", "Table 6 (= Table 5 column 0.03 m)", "F_press, spring push at rest")
-    # Wires (Table 2 and nsd-model.md)
+    # Wires (Table 2 and docs/model.md)
     n_wires: int = _p(4, "-", T2, "n_w, number of SMA wires", int)
     wire_diameter: float = _p(0.002, "m", T2, "D_w, wire diameter")
     wire_upper_radius: float = _p(0.0165, "m", T2, "R_w,u, radius of the wires' upper ends")
@@ -83,12 +85,12 @@ class Params:
     # ---- derived quantities (never stored, so they cannot disagree) ----
     @property
     def wire_span(self) -> float:
-        """h_w = l_d + h_wu: vertical span of a wire at rest (nsd-model.md)."""
+        """h_w = l_d + h_wu: vertical span of a wire at rest (docs/model.md)."""
         return self.rod_length + self.wire_upper_height
 
     @property
     def wire_lower_radius(self) -> float:
-        """R_w,l = R_w,u + h_w tan(theta) (nsd-model.md; 0.0265 m in Table 2 at the nominal theta)."""
+        """R_w,l = R_w,u + h_w tan(theta) (docs/model.md; 0.0265 m in Table 2 at the nominal theta)."""
         return self.wire_upper_radius + self.wire_span * math.tan(math.radians(self.wire_inclination_deg))
 
     @property
@@ -97,7 +99,7 @@ class Params:
 
     @property
     def rope_span(self) -> float:
-        """H_r = l_s + l_d + h_ru: vertical span of a rope at rest (nsd-model.md)."""
+        """H_r = l_s + l_d + h_ru: vertical span of a rope at rest (docs/model.md)."""
         return self.spring_length + self.rod_length + self.rope_upper_height
 
     @property
@@ -132,15 +134,16 @@ def _coerce(name: str, value: Any):
     kind = FIELDS[name].metadata["kind"]
     if isinstance(value, str):
         try:
-            value = float(value)
+            value = int(value) if kind is int else float(value)
         except ValueError:
-            raise ParameterError(f"{name} = {value!r}: not a number") from None
+            what = "a whole number" if kind is int else "a number"
+            raise ParameterError(f"{name} = {value!r}: not {what}") from None
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise ParameterError(f"{name} = {value!r}: must be a number ({FIELDS[name].metadata['unit']})")
     if kind is int:
-        if not math.isfinite(value) or value != int(value):
-            raise ParameterError(f"{name} = {value!r}: must be a whole number")
-        return int(value)
+        if not isinstance(value, int):  # 4.0 in a file is a typo for a count, not a count
+            raise ParameterError(f"{name} = {value!r}: must be a whole number (an integer, no decimal point)")
+        return value
     return float(value)
 
 
@@ -163,19 +166,54 @@ def parse_set(items: list[str]) -> dict[str, str]:
     return out
 
 
+def read_toml(path: str | Path, what: str) -> dict:
+    """A TOML input file as a dict; every way it can be unreadable is one ParameterError line."""
+    path = Path(path)
+    try:
+        if path.is_dir():
+            raise ParameterError(f"{what} {path}: is a folder; a TOML file is expected")
+        if path.stat().st_size > 1_000_000:
+            raise ParameterError(f"{what} {path}: {path.stat().st_size} bytes; at most 1 MB expected")
+        return tomllib.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ParameterError(f"{what} {path}: file not found") from None
+    except PermissionError:
+        raise ParameterError(f"{what} {path}: not readable (permission denied)") from None
+    except UnicodeDecodeError:
+        raise ParameterError(f"{what} {path}: not a text file (UTF-8 TOML expected)") from None
+    except tomllib.TOMLDecodeError as e:
+        raise ParameterError(f"{what} {path}: not valid TOML ({e})") from None
+    except OSError as e:
+        raise ParameterError(f"{what} {path}: cannot be read ({e.strerror or e})") from None
+
+
+def params_from_toml(data: dict, what: str) -> dict[str, Any]:
+    """The overrides of a parameter file: flat ``name = value`` or under ``[params]``; a free-form
+    ``[provenance]`` table may sit beside them (nsd calibrate writes one). Anything else is an error
+    rather than silently ignored (a key beside [params] would otherwise not apply)."""
+    data = {k: v for k, v in data.items() if k != "provenance"}
+    if "params" in data:
+        extra = sorted(set(data) - {"params"})
+        if extra:
+            raise ParameterError(f"{what}: {extra[0]!r} beside [params]; put every parameter under [params] "
+                                 "(allowed tables: params, provenance)")
+        data = data["params"]
+        if not isinstance(data, dict):
+            raise ParameterError(f"{what}: params = {data!r}: must be a table of name = value")
+    for k, v in data.items():
+        if isinstance(v, (dict, list)):
+            raise ParameterError(f"{what}: {k} = {type(v).__name__}: must be a number (tables allowed: params, "
+                                 "provenance)")
+    return data
+
+
 def load_params(path: str | Path | None = None, overrides: Mapping[str, Any] | None = None) -> Params:
     """Defaults, then a TOML file (flat ``name = value`` or under ``[params]``), then overrides."""
     p = Params()
     if path is not None:
-        try:
-            data = tomllib.loads(Path(path).read_text())
-        except FileNotFoundError:
-            raise ParameterError(f"--params {path}: file not found") from None
-        except tomllib.TOMLDecodeError as e:
-            raise ParameterError(f"--params {path}: not valid TOML ({e})") from None
-        data = data.get("params", data)
-        data = {k: v for k, v in data.items() if not isinstance(v, dict)}
-        p = with_overrides(p, data)
+        if not str(path).strip():
+            raise ParameterError("--params '': name a TOML file")
+        p = with_overrides(p, params_from_toml(read_toml(path, "--params"), f"--params {path}"))
     if overrides:
         p = with_overrides(p, overrides)
     return p
@@ -186,20 +224,35 @@ _POSITIVE = [n for n, f in FIELDS.items() if f.metadata["kind"] is float
                            "spring_gamma")]
 
 
+# Magnitude bounds per unit: generous (orders of magnitude beyond the device's values) but finite, so
+# that an input like rope_stiffness = 1e15 or rod_length = 1e308 is bad input, not a run that
+# overflows or never ends (issue 12).
+MAGNITUDE_MAX = {"m": 10.0, "kg": 1e4, "N/m": 1e10, "Pa": 1e13, "N": 1e8, "1/m": 1e8, "deg": 360.0,
+                 "kg/m^3": 1e5, "m/s^2": 100.0, "-": 1e6}
+
+
 def validate(p: Params) -> None:
     """Reject anything physically impossible or outside the model's validity (one-line errors)."""
     for name in FIELDS:
         v = getattr(p, name)
         if isinstance(v, float) and not math.isfinite(v):
             raise ParameterError(f"{name} = {v}: must be a finite number")
+    for name, f in FIELDS.items():
+        top = MAGNITUDE_MAX.get(f.metadata["unit"])
+        v = getattr(p, name)
+        if top is not None and abs(v) > top:
+            raise ParameterError(f"{name} = {v}: must be within +-{top:g} {f.metadata['unit']} "
+                                 "(far outside any device this model describes)")
     for name in _POSITIVE:
         v = getattr(p, name)
         if not v > 0:
             raise ParameterError(f"{name} = {v}: must be > 0 ({FIELDS[name].metadata['unit']})")
     if p.n_ropes < 3:
         raise ParameterError(f"n_ropes = {p.n_ropes}: must be >= 3 (fewer ropes cannot hold the cap centred)")
-    if p.n_wires < 0:
-        raise ParameterError(f"n_wires = {p.n_wires}: must be >= 0")
+    if p.n_ropes > 64:
+        raise ParameterError(f"n_ropes = {p.n_ropes}: must be <= 64")
+    if not 0 <= p.n_wires <= 64:
+        raise ParameterError(f"n_wires = {p.n_wires}: must be in [0, 64]")
     if not 0.0 <= p.wire_inclination_deg < 45.0:
         raise ParameterError(f"wire_inclination_deg = {p.wire_inclination_deg}: must be in [0, 45)")
     if p.wire_span <= 0:

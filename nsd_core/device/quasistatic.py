@@ -134,3 +134,20 @@ def x_max(params: Params, direction_deg: float = 0.0, step: float = 2e-5) -> flo
         return float("nan")
     k = slack[0]  # the stretch is smooth: interpolate linearly inside the last step
     return float(u[k - 1] + step * stretch[k - 1] / (stretch[k - 1] - stretch[k]))
+
+
+def quasi_static_cycle(params: Params, amplitude: float, points_per_cycle: int = 80, cycles: int = 2,
+                       substeps: int = 6) -> dict[str, np.ndarray]:
+    """The last of ``cycles`` quasi-static cycles, u = A sin(2 pi s) (the hysteresis is carried).
+
+    Returns the quasi-static path's arrays plus 's' (cycle phase, 0..1) and 'stiffness' on the
+    loading quarter (u from 0 to A), used by the qualitative checks of Figures 7-20.
+    """
+    s = np.linspace(0.0, cycles, cycles * points_per_cycle + 1)
+    out = quasi_static_path(params, amplitude * np.sin(2 * np.pi * s), substeps=substeps)
+    m = s >= cycles - 1 - 1e-12
+    cyc = {k: v[m] for k, v in out.items()}
+    cyc["s"] = s[m] - (cycles - 1)
+    q = cyc["s"] <= 0.25 + 1e-12
+    cyc["loading_u"], cyc["loading_stiffness"] = cyc["u"][q], np.gradient(cyc["F_device"][q], cyc["u"][q])
+    return cyc

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from nsd_core.engine.kinematics import Kinematics, _cross3
+from nsd_core.engine.kinematics import Kinematics, cross3
 from nsd_core.engine.mechanism import Mechanism
 
 
@@ -48,16 +48,16 @@ def closure_kernel(parent, kind, ca, va, cb, vb, A, r, B, Z, vp, with_rates, Phi
                     continue
                 j = body
                 while j >= 0:
-                    _cross3(B[j, 3:], p, t1)
+                    cross3(B[j, 3:], p, t1)
                     for a in range(3):
                         J[row + a, j] += sign * (B[j, a] + t1[a])
                     j = parent[j]
                 if with_rates:
-                    _cross3(Z[body, 3:], p, t1)
+                    cross3(Z[body, 3:], p, t1)
                     for a in range(3):
                         vel[a] = Z[body, a] + t1[a]
-                    _cross3(vp[body, 3:], p, t1)
-                    _cross3(Z[body, 3:], vel, t2)
+                    cross3(vp[body, 3:], p, t1)
+                    cross3(Z[body, 3:], vel, t2)
                     for a in range(3):
                         c[row + a] += sign * (vp[body, a] + t1[a] + t2[a])
             row += 3
@@ -65,7 +65,7 @@ def closure_kernel(parent, kind, ca, va, cb, vb, A, r, B, Z, vp, with_rates, Phi
             _global(ca[k], va[k], A, r, False, av)
             _global(cb[k], vb[k], A, r, False, bv)
             Phi[row] = av[0] * bv[0] + av[1] * bv[1] + av[2] * bv[2]
-            _cross3(av, bv, axb)
+            cross3(av, bv, axb)
             for side in range(2):
                 body = ca[k] if side == 0 else cb[k]
                 sign = 1.0 if side == 0 else -1.0
@@ -85,10 +85,10 @@ def closure_kernel(parent, kind, ca, va, cb, vb, A, r, B, Z, vp, with_rates, Phi
                     for a in range(3):
                         wb[a] = Z[cb[k], 3 + a]
                         al[a] -= vp[cb[k], 3 + a]
-                _cross3(wa, av, t1)
-                _cross3(t1, bv, t2)       # (wa x a) x b
-                _cross3(wb, bv, t1)
-                _cross3(av, t1, vel)      # a x (wb x b)
+                cross3(wa, av, t1)
+                cross3(t1, bv, t2)       # (wa x a) x b
+                cross3(wb, bv, t1)
+                cross3(av, t1, vel)      # a x (wb x b)
                 acc = 0.0
                 for a in range(3):
                     acc += (t2[a] + vel[a]) * (wa[a] - wb[a]) + axb[a] * al[a]

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from nsd_core.engine.kinematics import Kinematics, _cross3
+from nsd_core.engine.kinematics import Kinematics, cross3
 from nsd_core.engine.mechanism import Mechanism
 
 
@@ -58,20 +58,20 @@ def body_terms_kernel(mass, com, inertia, gravity, A, r, Z, has_vel, Mb, Qb):
                 Mb[i, 3 + a, 3 + b] = JG[a, b] - m * GG
         for a in range(3):
             t1[a] = m * gravity[a]
-        _cross3(g, t1, gd)
+        cross3(g, t1, gd)
         for a in range(3):
             Qb[i, a] += t1[a]
             Qb[i, 3 + a] += gd[a]
         if has_vel:
             w = Z[i, 3:]
-            _cross3(w, g, t1)
+            cross3(w, g, t1)
             for a in range(3):
                 gd[a] = Z[i, a] + t1[a]
-            _cross3(w, gd, wgd)
+            cross3(w, gd, wgd)
             for a in range(3):
                 Jw[a] = JG[a, 0] * w[0] + JG[a, 1] * w[1] + JG[a, 2] * w[2]
-            _cross3(w, Jw, t1)
-            _cross3(g, wgd, gd)
+            cross3(w, Jw, t1)
+            cross3(g, wgd, gd)
             for a in range(3):
                 Qb[i, a] -= m * wgd[a]
                 Qb[i, 3 + a] -= t1[a] + m * gd[a]

@@ -62,7 +62,7 @@ def _rodrigues(u, angle, R):
 
 
 @njit(cache=True)
-def _cross3(a, b, out):
+def cross3(a, b, out):
     out[0] = a[1] * b[2] - a[2] * b[1]
     out[1] = a[2] * b[0] - a[0] * b[2]
     out[2] = a[0] * b[1] - a[1] * b[0]
@@ -99,7 +99,7 @@ def positions_kernel(parent, jtype, axis, offset, z, A, r, B):
                         acc += (A[p, a, c] if p >= 0 else (1.0 if a == c else 0.0)) * Rj[c, b]
                     A[i, a, b] = acc
                 r[i, a] = d[a]
-            _cross3(d, u, tmp)
+            cross3(d, u, tmp)
             for a in range(3):
                 B[i, a] = tmp[a]
                 B[i, 3 + a] = u[a]
@@ -130,17 +130,17 @@ def velocities_kernel(parent, jtype, B, r, zd, Z, vp):
         w = Z[p, 3:]
         if jtype[i] == 1:
             u = B[i, 3:]
-            _cross3(w, u, udot)
-            _cross3(w, r[i], t1)
+            cross3(w, u, udot)
+            cross3(w, r[i], t1)
             for a in range(3):
                 ddot[a] = Z[p, a] + t1[a]
-            _cross3(ddot, u, t1)
-            _cross3(r[i], udot, t2)
+            cross3(ddot, u, t1)
+            cross3(r[i], udot, t2)
             for a in range(3):
                 vp[i, a] = vp[p, a] + (t1[a] + t2[a]) * zd[i]
                 vp[i, 3 + a] = vp[p, 3 + a] + udot[a] * zd[i]
         else:
-            _cross3(w, B[i, :3], udot)
+            cross3(w, B[i, :3], udot)
             for a in range(3):
                 vp[i, a] = vp[p, a] + udot[a] * zd[i]
                 vp[i, 3 + a] = vp[p, 3 + a]

@@ -30,7 +30,8 @@ from scipy.optimize import least_squares
 from nsd_core import __version__
 from nsd_core.device.params import FIELDS, ParameterError, Params
 from nsd_core.device.results import atomic_write_json, atomic_write_text
-from nsd_core.study.tables import TABLE5, TABLE6, x_max_at_slack
+from nsd_core.device.working_range import x_max_at_slack
+from nsd_core.study.tables import TABLE5, TABLE6
 
 DEFAULT_FIT = ("rope_upper_height", "spring_kse", "spring_ksd", "spring_beta", "spring_gamma")
 LINEAR = {"rope_upper_height": 1e-3}   # fitted linearly, in mm; the rest in log (they stay positive)
