@@ -5,7 +5,7 @@ n_w = n_r = n wires and ropes, to test the paper's guideline on the number of wi
 Per design n and azimuth psi over a full turn, on the quasi-static solution
 (nsd_core.device.quasistatic: inertia-free, the right limit for these stiffness and range measures;
 at 1 Hz, A = 15 mm it is within 0.1 % of the dynamic model's force, tests/test_paths.py):
-- X_max(psi): the working range, where the ropes go slack (nsd_core.study.tables.x_max_at_slack);
+- X_max(psi): the working range, where the ropes go slack (nsd_core.device.working_range.x_max_at_slack);
 - K0(psi): the initial stiffness dF/du at u = 0 (secant over the first 1 micrometre of loading);
 - K_min(psi): the most negative tangent stiffness on the loading branch u = 0 .. A;
 - the loop area (energy dissipated per cycle) and the peak force of a cycle at amplitude A, from the
@@ -21,7 +21,7 @@ import numpy as np
 from nsd_core.device.cycle import loop_area
 from nsd_core.device.params import ParameterError, Params
 from nsd_core.device.quasistatic import quasi_static_path
-from nsd_core.study.tables import x_max_at_slack
+from nsd_core.device.working_range import x_max_at_slack
 
 FIELDS = ("x_max", "k0", "k_min", "loop_area", "peak_force")
 UNITS = {"psi_deg": "deg", "x_max": "m", "k0": "N/m", "k_min": "N/m", "loop_area": "J", "peak_force": "N"}
