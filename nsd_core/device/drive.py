@@ -26,6 +26,7 @@ import numpy as np
 from nsd_core.device.params import ParameterError, Params
 
 PATHS = ("line", "circle", "ellipse", "figure8")
+MAX_TABLE_BYTES = 50_000_000  # ~1e6 rows of t,x,y: far beyond any record a run could follow
 
 
 class DriveError(ValueError):
@@ -42,6 +43,9 @@ def read_path_table(path: str | Path):
     from scipy.interpolate import CubicSpline
     where = f"path = {str(path)!r}"
     try:
+        size = Path(path).stat().st_size
+        if size > MAX_TABLE_BYTES:
+            raise ParameterError(f"{where}: {size} bytes; a path table may hold at most {MAX_TABLE_BYTES} bytes")
         lines = Path(path).read_text().splitlines()
     except (FileNotFoundError, IsADirectoryError):
         raise ParameterError(f"{where}: no such file; allowed: {', '.join(PATHS)} or a CSV file of t,x,y") from None
