@@ -23,7 +23,7 @@ from .integrate import SolverError, integrate
 from .elements import AxialElements
 from .mechanism import Cut, Mechanism, mechanism
 from .outputs import device_columns
-from .params import Params
+from .params import ParameterError, Params
 from .results import RunResult
 from .semirecursive import ConstraintError, SemiRecursiveSystem
 
@@ -35,7 +35,9 @@ X, Y, Z = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)
 
 MAX_WIRE_STRAIN = 0.2  # beyond it the SMA law (Eq. 17, fitted up to ~8 %) says nothing about a real wire
 
-DEFAULT_SOLVER = {"method": "DOP853", "rtol": 1e-7, "atol": 1e-12, "max_step": 1e-3}
+DEFAULT_SOLVER = {"method": "DOP853", "rtol": 1e-7, "atol": 1e-12, "max_step": 1e-3, "backend": "compiled"}
+BACKENDS = ("compiled", "numpy")
+COMPILED_METHODS = ("DOP853", "RK45")
 
 
 def device_mechanism(g: DeviceGeometry) -> Mechanism:
@@ -127,19 +129,30 @@ def device_system(params: Params, drive: Drive) -> tuple[SemiRecursiveSystem, De
 
 def simulate(params: Params, drive: Drive, method: str = DEFAULT_SOLVER["method"],
              rtol: float = DEFAULT_SOLVER["rtol"], atol: float = DEFAULT_SOLVER["atol"],
-             max_step: float = DEFAULT_SOLVER["max_step"], progress=None) -> RunResult:
+             max_step: float = DEFAULT_SOLVER["max_step"], progress=None,
+             backend: str = DEFAULT_SOLVER["backend"]) -> RunResult:
     """Run the drive on the in-house semirecursive model; returns the common columns.
 
-    Raises DriveError (|u| >= l_d), SolverError (integration failure). The initial state is the
-    precompressed rest state (nsd-model.md), an exact static equilibrium.
+    backend "compiled": the compiled right-hand side and step loop (nsd_core.device_compiled;
+    methods RK45, DOP853); "numpy": the readable specification driven by scipy's solvers (any
+    method of nsd_core.integrate). Raises DriveError (|u| >= l_d), SolverError (integration
+    failure). The initial state is the precompressed rest state (nsd-model.md), an exact static
+    equilibrium.
     """
     drive.check_followable(params)
+    if backend not in BACKENDS:
+        raise ParameterError(f"backend = {backend!r}: allowed {', '.join(BACKENDS)}")
+    if backend == "compiled" and method not in COMPILED_METHODS:
+        raise ParameterError(f"method = {method!r}: the compiled backend offers {', '.join(COMPILED_METHODS)}")
     start = time.perf_counter()
     system, g = device_system(params, drive)
     z0 = rest_coordinates(g)
     extra0 = np.concatenate([g.initial_wire_stress(), [g.spring_zeta0]])
-    y0 = system.state(system.assemble(0.0, z0[system.partition.free]), np.zeros(len(z0)), extra0)
+    z_rest = system.assemble(0.0, z0[system.partition.free])
+    y0 = system.state(z_rest, np.zeros(len(z0)), extra0)
     t_eval = drive.output_times()
+    if backend == "compiled":
+        return _simulate_compiled(system, g, drive, z_rest, y0, t_eval, method, rtol, atol, max_step, start)
     rows = []
 
     def record(t, y):
@@ -159,9 +172,47 @@ def simulate(params: Params, drive: Drive, method: str = DEFAULT_SOLVER["method"
     except ConstraintError as err:
         raise SolverError(str(err)) from None
     t, cap, wall, sig, zeta, clo, F, lam = (np.array(c) for c in zip(*rows))
-    stats = {"engine": "semirecursive", "version": __version__, "method": method, "rtol": rtol,
+    stats = {"engine": "semirecursive", "version": __version__, "method": method, "backend": "numpy", "rtol": rtol,
              "atol": atol, "max_step": max_step, "steps": traj.steps, "nfev": traj.nfev,
              "wall_time": time.perf_counter() - start, "tracking_error": 0.0,
              "closure_max": float(np.max(clo))}
     return device_columns("semirecursive", g, drive, t, cap, wall, sig.reshape(len(t), g.n_wires), zeta, clo,
+                          drive_force=F, rod_force=lam, stats=stats)
+
+
+def _check_lengths(t, lengths, forces: DeviceForces) -> None:
+    """check_validity on recorded element lengths (samples, elements): the first bad sample raises."""
+    g = forces.g
+    bad = np.any(lengths <= 0.0, axis=1)
+    if g.n_wires:
+        strain = (lengths[:, forces.wires] - g.wire.natural_length) / g.wire.natural_length
+        bad |= np.max(strain, axis=1) > MAX_WIRE_STRAIN
+    if np.any(bad):
+        k = int(np.argmax(bad))
+        L = lengths[k]
+        if np.any(L <= 0.0):
+            raise DriveError(f"t = {t[k]:.6g} s: an element's length reached zero: outside the model's validity")
+        raise DriveError(f"t = {t[k]:.6g} s: wire strain {np.max(strain[k]):.3g} beyond "
+                         f"{MAX_WIRE_STRAIN}: outside the SMA law's validity")
+
+
+def _simulate_compiled(system, g, drive, z_rest, y0, t_eval, method, rtol, atol, max_step, start):
+    from .device_compiled import compiled_model, run, split_state
+    model = compiled_model(system, g, drive, system.forces.elements)
+    out, (steps, nfev, status, n_done) = run(model, z_rest, y0, t_eval, method, rtol, atol, max_step)
+    _check_lengths(t_eval[:n_done], out.lengths[:n_done], system.forces)
+    if status != 0:
+        raise SolverError(f"{method} (compiled) failed at t = {t_eval[min(n_done, len(t_eval) - 1)]:.6g} s "
+                          f"or before: status {status} (nsd_core.compiled, nsd_core.rk)")
+    parts = split_state(out.y, len(system.partition.free))
+    e = drive.unit_vector
+    lam = np.zeros((len(t_eval), 3))
+    lam[:, system.partition.rows] = out.lam
+    F = out.tau[:, 0] * e[0] + out.tau[:, 1] * e[1]
+    stats = {"engine": "semirecursive", "version": __version__, "method": method, "backend": "compiled",
+             "rtol": rtol, "atol": atol, "max_step": max_step, "steps": int(steps), "nfev": int(nfev),
+             "wall_time": time.perf_counter() - start, "tracking_error": 0.0,
+             "closure_max": float(np.max(out.closure))}
+    return device_columns("semirecursive", g, drive, t_eval, out.r[:, BODY["cap"]], out.z[:, BODY["wall"]],
+                          parts.extra[:, :g.n_wires], parts.extra[:, g.n_wires], out.closure,
                           drive_force=F, rod_force=lam, stats=stats)

@@ -15,7 +15,7 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import vectorize
+from numba import njit, vectorize
 
 
 class WireLaw(NamedTuple):
@@ -43,15 +43,30 @@ class SpringLaw(NamedTuple):
     free_length: float
 
 
-def rope_tension(length, natural_length, stiffness):
-    """Eq. 16: T = k_r (l_r - l_r0) H(l_r - l_r0); a rope never pushes."""
-    return stiffness * np.maximum(np.asarray(length, dtype=float) - natural_length, 0.0)
+# ---- the laws, once, as scalar compiled functions: the ufuncs below and the compiled right-hand
+# side (nsd_core.device_compiled) both call these ----
+
+@njit(cache=True)
+def rope_tension_scalar(length, natural_length, stiffness):
+    """Eq. 16 for one rope."""
+    return stiffness * max(length - natural_length, 0.0)
 
 
-@vectorize(["float64(float64, float64, float64, float64, float64, float64, float64, float64, float64, "
-            "float64, float64, float64)"], cache=True)
-def _sma_slope(eps, d, stress, E, Y, alpha, n, fT, a, Em, eps_t, c):
-    """Elementwise Eq. 17b-d slope; a compiled ufunc (one call for all wires, scalars too)."""
+@njit(cache=True)
+def wire_tension_scalar(stress, area):
+    """Eq. 17a for one wire."""
+    return area * max(stress, 0.0)
+
+
+@njit(cache=True)
+def spring_raw_push_scalar(compression, zeta, kse):
+    """Eq. 18a before the push-only clip: k_se x_s + zeta (below zero: lifted off its seat)."""
+    return kse * compression + zeta
+
+
+@njit(cache=True)
+def sma_slope_scalar(eps, d, stress, E, Y, alpha, n, fT, a, Em, eps_t, c):
+    """Eq. 17b-d slope d sigma / d eps for one wire straining in direction sign(d)."""
     d = 1.0 if d > 0 else (-1.0 if d < 0 else 0.0)
     unloading_towards_zero = 1.0 if eps * d < 0.0 else 0.0  # H(-eps deps), H(0) = 0
     beta = E * alpha * (eps - stress / E + fT * math.tanh(a * eps) * unloading_towards_zero)
@@ -59,6 +74,31 @@ def _sma_slope(eps, d, stress, E, Y, alpha, n, fT, a, Em, eps_t, c):
     sg = 1.0 if over > 0 else (-1.0 if over < 0 else 0.0)
     s = 0.5 * (math.tanh(c * (abs(eps) - eps_t)) + 1.0)
     return (1.0 - s) * E * (1.0 - d * sg * abs(over / Y) ** n) + s * Em
+
+
+@njit(cache=True)
+def bouc_wen_slope_scalar(zeta, direction, ksd, beta, gamma, n):
+    """Eq. 18b slope d zeta / d x_s for one spring compressed in direction sign(direction)."""
+    sg = zeta * direction
+    sg = 1.0 if sg > 0 else (-1.0 if sg < 0 else 0.0)
+    return ksd - (gamma + beta * sg) * abs(zeta) ** n
+
+
+@vectorize(["float64(float64, float64, float64)"], cache=True)
+def _rope_tension(length, natural_length, stiffness):
+    return rope_tension_scalar(length, natural_length, stiffness)
+
+
+def rope_tension(length, natural_length, stiffness):
+    """Eq. 16: T = k_r (l_r - l_r0) H(l_r - l_r0); a rope never pushes."""
+    return _rope_tension(np.asarray(length, dtype=float), natural_length, stiffness)
+
+
+@vectorize(["float64(float64, float64, float64, float64, float64, float64, float64, float64, float64, "
+            "float64, float64, float64)"], cache=True)
+def _sma_slope(eps, d, stress, E, Y, alpha, n, fT, a, Em, eps_t, c):
+    """Elementwise Eq. 17b-d slope; a compiled ufunc (one call for all wires, scalars too)."""
+    return sma_slope_scalar(eps, d, stress, E, Y, alpha, n, fT, a, Em, eps_t, c)
 
 
 def sma_stress_slope(strain, direction, stress, law: WireLaw):
@@ -85,9 +125,7 @@ def sma_wire(length, length_rate, stress, law: WireLaw):
 
 @vectorize(["float64(float64, float64, float64, float64, float64, float64)"], cache=True)
 def _bouc_wen_slope(zeta, direction, ksd, beta, gamma, n):
-    sg = zeta * direction
-    sg = 1.0 if sg > 0 else (-1.0 if sg < 0 else 0.0)
-    return ksd - (gamma + beta * sg) * abs(zeta) ** n
+    return bouc_wen_slope_scalar(zeta, direction, ksd, beta, gamma, n)
 
 
 def bouc_wen_slope(zeta, direction, law: SpringLaw):
@@ -95,9 +133,19 @@ def bouc_wen_slope(zeta, direction, law: SpringLaw):
     return _bouc_wen_slope(zeta, direction, law.ksd, law.beta, law.gamma, law.n)
 
 
+@vectorize(["float64(float64, float64)"], cache=True)
+def _wire_tension(stress, area):
+    return wire_tension_scalar(stress, area)
+
+
 def wire_tension(stress, law: WireLaw):
     """Eq. 17a: T = sigma A_w H(sigma); a wire never pushes."""
-    return law.area * np.maximum(stress, 0.0)
+    return _wire_tension(np.asarray(stress, dtype=float), law.area)
+
+
+@vectorize(["float64(float64, float64, float64)"], cache=True)
+def _spring_raw_push(compression, zeta, kse):
+    return spring_raw_push_scalar(compression, zeta, kse)
 
 
 def spring_push(length, length_rate, zeta, law: SpringLaw):
@@ -108,7 +156,7 @@ def spring_push(length, length_rate, zeta, law: SpringLaw):
     """
     x = law.free_length - np.asarray(length, dtype=float)
     xdot = -np.asarray(length_rate, dtype=float)
-    raw = law.kse * x + zeta
+    raw = _spring_raw_push(x, np.asarray(zeta, dtype=float), law.kse)
     return np.maximum(raw, 0.0), bouc_wen_slope(zeta, xdot, law) * xdot, raw
 
 
