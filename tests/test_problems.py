@@ -8,8 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from nsd_core.problems import andrews, bricard, iftomm, slider_crank
-from nsd_core.problems.common import digits, library_error
+from nsd_core.engine.problems import andrews, bricard, iftomm, slider_crank
+from nsd_core.engine.problems.common import digits, library_error
 
 
 def test_andrews_digits_at_t003():
@@ -26,7 +26,7 @@ def test_andrews_reference_has_source_and_consistent_start():
     assert ref["reference"]["t"] == 0.03 and len(ref["reference"]["angles"]) == 7
     system, y0 = andrews.andrews_system(ref)
     # the test set's initial angles satisfy the loop equations: Newton must barely move them
-    ev = system.evaluate(0.0, y0)
+    ev = system.evaluate(system.workspace(), 0.0, y0)
     assert np.max(np.abs(ev.z[andrews.TO_TESTSET] - ref["initial"]["angles"])) < 1e-12
     # 7 angles, 3 planar point cuts = 9 rows, of which the 3 z-rows are dropped: 1 DOF
     assert len(system.partition.rows) == 6 and len(system.partition.free) == 1
@@ -74,8 +74,8 @@ def test_bricard_rank_deficient_right_answer():
 
 
 def test_bricard_jacobian_rank_is_four():
-    from nsd_core.closure import closure
-    from nsd_core.kinematics import positions
+    from nsd_core.engine.closure import closure
+    from nsd_core.engine.kinematics import positions
     mech, _ = bricard.bricard_mechanism()
     s = np.linalg.svd(closure(mech, positions(mech, np.zeros(5)))[1], compute_uv=False)
     assert s[3] > 1e-3 and s[4] < 1e-12  # Grubler says 0 DOF; the rank says 1

@@ -1,0 +1,225 @@
+"""The three axial force elements every engine calls: rope (Eq. 16), SMA wire (Eq. 17), spring (Eq. 18).
+
+Each is a two-point element: from its current length L, its rate dL/dt and its internal state it
+gives a scalar axial force and the state's rate. Every function takes numpy arrays (one entry per
+element) or floats, allocates no Python objects per element, and knows nothing of any engine.
+
+The hysteretic laws are rate-independent, so each is written once as a *slope* (d state / d strain
+for a given direction of straining); the rate form multiplies the slope by the strain rate, and
+``advance_*`` integrates the slope along a finite length change (for engines that commit the
+states once per accepted step).
+"""
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit, vectorize
+
+
+class WireLaw(NamedTuple):
+    """Charalampakis-Tsiatas SMA parameters (Eq. 17) plus the wire's area and natural length."""
+    E: float
+    Y: float
+    alpha: float
+    n: float
+    fT: float
+    a: float
+    Em: float
+    eps_t: float
+    c: float
+    area: float
+    natural_length: float
+
+
+class SpringLaw(NamedTuple):
+    """Bouc-Wen spring parameters (Eq. 18) plus the spring's free length L_s0."""
+    kse: float
+    ksd: float
+    beta: float
+    gamma: float
+    n: float
+    free_length: float
+
+
+# ---- the laws, once, as scalar compiled functions: the ufuncs below and the compiled right-hand
+# side (nsd_core.device.compiled) both call these ----
+
+@njit(cache=True)
+def rope_tension_scalar(length, natural_length, stiffness):
+    """Eq. 16 for one rope."""
+    return stiffness * max(length - natural_length, 0.0)
+
+
+@njit(cache=True)
+def wire_tension_scalar(stress, area):
+    """Eq. 17a for one wire."""
+    return area * max(stress, 0.0)
+
+
+@njit(cache=True)
+def spring_raw_push_scalar(compression, zeta, kse):
+    """Eq. 18a before the push-only clip: k_se x_s + zeta (below zero: lifted off its seat)."""
+    return kse * compression + zeta
+
+
+@njit(cache=True)
+def sma_slope_scalar(eps, d, stress, E, Y, alpha, n, fT, a, Em, eps_t, c):
+    """Eq. 17b-d slope d sigma / d eps for one wire straining in direction sign(d)."""
+    d = 1.0 if d > 0 else (-1.0 if d < 0 else 0.0)
+    unloading_towards_zero = 1.0 if eps * d < 0.0 else 0.0  # H(-eps deps), H(0) = 0
+    beta = E * alpha * (eps - stress / E + fT * math.tanh(a * eps) * unloading_towards_zero)
+    over = stress - beta
+    sg = 1.0 if over > 0 else (-1.0 if over < 0 else 0.0)
+    s = 0.5 * (math.tanh(c * (abs(eps) - eps_t)) + 1.0)
+    return (1.0 - s) * E * (1.0 - d * sg * abs(over / Y) ** n) + s * Em
+
+
+@njit(cache=True)
+def bouc_wen_slope_scalar(zeta, direction, ksd, beta, gamma, n):
+    """Eq. 18b slope d zeta / d x_s for one spring compressed in direction sign(direction)."""
+    sg = zeta * direction
+    sg = 1.0 if sg > 0 else (-1.0 if sg < 0 else 0.0)
+    return ksd - (gamma + beta * sg) * abs(zeta) ** n
+
+
+@vectorize(["float64(float64, float64, float64)"], cache=True)
+def _rope_tension(length, natural_length, stiffness):
+    return rope_tension_scalar(length, natural_length, stiffness)
+
+
+def rope_tension(length, natural_length, stiffness):
+    """Eq. 16: T = k_r (l_r - l_r0) H(l_r - l_r0); a rope never pushes."""
+    return _rope_tension(np.asarray(length, dtype=float), natural_length, stiffness)
+
+
+@vectorize(["float64(float64, float64, float64, float64, float64, float64, float64, float64, float64, "
+            "float64, float64, float64)"], cache=True)
+def _sma_slope(eps, d, stress, E, Y, alpha, n, fT, a, Em, eps_t, c):
+    """Elementwise Eq. 17b-d slope; a compiled ufunc (one call for all wires, scalars too)."""
+    return sma_slope_scalar(eps, d, stress, E, Y, alpha, n, fT, a, Em, eps_t, c)
+
+
+def sma_stress_slope(strain, direction, stress, law: WireLaw):
+    """Eq. 17b-d as a slope: d sigma / d epsilon for straining in ``direction`` (+1, -1 or 0).
+
+    beta = E alpha [eps - sigma/E + f_T tanh(a eps) H(-eps deps)] (17c, H(0) = 0),
+    s = (tanh(c(|eps| - eps_t)) + 1)/2 (17d), and
+    d sigma/d eps = (1 - s) E [1 - sgn(deps) sgn(sigma - beta) |(sigma - beta)/Y|^n] + s E_m (17b).
+    """
+    return _sma_slope(strain, direction, stress, law.E, law.Y, law.alpha, law.n, law.fT, law.a, law.Em,
+                      law.eps_t, law.c)
+
+
+def sma_wire(length, length_rate, stress, law: WireLaw):
+    """Eq. 17: SMA wire tension T = sigma A_w H(sigma) (17a) and the stress rate d sigma/dt (17b).
+
+    The stress evolves as Eq. 17 says even while the wire is slack; only the force is clipped.
+    """
+    strain = (np.asarray(length, dtype=float) - law.natural_length) / law.natural_length
+    strain_rate = np.asarray(length_rate, dtype=float) / law.natural_length
+    rate = sma_stress_slope(strain, strain_rate, stress, law) * strain_rate
+    return wire_tension(stress, law), rate
+
+
+@vectorize(["float64(float64, float64, float64, float64, float64, float64)"], cache=True)
+def _bouc_wen_slope(zeta, direction, ksd, beta, gamma, n):
+    return bouc_wen_slope_scalar(zeta, direction, ksd, beta, gamma, n)
+
+
+def bouc_wen_slope(zeta, direction, law: SpringLaw):
+    """Eq. 18b as a slope: d zeta / d x_s = k_sd - (gamma_s + beta_s sgn(zeta dx_s)) |zeta|^n_s."""
+    return _bouc_wen_slope(zeta, direction, law.ksd, law.beta, law.gamma, law.n)
+
+
+@vectorize(["float64(float64, float64)"], cache=True)
+def _wire_tension(stress, area):
+    return wire_tension_scalar(stress, area)
+
+
+def wire_tension(stress, law: WireLaw):
+    """Eq. 17a: T = sigma A_w H(sigma); a wire never pushes."""
+    return _wire_tension(np.asarray(stress, dtype=float), law.area)
+
+
+@vectorize(["float64(float64, float64, float64)"], cache=True)
+def _spring_raw_push(compression, zeta, kse):
+    return spring_raw_push_scalar(compression, zeta, kse)
+
+
+def spring_push(length, length_rate, zeta, law: SpringLaw):
+    """Eq. 18: spring push P = k_se x_s + zeta (>= 0: push only) and d zeta/dt.
+
+    x_s = L_s0 - L is the compression. Returns (push, zeta_rate, unclipped push); the unclipped
+    value below zero means the spring has lifted off its seat.
+    """
+    x = law.free_length - np.asarray(length, dtype=float)
+    xdot = -np.asarray(length_rate, dtype=float)
+    raw = _spring_raw_push(x, np.asarray(zeta, dtype=float), law.kse)
+    return np.maximum(raw, 0.0), bouc_wen_slope(zeta, xdot, law) * xdot, raw
+
+
+def _advance_along(slope, x0, x1, state, substeps: int, order: int):
+    """Integrate d state/dx = slope(x, state) from x0 to x1 (fixed direction) in ``substeps`` steps
+    of classical RK4 (order 4) or Heun's method (order 2, half the slope calls)."""
+    if order not in (2, 4):
+        raise ValueError(f"order = {order!r}: allowed 2 (Heun) or 4 (RK4)")
+    x0 = np.asarray(x0, dtype=float)
+    x1 = np.asarray(x1, dtype=float)
+    h = (x1 - x0) / substeps
+    y = np.asarray(state, dtype=float)
+    for k in range(substeps):
+        x = x0 + k * h
+        x_end = x1 if k == substeps - 1 else x + h
+        k1 = slope(x, y)
+        if order == 2:
+            y = y + 0.5 * h * (k1 + slope(x_end, y + h * k1))
+            continue
+        k2 = slope(x + 0.5 * h, y + 0.5 * h * k1)
+        k3 = slope(x + 0.5 * h, y + 0.5 * h * k2)
+        k4 = slope(x_end, y + h * k3)
+        y = y + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+    return y
+
+
+def advance_wire_stress(strain0, strain1, stress, law: WireLaw, substeps: int = 1, order: int = 4):
+    """Stress after the strain moves from strain0 to strain1 (Eq. 17 integrated in strain)."""
+    direction = np.sign(np.asarray(strain1, dtype=float) - strain0)
+    return _advance_along(lambda e, s: sma_stress_slope(e, direction, s, law), strain0, strain1, stress,
+                          substeps, order)
+
+
+def advance_spring_zeta(compression0, compression1, zeta, law: SpringLaw, substeps: int = 1, order: int = 4):
+    """Hysteretic force after the compression moves from compression0 to compression1 (Eq. 18b)."""
+    direction = np.sign(np.asarray(compression1, dtype=float) - compression0)
+    return _advance_along(lambda x, z: bouc_wen_slope(z, direction, law), compression0, compression1, zeta,
+                          substeps, order)
+
+
+def precompressed_spring(kse, ksd, beta, gamma, n, push) -> tuple[float, float]:
+    """Initial spring state: monotonic compression from x = 0, zeta = 0 until k_se x + zeta(x) = push.
+
+    Returns (x_pre, zeta_0). For n_s = 1 zeta(x) = k_sd/(beta+gamma) (1 - exp(-(beta+gamma) x)) in
+    closed form; otherwise zeta(x) is integrated in x with fine RK4 steps.
+    """
+    law = SpringLaw(kse, ksd, beta, gamma, n, 0.0)
+    if n == 1.0:
+        b = beta + gamma
+
+        def zeta_of(x):
+            return ksd / b * (1.0 - math.exp(-b * x))
+    else:
+        def zeta_of(x):
+            return float(advance_spring_zeta(0.0, x, 0.0, law, substeps=2000))
+    lo, hi = 0.0, push / kse  # zeta >= 0 on monotonic loading, so x_pre <= push/kse
+    for _ in range(200):  # bisection: robust and deterministic
+        mid = 0.5 * (lo + hi)
+        if kse * mid + zeta_of(mid) < push:
+            lo = mid
+        else:
+            hi = mid
+        if hi - lo < 1e-16:
+            break
+    x = 0.5 * (lo + hi)
+    return x, zeta_of(x)
