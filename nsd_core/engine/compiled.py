@@ -89,6 +89,7 @@ def newton(m, w, z):
     nd = dep.shape[0]
     tol, maxit = m.settings[0], int(m.settings[1])
     for _ in range(maxit):
+        w.counters[1] += 1
         positions_kernel(m.parent, m.jtype, m.axis, m.offset, z, w.A, w.r, w.B, w.scratch)
         _closure(m, w, False)
         res, pos = 0.0, 1.0
@@ -124,8 +125,14 @@ def _maxdiff_dep(dep, a, b):
 
 @njit(cache=True)
 def assemble(m, w, zf):
-    """Full configuration on the loop manifold into w.z, for free coordinates zf and w.q
-    (SemiRecursiveSystem.assemble: Newton from the warm start, checked against the predictor)."""
+    """Full configuration on the loop manifold into w.z, for free coordinates zf and w.q.
+
+    The branch rule of SemiRecursiveSystem.assemble, taken from the other side: Newton starts from
+    the first-order predictor z_dep + S dz when there is one (two iterations where the plain warm
+    start needs four or five); only when its answer strays from the predictor by more than the
+    predictor's own second-order error is Newton from the warm start tried as well, and the answer
+    closer to the predictor kept. Both converge to the same root to round-off.
+    """
     dep, n = m.dependent, w.z.shape[0]
     nd = dep.shape[0]
     z = w.z_start
@@ -134,43 +141,37 @@ def assemble(m, w, zf):
         z[m.prescribed[a]] = w.q[a]
     for a in range(m.free.shape[0]):
         z[m.free[a]] = zf[a]
-    if nd == 0:
-        w.z[:] = z
-        return OK
-    have_pred = w.has_lin[0] == 1
-    move = 0.0
-    if have_pred:  # z_dep + S dz along the manifold (S from the last evaluation)
-        for j in range(nd):
-            acc = w.z_lin[dep[j]]
-            for k in range(n):
-                acc += w.S[j, k] * (z[k] - w.z_lin[k])  # S is zero on the dependent columns
-            w.pred[j] = acc
-            move = max(move, abs(acc - w.z_lin[dep[j]]))
     w.z[:] = z
+    if nd == 0:
+        return OK
+    w.counters[0] += 1
+    if w.has_lin[0] == 0:
+        return newton(m, w, w.z)
+    move = 0.0
+    for j in range(nd):  # z_dep + S dz along the manifold (S from the last evaluation)
+        acc = w.z_lin[dep[j]]
+        for k in range(n):
+            acc += w.S[j, k] * (z[k] - w.z_lin[k])  # S is zero on the dependent columns
+        w.pred[j] = acc
+        w.z[dep[j]] = acc
+        move = max(move, abs(acc - w.z_lin[dep[j]]))
     code = newton(m, w, w.z)
-    ok = code == OK
-    if not ok and not have_pred:
-        return code
-    if have_pred:
-        dev = np.inf
-        if ok:
-            dev = 0.0
+    dev = np.inf
+    if code == OK:
+        dev = 0.0
+        for j in range(nd):
+            dev = max(dev, abs(w.z[dep[j]] - w.pred[j]))
+    if dev > 0.02 * move + 1e-10:  # maybe another branch: solve from the warm start too
+        w.counters[2] += 1
+        w.z_alt[:] = z
+        if newton(m, w, w.z_alt) == OK:
+            dev_alt = 0.0
             for j in range(nd):
-                dev = max(dev, abs(w.z[dep[j]] - w.pred[j]))
-        if dev > 0.02 * move + 1e-10:  # maybe another branch: solve again from the predictor
-            w.z_alt[:] = z
-            for j in range(nd):
-                w.z_alt[dep[j]] = w.pred[j]
-            ok_alt = newton(m, w, w.z_alt) == OK
-            if not ok_alt and not ok:
-                return code
-            if ok_alt:
-                dev_alt = 0.0
-                for j in range(nd):
-                    dev_alt = max(dev_alt, abs(w.z_alt[dep[j]] - w.pred[j]))
-                if not ok or (_maxdiff_dep(dep, w.z_alt, w.z) > 1e-8 and dev_alt < dev):
-                    w.z[:] = w.z_alt
-    return OK
+                dev_alt = max(dev_alt, abs(w.z_alt[dep[j]] - w.pred[j]))
+            if code != OK or (_maxdiff_dep(dep, w.z_alt, w.z) > 1e-8 and dev_alt < dev):
+                w.z[:] = w.z_alt
+                code = OK
+    return code
 
 
 @njit(cache=True)
