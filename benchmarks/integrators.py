@@ -50,22 +50,25 @@ def main() -> None:
         ref, _ = in_house_reference(p, d)
         ladder = EXPLICIT + (IMPLICIT if args.implicit else [])
         times = [[] for _ in ladder]
+        cpu = [[] for _ in ladder]
         res = [None] * len(ladder)
         for rep in range(args.repeats):
             for k, s in enumerate(ladder):
                 if rep and s.get("backend") == "scipy":
                     continue  # minutes per run in Python: once is enough for steps and error
-                t0 = time.perf_counter()
+                t0, c0 = time.perf_counter(), time.process_time()
                 res[k] = simulate(p, d, **s)
                 times[k].append((time.perf_counter() - t0) / d.cycles)
-        for s, r, ts in zip(ladder, res, times):
+                cpu[k].append((time.process_time() - c0) / d.cycles)
+        for s, r, ts, cs in zip(ladder, res, times, cpu):
             acc = discrepancy(r, ref, d)
             row = dict(amplitude=A, frequency=f, **{k: (v if np.isfinite(v) else None) if isinstance(v, float) else v
                                                      for k, v in s.items()},
-                       dF=acc["dF"], s_per_cycle=statistics.median(ts), steps=r.stats["steps"], nfev=r.stats["nfev"])
+                       dF=acc["dF"], s_per_cycle=statistics.median(ts), cpu_s_per_cycle=statistics.median(cs), steps=r.stats["steps"], nfev=r.stats["nfev"])
             rows.append(row)
             print(f"A={A} f={f:4.1f} {s['method']:6s} rtol={s['rtol']:.0e} max_step={s['max_step']:<6g} "
-                  f"{s.get('backend', 'compiled'):8s} dF={acc['dF']:.2e} {1e3 * row['s_per_cycle']:8.1f} ms/cycle "
+                  f"{s.get('backend', 'compiled'):8s} dF={acc['dF']:.2e} {1e3 * row['s_per_cycle']:8.1f} ms/cycle wall "
+                  f"{1e3 * row['cpu_s_per_cycle']:8.1f} ms/cycle CPU "
                   f"steps={row['steps']} nfev={row['nfev']}", flush=True)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

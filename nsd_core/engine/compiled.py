@@ -88,6 +88,7 @@ def newton(m, w, z):
     dep, rows = m.dependent, m.rows
     nd = dep.shape[0]
     tol, maxit = m.settings[0], int(m.settings[1])
+    w.kin_current[0] = 0
     for _ in range(maxit):
         w.counters[1] += 1
         positions_kernel(m.parent, m.jtype, m.axis, m.offset, z, w.A, w.r, w.B, w.scratch)
@@ -99,6 +100,7 @@ def newton(m, w, z):
             for a in range(3):
                 pos = max(pos, abs(w.r[i, a]))
         if res <= 4e-16 * pos:  # closed to round-off of the positions
+            w.kin_current[0] = 1  # A, r, B, Phi, Phi_z are those of z: the velocity stage reuses them
             return OK
         if not _factor_dependent_block(m, w):
             return SINGULAR_BLOCK
@@ -142,6 +144,7 @@ def assemble(m, w, zf):
     for a in range(m.free.shape[0]):
         z[m.free[a]] = zf[a]
     w.z[:] = z
+    w.kin_current[0] = 0
     if nd == 0:
         return OK
     w.counters[0] += 1
@@ -171,6 +174,10 @@ def assemble(m, w, zf):
             if code != OK or (_maxdiff_dep(dep, w.z_alt, w.z) > 1e-8 and dev_alt < dev):
                 w.z[:] = w.z_alt
                 code = OK
+            else:
+                w.kin_current[0] = 0  # the kinematics in w are z_alt's
+        else:
+            w.kin_current[0] = 0
     return code
 
 
@@ -179,8 +186,10 @@ def velocities_and_predictor(m, w, zfd):
     """Positions at w.z, Phi_z, z' with the dependent part from Eq. 10, Z, vp, c; store the predictor."""
     dep, rows, free, pres = m.dependent, m.rows, m.free, m.prescribed
     nd, n = dep.shape[0], w.z.shape[0]
-    positions_kernel(m.parent, m.jtype, m.axis, m.offset, w.z, w.A, w.r, w.B, w.scratch)
-    _closure(m, w, False)
+    if w.kin_current[0] == 0:
+        positions_kernel(m.parent, m.jtype, m.axis, m.offset, w.z, w.A, w.r, w.B, w.scratch)
+        _closure(m, w, False)
+    w.kin_current[0] = 0
     w.zd[:] = 0.0
     for a in range(pres.shape[0]):
         w.zd[pres[a]] = w.qd[a]

@@ -134,6 +134,7 @@ class SemiRecursiveSystem:
             if assemble_kernel(self.model, ws, np.ascontiguousarray(zf, dtype=float)) == OK:
                 return ws.z
             ws.z[:] = z_before  # a singular block or no convergence: the specification copes or says why
+        ws.kin_current[0] = 0
         z = ws.z.copy()
         z[self.prescribed] = q
         z[P.free] = zf
