@@ -17,6 +17,7 @@ import argparse
 import json
 import os
 import platform
+import resource
 import statistics
 import subprocess
 import sys
@@ -38,26 +39,36 @@ FIRST_RUN = ("import time; t0 = time.perf_counter(); from nsd_core.device.model 
              "print(time.perf_counter() - t0)")
 
 
-def first_run_seconds(cache_dir: str) -> float:
+def first_run_seconds(cache_dir: str) -> tuple[float, float]:
+    """(wall, CPU) seconds of a fresh process's import and first short run."""
     env = dict(os.environ, NUMBA_CACHE_DIR=cache_dir)
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     out = subprocess.run([sys.executable, "-c", FIRST_RUN], env=env, capture_output=True, text=True, check=True)
-    return float(out.stdout.strip().splitlines()[-1])
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
+    return float(out.stdout.strip().splitlines()[-1]), cpu
 
 
 def compile_times() -> dict:
     with tempfile.TemporaryDirectory() as cache:
-        cold = first_run_seconds(cache)
-        warm = first_run_seconds(cache)
-    return {"cold_cache_first_run_s": cold, "warm_cache_first_run_s": warm, "compile_s": cold - warm}
+        cold, cold_cpu = first_run_seconds(cache)
+        warm, warm_cpu = first_run_seconds(cache)
+    return {"cold_cache_first_run_s": cold, "warm_cache_first_run_s": warm, "compile_s": cold - warm,
+            "cold_cache_first_run_cpu_s": cold_cpu, "warm_cache_first_run_cpu_s": warm_cpu,
+            "compile_cpu_s": cold_cpu - warm_cpu}
 
 
-def sweep_time(workers: int) -> float:
+def sweep_time(workers: int) -> tuple[float, float]:
+    """(wall, CPU of all its processes) seconds of ``nsd sweep --paper`` in a fresh process."""
     nsd = Path(sys.executable).with_name("nsd")
     with tempfile.TemporaryDirectory() as out:
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
         t0 = time.perf_counter()
         subprocess.run([str(nsd), "sweep", "--paper", "--workers", str(workers), "--out", out], check=True,
                        capture_output=True)
-        return time.perf_counter() - t0
+        wall = time.perf_counter() - t0
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        return wall, (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
 
 
 def main() -> None:
@@ -71,7 +82,7 @@ def main() -> None:
               "solver": DEFAULT_SOLVER}
     if not args.no_compile:
         report["compile"] = compile_times()
-        print("compile: " + ", ".join(f"{k} {v:.1f}" for k, v in report["compile"].items()))
+        print("compile [s]: " + ", ".join(f"{k} {v:.1f}" for k, v in report["compile"].items()))
     p = Params()
     simulate(p, Drive(0.015, 10.0, cycles=1, samples_per_cycle=100))  # warm-up: load compiled code
     drives = [Drive(A, f, cycles=2, samples_per_cycle=2000) for A, f in CASES]
@@ -100,8 +111,9 @@ def main() -> None:
               f"dF = {acc['dF']:.2g}")
     report["cases"] = rows
     if args.sweep:
-        report["sweep_paper_s"] = sweep_time(os.cpu_count() or 1)
-        print(f"nsd sweep --paper: {report['sweep_paper_s']:.1f} s on {os.cpu_count()} cores (warm cache)")
+        report["sweep_paper_s"], report["sweep_paper_cpu_s"] = sweep_time(os.cpu_count() or 1)
+        print(f"nsd sweep --paper: {report['sweep_paper_s']:.1f} s wall, {report['sweep_paper_cpu_s']:.1f} s CPU "
+              f"in all processes, on {os.cpu_count()} cores (warm cache)")
     report["load_average_end"] = os.getloadavg()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

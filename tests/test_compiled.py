@@ -57,7 +57,7 @@ def andrews_model():
     params = np.concatenate([[p["c0"]], [p["l0"]], gen])
     model = build_model(system.m, system.partition, system.prescribed, (sp.body_up, sp.pts_up, sp.body_lo, sp.pts_lo),
                         params, (), n_extra=0, newton_tol=system.newton_tol)
-    z0 = system.assemble(system.workspace(), 0.0, y0[:len(system.partition.free)]).copy()
+    z0 = system.assemble(system.workspace(), 0.0, split_state(y0, len(system.partition.free)).free_positions).copy()
     return system, model, z0, y0
 
 

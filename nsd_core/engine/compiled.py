@@ -299,7 +299,7 @@ def reduced_dynamics(m, w):
 @njit(cache=True)
 def evaluate(t, y, m, w, forces, motion):
     """Everything at (t, y): w.z, w.zd, w.zdd, w.lam, w.tau, w.extra_rate, the kinematics."""
-    nf = m.free.shape[0]
+    nf = m.free.shape[0]  # y = [z_f, z'_f, extra]: the layout of compiled_model.split_state
     motion(t, m.motion_params, w.q, w.qd, w.qdd)
     code = assemble(m, w, y[:nf])
     if code != OK:
