@@ -35,14 +35,15 @@ X, Y, Z = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)
 
 MAX_WIRE_STRAIN = 0.2  # beyond it the SMA law (Eq. 17, fitted up to ~8 %) says nothing about a real wire
 
-# DOP853 at rtol 1e-6, atol 1e-12: max|dF|/max|F| on the last cycle against rtol 1e-10 is at
-# most 3.6e-5 on the four Figure 6 cases (aim 1e-4; benchmarks/integrators.py). Looser tolerances
-# pass the smooth cases but not reliably the rope-slack ones (the laws' kinks make the error
-# erratic: rtol 3e-6 gave 1.1e-4 on A = 25.5 mm, 10 Hz). max_step 3e-3 s is not an accuracy cap
-# but the explicit pair's stability limit for the lightly damped ~255 Hz vertical mode
-# (h omega ~ 4.8): without it, steps grow past that limit wherever the motion is slow and round-off
-# rings at the tolerance level (3e-12 m at rest); the old 1e-3 forced ~3x more steps.
-DEFAULT_SOLVER = {"method": "DOP853", "rtol": 1e-6, "atol": 1e-12, "max_step": 3e-3, "backend": "auto"}
+# DOP853, rtol 1e-7, atol 1e-12, max_step 1e-3 (measured, benchmarks/integrators.py, on the four
+# Figure 6 cases against rtol 1e-10: max|dF|/max|F| <= 1e-5, aim 1e-4). Looser settings pass the
+# smooth cases but not reliably the rope-slack ones (the laws' kinks make the error erratic:
+# rtol 3e-6 gave 1.1e-4 on A = 25.5 mm, 10 Hz), rtol 1e-6 breaks the four-fold symmetry at 4e-6,
+# and atol above 1e-12 lets round-off ring at rest. The step is limited by the stability of the
+# lightly damped ~255 Hz vertical mode (h omega ~ 4.8 at 3 ms): a cap of 1e-3 s below that limit
+# costs fewer right-hand sides than none (39k instead of 48k per two 1 Hz cycles: no rejected
+# steps). max_step None: no limit.
+DEFAULT_SOLVER = {"method": "DOP853", "rtol": 1e-7, "atol": 1e-12, "max_step": 1e-3, "backend": "auto"}
 BACKENDS = ("auto", "compiled", "scipy", "numpy")  # auto: compiled where it offers the method
 COMPILED_METHODS = ("DOP853", "RK45")
 
@@ -211,6 +212,11 @@ def _check_lengths(t, lengths, forces: DeviceForces) -> None:
 
 
 def _simulate_compiled(system, g, drive, z_rest, y0, t_eval, method, rtol, atol, max_step, start):
+    # what scipy's solvers refuse at run time, refused here the same way (exit code 3)
+    if not (np.isfinite(rtol) and rtol > 0 and np.isfinite(atol) and atol >= 0 and max_step > 0):
+        raise SolverError(f"{method} (compiled): rtol = {rtol}, atol = {atol}, max_step = {max_step}: "
+                          "rtol must be > 0, atol >= 0, max_step > 0")
+    rtol = max(rtol, 100 * np.finfo(float).eps)  # scipy's floor on rtol
     from nsd_core.device.compiled import compiled_model, run
     model = compiled_model(system, g, drive, system.forces.elements)
     out, (steps, nfev, status, n_done) = run(model, z_rest, y0, t_eval, method, rtol, atol, max_step)
