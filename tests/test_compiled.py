@@ -99,7 +99,7 @@ def test_compiled_step_loop_is_scipys_step_for_step(method, scipy_solver):
     out = make_outputs(2, len(y0), len(model.parent), 0, 0, 0, keep_steps=100000)
     stats = np.zeros(4, dtype=np.int64)
     assert integrate_kernel(model, ws, no_forces, no_motion, tableau(method), y0.copy(),
-                            np.array([0.0, t1]), np.array([rtol, atol, np.inf, 0.0]), out, stats) == 0
+                            np.array([0.0, t1]), np.array([rtol, atol, np.inf, 0.0, 1e9]), out, stats) == 0
     ws2 = make_workspace(model, z0)
 
     def fun(t, y):

@@ -80,13 +80,13 @@ def compiled_model(system, g: DeviceGeometry, drive: Drive, elements):
 
 
 def run(model, z0: np.ndarray, y0: np.ndarray, t_eval: np.ndarray, method: str, rtol: float, atol: float,
-        max_step: float) -> tuple[Outputs, np.ndarray]:
+        max_step: float, max_steps: int) -> tuple[Outputs, np.ndarray]:
     """One compiled integration; returns the outputs at t_eval and [steps, nfev, status, samples]."""
     ws = make_workspace(model, z0)
     out = make_outputs(len(t_eval), len(y0), len(model.parent), len(model.dependent), len(model.prescribed),
                        len(model.elem_up))
     stats = np.zeros(4, dtype=np.int64)
-    settings = np.array([rtol, atol, max_step, 0.0])
+    settings = np.array([rtol, atol, max_step, 0.0, float(max_steps)])
     integrate_kernel(model, ws, device_forces, device_motion, tableau(method), np.ascontiguousarray(y0, float),
                      np.ascontiguousarray(t_eval, float), settings, out, stats)
     return out, stats

@@ -18,7 +18,7 @@ from nsd_core import __version__
 from nsd_core.device.drive import Drive, DriveError
 from nsd_core.device.forces import rope_tension, sma_wire, spring_push
 from nsd_core.device.geometry import DeviceGeometry, device_geometry
-from nsd_core.engine.integrate import SolverError, integrate
+from nsd_core.engine.integrate import SolverError, check_tolerances, integrate
 from nsd_core.engine.elements import AxialElements
 from nsd_core.engine.mechanism import Cut, Mechanism, mechanism
 from nsd_core.device.outputs import device_columns
@@ -43,6 +43,8 @@ MAX_WIRE_STRAIN = 0.2  # beyond it the SMA law (Eq. 17, fitted up to ~8 %) says 
 # lightly damped ~255 Hz vertical mode (h omega ~ 4.8 at 3 ms): a cap of 1e-3 s below that limit
 # costs fewer right-hand sides than none (39k instead of 48k per two 1 Hz cycles: no rejected
 # steps). max_step None: no limit.
+# The default cases need at most ~1800 accepted steps per cycle (README); about 55x that is a runaway
+MAX_STEPS_PER_CYCLE = 100_000
 DEFAULT_SOLVER = {"method": "DOP853", "rtol": 1e-7, "atol": 1e-12, "max_step": 1e-3, "backend": "auto"}
 BACKENDS = ("auto", "compiled", "scipy", "numpy")  # auto: compiled where it offers the method
 COMPILED_METHODS = ("DOP853", "RK45")
@@ -183,7 +185,8 @@ def simulate(params: Params, drive: Drive, method: str = DEFAULT_SOLVER["method"
 
     try:
         traj = integrate(system, ws, y0, t_eval, method=method, rtol=rtol, atol=atol, max_step=step_cap,
-                         min_pivot_ratio=0.0, progress=progress, outputs=record)
+                         min_pivot_ratio=0.0, progress=progress, outputs=record,
+                         max_steps=MAX_STEPS_PER_CYCLE * drive.cycles)
     except ConstraintError as err:
         raise SolverError(str(err)) from None
     t, cap, wall, sig, zeta, clo, F, lam = (np.array(c) for c in zip(*rows))
@@ -212,15 +215,16 @@ def _check_lengths(t, lengths, forces: DeviceForces) -> None:
 
 
 def _simulate_compiled(system, g, drive, z_rest, y0, t_eval, method, rtol, atol, max_step, start):
-    # what scipy's solvers refuse at run time, refused here the same way (exit code 3)
-    if not (np.isfinite(rtol) and rtol > 0 and np.isfinite(atol) and atol >= 0 and max_step > 0):
-        raise SolverError(f"{method} (compiled): rtol = {rtol}, atol = {atol}, max_step = {max_step}: "
-                          "rtol must be > 0, atol >= 0, max_step > 0")
-    rtol = max(rtol, 100 * np.finfo(float).eps)  # scipy's floor on rtol
+    check_tolerances(rtol, atol, max_step)  # the bounds of the scipy path, the same way
     from nsd_core.device.compiled import compiled_model, run
+    from nsd_core.engine.rk import TOO_MANY_STEPS
     model = compiled_model(system, g, drive, system.forces.elements)
-    out, (steps, nfev, status, n_done) = run(model, z_rest, y0, t_eval, method, rtol, atol, max_step)
+    out, (steps, nfev, status, n_done) = run(model, z_rest, y0, t_eval, method, rtol, atol, max_step,
+                                             MAX_STEPS_PER_CYCLE * drive.cycles)
     _check_lengths(t_eval[:n_done], out.lengths[:n_done], system.forces)
+    if status == TOO_MANY_STEPS:
+        raise SolverError(f"exceeded {MAX_STEPS_PER_CYCLE * drive.cycles} steps at t = "
+                          f"{t_eval[min(n_done, len(t_eval) - 1)]:.6g} s of {t_eval[-1]:.6g} s: a stiff or runaway input")
     if status != 0:
         raise SolverError(f"{method} (compiled) failed at t = {t_eval[min(n_done, len(t_eval) - 1)]:.6g} s "
                           f"or before: status {status} (nsd_core.engine.compiled, nsd_core.engine.rk)")

@@ -25,7 +25,7 @@ from nsd_core.engine.compiled_model import FORCE_FN, MODEL_TYPE, MOTION_FN, WORK
 Tableau = namedtuple("Tableau", "A B C E E3 E5 P D A_extra C_extra info")
 # info: [n_stages, error_estimator_order, dop853 (1) or interpolating polynomial (0)]
 Outputs = namedtuple("Outputs", "y z zd r lam tau closure lengths step_t")  # step_t: accepted step ends
-NOT_FINITE, TOO_SMALL_STEP = 20, 21
+NOT_FINITE, TOO_SMALL_STEP, TOO_MANY_STEPS = 20, 21, 22
 
 
 def _f(x):
@@ -138,8 +138,8 @@ def _dense(tab, K, F, t_old, h, y_old, y_new, f_new, tq, out):
 def _integrate(m, w, forces, motion, tab, y0, t_eval, settings, out, stats):
     """Integrate from t_eval[0] to t_eval[-1], evaluating the model at every t_eval into out.
 
-    settings: rtol, atol, max_step, first_step (0 = select). stats: steps, nfev, status, failed
-    sample. Returns the status (0 ok)."""
+    settings: rtol, atol, max_step, first_step (0 = select), max_steps (accepted steps; more is a
+    runaway: TOO_MANY_STEPS). stats: steps, nfev, status, samples done. Returns the status (0 ok)."""
     rtol, atol, max_step = settings[0], settings[1], settings[2]
     ny, ns = y0.shape[0], int(tab.info[0])
     dop = tab.info[2] == 1.0
@@ -232,6 +232,9 @@ def _integrate(m, w, forces, motion, tab, y0, t_eval, settings, out, stats):
         if steps < out.step_t.shape[0]:
             out.step_t[steps] = t_new
         steps += 1
+        if steps > settings[4]:
+            stats[0], stats[1], stats[2], stats[3] = steps, nfev, TOO_MANY_STEPS, k
+            return TOO_MANY_STEPS
         if k < t_eval.shape[0] and t_eval[k] <= t_new and t_eval[k] != t_new and dop:
             for s in range(ns + 1, nk):  # the three extra stages of DOP853's interpolant
                 _stage_state(K, tab.A_extra[s - ns - 1], s, h, y, ys)
