@@ -64,7 +64,8 @@ def main() -> None:
             acc = discrepancy(r, ref, d)
             row = dict(amplitude=A, frequency=f, **{k: (v if np.isfinite(v) else None) if isinstance(v, float) else v
                                                      for k, v in s.items()},
-                       dF=acc["dF"], s_per_cycle=statistics.median(ts), cpu_s_per_cycle=statistics.median(cs), steps=r.stats["steps"], nfev=r.stats["nfev"])
+                       dF=acc["dF"], s_per_cycle=statistics.median(ts), cpu_s_per_cycle=statistics.median(cs),
+                       steps=r.stats["steps"], nfev=r.stats["nfev"])
             rows.append(row)
             print(f"A={A} f={f:4.1f} {s['method']:6s} rtol={s['rtol']:.0e} max_step={s['max_step']:<6g} "
                   f"{s.get('backend', 'compiled'):8s} dF={acc['dF']:.2e} {1e3 * row['s_per_cycle']:8.1f} ms/cycle wall "

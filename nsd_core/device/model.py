@@ -143,12 +143,12 @@ def simulate(params: Params, drive: Drive, method: str = DEFAULT_SOLVER["method"
              backend: str = DEFAULT_SOLVER["backend"]) -> RunResult:
     """Run the drive on the in-house semirecursive model; returns the common columns.
 
-    backend "auto" (default): "compiled" for the methods it offers, else "scipy". "compiled": the compiled right-hand side and step loop (nsd_core.device.compiled;
-    methods RK45, DOP853); "scipy": SemiRecursiveSystem (compiled kernels, the force laws through
-    numpy) driven by scipy's solvers (any method of nsd_core.engine.integrate); "numpy": the same
-    on the readable numpy specification of every step. Raises DriveError (|u| >= l_d), SolverError (integration
-    failure). The initial state is the precompressed rest state (docs/model.md), an exact static
-    equilibrium.
+    backend "auto" (default): "compiled" for the methods it offers, else "scipy". "compiled": the
+    compiled right-hand side and step loop (nsd_core.device.compiled; methods RK45, DOP853);
+    "scipy": SemiRecursiveSystem (compiled kernels, the force laws through numpy) driven by scipy's
+    solvers (any method of nsd_core.engine.integrate); "numpy": the same on the readable numpy
+    specification of every step. Raises DriveError (|u| >= l_d), SolverError (integration failure).
+    The initial state is the precompressed rest state (docs/model.md), an exact static equilibrium.
     """
     drive.check_followable(params)
     if backend not in BACKENDS:
@@ -224,7 +224,8 @@ def _simulate_compiled(system, g, drive, z_rest, y0, t_eval, method, rtol, atol,
     _check_lengths(t_eval[:n_done], out.lengths[:n_done], system.forces)
     if status == TOO_MANY_STEPS:
         raise SolverError(f"exceeded {MAX_STEPS_PER_CYCLE * drive.cycles} steps at t = "
-                          f"{t_eval[min(n_done, len(t_eval) - 1)]:.6g} s of {t_eval[-1]:.6g} s: a stiff or runaway input")
+                          f"{t_eval[min(n_done, len(t_eval) - 1)]:.6g} s of {t_eval[-1]:.6g} s: "
+                          "a stiff or runaway input")
     if status != 0:
         raise SolverError(f"{method} (compiled) failed at t = {t_eval[min(n_done, len(t_eval) - 1)]:.6g} s "
                           f"or before: status {status} (nsd_core.engine.compiled, nsd_core.engine.rk)")

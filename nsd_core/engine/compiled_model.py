@@ -119,7 +119,8 @@ def make_workspace(model: SystemModel, z0: np.ndarray) -> Workspace:
         q=(npr,), qd=(npr,), qdd=(npr,), zd=(n,), zdd=(n,), lam=(nd,), tau=(npr,),
         L=(ne,), Ld=(ne,), T=(ne,), N=(ne, 3), P_up=(ne, 3), P_lo=(ne, 3), gen=(n,), wrench=(n, 6),
         extra=(nx,), extra_rate=(nx,), Mb=(n, 6, 6), Qb=(n, 6), M=(n, n), Q=(n,), Rz=(n, nf), zdd0=(n,),
-        red=(nf, nf), red_rhs=(nf,), red_piv=(nf,), res=(n,), scratch=(SCRATCH_ROWS, 3), scratch6=(6,), lin_trusted=(1,), has_good=(1,), good_t=(1,),
+        red=(nf, nf), red_rhs=(nf,), red_piv=(nf,), res=(n,), scratch=(SCRATCH_ROWS, 3), scratch6=(6,),
+        lin_trusted=(1,), has_good=(1,), good_t=(1,),
         good_z=(n,), good_zd=(n,), good_zdd=(n,), kin_current=(1,), counters=(3,))
     ws = Workspace(**{k: np.zeros(shapes[k], dtype=dt) for k, (dt, _) in _WORK_FIELDS.items()})
     ws.z[:] = z0

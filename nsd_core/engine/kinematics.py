@@ -179,7 +179,8 @@ def positions(m: Mechanism, z: np.ndarray) -> Kinematics:
     n = m.n
     A, r, B = np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((n, 6))
     a = m.arrays
-    positions_kernel(a.parent, a.jtype, m.joint_axis, m.joint_offset, np.asarray(z, dtype=float), A, r, B, np.empty((SCRATCH_ROWS, 3)))
+    positions_kernel(a.parent, a.jtype, m.joint_axis, m.joint_offset, np.asarray(z, dtype=float), A, r, B,
+                     np.empty((SCRATCH_ROWS, 3)))
     return Kinematics(A, r, B)
 
 
