@@ -14,7 +14,15 @@ Forces (Eqs. 16-18): ropes (base point -> cap point), SMA wires (cap point -> wa
 push-only Bouc-Wen spring (base origin -> wall reference, along Z) are added to ``qfrc_passive`` by
 an ``mjcb_passive`` callback that calls ``nsd_core.forces`` (rope_tension, spring_push; the wire
 tension is Eq. 17a, A_w max(sigma, 0), of the committed stress). The callback is installed for the
-run only and the previous one is restored afterwards.
+run only and the previous one is restored afterwards. By default (``passive = "compiled"``,
+``step_loop = "native"``) the callback is a C function compiled from the same scalar laws
+(mujoco_native) and the whole step loop below runs natively, calling MuJoCo's own mj_step; the
+Python callback and loop (``"python"``) remain as the readable form and give the same forces
+(tests/test_mujoco_native.py: identical drive force on this machine). Euler, h = 5e-5 s, A = 15 mm,
+1 Hz: 1.47 s CPU per cycle with the Python callback and loop, 0.15 s with the C callback, 0.106 s
+with the native loop too (loaded 2-core machine). The solver options do not matter here: Newton
+tolerance 1e-8..1e-12, 2-20 iterations, implicitfast, commits every 1-50 steps all give the same
+error to 3 digits within the timing noise (0.09-0.13 s per cycle).
 
 Hysteretic states (wire stresses sigma_j, spring zeta): never integrated by MuJoCo. After every
 ``commit_every`` accepted steps (and at every output time) they are advanced along the actual
