@@ -38,7 +38,7 @@ from pathlib import Path
 from comparisons.config import load_cases
 from comparisons.engines import get_engine
 from comparisons.engines.base import EngineError
-from nsd_core.results import atomic_write_json
+from nsd_core.device.results import atomic_write_json
 
 from refcompare import discrepancy, in_house_reference
 
@@ -56,8 +56,8 @@ START_CODE = """
 import sys, time, json
 t0 = time.perf_counter(); c0 = time.process_time()
 from comparisons.engines import get_engine
-from nsd_core.drive import Drive
-from nsd_core.params import Params
+from nsd_core.device.drive import Drive
+from nsd_core.device.params import Params
 e = get_engine(sys.argv[1]); d = Drive(0.015, 10.0, cycles=1, samples_per_cycle=100)
 t1 = time.perf_counter(); e.run(Params(), d); t2 = time.perf_counter(); e.run(Params(), d); t3 = time.perf_counter()
 print(json.dumps({"import_s": t1 - t0, "first_run_s": t2 - t1, "second_run_s": t3 - t2}))

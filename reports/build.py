@@ -19,10 +19,10 @@ from typing import Any, Callable
 
 import numpy as np
 
-from nsd_core.params import ParameterError
-from nsd_core.results import RunResult, read_csv
+from nsd_core.device.params import ParameterError
+from nsd_core.device.results import RunResult, read_csv
 
-from . import style  # noqa: F401  (selects the Agg backend before pyplot is imported anywhere)
+from reports import style  # noqa: F401  (selects the Agg backend before pyplot is imported anywhere)
 
 REQUIRED = {"verdict": str, "exit_code": int, "failures": list, "engines": list, "cases": list, "runs": dict,
             "metrics": list, "tolerances": dict}
@@ -105,7 +105,7 @@ def load(results_dir: str | Path) -> ReportData:
     if bench.is_file():
         b = _json(bench, "written by nsd benchmark")
         data.benchmark = b if isinstance(b, dict) and isinstance(b.get("problems"), dict) else None
-    from .figures_wp import load_work_precision
+    from reports.figures_wp import load_work_precision
     data.work_precision = load_work_precision(root / "work_precision" / "work_precision.json")
     data.study = _load_study(root / "study")
     data.tables = _load_tables(root / "study" / "tables.csv")
@@ -155,7 +155,7 @@ def _load_study(folder: Path) -> list[dict]:
 
 def pages(data: ReportData) -> list[tuple[str, Callable]]:
     """(file stem, figure function) per page, in order. Each function returns one Figure."""
-    from . import figures, figures_extra, figures_wp, pages as text_pages
+    from reports import figures, figures_extra, figures_wp, pages as text_pages
     out: list[tuple[str, Callable]] = []
     for i, fn in enumerate(text_pages.summary_pages(data)):
         out.append((f"summary{'' if i == 0 else f'_{i + 1}'}", fn))

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from matplotlib.lines import Line2D
 
-from .style import GREY, LANDSCAPE, RED, fmt, new_figure, no_data, style, table
+from reports.style import GREY, LANDSCAPE, RED, fmt, new_figure, no_data, style, table
 
 FLOOR = 1e-9   # errors below this are drawn on it (the log axis keeps its range)
 ORDER = ("semirecursive", "mujoco", "exudyn")

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from comparisons.engines.exudyn_engine import ExudynEngine
-from nsd_core.drive import Drive
-from nsd_core.params import ParameterError, Params
+from nsd_core.device.drive import Drive
+from nsd_core.device.params import ParameterError, Params
 
 P = Params()
 

@@ -7,9 +7,9 @@ import pytest
 
 from comparisons.engines import mujoco_native as native
 from comparisons.engines.mujoco_engine import MujocoEngine, _Device, build_mjcf
-from nsd_core.drive import Drive
-from nsd_core.geometry import device_geometry
-from nsd_core.params import ParameterError, Params
+from nsd_core.device.drive import Drive
+from nsd_core.device.geometry import device_geometry
+from nsd_core.device.params import ParameterError, Params
 
 P = Params()
 G = device_geometry(P)

@@ -2,7 +2,7 @@
 
 At the 1e-4 aim Exudyn spends about two thirds of its time in the Python pre-step function, most of
 it in ``_Elements.step`` (numpy over 4 ropes and 4 wires: ~50 us a step). This is the same
-computation on the shared scalar laws of ``nsd_core.forces`` (rope_tension_scalar,
+computation on the shared scalar laws of ``nsd_core.device.forces`` (rope_tension_scalar,
 wire_tension_scalar, spring_push_scalar and the strain integrators advance_*_scalar, the one
 implementation each array law is built from): commit the hysteretic states at the converged
 configuration, predict them at the end of the next step, and return the loads there.
@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from nsd_core.forces import (advance_spring_zeta_scalar, advance_wire_stress_scalar, rope_tension_scalar,
+from nsd_core.device.forces import (advance_spring_zeta_scalar, advance_wire_stress_scalar, rope_tension_scalar,
                              spring_push_scalar, wire_tension_scalar)
 
 

@@ -1,7 +1,7 @@
 """MuJoCo's passive callback and step loop in compiled code (numba), calling the shared force laws.
 
 The device's force elements and hysteretic states are the same as in mujoco_engine's Python callback
-(``_Device``), evaluated by the same scalar laws of ``nsd_core.forces`` (rope_tension_scalar,
+(``_Device``), evaluated by the same scalar laws of ``nsd_core.device.forces`` (rope_tension_scalar,
 wire_tension_scalar, spring_push_scalar, sma_slope_scalar, bouc_wen_slope_scalar and the strain
 integrators advance_*_scalar): one implementation of each law, compiled here instead of called from
 Python. Three pieces:
@@ -35,7 +35,7 @@ from llvmlite import ir
 from numba import carray, cfunc, njit, types
 from numba.extending import intrinsic
 
-from nsd_core.forces import (advance_spring_zeta_scalar, advance_wire_stress_scalar, bouc_wen_slope_scalar,
+from nsd_core.device.forces import (advance_spring_zeta_scalar, advance_wire_stress_scalar, bouc_wen_slope_scalar,
                              rope_tension_scalar, sma_slope_scalar, spring_push_scalar, wire_tension_scalar)
 
 # ---- userdata layout (float64 indices) ----------------------------------------------------------
