@@ -1,7 +1,7 @@
 """Work-precision of the three engines on the default cases (the diagram of Hairer & Wanner).
 
-    PYTHONPATH=benchmarks .venv/bin/python benchmarks/work_precision.py --out results/work_precision
-    PYTHONPATH=benchmarks .venv/bin/python benchmarks/work_precision.py --out /tmp/wp --repeats 1 --quick
+    .venv/bin/python benchmarks/work_precision.py --out out/run/work_precision
+    .venv/bin/python benchmarks/work_precision.py --out /tmp/wp --repeats 1 --quick --no-compile
 
 For every default case of comparisons/cases.toml (2 cycles, the last one compared) each engine runs a
 ladder of settings (LADDERS: tolerances for the in-house model, step sizes for MuJoCo and Exudyn),
@@ -161,17 +161,25 @@ def main(argv=None) -> int:
     ap.add_argument("--only", nargs="+", default=None, help="case names to run (default: all)")
     ap.add_argument("--quick", action="store_true", help="one rung per engine (a smoke run)")
     ap.add_argument("--no-compile", action="store_true", help="skip the start-up measurement")
+    ap.add_argument("--compile-only", action="store_true",
+                    help="only measure the start-up and add it to an existing work_precision.json in --out")
     a = ap.parse_args(argv)
     if a.repeats < 1:
         print(f"--repeats = {a.repeats}: must be >= 1", file=sys.stderr)
         return 2
+    out = Path(a.out) / "work_precision.json"
+    if a.compile_only:
+        report = json.loads(out.read_text()) if out.is_file() else {}
+        report["compile"] = compile_times(a.engines)
+        atomic_write_json(out, report)
+        print(f"wrote {out}")
+        return 0
     ladders = {e: (QUICK if a.quick else LADDERS)[e] for e in a.engines}
     cases = [c for c in load_cases(a.cases) if a.only is None or c.name in a.only]
     report = {"aim": AIM, "metric": "last cycle max|F - F_ref| / max|F_ref|, F_ref: in-house rtol 1e-10",
               "work": "CPU seconds per cycle (process_time, model construction included), median",
               "machine": platform.platform(), "cpus": os.cpu_count(), "load_average_start": os.getloadavg(),
               "repeats": a.repeats, "ladders": ladders, "cases": []}
-    out = Path(a.out) / "work_precision.json"
     for case in cases:
         print(f"case {case.name}", flush=True)
         report["cases"].append(run_case(case, ladders, a.repeats))
