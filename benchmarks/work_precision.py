@@ -90,6 +90,8 @@ def compile_times(engines) -> dict:
                 try:
                     p = subprocess.run([sys.executable, "-c", START_CODE, e], env=env, capture_output=True,
                                        text=True, timeout=900, cwd=root)
+                    if p.returncode != 0:
+                        raise ValueError(f"exit {p.returncode}: {(p.stderr.strip().splitlines() or [''])[-1]}")
                     r = json.loads(p.stdout.strip().splitlines()[-1])
                     r["startup_s"] = r["first_run_s"] - r["second_run_s"]
                 except (subprocess.SubprocessError, ValueError, IndexError) as exc:
