@@ -16,8 +16,8 @@ from numba import njit
 
 from nsd_core.engine.compiled_model import FORCE_SIG, MOTION_SIG, build_model, make_workspace, split_state
 from nsd_core.device.drive import Drive, sine_displacement
-from nsd_core.device.forces import (bouc_wen_slope_scalar, rope_tension_scalar, sma_slope_scalar, spring_raw_push_scalar,
-                     wire_tension_scalar)
+from nsd_core.device.forces import (bouc_wen_slope_scalar, rope_tension_scalar, sma_slope_scalar, spring_push_scalar,
+                                    wire_tension_scalar)
 from nsd_core.device.geometry import DeviceGeometry
 from nsd_core.engine.rk import Outputs, integrate_kernel, make_outputs, tableau
 
@@ -42,9 +42,9 @@ def device_forces(t, z, zd, L, Ld, extra, p, T, gen, rate):
     o += WIRE_FIELDS
     kse, ksd, beta, gamma, ns, free_length = p[o], p[o + 1], p[o + 2], p[o + 3], p[o + 4], p[o + 5]
     e = nr + nw
-    x, xdot = free_length - L[e], -Ld[e]
+    xdot = -Ld[e]  # compression rate
     rate[nw] = bouc_wen_slope_scalar(extra[nw], xdot, ksd, beta, gamma, ns) * xdot
-    T[e] = -max(spring_raw_push_scalar(x, extra[nw], kse), 0.0)
+    T[e] = -spring_push_scalar(L[e], extra[nw], kse, free_length)
     return 0
 
 

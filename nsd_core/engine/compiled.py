@@ -22,9 +22,6 @@ from nsd_core.engine.elements import apply_tensions, element_kinematics
 from nsd_core.engine.kinematics import positions_kernel, velocities_kernel
 
 OK, NEWTON_FAILED, SINGULAR_BLOCK, SINGULAR_MASS = 0, 1, 2, 3
-# Condition estimate max|Jd^-1| max|Jd| above which S = -Jd^-1 Jr is not trusted as a predictor
-# (the device: <= 63 at A = 25.5 mm; the N-four-bar: median 1.5, ~3e3 next to its flat position)
-COND_TRUST = 1e3
 
 
 @njit(cache=True)
@@ -154,15 +151,10 @@ def assemble(m, w, t, zf):
     if w.has_lin[0] == 0:
         return newton(m, w, w.z)
     move = 0.0
-    taylor = w.lin_trusted[0] == 0 and w.has_good[0] == 1
-    h = t - w.good_t[0]
-    for j in range(nd):
-        if taylor:  # next to a singular position: continuity of the velocity picks the branch
-            acc = w.good_z[dep[j]] + h * w.good_zd[dep[j]] + 0.5 * h * h * w.good_zdd[dep[j]]
-        else:  # z_dep + S dz along the manifold (S from the last evaluation)
-            acc = w.z_lin[dep[j]]
-            for k in range(n):
-                acc += w.S[j, k] * (z[k] - w.z_lin[k])  # S is zero on the dependent columns
+    for j in range(nd):  # z_dep + S dz along the manifold (S from the last evaluation)
+        acc = w.z_lin[dep[j]]
+        for k in range(n):
+            acc += w.S[j, k] * (z[k] - w.z_lin[k])  # S is zero on the dependent columns
         w.pred[j] = acc
         w.z[dep[j]] = acc
         move = max(move, abs(acc - w.z_lin[dep[j]]))
@@ -204,10 +196,6 @@ def velocities_and_predictor(m, w, zfd):
     for a in range(free.shape[0]):
         w.zd[free[a]] = zfd[a]
     if nd:
-        jd_max = 0.0
-        for i in range(nd):
-            for j in range(nd):
-                jd_max = max(jd_max, abs(w.J[rows[i], dep[j]]))
         if not _factor_dependent_block(m, w):
             return SINGULAR_BLOCK
         for k in range(nd):  # Jd^-1, column by column
@@ -231,12 +219,6 @@ def velocities_and_predictor(m, w, zfd):
             w.zd[dep[j]] = acc
         w.z_lin[:] = w.z
         w.has_lin[0] = 1
-        inv_max = 0.0
-        for j in range(nd):
-            for k in range(nd):
-                inv_max = max(inv_max, abs(w.Jd_inv[j, k]))
-        est = inv_max * jd_max
-        w.lin_trusted[0] = 1 if (np.isfinite(est) and est < COND_TRUST) else 0
     velocities_kernel(m.parent, m.jtype, w.B, w.r, w.zd, w.Z, w.vp, w.scratch)
     _closure(m, w, True)  # positions unchanged: only c is new
     return OK
@@ -334,22 +316,7 @@ def evaluate(t, y, m, w, forces, motion):
         return code
     w.wrench[:, :] = 0.0
     apply_tensions(m.elem_up, m.elem_lo, w.P_up, w.P_lo, w.N, w.T, w.wrench)
-    code = reduced_dynamics(m, w)
-    if code == OK:
-        remember_if_trusted(t, w)
-    return code
-
-
-@njit(cache=True)
-def remember_if_trusted(t, w):
-    """Keep (t, z, z', z'') of a well-conditioned evaluation for the Taylor predictor (trusted is
-    also set where there are no dependent coordinates at all, so nothing is kept there)."""
-    if w.has_lin[0] == 1 and w.lin_trusted[0] == 1:
-        w.good_t[0] = t
-        w.good_z[:] = w.z
-        w.good_zd[:] = w.zd
-        w.good_zdd[:] = w.zdd
-        w.has_good[0] = 1
+    return reduced_dynamics(m, w)
 
 
 @njit(cache=True)

@@ -48,10 +48,6 @@ _WORK_FIELDS = {
     "Mb": (float, 3), "Qb": (float, 2), "M": (float, 2), "Q": (float, 1), "Rz": (float, 2),
     "zdd0": (float, 1), "red": (float, 2), "red_rhs": (float, 1), "red_piv": (np.int64, 1), "res": (float, 1),
     "scratch": (float, 2), "scratch6": (float, 1),   # the recursions' 3-vectors, the tree's 6-vector
-    # the last well-conditioned evaluation (t, z, z', z''): near a singular position S is round-off and
-    # the predictor follows the branch by a Taylor step from there instead (lin_trusted = 0)
-    "lin_trusted": (np.int64, 1), "has_good": (np.int64, 1), "good_t": (float, 1), "good_z": (float, 1),
-    "good_zd": (float, 1), "good_zdd": (float, 1),
     "kin_current": (np.int64, 1),  # 1: A, r, B, Phi, Phi_z in the workspace belong to z
     "counters": (np.int64, 1),  # assemblies, Newton iterations, second Newton solves (diagnostics)
 }
@@ -120,8 +116,7 @@ def make_workspace(model: SystemModel, z0: np.ndarray) -> Workspace:
         L=(ne,), Ld=(ne,), T=(ne,), N=(ne, 3), P_up=(ne, 3), P_lo=(ne, 3), gen=(n,), wrench=(n, 6),
         extra=(nx,), extra_rate=(nx,), Mb=(n, 6, 6), Qb=(n, 6), M=(n, n), Q=(n,), Rz=(n, nf), zdd0=(n,),
         red=(nf, nf), red_rhs=(nf,), red_piv=(nf,), res=(n,), scratch=(SCRATCH_ROWS, 3), scratch6=(6,),
-        lin_trusted=(1,), has_good=(1,), good_t=(1,),
-        good_z=(n,), good_zd=(n,), good_zdd=(n,), kin_current=(1,), counters=(3,))
+        kin_current=(1,), counters=(3,))
     ws = Workspace(**{k: np.zeros(shapes[k], dtype=dt) for k, (dt, _) in _WORK_FIELDS.items()})
     ws.z[:] = z0
     return ws

@@ -18,7 +18,7 @@ from typing import Callable
 
 import numpy as np
 
-from nsd_core.engine.compiled import COND_TRUST, OK, reduced_dynamics, remember_if_trusted, velocities_and_predictor
+from nsd_core.engine.compiled import OK, reduced_dynamics, velocities_and_predictor
 from nsd_core.engine.compiled import assemble as assemble_kernel
 from nsd_core.engine.compiled_model import SystemModel, Workspace, build_model, make_workspace, split_state
 from nsd_core.engine.closure import closure, full_pivot_elimination
@@ -147,17 +147,9 @@ class SemiRecursiveSystem:
             # the last evaluation). With large steps (loose tolerances, or across a singular
             # position where two assembly branches meet) Newton from the plain warm start can land
             # on another branch, or on the same one shifted by 2 pi; the predictor tells which.
-            dep = P.dependent
-            if ws.lin_trusted[0] or not ws.has_good[0]:
-                dz = z - ws.z_lin
-                dz[dep] = 0.0
-                pred = ws.z_lin[dep] + ws.S @ dz
-            else:
-                # next to a singular position S = -Jd^-1 Jr is round-off (two branches meet there, the
-                # velocity picks one): follow the branch by continuity of the velocity instead, with
-                # a Taylor step from the last well-conditioned evaluation
-                h = t - ws.good_t[0]
-                pred = ws.good_z[dep] + h * ws.good_zd[dep] + 0.5 * h * h * ws.good_zdd[dep]
+            dz = z - ws.z_lin
+            dz[P.dependent] = 0.0
+            pred = ws.z_lin[P.dependent] + ws.S @ dz
             move = float(np.max(np.abs(pred - ws.z_lin[P.dependent])))
         z_start = z.copy()
         try:
@@ -219,9 +211,6 @@ class SemiRecursiveSystem:
         ws.qdd[:] = qdd
         if velocities_and_predictor(self.model, ws, np.ascontiguousarray(zfd, dtype=float)) != OK:
             return None
-        P = self.partition
-        if len(P.dependent):  # the trust test in Python here, so that it is one function (and patchable)
-            ws.lin_trusted[0] = _well_conditioned(ws.Jd_inv, ws.J[np.ix_(P.rows, P.dependent)])
         kin = Kinematics(ws.A.copy(), ws.r.copy(), ws.B.copy(), ws.Z.copy(), ws.vp.copy())
         z, zd = ws.z.copy(), ws.zd.copy()
         wrench, gen, extra_rate = self.forces(t, kin, z, zd, extra)
@@ -229,7 +218,6 @@ class SemiRecursiveSystem:
         ws.gen[:] = 0.0 if gen is None else gen
         if reduced_dynamics(self.model, ws) != OK:
             return None
-        remember_if_trusted(t, ws)
         return Evaluation(t, z, zd, ws.zdd.copy(), kin, np.asarray(extra_rate, dtype=float), ws.lam.copy(),
                           ws.tau.copy(), ws.Phi.copy())
 
@@ -247,7 +235,6 @@ class SemiRecursiveSystem:
         S[:, P.dependent] = 0.0
         if len(P.dependent):
             ws.z_lin[:], ws.S[:], ws.has_lin[0] = z, S, 1
-            ws.lin_trusted[0] = _well_conditioned(Jd_inv, Jr[:, P.dependent])
         velocities(m, kin, zd)
         _, _, c = closure(m, kin, with_rates=True)
         wrench, gen, extra_rate = self.forces(t, kin, z, zd, extra)
@@ -267,8 +254,6 @@ class SemiRecursiveSystem:
         res = MRz @ zfdd + M @ zdd0 - Q
         lam = Jd_inv.T @ res[P.dependent]
         tau = res[pr] - Jr[:, pr].T @ lam
-        if len(P.dependent) and ws.lin_trusted[0]:
-            ws.good_t[0], ws.good_z[:], ws.good_zd[:], ws.good_zdd[:], ws.has_good[0] = t, z, zd, zdd, 1
         return Evaluation(t, z, zd, zdd, kin, np.asarray(extra_rate, dtype=float), lam, tau, Phi)
 
     # ---- the ODE in y = [z_f, z'_f, extra] (nsd_core.engine.compiled_model.split_state) ----
@@ -311,13 +296,6 @@ class SemiRecursiveSystem:
             return 1.0
         z = self.assemble(ws, t, split_state(y, len(P.free)).free_positions)
         return _block_ratio(closure(self.m, positions(self.m, z))[1], P)
-
-
-def _well_conditioned(Jd_inv: np.ndarray, Jd: np.ndarray) -> bool:
-    if Jd.size == 0:
-        return True
-    est = float(np.max(np.abs(Jd_inv)) * np.max(np.abs(Jd)))
-    return bool(np.isfinite(est) and est < COND_TRUST)
 
 
 def _block_ratio(J: np.ndarray, P: Partition) -> float:
