@@ -340,7 +340,7 @@ def test_hostile_input(tmp_path, capsys, argv, files, fragment):
     assert "Traceback" not in err
     assert fragment.lower() in lines[0].lower(), lines[0]
     assert snapshot(tmp_path) == before, "something was written"
-    assert elapsed < 15.0, f"{elapsed:.1f} s"
+    assert elapsed < 30.0, f"{elapsed:.1f} s"  # the first case to import the engines pays that once
 
 
 def nsd(*args, **kw):
