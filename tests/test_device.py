@@ -2,11 +2,11 @@
 import numpy as np
 import pytest
 
-from nsd_core.cycle import analyse, steady_cycle
-from nsd_core.device import simulate
-from nsd_core.drive import Drive
-from nsd_core.params import Params
-from nsd_core.quasistatic import quasi_static_path
+from nsd_core.device.cycle import analyse, steady_cycle
+from nsd_core.device.model import simulate
+from nsd_core.device.drive import Drive
+from nsd_core.device.params import Params
+from nsd_core.device.quasistatic import quasi_static_path
 
 P = Params()
 

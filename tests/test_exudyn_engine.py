@@ -10,11 +10,11 @@ import pytest
 
 from comparisons.engines.base import EngineError
 from comparisons.engines.exudyn_engine import ExudynEngine
-from nsd_core.drive import Drive, DriveError
-from nsd_core.geometry import device_geometry
-from nsd_core.params import ParameterError, Params
-from nsd_core.quasistatic import quasi_static_path
-from nsd_core.results import column_units
+from nsd_core.device.drive import Drive, DriveError
+from nsd_core.device.geometry import device_geometry
+from nsd_core.device.params import ParameterError, Params
+from nsd_core.device.quasistatic import quasi_static_path
+from nsd_core.device.results import column_units
 
 P = Params()
 G = device_geometry(P)

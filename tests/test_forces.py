@@ -6,10 +6,10 @@ import pytest
 from hypothesis import given, settings, strategies as st
 from scipy.integrate import solve_ivp
 
-from nsd_core.forces import (SpringLaw, WireLaw, advance_spring_zeta, advance_wire_stress, bouc_wen_slope,
+from nsd_core.device.forces import (SpringLaw, WireLaw, advance_spring_zeta, advance_wire_stress, bouc_wen_slope,
                              precompressed_spring, rope_tension, sma_wire, spring_push)
-from nsd_core.geometry import device_geometry
-from nsd_core.params import Params
+from nsd_core.device.geometry import device_geometry
+from nsd_core.device.params import Params
 
 G = device_geometry(Params())
 WIRE: WireLaw = G.wire

@@ -4,8 +4,8 @@ import tomllib
 
 import pytest
 
-from nsd_core.drive import Drive, DriveError
-from nsd_core.params import FIELDS, ParameterError, Params, load_params, parse_set
+from nsd_core.device.drive import Drive, DriveError
+from nsd_core.device.params import FIELDS, ParameterError, Params, load_params, parse_set
 from tests.conftest import ROOT
 
 PAPER = tomllib.loads((ROOT / "references" / "paper-data.toml").read_text())

@@ -63,12 +63,12 @@ from exudyn.itemInterface import (LoadForceVector, MarkerNodePosition, ObjectGen
 from exudyn.rigidBodyUtilities import RigidBodyInertia
 
 from comparisons.engines.base import EngineError, merged_settings
-from nsd_core.drive import Drive
-from nsd_core.forces import advance_spring_zeta, advance_wire_stress, rope_tension, spring_push, wire_tension
-from nsd_core.geometry import device_geometry
-from nsd_core.outputs import device_columns
-from nsd_core.params import ParameterError, Params
-from nsd_core.results import RunResult
+from nsd_core.device.drive import Drive
+from nsd_core.device.forces import advance_spring_zeta, advance_wire_stress, rope_tension, spring_push, wire_tension
+from nsd_core.device.geometry import device_geometry
+from nsd_core.device.outputs import device_columns
+from nsd_core.device.params import ParameterError, Params
+from nsd_core.device.results import RunResult
 
 
 class _Elements:
