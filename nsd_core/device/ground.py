@@ -31,7 +31,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from .params import ParameterError
+from nsd_core.device.params import ParameterError
 
 STANDARD_GRAVITY = 9.80665  # m/s^2: the records' unit g
 SIMILITUDE_TIME_FACTOR = math.sqrt(0.1)  # Froude 1:10: time x sqrt(length scale)
