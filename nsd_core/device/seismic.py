@@ -124,13 +124,21 @@ class SeismicForces:
 class SeismicSystem(SemiRecursiveSystem):
     """The generic system, stopping with RodReachError where |u| >= l_d (the rod lies flat)."""
     reach = math.inf
+    last = (0.0, 0.0)  # (t, |u|) of the last evaluation
 
     def rhs_parts(self, t, zf, zfd, extra):
         q = self.motion(t)[0]
-        if math.hypot(zf[0] - q[0], zf[1] - q[1]) >= self.reach:
-            raise RodReachError(f"t = {t:.6g} s: |u| = {math.hypot(zf[0] - q[0], zf[1] - q[1]):.6g} m "
-                                f">= rod_length = {self.reach} m: the rod cannot reach")
+        u = math.hypot(zf[0] - q[0], zf[1] - q[1])
+        self.last = (t, u)
+        if u >= self.reach:
+            raise self.reach_error()
         return super().rhs_parts(t, zf, zfd, extra)
+
+    def reach_error(self) -> RodReachError:
+        t, u = self.last
+        return RodReachError(f"t = {t:.6g} s: |u| = {u:.6g} m >= rod_length = {self.reach} m: the rod cannot "
+                             f"reach" if u >= self.reach else f"t = {t:.6g} s: |u| = {u:.6g} m: the loop cannot "
+                             f"close as the rod nears the horizontal (rod_length = {self.reach} m)")
 
 
 def seismic_system(params: Params, structure: Structure, ground: GroundMotion, device: bool = True):
@@ -225,8 +233,11 @@ def simulate_seismic(params: Params, structure: Structure, ground: GroundMotion,
 
     try:
         traj = integrate(system, y0, t_eval, method=method, rtol=rtol, atol=atol, max_step=max_step,
-                         min_pivot_ratio=0.0, progress=progress, outputs=record)
+                         min_pivot_ratio=0.0, progress=progress, outputs=record,
+                         first_step=min(max_step, 1e-4, duration))  # the ground moves: start small
     except ConstraintError as err:
+        if system.last[1] > 0.95 * system.reach:
+            raise system.reach_error() from None
         raise SolverError(str(err)) from None
     cols = {k: np.array([r[k] for r in rows]) for k in rows[0]}
     cols["u"] = np.hypot(cols["x"], cols["y"])  # radial relative displacement (events use it)

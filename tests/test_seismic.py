@@ -1,0 +1,100 @@
+"""The seismic mode (Table 1, second row) on the in-house engine, and the default isolated structure."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from nsd_core.device.ground import Harmonic, Pulse
+from nsd_core.device.isolation import Structure
+from nsd_core.device.model import BODY
+from nsd_core.device.params import Params
+from nsd_core.device.seismic import RodReachError, seismic_system, simulate_seismic
+
+# the default structure's numbers (nsd_core.device.isolation.default_structure, recorded in the README)
+STRUCTURE = Structure(mass=3743.80, radius_of_gyration=0.40825, stiffness=147799.2, damping=2352.30,
+                      support_radius=0.5)
+
+
+def sdof_harmonic_from_rest(t, A, f, T_n, zeta):
+    """u'' + 2 zeta w_n u' + w_n^2 u = -A sin(w t), u(0) = u'(0) = 0 (Chopra, Sections 3.1-3.2)."""
+    w, wn = 2 * math.pi * f, 2 * math.pi / T_n
+    wd, r = wn * math.sqrt(1 - zeta ** 2), w / wn
+    den = (1 - r * r) ** 2 + (2 * zeta * r) ** 2
+    C = -A / wn ** 2 * (1 - r * r) / den
+    D = -A / wn ** 2 * (-2 * zeta * r) / den
+    E = -D
+    F = (zeta * wn * E - C * w) / wd
+    return C * np.sin(w * t) + D * np.cos(w * t) + np.exp(-zeta * wn * t) * (E * np.cos(wd * t) + F * np.sin(wd * t))
+
+
+def test_supports_alone_match_the_closed_form_single_degree_of_freedom():
+    A, f, psi = 1.0, 1.5, 30.0
+    r = simulate_seismic(Params(), STRUCTURE, Harmonic(A, f, psi, duration=1.2), device=False)
+    u = sdof_harmonic_from_rest(r["t"], A, f, STRUCTURE.period, STRUCTURE.damping_ratio)
+    e = (math.cos(math.radians(psi)), math.sin(math.radians(psi)))
+    err = max(np.max(np.abs(r["x"] - u * e[0])), np.max(np.abs(r["y"] - u * e[1])))
+    assert err / np.max(np.abs(u)) < 1e-6, err
+    assert np.max(np.abs(r["theta"])) < 1e-15  # nothing turns the plate
+    # Newton on the plate: base shear = -M a_abs; energy balance closes
+    assert np.max(np.abs(r["base_shear_x"] + STRUCTURE.mass * r["ax_abs"])) < 1e-9 * np.max(np.abs(r["base_shear_x"]))
+    assert np.max(np.abs(r["E_residual"])) < 1e-8 * np.max(r["E_input"])
+
+
+@pytest.fixture(scope="module")
+def with_device():
+    return simulate_seismic(Params(), STRUCTURE, Harmonic(0.8, 2.0, 0.0, duration=0.3))
+
+
+def test_partition_is_table_1_second_row():
+    system, _, _ = seismic_system(Params(), STRUCTURE, Harmonic(1.0, 1.0))
+    names = system.m.names
+    assert [names[i] for i in system.partition.free] == ["plate_x", "plate_y", "plate", "cap"]
+    assert sorted(names[i] for i in system.partition.dependent) == ["rod", "rod_x", "wall"]
+    assert [names[i] for i in system.prescribed] == ["base_x", "base_y", "base"]
+
+
+def test_device_run_closes_the_loop_and_the_energy_balance(with_device):
+    r = with_device
+    assert np.max(r["closure"]) < 1e-13
+    assert np.max(r["u"]) > 5e-3  # the device is really worked (a tenth of its range or more)
+    assert np.max(np.abs(r["E_residual"])) < 1e-6 * np.max(r["E_input"])
+    # the device's work is a real part of the balance (negative while its precompression pushes out)
+    assert np.max(np.abs(r["E_device"])) > 0.1 * np.max(r["E_input"])
+
+
+def test_base_shear_is_the_superstructure_s_inertia(with_device):
+    """Plate + mass + cap move together horizontally: V = support + device = -(M + m_c) a_abs. The
+    device force comes from the cut's multiplier and the element forces, the acceleration from the
+    equations of motion: they meet only if both are right."""
+    r = with_device
+    m = STRUCTURE.mass + Params().cap_mass
+    for c in "xy":
+        V = r[f"base_shear_{c}"]
+        assert np.max(np.abs(V + m * r[f"a{c}_abs"])) < 1e-9 * max(np.max(np.abs(r["base_shear_x"])), 1.0)
+
+
+def test_a_drive_along_a_wire_does_not_turn_the_plate_and_stays_in_its_plane(with_device):
+    r = with_device  # psi = 0 is a mirror plane of the device: no torque, no Y motion
+    assert np.max(np.abs(r["theta"])) < 1e-12 and np.max(np.abs(r["y"])) < 1e-12
+
+
+def test_device_force_opposes_small_motions_with_the_device_s_initial_stiffness(with_device):
+    """Near rest the device's force is its initial tangent stiffness (positive, ~7e4 N/m) times u:
+    from the quasi-static solution, independent of the multibody engine."""
+    from nsd_core.device.quasistatic import quasi_static_path
+    r = with_device
+    small = (np.abs(r["x"]) < 4e-4) & (r["t"] < 0.12)
+    qs = quasi_static_path(Params(), np.linspace(0.0, 4e-4, 41))
+    k0 = np.polyfit(qs["u"], qs["F_device"], 1)[0]
+    k_run = np.polyfit(r["x"][small], r["device_Fx"][small], 1)[0]
+    assert k0 > 0 and abs(k_run / k0 - 1) < 0.05, (k_run, k0)
+
+
+@pytest.mark.slow
+def test_a_motion_beyond_the_rod_s_reach_stops_with_the_time():
+    soft = Structure(mass=STRUCTURE.mass, radius_of_gyration=0.40825, stiffness=2.0e5, damping=0.0,
+                     support_radius=0.5)
+    with pytest.raises(RodReachError, match=r"t = [0-9.]+ s: \|u\| = 0.03\d* m >= rod_length = 0.03 m"):
+        simulate_seismic(Params(), soft, Pulse(1.2, 2.0, 2.0), duration=0.6)
