@@ -292,3 +292,41 @@ def seismic_units(cols: dict) -> dict:
             return "Pa"
         return "N"
     return {name: unit(name) for name in cols}
+
+
+def seismic_summary(result: RunResult) -> dict:
+    """Peaks (with their times), the displacement left at the end, the energy balance and the
+    working-range events of a seismic run (what summary.json holds)."""
+    from nsd_core.device.cycle import events
+    c, t = result.columns, result["t"]
+
+    def peak(values):
+        k = int(np.argmax(values))
+        return {"value": float(values[k]), "t": float(t[k])}
+
+    E_in = c["E_input"]
+    out = {
+        "peak_displacement": peak(c["u"]),
+        "peak_x": peak(np.abs(c["x"])), "peak_y": peak(np.abs(c["y"])),
+        "peak_rotation": peak(np.abs(c["theta"])),
+        "peak_absolute_acceleration": peak(np.hypot(c["ax_abs"], c["ay_abs"])),
+        "peak_base_shear": peak(np.hypot(c["base_shear_x"], c["base_shear_y"])),
+        "peak_device_force": peak(np.hypot(c["device_Fx"], c["device_Fy"])),
+        "peak_support_force": peak(np.hypot(c["support_Fx"], c["support_Fy"])),
+        "peak_ground_acceleration": peak(np.hypot(c["ax_g"], c["ay_g"])),
+        "residual_displacement": {"x": float(c["x"][-1]), "y": float(c["y"][-1]), "u": float(c["u"][-1]),
+                                  "t": float(t[-1])},
+        "energy": {"input": float(E_in[-1]), "kinetic": float(c["E_kinetic"][-1]),
+                   "gravity": float(c["E_gravity"][-1]), "supports_stored": float(c["E_supports_stored"][-1]),
+                   "supports_dissipated": float(c["E_supports_dissipated"][-1]), "device": float(c["E_device"][-1]),
+                   "max_residual": float(np.max(np.abs(c["E_residual"]))),
+                   "relative_residual": float(np.max(np.abs(c["E_residual"])) / max(np.max(np.abs(E_in)), 1e-300))},
+    }
+    if "spring_push" in c:
+        ev = events(result)
+        out.update({"events": ev, "outside_working_range": any(e["kind"] == "ropes_slack" for e in ev),
+                    "cap_z": {"min": float(np.min(c["cap_z"])), "max": float(np.max(c["cap_z"]))},
+                    "closure_max": float(np.max(c["closure"]))})
+    else:
+        out.update({"events": [], "outside_working_range": False})
+    return out
