@@ -14,7 +14,7 @@ import sys
 from nsd_core.device.drive import DriveError
 from nsd_core.engine.errors import InputError, SolverError
 
-SUBCOMMANDS = ("cycle", "compare", "report", "sweep", "tables", "calibrate", "benchmark")
+SUBCOMMANDS = ("cycle", "seismic", "compare", "report", "sweep", "tables", "calibrate", "benchmark")
 
 
 def build_parser() -> argparse.ArgumentParser:

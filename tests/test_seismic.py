@@ -131,3 +131,57 @@ def test_the_recorded_device_stiffness_is_what_the_quasi_static_cycles_give():
     # the model document expected about -70 to -90 kN/m; this model gives -99 (psi = 0) and -111 (45 deg)
     assert -1.2e5 < k["K_dev"] < -0.8e5
     assert k["per_direction"]["0.0"]["K_dev"] == pytest.approx(NOMINAL_K_DEV["per_direction"]["0.0"]["K_dev"], rel=1e-9)
+
+
+def nsd(*args):
+    import subprocess
+    import sys
+    return subprocess.run([sys.executable, "-m", "nsd_cli.main", *args], capture_output=True, text=True, timeout=600)
+
+
+def test_nsd_seismic_writes_the_time_series_and_the_summary(tmp_path):
+    import json
+    from nsd_core.device.results import read_csv
+    out = tmp_path / "run"
+    p = nsd("seismic", "--ground", "harmonic:amplitude=0.8,frequency=2,azimuth=0,duration=0.2", "--dt-out", "0.002",
+            "--out", str(out))
+    assert p.returncode == 0, p.stderr
+    r = read_csv(out / "seismic.csv")
+    for col in ("x", "y", "ax_abs", "ay_abs", "device_Fx", "device_Fy", "support_Fx", "base_shear_x", "cap_z",
+                "rope0_tension", "wire3_stress", "E_input", "E_residual"):
+        assert col in r.columns
+    s = json.loads((out / "summary.json").read_text())
+    for key in ("peak_displacement", "peak_absolute_acceleration", "residual_displacement", "energy", "events",
+                "structure", "ground", "versions", "params"):
+        assert key in s
+    assert s["structure"]["stiffness"] == pytest.approx(STRUCTURE.stiffness, rel=1e-5)
+    assert s["peak_displacement"]["value"] == pytest.approx(np.max(r["u"]), rel=1e-6)
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--record", "midfield:1"], "record set = 'midfield': unknown"),
+    (["--record", "farfield:40"], "record = '40': unknown in set farfield; allowed 1..22"),
+    (["--record", "farfield:1", "--scale", "0"], "scale = 0: must be > 0"),
+    (["--record", "farfield:1", "--scale", "-1"], "scale = -1: must be > 0"),
+    (["--record", "farfield:1", "--window", "10,90"], "window = 10,90: must satisfy 0 <= t0 < t1 <= 29.98 s"),
+    (["--record", "farfield:1", "--rotate", "east"], "rotate_deg = 'east': not a number"),
+    (["--record", "farfield"], "--record 'farfield': expected SET:ID"),
+    (["--ground", "sine:amplitude=1"], "--ground 'sine': unknown kind"),
+    (["--ground", "pulse:velocity=0.3,frequency=1,gamma=0.5"], "gamma = 0.5: must be > 1"),
+    (["--ground", "harmonic:amplitude=1,frequency=1", "--structure", "mass=-3"], "structure mass = -3.0: must be"),
+])
+def test_nsd_seismic_bad_input_exit_2_one_line_nothing_written(tmp_path, args, words):
+    out = tmp_path / "x"
+    p = nsd("seismic", *args, "--out", str(out))
+    assert p.returncode == 2, p.stderr
+    assert words in p.stderr and len(p.stderr.strip().splitlines()) == 1, p.stderr
+    assert not out.exists()
+
+
+@pytest.mark.slow
+def test_nsd_seismic_exit_4_with_the_time_when_the_rod_cannot_reach(tmp_path):
+    out = tmp_path / "x"
+    p = nsd("seismic", "--ground", "pulse:velocity=1.2,frequency=2,gamma=2", "--structure", "stiffness=2e5",
+            "--structure", "damping=0", "--duration", "0.6", "--out", str(out))
+    assert p.returncode == 4 and "the rod cannot reach" in p.stderr and "t = 0." in p.stderr, p.stderr
+    assert not out.exists()
