@@ -73,4 +73,4 @@ def test_edge_cycle_has_figure7_shape_and_reports_slack_ropes():
     assert signs[:2] == ["+", "-"]  # positive at the origin (wires), then the negative plateau
     assert signs[-1] == "+"         # positive again towards X_max
     assert s["outside_working_range"] and any(e["kind"] == "ropes_slack" for e in s["events"])
-    assert 0.0245 < s["x_max"] <= 0.0255  # nsd-model.md: the ropes go slack near 25.46 mm
+    assert 0.0245 < s["x_max"] <= 0.0255  # docs/model.md: the ropes go slack near 25.46 mm

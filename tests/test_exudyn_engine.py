@@ -47,7 +47,7 @@ def test_result_has_the_common_columns_and_stats(cycle10):
 def test_rest_state_is_the_precompressed_equilibrium(rest):
     """Spring push = F_press, ropes pull F_press - W, nothing moves, no drive force.
 
-    The rest state is an exact static equilibrium (nsd-model.md) and the engine starts from it with
+    The rest state is an exact static equilibrium (docs/model.md) and the engine starts from it with
     consistent initial accelerations, so every residual is at round-off level; the bounds leave
     three orders of magnitude (1e-6 N against 3800 N, 1 nm against micrometre-level concerns).
     """

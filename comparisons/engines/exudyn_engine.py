@@ -1,6 +1,6 @@
 """The device in Exudyn: redundant-coordinate rigid bodies, joints as constraints, the drive as motion.
 
-Model (nsd-model.md, drive mode). Base = ground. Wall, rod and cap are ``ObjectRigidBody`` bodies on
+Model (docs/model.md, drive mode). Base = ground. Wall, rod and cap are ``ObjectRigidBody`` bodies on
 ``NodeRigidBodyEP`` nodes (3 positions + 4 Euler parameters each, the Euler-parameter normalisation
 an algebraic equation: Exudyn's redundant coordinates). Constraints (index 3, Lagrange multipliers):
 - the wall's vertical guide: a GenericJoint ground-wall locking X, Y and the three rotations;

@@ -1,4 +1,4 @@
-"""MuJoCo engine: the negative-stiffness device of nsd-model.md in drive mode (Table 1, first row).
+"""MuJoCo engine: the negative-stiffness device of docs/model.md in drive mode (Table 1, first row).
 
 Model (MJCF generated in code from ``device_geometry(params)``; no XML file):
 - world -> ``cap``: three slide joints, ``drive`` along e_psi, ``lateral`` along e_z x e_psi (both

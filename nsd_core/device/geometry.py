@@ -1,7 +1,7 @@
 """The device as engine-independent data: attachment points, inertias and the precompressed rest state.
 
 Every engine (semirecursive, MuJoCo, Exudyn) builds its model from ``device_geometry(params)`` so
-that all of them read the paper the same way (``nsd-model.md``). Frames: Z up; the base reference
+that all of them read the paper the same way (``docs/model.md``). Frames: Z up; the base reference
 is the spring's lower seat at the origin; the wall reference is the rod's lower joint centre (the
 spring's upper seat), at rest at z = l_s; the cap reference is the rod's upper joint centre, at
 rest at z = l_s + l_d. Points below are in the body's own frame, which at rest is the world frame
@@ -98,7 +98,7 @@ def _disc(name: str, mass: float, diameter: float, density: float) -> RigidBody:
 
 
 def device_geometry(p: Params) -> DeviceGeometry:
-    """Build the one model of nsd-model.md from a parameter set."""
+    """Build the one model of docs/model.md from a parameter set."""
     rope_base = _ring(p.n_ropes, p.rope_lower_radius, 0.0, p.wire_first_azimuth_deg)
     rope_cap = _ring(p.n_ropes, p.rope_upper_radius, p.rope_upper_height, p.wire_first_azimuth_deg)
     wire_cap = _ring(p.n_wires, p.wire_upper_radius, p.wire_upper_height, p.wire_first_azimuth_deg)

@@ -130,7 +130,7 @@ def simulate(params: Params, drive: Drive, method: str = DEFAULT_SOLVER["method"
     """Run the drive on the in-house semirecursive model; returns the common columns.
 
     Raises DriveError (|u| >= l_d), SolverError (integration failure). The initial state is the
-    precompressed rest state (nsd-model.md), an exact static equilibrium.
+    precompressed rest state (docs/model.md), an exact static equilibrium.
     """
     drive.check_followable(params)
     start = time.perf_counter()

@@ -1,7 +1,7 @@
 """The device's parameter set: one typed, immutable object.
 
 Every field carries its SI unit and its provenance (a table of Dai et al. 2024, or "assumed" with
-the place in ``nsd-model.md`` that argues for it). Angles are stored in degrees, and their field
+the place in ``docs/model.md`` that argues for it). Angles are stored in degrees, and their field
 names end in ``_deg`` so that no reader mistakes them for radians.
 """
 from __future__ import annotations
@@ -25,14 +25,14 @@ def _p(default, unit: str, source: str, doc: str, kind=float):
 
 
 T2 = "Table 2"
-MODEL = "assumed: nsd-model.md"
-WIRE = "assumed: nsd-model.md (Table 3 missing)"
-SPRING = "assumed: nsd-model.md (Table 4 missing)"
+MODEL = "assumed: docs/model.md"
+WIRE = "assumed: docs/model.md (Table 3 missing)"
+SPRING = "assumed: docs/model.md (Table 4 missing)"
 
 
 @dataclass(frozen=True)
 class Params:
-    """Device parameters (SI units; angles in degrees). Defaults: Table 2, Section 4.1, nsd-model.md."""
+    """Device parameters (SI units; angles in degrees). Defaults: Table 2, Section 4.1, docs/model.md."""
 
     # Geometry and masses (Table 2)
     cap_diameter: float = _p(0.128, "m", T2, "R_c, diameter of the cap")
@@ -44,14 +44,14 @@ class Params:
     base_diameter: float = _p(0.128, "m", T2, "R_b, diameter of the base")
     base_mass: float = _p(1.082, "kg", T2, "m_b, mass of the base")
     spring_length: float = _p(0.062, "m", T2, "l_s, spring length after precompression")
-    # Ropes (Table 2, Section 4.1, nsd-model.md)
+    # Ropes (Table 2, Section 4.1, docs/model.md)
     n_ropes: int = _p(4, "-", T2, "n_r, number of ropes", int)
     rope_upper_radius: float = _p(0.055, "m", T2, "R_r,u, radius of the ropes' upper ends")
     rope_lower_radius: float = _p(0.055, "m", T2, "R_r,l, radius of the ropes' lower ends")
     rope_stiffness: float = _p(5.0e5, "N/m", "Section 4.1", "k_r, axial stiffness of each rope")
     rope_upper_height: float = _p(0.0189, "m", MODEL, "h_ru, rope upper end above the cap reference")
     precompression_force: float = _p(3800.0, "N", "Table 6 (= Table 5 column 0.03 m)", "F_press, spring push at rest")
-    # Wires (Table 2 and nsd-model.md)
+    # Wires (Table 2 and docs/model.md)
     n_wires: int = _p(4, "-", T2, "n_w, number of SMA wires", int)
     wire_diameter: float = _p(0.002, "m", T2, "D_w, wire diameter")
     wire_upper_radius: float = _p(0.0165, "m", T2, "R_w,u, radius of the wires' upper ends")
@@ -85,12 +85,12 @@ class Params:
     # ---- derived quantities (never stored, so they cannot disagree) ----
     @property
     def wire_span(self) -> float:
-        """h_w = l_d + h_wu: vertical span of a wire at rest (nsd-model.md)."""
+        """h_w = l_d + h_wu: vertical span of a wire at rest (docs/model.md)."""
         return self.rod_length + self.wire_upper_height
 
     @property
     def wire_lower_radius(self) -> float:
-        """R_w,l = R_w,u + h_w tan(theta) (nsd-model.md; 0.0265 m in Table 2 at the nominal theta)."""
+        """R_w,l = R_w,u + h_w tan(theta) (docs/model.md; 0.0265 m in Table 2 at the nominal theta)."""
         return self.wire_upper_radius + self.wire_span * math.tan(math.radians(self.wire_inclination_deg))
 
     @property
@@ -99,7 +99,7 @@ class Params:
 
     @property
     def rope_span(self) -> float:
-        """H_r = l_s + l_d + h_ru: vertical span of a rope at rest (nsd-model.md)."""
+        """H_r = l_s + l_d + h_ru: vertical span of a rope at rest (docs/model.md)."""
         return self.spring_length + self.rod_length + self.rope_upper_height
 
     @property

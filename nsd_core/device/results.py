@@ -1,6 +1,6 @@
 """The time series every engine returns: the same columns, units and signs, and atomic writers.
 
-Sign convention (nsd-model.md, "Drive and outputs"): F is the horizontal force the drive applies to
+Sign convention (docs/model.md, "Drive and outputs"): F is the horizontal force the drive applies to
 the cap along psi, F = m_c u'' - (rod + ropes + wires on the cap) . e_psi. Each part column is the
 part's contribution to F, i.e. minus its force on the cap along psi, so that
 F_device = F_rod + F_ropes + F_wires and F = m_c u'' + F_device.
@@ -82,12 +82,17 @@ def _json_default(o):
     raise TypeError(f"not JSON serialisable: {type(o).__name__}")
 
 
-def write_csv(path: str | Path, result: RunResult) -> None:
-    names = list(result.units)
-    header = ",".join(f"{n} [{result.units[n]}]" for n in names)
-    data = np.column_stack([result.columns[n] for n in names])
+def write_columns(path: str | Path, columns: dict[str, tuple[str, np.ndarray]]) -> None:
+    """Numeric columns {name: (unit, values)} as CSV with "name [unit]" headers, atomically."""
+    header = ",".join(f"{n} [{u}]" for n, (u, _) in columns.items())
+    data = np.column_stack([v for _, v in columns.values()])
     lines = [header] + [",".join(f"{v:.10g}" for v in row) for row in data]
     atomic_write_text(path, "\n".join(lines) + "\n")
+
+
+def write_csv(path: str | Path, result: RunResult) -> None:
+    """A run's time series, every column with its unit (read back by ``read_csv``)."""
+    write_columns(path, {n: (result.units[n], result.columns[n]) for n in result.units})
 
 
 def read_csv(path: str | Path, engine: str = "") -> RunResult:

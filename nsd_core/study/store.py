@@ -17,10 +17,9 @@ import time
 from dataclasses import asdict
 from pathlib import Path
 
-import numpy as np
 
 from nsd_core import __version__
-from nsd_core.device.results import atomic_write_json, atomic_write_text, write_csv
+from nsd_core.device.results import atomic_write_json, write_columns, write_csv
 from nsd_core.study.designs import Design
 
 
@@ -46,15 +45,9 @@ class Store:
                "stored_at": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
         if out["status"] == "ok":
             write_csv(folder / "cycle.csv", out["result"])
-            _write_table(folder / "steady.csv", out["steady"])
+            write_columns(folder / "steady.csv", out["steady"])
             rec["files"] = {"cycle": "cycle.csv", "steady": "steady.csv"}
         else:
             rec["traceback"] = out.get("traceback")
         atomic_write_json(folder / "result.json", rec)  # last: marks the design finished
         return rec
-
-
-def _write_table(path: Path, cols: dict[str, tuple[str, np.ndarray]]) -> None:
-    header = ",".join(f"{n} [{u}]" for n, (u, _) in cols.items())
-    data = np.column_stack([v for _, v in cols.values()])
-    atomic_write_text(path, "\n".join([header] + [",".join(f"{x:.10g}" for x in row) for row in data]) + "\n")

@@ -18,7 +18,7 @@ from nsd_core.engine.integrate import integrate
 from nsd_core.engine.kinematics import positions, velocities
 from nsd_core.engine.semirecursive import SemiRecursiveSystem
 
-REFERENCES = Path(__file__).resolve().parents[2] / "references"
+REFERENCES = Path(__file__).resolve().parents[3] / "references"
 
 
 @dataclass
