@@ -1,4 +1,4 @@
-"""Ground motion for the seismic mode (nsd-model.md, "Seismic (dynamic) analysis").
+"""Ground motion for the seismic mode (docs/model.md, "Seismic mode").
 
 Every ground motion is a horizontal pair: ``motion(t)`` returns the ground displacement, velocity
 and acceleration, each of shape (2,) (X, Y) for a scalar t, or (len(t), 2) for an array.

@@ -1,4 +1,4 @@
-"""The isolated structure of the seismic mode (nsd-model.md, "Seismic (dynamic) analysis").
+"""The isolated structure of the seismic mode (docs/model.md, "Seismic mode").
 
 The plate carries a rigid mass M (polar inertia M r_g^2) in parallel with viscoelastic supports
 between plate and base: horizontal stiffness k_b (the same in every direction), viscous damping
@@ -136,9 +136,9 @@ def default_structure(params: Params | None = None, k_dev: dict | None = None) -
         "K_dev": {"value": K, "unit": "N/m", "how": "most negative chord dF_device/du on the steady "
                   "quasi-static cycle of amplitude 0.999 X_max, ropes taut (nsd_core.device.quasistatic)",
                   **k_dev},
-        "stiffness": f"assumed rule (nsd-model.md): smallest k_b with k_b + K_dev >= {MARGIN} k_b -> -K_dev/{1 - MARGIN}",
-        "mass": f"assumed rule (nsd-model.md): period of the supports alone {PERIOD} s -> k_b (T/2pi)^2",
-        "damping": f"assumed rule (nsd-model.md): {DAMPING_RATIO:.0%} of critical for M and k_b",
+        "stiffness": f"assumed rule (docs/model.md): smallest k_b with k_b + K_dev >= {MARGIN} k_b -> -K_dev/{1 - MARGIN}",
+        "mass": f"assumed rule (docs/model.md): period of the supports alone {PERIOD} s -> k_b (T/2pi)^2",
+        "damping": f"assumed rule (docs/model.md): {DAMPING_RATIO:.0%} of critical for M and k_b",
         "radius_of_gyration": f"assumed: uniform {SLAB_SIDE} m square slab, side/sqrt(6)",
         "support_radius": f"assumed: supports at the mid-sides of the {SLAB_SIDE} m slab, side/2",
         "params": "nominal device (Params defaults)" if params == Params() else "overridden device",

@@ -1,4 +1,4 @@
-"""The seismic mode on the in-house engine: Table 1, second row (nsd-model.md, "Seismic analysis").
+"""The seismic mode on the in-house engine: Table 1, second row (docs/model.md, "Seismic mode").
 
 The same Figure 4 tree as the drive mode (``nsd_core.device.model``); only the choice of prescribed
 and free coordinates changes, so the generic engine needs no special case:
