@@ -185,3 +185,20 @@ def test_nsd_seismic_exit_4_with_the_time_when_the_rod_cannot_reach(tmp_path):
             "--structure", "damping=0", "--duration", "0.6", "--out", str(out))
     assert p.returncode == 4 and "the rod cannot reach" in p.stderr and "t = 0." in p.stderr, p.stderr
     assert not out.exists()
+
+
+def test_mujoco_seismic_agrees_with_the_in_house_engine():
+    """Real MuJoCo, ground-frame loads, off a symmetry axis (so X, Y and the rotation all move).
+    Measured: 3.7e-6 in displacement, 3.2e-5 in device force; the issue's aim is 1e-3."""
+    from comparisons.engines.mujoco_seismic import MujocoSeismic
+    gm = Harmonic(0.8, 2.0, 30.0, duration=0.3)
+    ref = simulate_seismic(Params(), STRUCTURE, gm, dt_out=2e-3)
+    mj = MujocoSeismic().run(Params(), STRUCTURE, gm, dt_out=2e-3)
+    du = np.max(np.hypot(mj["x"] - ref["x"], mj["y"] - ref["y"])) / np.max(ref["u"])
+    F = np.hypot(ref["device_Fx"], ref["device_Fy"])
+    dF = np.max(np.hypot(mj["device_Fx"] - ref["device_Fx"], mj["device_Fy"] - ref["device_Fy"])) / np.max(F)
+    da = np.max(np.abs(mj["ax_abs"] - ref["ax_abs"])) / np.max(np.abs(ref["ax_abs"]))
+    assert np.max(ref["u"]) > 0.01 and np.max(np.abs(ref["theta"])) > 1e-6
+    assert du < 1e-4 and dF < 1e-4 and da < 1e-4, (du, dF, da)
+    assert np.max(np.abs(mj["theta"] - ref["theta"])) < 1e-3 * np.max(np.abs(ref["theta"]))
+    assert np.max(mj["closure"]) < 1e-7
