@@ -37,6 +37,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="model time to run [s] (default: the input's; longer adds free vibration)")
     p.add_argument("--dt-out", type=float, default=1e-3, help="output interval [s]")
     p.add_argument("--no-device", action="store_true", help="the supports alone (the isolation effect's reference)")
+    p.add_argument("--engines", default="semirecursive",
+                   help="semirecursive (the reference, always first) and any of mujoco, exudyn to cross-check: "
+                        "each writes seismic_<engine>.csv; summary.json gets their differences")
     p.add_argument("--structure", action="append", default=[], metavar="NAME=VALUE",
                    help="override the default isolated structure: mass, stiffness, damping, "
                         "radius_of_gyration, support_radius (SI)")
@@ -77,6 +80,10 @@ def ground_motion(args):
             values[keys[k.strip()]] = float(v)
         except ValueError:
             raise ParameterError(f"--ground {kind}: {k.strip()} = {v!r}: not a number") from None
+    required = {"harmonic": ("amplitude", "frequency"), "pulse": ("velocity", "frequency")}[kind]
+    missing = [k for k in required if keys[k] not in values]
+    if missing:
+        raise ParameterError(f"--ground {kind}: {', '.join(missing)} required (KEY=VALUE)")
     return getattr(ground, cls)(**values)
 
 
@@ -86,7 +93,13 @@ def run(args) -> int:
     from nsd_core.device.params import parse_set
     from nsd_core.device.results import atomic_write_json, versions, write_csv
     from nsd_core.device.seismic import seismic_summary, simulate_seismic
+    from comparisons.seismic import parse_seismic_engines, run_seismic, seismic_metrics
     params = base_params(args)
+    engines = parse_seismic_engines(args.engines)
+    if engines[0] != "semirecursive":
+        raise ParameterError(f"--engines {args.engines!r}: semirecursive (the reference) must come first")
+    if args.no_device and len(engines) > 1:
+        raise ParameterError("--engines: the supports alone (--no-device) run on the in-house engine only")
     motion = ground_motion(args)
     structure = default_structure(params)
     if args.structure:
@@ -97,7 +110,15 @@ def run(args) -> int:
     summary = {"ground": motion.describe(), "structure": structure.to_dict(), "device": not args.no_device,
                **seismic_summary(result), "solver": result.stats, "wall_time": result.stats["wall_time"],
                "versions": versions(), "params": params.describe()}
+    others = {}
+    for name in engines[1:]:
+        other = run_seismic(name, params, structure, motion, duration=args.duration, dt_out=args.dt_out)
+        others[name] = other
+        summary.setdefault("engines", {})[name] = {**seismic_metrics(result, other),
+                                                   "wall_time": other.stats["wall_time"]}
     out = Path(args.out)
+    for name, other in others.items():
+        write_csv(out / f"seismic_{name}.csv", other)
     write_csv(out / "seismic.csv", result)
     atomic_write_json(out / "summary.json", summary)
     pd, pa = summary["peak_displacement"], summary["peak_absolute_acceleration"]
@@ -108,6 +129,9 @@ def run(args) -> int:
           f"{result.stats['steps']} steps in {result.stats['wall_time']:.1f} s for {result.stats['model_time']:.2f} s")
     for ev in summary["events"]:
         print(f"  event {ev['kind']}: t = {ev['start']:.4f} s for {ev['duration'] * 1e3:.2f} ms (|u| = {ev['u_start'] * 1e3:.2f} mm)")
+    for name, m in summary.get("engines", {}).items():
+        print(f"  {name}: max|du|/max|u| = {m['du']:.2e}, max|dF|/max|F| = {m['dF']:.2e}, "
+              f"max|da|/max|a| = {m['da']:.2e}, {m['wall_time']:.1f} s")
     if summary["outside_working_range"]:
         print("  WARNING: the ropes went slack: part of this run lies outside the device's working range")
     print(f"wrote {out / 'seismic.csv'} and {out / 'summary.json'}")

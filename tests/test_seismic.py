@@ -168,13 +168,18 @@ def test_nsd_seismic_writes_the_time_series_and_the_summary(tmp_path):
     (["--record", "farfield"], "--record 'farfield': expected SET:ID"),
     (["--ground", "sine:amplitude=1"], "--ground 'sine': unknown kind"),
     (["--ground", "pulse:velocity=0.3,frequency=1,gamma=0.5"], "gamma = 0.5: must be > 1"),
+    (["--ground", "harmonic:amplitude=0.8"], "--ground harmonic: frequency required"),
+    (["--ground", "harmonic:amplitude=1,frequency=1", "--engines", "mujoco"], "semirecursive (the reference) must"),
+    (["--ground", "harmonic:amplitude=1,frequency=1", "--engines", "semirecursive,bullet"], "--engines 'bullet'"),
     (["--ground", "harmonic:amplitude=1,frequency=1", "--structure", "mass=-3"], "structure mass = -3.0: must be"),
 ])
-def test_nsd_seismic_bad_input_exit_2_one_line_nothing_written(tmp_path, args, words):
+def test_nsd_seismic_bad_input_exit_2_one_line_nothing_written(tmp_path, capsys, args, words):
+    from nsd_cli.main import main
     out = tmp_path / "x"
-    p = nsd("seismic", *args, "--out", str(out))
-    assert p.returncode == 2, p.stderr
-    assert words in p.stderr and len(p.stderr.strip().splitlines()) == 1, p.stderr
+    code = main(["seismic", *args, "--out", str(out)])  # in-process: the same entry point as the command
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert words in err and len(err.strip().splitlines()) == 1, err
     assert not out.exists()
 
 
