@@ -223,3 +223,20 @@ def test_exudyn_seismic_agrees_with_the_in_house_engine():
     assert np.max(ref["u"]) > 3e-3
     assert du < 1e-4 and dF < 1e-4 and da < 1e-4, (du, dF, da)
     assert np.max(ex["closure"]) < 1e-12
+
+
+def test_leaving_the_working_range_is_an_event_and_the_run_goes_on():
+    """A ground motion that takes the plate past X_max (25.46 mm): the ropes go slack, the events
+    come with their times and the run finishes, its energy balance still closed."""
+    from nsd_core.device.seismic import seismic_summary
+    from nsd_core.device.working_range import x_max_at_slack
+    r = simulate_seismic(Params(), STRUCTURE, Harmonic(1.2, 2.0, 0.0, duration=0.4), dt_out=1e-3)
+    s = seismic_summary(r)
+    assert r["t"][-1] == pytest.approx(0.4) and s["outside_working_range"]
+    slack = [e for e in s["events"] if e["kind"] == "ropes_slack"]
+    x_max = x_max_at_slack(Params())
+    first = slack[0]
+    assert 0.0 < first["start"] < 0.4 and first["duration"] > 0
+    assert x_max <= first["u_start"] < x_max + 0.5e-3  # within the sampling of the edge
+    assert np.all(r["u"][r["t"] < first["start"]] < x_max + 1e-6)
+    assert s["energy"]["relative_residual"] < 1e-6
