@@ -4,9 +4,10 @@ displacement, energy balance, working-range events). Exit 4 when |u| reaches the
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
+import math
 
-from nsd_cli.options import Progress, add_param_arguments, add_solver_arguments, base_params, solver_settings
+from nsd_cli.options import (Progress, add_param_arguments, add_solver_arguments, base_params, check_out_dir,
+                             solver_settings)
 from nsd_core.device.params import ParameterError
 
 HELP = "seismic response of the isolated structure (in-house engine)"
@@ -105,6 +106,11 @@ def run(args) -> int:
     if args.structure:
         structure = structure.replace(**parse_set(args.structure))
     solver = {**DEFAULT_SOLVER, **solver_settings(args)}
+    for name in ("duration", "dt_out"):
+        v = getattr(args, name)
+        if v is not None and not (math.isfinite(v) and v > 0):
+            raise ParameterError(f"--{name.replace('_', '-')} = {v}: must be a finite number > 0 (s)")
+    out = check_out_dir("--out", args.out)
     result = simulate_seismic(params, structure, motion, duration=args.duration, dt_out=args.dt_out,
                               device=not args.no_device, progress=Progress("nsd seismic"), **solver)
     summary = {"ground": motion.describe(), "structure": structure.to_dict(), "device": not args.no_device,
@@ -116,7 +122,6 @@ def run(args) -> int:
         others[name] = other
         summary.setdefault("engines", {})[name] = {**seismic_metrics(result, other),
                                                    "wall_time": other.stats["wall_time"]}
-    out = Path(args.out)
     for name, other in others.items():
         write_csv(out / f"seismic_{name}.csv", other)
     write_csv(out / "seismic.csv", result)
