@@ -137,18 +137,21 @@ class ExudynSeismic:
         mbs.CreateSphericalJoint(itemNumbers=[wall[1], rod[1]], position=[0.0, 0.0, wall_z], show=False)
         rc_joint = mbs.CreateSphericalJoint(itemNumbers=[rod[1], cap[1]], position=[0.0, 0.0, cap_z], show=False)
 
-        def force_load(node):
+        def force_load(node, f=(0.0, 0.0, 0.0)):
             return mbs.AddLoad(LoadForceVector(markerNumber=mbs.AddMarker(MarkerNodePosition(nodeNumber=node)),
-                                               loadVector=[0.0, 0.0, 0.0]))
+                                               loadVector=list(f)))
 
-        def torque_load(node):
+        def torque_load(node, m=(0.0, 0.0, 0.0)):
             return mbs.AddLoad(LoadTorqueVector(markerNumber=mbs.AddMarker(MarkerNodeRigid(nodeNumber=node)),
-                                                loadVector=[0.0, 0.0, 0.0]))
+                                                loadVector=list(m)))
 
+        # every load starts at its t = 0 value: the solver's initial accelerations are computed with them
         bodies = (plate, cap, wall, rod)
-        inertial = [force_load(b[0]) for b in bodies]  # -m a_g on every body
+        a_g0 = ground(0.0)[2]
+        inertial = [force_load(b[0], (-b[2] * a_g0[0], -b[2] * a_g0[1], 0.0)) for b in bodies]  # -m a_g
         el = _Elements(g)
-        cap_f, cap_m, wall_f = force_load(cap[0]), torque_load(cap[0]), force_load(wall[0])
+        f0, m0, fw0 = el.loads(np.array([0.0, 0.0, cap_z]), 0.0, wall_z)
+        cap_f, cap_m, wall_f = force_load(cap[0], f0), torque_load(cap[0], m0), force_load(wall[0], (0.0, 0.0, fw0))
         plate_f, plate_m = force_load(plate[0]), torque_load(plate[0])
         OV = exu.OutputVariableType
         out = []
