@@ -150,3 +150,13 @@ def test_bad_synthetic_input():
         Pulse(0.3, 1.0, gamma=1.0)
     with pytest.raises(ParameterError, match="frequency = 0: must be > 0"):
         Harmonic(1.0, 0.0)
+
+
+def test_scalar_and_array_evaluation_agree():
+    rng = np.random.default_rng(3)
+    t = np.arange(0.0, 1.0, 0.01)
+    pl = PiecewiseLinear(t, rng.normal(size=len(t)), ramp=0.02)
+    ts = np.concatenate([[-0.5, 0.0, 0.99, 1.0, 1.005, 1.02, 3.0], rng.uniform(0.0, 1.1, 50)])
+    arr = pl(ts)
+    for i, s in enumerate(ts):
+        assert np.allclose(pl(s), [arr[0][i], arr[1][i], arr[2][i]], rtol=1e-13, atol=1e-15)

@@ -24,6 +24,7 @@ windows are given in the record's own (full-scale) time.
 """
 from __future__ import annotations
 
+import bisect
 import math
 import warnings
 from dataclasses import dataclass, field
@@ -94,9 +95,20 @@ class PiecewiseLinear:
         self.slope = np.append(np.diff(a) / h, 0.0)
         self.v = np.concatenate([[0.0], np.cumsum(h * (a[1:] + a[:-1]) / 2.0)])
         self.d = np.concatenate([[0.0], np.cumsum(h * self.v[:-1] + h * h * (2.0 * a[:-1] + a[1:]) / 6.0)])
+        self._t, self._a, self._s = self.t.tolist(), self.a.tolist(), self.slope.tolist()
+        self._v, self._d = self.v.tolist(), self.d.tolist()
 
     def __call__(self, t):
         """(d, v, a) at t: before t[0] the ground is at rest at 0; a = a_k + s_k tau on each interval."""
+        if np.ndim(t) == 0:  # the integrator asks one time at a time: plain floats are ~10x faster
+            t = float(t)
+            if t < self.t[0]:
+                return 0.0, 0.0, 0.0
+            k = min(bisect.bisect_right(self._t, t) - 1, len(self._t) - 1)
+            tau = t - self._t[k]
+            a0, s, v0, d0 = self._a[k], self._s[k], self._v[k], self._d[k]
+            return (d0 + v0 * tau + a0 * tau * tau / 2.0 + s * tau ** 3 / 6.0,
+                    v0 + a0 * tau + s * tau * tau / 2.0, a0 + s * tau)
         t = np.asarray(t, dtype=float)
         k = np.clip(np.searchsorted(self.t, t, side="right") - 1, 0, len(self.t) - 1)
         tau = np.maximum(t - self.t[k], 0.0)
@@ -135,6 +147,9 @@ class Record(GroundMotion):
     def __call__(self, t):
         (da, va, aa), (db, vb, ab) = self.comp[0](t), self.comp[1](t)
         R = self.rotation
+        if np.ndim(t) == 0:
+            return tuple(np.array([R[0, 0] * p + R[0, 1] * q, R[1, 0] * p + R[1, 1] * q])
+                         for p, q in ((da, db), (va, vb), (aa, ab)))
         return tuple(np.stack([R[0, 0] * p + R[0, 1] * q, R[1, 0] * p + R[1, 1] * q], axis=-1)
                      for p, q in ((da, db), (va, vb), (aa, ab)))
 
