@@ -6,6 +6,7 @@ message is kept for that case; every other case still runs and is written).
 from __future__ import annotations
 
 import datetime as dt
+import functools
 import hashlib
 import json
 import os
@@ -29,12 +30,23 @@ ENGINE_COST = {"semirecursive": 1.0, "mujoco": 1.0, "exudyn": 3.0}  # rough rela
 
 
 
+@functools.lru_cache(maxsize=1)
+def code_fingerprint() -> str:
+    """A hash of the model and engine source (nsd_core, comparisons) and the installed versions: a
+    kept run is reused only by the code that made it, never after an edit or an upgrade."""
+    import nsd_core
+    h = hashlib.sha256(json.dumps(versions(), sort_keys=True).encode())
+    for pkg in (Path(nsd_core.__file__).parent, Path(__file__).parent):
+        for f in sorted(pkg.rglob("*.py")):
+            h.update(f.read_bytes())
+    return h.hexdigest()[:16]
+
+
 def job_key(case: Case, engine: str) -> str:
-    """What a kept run depends on: the engine, its parameters, the drive, its settings, the version."""
-    from nsd_core import __version__
+    """What a kept run depends on: the engine, its parameters, the drive, its settings, the code."""
     d = case.drive
     text = json.dumps([engine, case.params_for(engine).to_dict(), [d.amplitude, d.frequency, d.direction_deg,
-                       d.cycles, d.samples_per_cycle], case.settings.get(engine, {}), __version__],
+                       d.cycles, d.samples_per_cycle], case.settings.get(engine, {}), code_fingerprint()],
                       sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:20]
 
