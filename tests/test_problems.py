@@ -103,21 +103,3 @@ def test_n_four_bar_40_holds_past_the_reported_failing_point():
     assert r["singular_crossings"] >= 30
     assert r["error"] < 1e-3 and r["energy_drift"] < 1e-3 and r["closure_max"] < 1e-10
 
-
-def test_velocity_continuity_predictor_keeps_the_branch(monkeypatch):
-    """With the trust threshold lowered, every evaluation near the flat position predicts the dependent
-    coordinates from the last well-conditioned velocity (not from S = -Jd^-1 Jr): the run must
-    use that path and still follow the exact parallelogram motion."""
-    import nsd_core.engine.semirecursive as sr
-    used = []
-    real = sr._well_conditioned
-
-    def counted(a, b):
-        ok = real(a, b)
-        used.append(not ok)
-        return ok
-    monkeypatch.setattr(sr, "COND_TRUST", 30.0)
-    monkeypatch.setattr(sr, "_well_conditioned", counted)
-    r = iftomm.a02(N=5, duration=6.0, outputs=120, rtol=1e-10, atol=1e-12)
-    assert sum(used) > 10
-    assert r["error"] < 1e-6 and r["energy_drift"] < 1e-5 and r["closure_max"] < 1e-12
