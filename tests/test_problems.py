@@ -96,6 +96,7 @@ def test_digits_and_library_error_helpers():
     assert math.isclose(library_error(val, ref), 1e-4, rel_tol=1e-9)
 
 
+@pytest.mark.slow
 def test_n_four_bar_40_holds_past_the_reported_failing_point():
     """Issue 12: on one install A02 (N = 40) held for 5 s and then left the parallelogram branch
     (error 0.56, 613 J drift). The full 20 s, 30 singular crossings, must stay on the branch."""

@@ -90,6 +90,11 @@ def _check_settings(s: dict) -> None:
         raise ParameterError(f"mujoco.integrator = {s['integrator']!r}: allowed: {', '.join(allowed)}")
     if s["solref_factor"] < 2.0:
         raise ParameterError(f"mujoco.solref_factor = {s['solref_factor']!r}: must be >= 2 (MuJoCo's minimum)")
+    for key, choices in (("passive", ("compiled", "python")), ("step_loop", ("native", "python"))):
+        if s[key] not in choices:
+            raise ParameterError(f"mujoco.{key} = {s[key]!r}: allowed: {', '.join(choices)}")
+    if s["step_loop"] == "native" and s["passive"] != "compiled":
+        raise ParameterError("mujoco.step_loop = native needs passive = compiled")
 
 
 def _f(x) -> str:

@@ -44,12 +44,15 @@ def integrate(system: SemiRecursiveSystem, ws: Workspace, y0: np.ndarray, t_eval
               rtol: float = 1e-8, atol: float = 1e-10, max_step: float = np.inf,
               min_pivot_ratio: float = 1e-3, progress: Callable[[float], None] | None = None,
               outputs: Callable[[float, np.ndarray], None] | None = None,
-              max_steps: int | None = None) -> Trajectory:
+              max_steps: int | None = None, first_step: float | None = None) -> Trajectory:
     """Integrate from t_eval[0] to t_eval[-1] with the per-run workspace ws (system.workspace());
     ``outputs(t, y)`` is called at every t_eval.
 
     ``max_steps`` bounds the work: a run that needs more accepted steps stops with a SolverError
-    ("exceeded N steps") instead of running for hours on a stiff or runaway input."""
+    ("exceeded N steps") instead of running for hours on a stiff or runaway input.
+    ``first_step``: the first step (default: the solver's own guess, whose trial evaluation may lie
+    anywhere up to t_eval[-1] when the state starts at rest; a prescribed motion that has moved far
+    by then can put that trial where the loops cannot close)."""
     if method not in METHODS:
         raise InputError(f"method = {method!r}: allowed {', '.join(METHODS)}")
     check_tolerances(rtol, atol, max_step)
@@ -68,7 +71,7 @@ def integrate(system: SemiRecursiveSystem, ws: Workspace, y0: np.ndarray, t_eval
     steps = 0
     t = t0
     while True:
-        solver = METHODS[method](fun, t, y, t1, rtol=rtol, atol=atol, max_step=max_step)
+        solver = METHODS[method](fun, t, y, t1, rtol=rtol, atol=atol, max_step=max_step, first_step=first_step)
         while k < len(t_eval) and t_eval[k] <= t:
             ys[k] = y
             if outputs:

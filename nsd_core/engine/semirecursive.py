@@ -102,10 +102,19 @@ class SemiRecursiveSystem:
         k = positions(self.m, z)
         _, J, _ = closure(self.m, k)
         others = [i for i in range(self.m.n) if i not in set(self.prescribed)]
-        # coordinates the user prefers free are offered as pivots last
-        cand = [i for i in others if i not in self.prefer_free] + [i for i in others if i in self.prefer_free]
         # redundant equations (rank-deficient Phi_z) are left out by the elimination
-        rows, dep, piv = full_pivot_elimination(J, cand, n_pivots=n_dependent) if J.shape[0] else ([], [], np.ones(1))
+        rows, dep, piv = full_pivot_elimination(J, others, n_pivots=n_dependent) if J.shape[0] else ([], [], np.ones(1))
+        # coordinates the user prefers free stay free whenever the others alone reach the same rank
+        # (Table 1: the same tree is driven at the plate or at the base, free elsewhere); else, and
+        # when re-partitioning near a singular position (n_dependent given), they are offered as
+        # pivots last
+        if self.prefer_free and J.shape[0]:
+            rest = [i for i in others if i not in self.prefer_free]
+            pick = full_pivot_elimination(J, rest) if rest and n_dependent is None else ([], [], np.ones(0))
+            if len(pick[1]) < len(dep):
+                pick = full_pivot_elimination(J, rest + [i for i in others if i in self.prefer_free],
+                                              n_pivots=n_dependent)
+            rows, dep, piv = pick
         free = np.array([i for i in others if i not in dep], dtype=int)
         ratio = float(piv.min() / piv.max()) if len(piv) else 1.0
         self._set_partition(Partition(free, np.array(dep, dtype=int), np.array(rows, dtype=int), ratio), z)
