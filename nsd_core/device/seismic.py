@@ -183,10 +183,15 @@ def _kinetic_and_height(mech, kin, v_g):
 def simulate_seismic(params: Params, structure: Structure, ground: GroundMotion, duration: float | None = None,
                      dt_out: float = 1e-3, device: bool = True, method: str = DEFAULT_SOLVER["method"],
                      rtol: float = DEFAULT_SOLVER["rtol"], atol: float = DEFAULT_SOLVER["atol"],
-                     max_step: float = DEFAULT_SOLVER["max_step"], progress=None) -> RunResult:
+                     max_step: float = DEFAULT_SOLVER["max_step"], progress=None,
+                     backend: str = DEFAULT_SOLVER["backend"]) -> RunResult:
     """The seismic response from relative rest at t = 0, sampled every ``dt_out`` up to ``duration``
     (default: the ground motion's; longer: free vibration after it). Raises RodReachError (exit 4),
-    DriveError (outside the laws' validity), SolverError (exit 3)."""
+    DriveError (outside the laws' validity), SolverError (exit 3). backend: "auto" and "scipy" run
+    SemiRecursiveSystem under scipy's solvers (the compiled path has no ground-record motion yet),
+    "numpy" the same on the numpy specification."""
+    if backend not in ("auto", "scipy", "numpy"):
+        raise ParameterError(f"backend = {backend!r}: the seismic mode offers auto, scipy, numpy")
     duration = ground.duration if duration is None else float(duration)
     if not (math.isfinite(duration) and duration > 0):
         raise ParameterError(f"duration = {duration!r}: must be > 0 s")
@@ -194,6 +199,7 @@ def simulate_seismic(params: Params, structure: Structure, ground: GroundMotion,
         raise ParameterError(f"dt_out = {dt_out!r}: must be in (0, duration]")
     start = time.perf_counter()
     system, g, forces = seismic_system(params, structure, ground, device)
+    system.fast = backend != "numpy"
     mech, ix = system.m, forces.ix
     z0 = rest_coordinates(g) if device else np.zeros(mech.n)
     extra0 = np.concatenate([g.initial_wire_stress(), [g.spring_zeta0]]) if device else np.zeros(0)
