@@ -22,11 +22,20 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from numba import njit
 
 from nsd_core.device.params import ParameterError, Params
 
 PATHS = ("line", "circle", "ellipse", "figure8")
 MAX_TABLE_BYTES = 50_000_000  # ~1e6 rows of t,x,y: far beyond any record a run could follow
+
+
+@njit(cache=True)
+def sine_displacement(amplitude, omega, t):
+    """u = A sin(omega t) and its first two derivatives; compiled, so the compiled model's motion
+    (nsd_core.device.compiled) and Drive.displacement are one formula."""
+    s = np.sin(omega * t)
+    return amplitude * s, amplitude * omega * np.cos(omega * t), -amplitude * omega * omega * s
 
 
 class DriveError(ValueError):
