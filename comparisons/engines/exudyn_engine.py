@@ -63,6 +63,7 @@ from exudyn.itemInterface import (LoadForceVector, MarkerNodePosition, ObjectGen
 from exudyn.rigidBodyUtilities import RigidBodyInertia
 
 from comparisons.engines.base import EngineError, merged_settings
+from comparisons.engines.perturb import perturbed
 from nsd_core.drive import Drive
 from nsd_core.forces import advance_spring_zeta, advance_wire_stress, rope_tension, spring_push, wire_tension
 from nsd_core.geometry import device_geometry
@@ -194,6 +195,7 @@ class ExudynEngine:
         "state_integrator": "heun",   # hysteretic states per step in strain: "heun" or "rk4" (advance_*)
         "rod_axial_inertia": 1e-3,    # rod spin inertia / its transverse inertia (must be > 0)
         "drive_offsets": "prestep",   # "prestep": offset = u(t_end) set once per step; "user_function"
+        "perturb": None,              # a modelling error injected into this model only (engines/perturb.py)
     }
 
     @staticmethod
@@ -212,7 +214,7 @@ class ExudynEngine:
         s = merged_settings(self.default_settings, settings, self.name)
         _check_settings(s)
         drive.check_followable(params)
-        g = device_geometry(params)
+        g = perturbed(device_geometry(params), s["perturb"])
         try:
             return self._run(g, drive, s, drive.output_times(), self.steps_per_output(drive, s))
         except EngineError:

@@ -33,7 +33,8 @@ the previous step and a is the acceleration that makes the integrator land on u(
 reset to the prescribed values every step, so the tracking error is the (reported) drift of one
 step, ~1e-15 m. The drive force is measured from the equation of motion of the drive joint,
 F = m_c u'' - (qfrc_passive + qfrc_constraint - qfrc_bias)[drive], i.e. m_c u'' minus rod, ropes
-and wires on the cap along psi (the rod's share is the connect's constraint force).
+and wires on the cap along psi (the rod's share is the connect's constraint force); m_c is read
+back from the compiled mjModel, so the force is that of MuJoCo's own model.
 
 Constraint softness: MuJoCo's equality constraints are soft. solref time constant
 ``solref_factor`` x timestep (2 = the smallest MuJoCo accepts) with solimp d = 0.9999 keeps the loop
@@ -69,6 +70,7 @@ from nsd_core.params import Params
 from nsd_core.results import RunResult
 
 from .base import EngineError, merged_settings
+from .perturb import perturbed
 
 _EULER_LIKE = ("Euler", "implicit", "implicitfast")
 
@@ -201,6 +203,7 @@ class MujocoEngine:
         "solver_tolerance": 1e-12,
         "solver_iterations": 20,
         "closure_limit": 1e-4,       # [m] a larger loop gap is an instability (EngineError)
+        "perturb": None,             # a modelling error injected into this model only (engines/perturb.py)
     }
 
     def run(self, params: Params, drive: Drive, settings: dict | None = None, zero_drive: bool = False) -> RunResult:
@@ -209,7 +212,7 @@ class MujocoEngine:
         if s["integrator"] not in _EULER_LIKE + ("RK4",):
             raise EngineError(f"mujoco: integrator {s['integrator']!r} not supported")
         drive.check_followable(params)
-        g = device_geometry(params)
+        g = perturbed(device_geometry(params), s["perturb"])
         t_out = drive.output_times()
         dt_out = float(t_out[1] - t_out[0])
         n_sub = max(1, math.ceil(dt_out / float(s["timestep"]) - 1e-9))
@@ -237,14 +240,14 @@ class MujocoEngine:
             acc = 2.0 * (u[2:] - u[1:-1] - h * ud[1:-1]) / (h * h)
             vel_at = ud[1:].tolist()
         u_at, acc_at = u[1:].tolist(), acc.tolist()
-        m_c, M = g.cap.mass, float(s["drive_armature"])
+        tip, cap_id = model.site("rod_tip").id, model.body("cap").id
+        m_c, M = float(model.body_mass[cap_id]), float(s["drive_armature"])   # the cap's mass in this model
 
         n_out = len(t_out)
         cap_pos, wall_z = np.zeros((n_out, 3)), np.zeros(n_out)
         sig, zet, clo, F = np.zeros((n_out, g.n_wires)), np.zeros(n_out), np.zeros(n_out), np.zeros(n_out)
         qpos, qvel, qfa = data.qpos, data.qvel, data.qfrc_applied
         qpas, qcon, qbias = data.qfrc_passive, data.qfrc_constraint, data.qfrc_bias
-        tip, cap_id = model.site("rod_tip").id, model.body("cap").id
         track = 0.0
         previous_cb = mujoco.get_mjcb_passive()
         t0, c0 = time.perf_counter(), time.process_time()
