@@ -22,6 +22,7 @@ METRICS = {  # name -> (unit, description)
     "region_shift_rel": ("-", "largest stiffness-region boundary shift / amplitude"),
     "closure_max": ("m", "largest loop-closure violation"),
     "tracking_error": ("m", "largest drive tracking error"),
+    "energy_balance_rel": ("-", "|drive work - (wires + spring hysteresis + stored change)| / drive work, steady cycle"),
 }
 CASE_KEYS = {"name", "amplitude", "frequency", "direction_deg", "cycles", "samples_per_cycle", "params",
              "settings", "engine_params"}
@@ -107,11 +108,43 @@ def load_cases(path: str | Path | None = None, base_params: Params | None = None
     return out
 
 
-def load_tolerances(path: str | Path | None = None) -> dict[str, float]:
+class Tolerances(dict):
+    """Default limits (metric -> value; a plain dict, as before) plus overrides per engine and per
+    engine and case: ``limit(engine, case, metric)`` takes the most specific one."""
+
+    def __init__(self, defaults: dict[str, float], engines: dict[str, dict] | None = None):
+        super().__init__(defaults)
+        self.engines = engines or {}
+
+    def limit(self, engine: str, case: str, metric: str) -> float | None:
+        e = self.engines.get(engine, {})
+        return e.get("case", {}).get(case, {}).get(metric, e.get(metric, self.get(metric)))
+
+
+def _metric_limits(where: str, table: dict) -> dict[str, float]:
+    for k, v in table.items():
+        if k not in METRICS:
+            raise ParameterError(f"{where}{k}: unknown metric; allowed: {', '.join(METRICS)}")
+        _number(f"{where}{k}", v)
+    return {k: float(v) for k, v in table.items()}
+
+
+def load_tolerances(path: str | Path | None = None) -> Tolerances:
+    """[limits] metric = value, optionally [limits.ENGINE] metric = value and
+    [limits.ENGINE.case.CASE] metric = value (more specific wins); a flat file of metrics still works."""
+    from .engines import ENGINES
     data = _read(Path(path or DEFAULT_TOLERANCES), "--tolerances")
     limits = data.get("limits", data)
-    for k, v in limits.items():
-        if k not in METRICS:
-            raise ParameterError(f"tolerance {k}: unknown metric; allowed: {', '.join(METRICS)}")
-        _number(f"tolerance {k}", v)
-    return {k: float(v) for k, v in limits.items()}
+    defaults = _metric_limits("tolerance ", {k: v for k, v in limits.items() if not isinstance(v, dict)})
+    engines = {}
+    for name, table in ((k, v) for k, v in limits.items() if isinstance(v, dict)):
+        if name not in ENGINES:
+            raise ParameterError(f"tolerance {name}: neither a metric nor an engine; allowed metrics: "
+                                 f"{', '.join(METRICS)}; engines: {', '.join(ENGINES)}")
+        own = _metric_limits(f"tolerance {name}.", {k: v for k, v in table.items() if k != "case"})
+        cases = table.get("case", {})
+        if not isinstance(cases, dict):
+            raise ParameterError(f"tolerance {name}.case = {cases!r}: must be a table of cases")
+        own["case"] = {c: _metric_limits(f"tolerance {name}.case.{c}.", t) for c, t in cases.items()}
+        engines[name] = own
+    return Tolerances(defaults, engines)

@@ -18,7 +18,10 @@ from nsd_core.cycle import analyse
 from nsd_core.params import Params
 from nsd_core.results import RunResult, atomic_write_json, versions, write_csv
 
+from nsd_core.geometry import device_geometry
+
 from .config import METRICS, Case
+from .energy import energy_balance_rel
 from .engines import REFERENCE, get_engine
 from .metrics import own_metrics, pair_metrics
 
@@ -86,7 +89,8 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
                      for m in failed_metrics] + [f"{c}: {e} failed: {runs[c][e]['message']}" for c, e in failed_engines],
         "date": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds"), "git_revision": git_revision(),
         "reference": REFERENCE, "engines": engines, "cases": [c.describe() for c in cases],
-        "tolerances": tolerances, "metric_units": {k: v[0] for k, v in METRICS.items()},
+        "tolerances": dict(tolerances), "tolerances_by_engine": getattr(tolerances, "engines", {}),
+        "metric_units": {k: v[0] for k, v in METRICS.items()},
         "params": cases[0].params.describe() if cases else [], "runs": runs, "metrics": metrics,
         "total_wall_time": time.perf_counter() - started, "workers": workers,
     }
@@ -99,6 +103,11 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
     return summary
 
 
+def _limit(tolerances, engine, case, metric):
+    """Per-engine-and-case limits when the tolerances have them (config.Tolerances), else the flat one."""
+    return tolerances.limit(engine, case, metric) if hasattr(tolerances, "limit") else tolerances.get(metric)
+
+
 def _metrics(cases, engines, tolerances, runs, results) -> list[dict]:
     """Every engine against the reference (gated) and every other pair (reported, not gated)."""
     rows = []
@@ -108,17 +117,20 @@ def _metrics(cases, engines, tolerances, runs, results) -> list[dict]:
     for c in cases:
         for e in engines:
             if (c.name, e) in results:
-                for k, v in own_metrics(results[(c.name, e)]).items():
-                    if k in tolerances:
-                        rows.append(_row(c.name, e, None, k, v, tolerances[k], True))
+                own = own_metrics(results[(c.name, e)])
+                own["energy_balance_rel"] = energy_balance_rel(results[(c.name, e)], device_geometry(c.params),
+                                                               c.drive.frequency, c.drive.unit_vector)
+                for k, v in own.items():
+                    if (lim := _limit(tolerances, e, c.name, k)) is not None:
+                        rows.append(_row(c.name, e, None, k, v, lim, True))
         for a, b, gated in pairs:
             if (c.name, a) in results and (c.name, b) in results:
                 ra, rb = runs[c.name][a]["summary"], runs[c.name][b]["summary"]
                 m = pair_metrics(results[(c.name, a)], results[(c.name, b)], ra, rb, c.drive.amplitude,
                                  c.drive.frequency)
                 for k, v in m.items():
-                    if k in tolerances:
-                        rows.append(_row(c.name, a, b, k, v, tolerances[k], gated))
+                    if (lim := _limit(tolerances, a, c.name, k)) is not None:
+                        rows.append(_row(c.name, a, b, k, v, lim, gated))
     return rows
 
 

@@ -35,6 +35,7 @@ class ReportData:
     benchmark: dict | None = None
     study: list[dict] = field(default_factory=list)
     tables: list[dict] = field(default_factory=list)  # rows of nsd tables' tables.csv, if present
+    power: dict | None = None  # power.json of nsd compare --power, if present
 
     @property
     def cases(self) -> list[dict]:
@@ -103,6 +104,10 @@ def load(results_dir: str | Path) -> ReportData:
     if bench.is_file():
         b = _json(bench, "written by nsd benchmark")
         data.benchmark = b if isinstance(b, dict) and isinstance(b.get("problems"), dict) else None
+    power = root / "power.json"
+    if power.is_file():
+        pw = _json(power, "written by nsd compare --power")
+        data.power = pw if isinstance(pw, dict) and isinstance(pw.get("table"), list) else None
     data.study = _load_study(root / "study")
     data.tables = _load_tables(root / "study" / "tables.csv")
     return data
@@ -163,6 +168,9 @@ def pages(data: ReportData) -> list[tuple[str, Callable]]:
         out.append((f"stiffness{tag}", lambda g=group: figures.stiffness_figure(data, g)))
     for i, chunk in enumerate(figures.chunks([c["name"] for c in data.cases], 4)):
         out.append((f"breakdown{'' if i == 0 else f'_{i + 1}'}", lambda c=chunk: figures.breakdown_figure(data, c)))
+    if data.power:
+        from .power_page import power_figure
+        out.append(("power", lambda: power_figure(data)))
     out.append(("convergence", lambda: figures_extra.convergence_figure(data)))
     out.append(("cost", lambda: figures_extra.cost_figure(data)))
     for i, chunk in enumerate(figures.chunks([c["name"] for c in data.cases], 4)):

@@ -14,7 +14,8 @@ WIDTH_PT = 0.88 * PORTRAIT[0] * 72  # usable text width [pt]
 METRIC_DESC = {"max_dF_rel": "max |F - F_ref| / max |F_ref|", "rms_dF_rel": "RMS(F - F_ref) / max |F_ref|",
                "loop_area_rel": "|loop area - ref| / |ref|", "peak_force_rel": "|peak |F| - ref| / ref",
                "region_shift_rel": "largest stiffness-region boundary shift / A",
-               "closure_max": "largest loop-closure violation", "tracking_error": "largest drive tracking error"}
+               "closure_max": "largest loop-closure violation", "tracking_error": "largest drive tracking error",
+               "energy_balance_rel": "|drive work - dissipated - stored change| / drive work"}
 
 
 def _wrap(text: str, size: float, bold: bool = False) -> str:
@@ -68,7 +69,8 @@ def metric_rows(data) -> tuple[list[tuple[str, float, str]], list[list[str]], li
     rows, colors = [], []
     short = [fmt(s["tolerances"][m], 2) for m in names]
     short = [f"{s['tolerances'][m]:.0e}" if "e" in t else t for m, t in zip(names, short)]
-    limit_row = ["limit", "", ""] + [f"\u2264 {t}" for t in short] + [""]
+    per_engine = bool(s.get("tolerances_by_engine"))   # then the rows have their own (tighter) limits
+    limit_row = ["default limit" if per_engine else "limit", "", ""] + [f"\u2264 {t}" for t in short] + [""]
     rows.append(limit_row)
     colors.append([GREY] * len(limit_row))
     keyed: dict[tuple, dict] = {}

@@ -17,6 +17,7 @@ balance, as such a typo would.
 """
 from __future__ import annotations
 
+import copy
 import dataclasses
 
 import numpy as np
@@ -90,8 +91,10 @@ def perturbed(g: DeviceGeometry, spec: dict | None) -> DeviceGeometry:
             raise ParameterError(f"perturb.index = {i}: allowed 0 .. {len(pts) - 1}")
         pts[i, AXES[spec.get("axis", "z")]] += by
         return dataclasses.replace(g, **{what + "s": pts})
-    if what == "gravity":
-        return dataclasses.replace(g, params=g.params.replace(gravity=g.params.gravity * (1.0 + by)))
+    if what == "gravity":   # Params rejects g <= 0 as input; an injected error may switch it off
+        p = copy.copy(g.params)
+        object.__setattr__(p, "gravity", g.params.gravity * (1.0 + by))
+        return dataclasses.replace(g, params=p)
     if what == "rod_length":
         return device_geometry(g.params.replace(rod_length=g.params.rod_length + by))
     if what == "rope_stiffness":
