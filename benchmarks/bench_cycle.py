@@ -16,9 +16,9 @@ import statistics
 import time
 from pathlib import Path
 
-from nsd_core.device import simulate
-from nsd_core.drive import Drive
-from nsd_core.params import Params
+from nsd_core.device.model import simulate
+from nsd_core.device.drive import Drive
+from nsd_core.device.params import Params
 
 CASES = [(0.015, 1.0), (0.015, 10.0), (0.0255, 1.0), (0.0255, 10.0)]
 

@@ -27,9 +27,9 @@ import numpy as np
 
 from comparisons.engines.base import EngineError
 from comparisons.engines.exudyn_engine import ExudynEngine
-from nsd_core.drive import Drive
-from nsd_core.params import Params
-from nsd_core.results import atomic_write_json
+from nsd_core.device.drive import Drive
+from nsd_core.device.params import Params
+from nsd_core.device.results import atomic_write_json
 
 from refcompare import discrepancy as compare, in_house_reference
 

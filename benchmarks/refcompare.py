@@ -5,10 +5,10 @@ import time
 
 import numpy as np
 
-from nsd_core.cycle import loop_area
-from nsd_core.device import simulate
-from nsd_core.drive import Drive
-from nsd_core.params import Params
+from nsd_core.device.cycle import loop_area
+from nsd_core.device.model import simulate
+from nsd_core.device.drive import Drive
+from nsd_core.device.params import Params
 
 
 def last_cycle(t, drive: Drive) -> slice:

@@ -7,8 +7,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from nsd_core.drive import Drive
-from nsd_core.params import ParameterError, Params, load_params
+from nsd_core.device.drive import Drive
+from nsd_core.device.params import ParameterError, Params, load_params
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_CASES = HERE / "cases.toml"
@@ -66,9 +66,19 @@ def _number(where: str, v, positive=True) -> float:
 
 def load_convergence(path: str | Path | None, cases: list[Case]) -> dict | None:
     """The [convergence] table of a case file, validated; None when the file has none."""
-    from .convergence import parse_convergence
     raw = _read(Path(path or DEFAULT_CASES), "--cases").get("convergence")
     return parse_convergence(raw, cases) if raw else None
+
+def parse_convergence(raw: dict, cases: list[Case]) -> dict:
+    by_name = {c.name: c for c in cases}
+    if raw.get("case") not in by_name:
+        raise ParameterError(f"convergence.case = {raw.get('case')!r}: must name a case of the file")
+    sweep = raw.get("sweep", {})
+    for engine, spec in sweep.items():
+        if not isinstance(spec, dict) or "setting" not in spec or not spec.get("values"):
+            raise ParameterError(f"convergence.sweep.{engine}: needs setting = NAME and values = [..]")
+    return {"case": by_name[raw["case"]], "cycles": int(raw.get("cycles", 1)),
+            "reference": dict(raw.get("reference", {"rtol": 1e-10})), "sweep": sweep}
 
 
 def load_cases(path: str | Path | None = None, base_params: Params | None = None) -> list[Case]:
@@ -132,7 +142,7 @@ def _metric_limits(where: str, table: dict) -> dict[str, float]:
 def load_tolerances(path: str | Path | None = None) -> Tolerances:
     """[limits] metric = value, optionally [limits.ENGINE] metric = value and
     [limits.ENGINE.case.CASE] metric = value (more specific wins); a flat file of metrics still works."""
-    from .engines import ENGINES
+    from comparisons.engines import ENGINES
     data = _read(Path(path or DEFAULT_TOLERANCES), "--tolerances")
     limits = data.get("limits", data)
     defaults = _metric_limits("tolerance ", {k: v for k, v in limits.items() if not isinstance(v, dict)})

@@ -18,25 +18,13 @@ import dataclasses
 import multiprocessing
 from concurrent.futures import ProcessPoolExecutor
 
-from nsd_core.params import ParameterError
 
-from .config import Case
-from .engines import REFERENCE
-from .harness import run_job
-from .metrics import pair_metrics
-from nsd_core.cycle import analyse
+from comparisons.config import Case
+from comparisons.engines import REFERENCE, run_job
+from comparisons.metrics import pair_metrics
+from nsd_core.device.cycle import analyse
 
 
-def parse_convergence(raw: dict, cases: list[Case]) -> dict:
-    by_name = {c.name: c for c in cases}
-    if raw.get("case") not in by_name:
-        raise ParameterError(f"convergence.case = {raw.get('case')!r}: must name a case of the file")
-    sweep = raw.get("sweep", {})
-    for engine, spec in sweep.items():
-        if not isinstance(spec, dict) or "setting" not in spec or not spec.get("values"):
-            raise ParameterError(f"convergence.sweep.{engine}: needs setting = NAME and values = [..]")
-    return {"case": by_name[raw["case"]], "cycles": int(raw.get("cycles", 1)),
-            "reference": dict(raw.get("reference", {"rtol": 1e-10})), "sweep": sweep}
 
 
 def convergence_study(spec: dict, engines: list[str], workers: int) -> dict:

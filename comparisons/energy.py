@@ -16,9 +16,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from nsd_core.cycle import steady_cycle
-from nsd_core.geometry import DeviceGeometry
-from nsd_core.results import RunResult
+from nsd_core.device.cycle import steady_cycle
+from nsd_core.device.geometry import DeviceGeometry
+from nsd_core.device.results import RunResult
 
 
 def _trapz(y, x) -> float:

@@ -14,29 +14,19 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Any, Callable
 
-from nsd_core.cycle import analyse
-from nsd_core.params import Params
-from nsd_core.results import RunResult, atomic_write_json, versions, write_csv
+from nsd_core.device.cycle import analyse
+from nsd_core.device.results import RunResult, atomic_write_json, versions, write_csv
 
-from nsd_core.geometry import device_geometry
-
-from .config import METRICS, Case
-from .energy import energy_balance_rel
-from .engines import REFERENCE, get_engine
-from .metrics import own_metrics, pair_metrics
+from comparisons.config import METRICS, Case
+from comparisons.engines import REFERENCE, run_job
+from comparisons.convergence import convergence_study
+from comparisons.metrics import own_metrics, pair_metrics
+from comparisons.energy import energy_balance_rel
+from nsd_core.device.geometry import device_geometry
 
 ENGINE_COST = {"semirecursive": 1.0, "mujoco": 1.0, "exudyn": 3.0}  # rough relative cost, for scheduling
 
 
-def run_job(engine: str, params: Params, drive, settings: dict) -> dict[str, Any]:
-    """One engine on one case, in a worker process. Never raises: failures come back as data."""
-    start = time.perf_counter()
-    try:
-        result = get_engine(engine).run(params, drive, settings or None)
-        return {"status": "ok", "result": result, "wall_time": time.perf_counter() - start}
-    except Exception as e:  # an engine's failure is reported for its case; the others go on
-        msg = " ".join(f"{type(e).__name__}: {e}".split())
-        return {"status": "error", "message": msg[:500], "wall_time": time.perf_counter() - start}
 
 
 def git_revision() -> str:
@@ -96,7 +86,6 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
     }
     summary["versions"] = versions()
     if convergence:
-        from .convergence import convergence_study
         log("  convergence study ...")
         summary["convergence"] = convergence_study(convergence, engines, workers)
     atomic_write_json(out / "results.json", summary)

@@ -3,16 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from nsd_core.cycle import loop_area, steady_cycle
-from nsd_core.results import RunResult
-
-
-def phase_resample(result: RunResult, frequency: float, column: str, n: int = 2000) -> np.ndarray:
-    """The steady cycle of ``column`` on the phase grid 0 .. 1 (n + 1 points)."""
-    cyc = steady_cycle(result, frequency)
-    t = result["t"][cyc]
-    phase = (t - t[0]) * frequency
-    return np.interp(np.linspace(0.0, 1.0, n + 1), phase, result[column][cyc])
+from nsd_core.device.cycle import loop_area, phase_resample, steady_cycle
+from nsd_core.device.results import RunResult
 
 
 def region_boundaries(summary: dict) -> list[float]:

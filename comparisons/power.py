@@ -16,16 +16,16 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any, Callable
 
-from nsd_core.cycle import analyse
-from nsd_core.geometry import device_geometry
-from nsd_core.results import atomic_write_json
+from nsd_core.device.cycle import analyse
+from nsd_core.device.geometry import device_geometry
+from nsd_core.device.results import atomic_write_json
 
-from .config import Case
-from .energy import energy_balance_rel
-from .engines import REFERENCE
-from .engines.perturb import describe
-from .harness import _limit, run_job
-from .metrics import own_metrics, pair_metrics
+from comparisons.config import Case
+from comparisons.energy import energy_balance_rel
+from comparisons.engines import REFERENCE, run_job
+from comparisons.engines.perturb import describe
+from comparisons.harness import _limit
+from comparisons.metrics import own_metrics, pair_metrics
 
 # the list: each body's mass +-1 %, each kind of attachment point moved 0.2 mm (up and
 # radially), the rod +-0.2 mm, gravity off, one rope's stiffness +-1 %, the spring's constants

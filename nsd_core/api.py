@@ -1,8 +1,8 @@
 """The library entry point for one drive: what ``nsd cycle`` does, as a function.
 
     from nsd_core.api import cycle
-    from nsd_core.drive import Drive
-    from nsd_core.params import Params
+    from nsd_core.device.drive import Drive
+    from nsd_core.device.params import Params
     result, summary = cycle(Params().replace(rope_stiffness=7e5), Drive(0.015, 1.0))
     result["F"], summary["loop_area"], summary["stiffness_regions"]
 """
@@ -10,11 +10,11 @@ from __future__ import annotations
 
 from typing import Any
 
-from .cycle import analyse
-from .device import simulate
-from .drive import Drive
-from .params import Params
-from .results import RunResult, versions
+from nsd_core.device.cycle import analyse
+from nsd_core.device.model import simulate
+from nsd_core.device.drive import Drive
+from nsd_core.device.params import Params
+from nsd_core.device.results import RunResult, versions
 
 
 def cycle(params: Params, drive: Drive, progress=None, **solver) -> tuple[RunResult, dict[str, Any]]:

@@ -18,10 +18,10 @@ from typing import Any, Callable
 
 import numpy as np
 
-from nsd_core.params import ParameterError
-from nsd_core.results import RunResult, read_csv
+from nsd_core.device.params import ParameterError
+from nsd_core.device.results import RunResult, read_csv
 
-from . import style  # noqa: F401  (selects the Agg backend before pyplot is imported anywhere)
+from reports import style  # noqa: F401  (selects the Agg backend before pyplot is imported anywhere)
 
 REQUIRED = {"verdict": str, "exit_code": int, "failures": list, "engines": list, "cases": list, "runs": dict,
             "metrics": list, "tolerances": dict}
@@ -156,7 +156,7 @@ def _load_study(folder: Path) -> list[dict]:
 
 def pages(data: ReportData) -> list[tuple[str, Callable]]:
     """(file stem, figure function) per page, in order. Each function returns one Figure."""
-    from . import figures, figures_extra, pages as text_pages
+    from reports import figures, figures_extra, pages as text_pages
     out: list[tuple[str, Callable]] = []
     for i, fn in enumerate(text_pages.summary_pages(data)):
         out.append((f"summary{'' if i == 0 else f'_{i + 1}'}", fn))

@@ -10,10 +10,9 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 from matplotlib.ticker import FuncFormatter
 
-from comparisons.metrics import phase_resample
-from nsd_core.cycle import loading_quarter, steady_cycle, tangent_stiffness
+from nsd_core.device.cycle import loading_quarter, phase_resample, steady_cycle, tangent_stiffness
 
-from .style import GREY, LANDSCAPE, RED, SHADE, fmt, new_figure, no_data, style
+from reports.style import GREY, LANDSCAPE, RED, SHADE, fmt, new_figure, no_data, style
 
 CLOSURE_FLOOR = 1e-18  # [m]; exact zeros are drawn here on the log axis
 

@@ -9,7 +9,7 @@ import numpy as np
 from matplotlib.lines import Line2D
 from matplotlib.ticker import NullFormatter
 
-from .style import GREEN, GREY, LANDSCAPE, RED, color, fmt, new_figure, no_data, style, table
+from reports.style import GREEN, GREY, LANDSCAPE, RED, color, fmt, new_figure, no_data, style, table
 
 SETTING_UNITS = {"rtol": "-", "atol": "-", "timestep": "s", "step_size": "s", "max_step": "s",
                  "solver_tolerance": "-", "newton_rel_tol": "-"}

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 
-from .style import (GREEN, GREY, ORANGE, PORTRAIT, RED, fmt, natural, new_figure, rows_per_page, table, text_width,
+from reports.style import (GREEN, GREY, ORANGE, PORTRAIT, RED, fmt, natural, new_figure, rows_per_page, table, text_width,
                     wrap_rows, wrap_width)
 
 FS = 7.0           # table font size [pt]

@@ -1,7 +1,7 @@
-"""An independent quasi-static reference of the driven device, written from nsd-model.md alone.
+"""An independent quasi-static reference of the driven device, written from docs/model.md alone.
 
 It imports nothing from nsd_core: Table 2 is read from references/paper-data.toml, the assumed
-values are copied from nsd-model.md (and named so), and the three force laws (Eqs. 16-18) are
+values are copied from docs/model.md (and named so), and the three force laws (Eqs. 16-18) are
 written out again here. Where nsd_core.quasistatic closes the loop with a single coordinate and
 gets the drive force by virtual work, this one writes Newton's equations body by body:
 
@@ -29,7 +29,7 @@ _DATA = tomllib.loads((Path(__file__).resolve().parents[1] / "references" / "pap
 T2 = _DATA["table2"]
 K_ROPE = _DATA["ropes"]["stiffness"]
 F_PRESS = _DATA["table6"]["precompression_force"][-1]   # Table 6's 3800 N column = Table 5's 0.03 m
-# assumed in nsd-model.md (the paper does not give them)
+# assumed in docs/model.md (the paper does not give them)
 GRAVITY = 9.81
 H_RU = 0.0189                                                             # rope upper end above the cap ref.
 H_W = (T2["wire_lower_radius"] - T2["wire_upper_radius"]) / math.tan(math.radians(T2["wire_inclination_deg"]))
@@ -89,7 +89,7 @@ def sma_step(eps0, eps1, sigma, substeps=2):
 
 
 class Device:
-    """The device of nsd-model.md at rest, from Table 2 and the assumed values."""
+    """The device of docs/model.md at rest, from Table 2 and the assumed values."""
 
     def __init__(self, wire_lower_radius=T2["wire_lower_radius"]):
         self.ld, self.ls = T2["rod_length"], T2["spring_length_precompressed"]

@@ -6,11 +6,11 @@ import sys
 import numpy as np
 import pytest
 
-from nsd_core.results import read_csv
+from nsd_core.device.results import read_csv
 
 
 def nsd(*args):
-    return subprocess.run([sys.executable, "-m", "nsd_core.cli", *args], capture_output=True, text=True, timeout=600)
+    return subprocess.run([sys.executable, "-m", "nsd_cli.main", *args], capture_output=True, text=True, timeout=600)
 
 
 @pytest.mark.parametrize("A,f", [(0.015, 1.0), (0.015, 10.0), (0.0255, 1.0), (0.0255, 10.0)])

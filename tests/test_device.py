@@ -2,10 +2,11 @@
 import numpy as np
 import pytest
 
-from nsd_core.cycle import analyse, steady_cycle
-from nsd_core.device import simulate
-from nsd_core.drive import Drive
-from nsd_core.params import Params
+from nsd_core.device.cycle import analyse, steady_cycle
+from nsd_core.device.model import simulate
+from nsd_core.device.drive import Drive
+from nsd_core.device.params import Params
+from nsd_core.device.quasistatic import quasi_static_path
 from independent_reference import quasi_static_force, rod_force_from_wall_balance
 
 P = Params()
@@ -67,4 +68,4 @@ def test_edge_cycle_has_figure7_shape_and_reports_slack_ropes():
     assert signs[:2] == ["+", "-"]  # positive at the origin (wires), then the negative plateau
     assert signs[-1] == "+"         # positive again towards X_max
     assert s["outside_working_range"] and any(e["kind"] == "ropes_slack" for e in s["events"])
-    assert 0.0245 < s["x_max"] <= 0.0255  # nsd-model.md: the ropes go slack near 25.46 mm
+    assert 0.0245 < s["x_max"] <= 0.0255  # docs/model.md: the ropes go slack near 25.46 mm

@@ -5,13 +5,13 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from nsd_core.device import BODY, device_mechanism
-from nsd_core.dynamics import kinetic_energy, potential_energy_gravity
-from nsd_core.geometry import device_geometry
-from nsd_core.integrate import integrate
-from nsd_core.mechanism import Cut, mechanism
-from nsd_core.params import Params
-from nsd_core.semirecursive import SemiRecursiveSystem
+from nsd_core.device.model import BODY, device_mechanism
+from nsd_core.engine.dynamics import kinetic_energy, potential_energy_gravity
+from nsd_core.device.geometry import device_geometry
+from nsd_core.engine.integrate import integrate
+from nsd_core.engine.mechanism import Cut, mechanism
+from nsd_core.device.params import Params
+from nsd_core.engine.semirecursive import SemiRecursiveSystem
 
 G = 9.81
 
@@ -113,8 +113,8 @@ def test_prescribed_coordinate_reaction_is_the_drive_force():
 @pytest.mark.parametrize("A", [0.015, 0.0255])
 def test_compiled_fast_path_equals_the_numpy_specification(A):
     """nsd_core.fastpath fuses the numpy steps of rhs_parts; both must give the same numbers."""
-    from nsd_core.device import device_system, rest_coordinates
-    from nsd_core.drive import Drive
+    from nsd_core.device.model import device_system, rest_coordinates
+    from nsd_core.device.drive import Drive
     d = Drive(A, 10.0)
     s, g = device_system(Params(), d)
     z0 = rest_coordinates(g)
@@ -134,10 +134,10 @@ def test_velocity_terms_obey_lagranges_equations_and_constraint_rates():
     """On the device tree at a random state: the recursive velocity terms equal
     -(M' z' - 1/2 d(z'^T M z')/dz) by finite differences, and c equals (d Phi_z/dt) z'."""
     import dataclasses
-    from nsd_core.closure import closure
-    from nsd_core.dynamics import tree_equations
-    from nsd_core.kinematics import positions, velocities
-    from nsd_core.device import rest_coordinates
+    from nsd_core.engine.closure import closure
+    from nsd_core.engine.dynamics import tree_equations
+    from nsd_core.engine.kinematics import positions, velocities
+    from nsd_core.device.model import rest_coordinates
     g = device_geometry(Params())
     m = dataclasses.replace(device_mechanism(g), gravity=np.zeros(3))
     rng = np.random.default_rng(7)

@@ -10,12 +10,12 @@ import pytest
 
 from comparisons.engines.base import EngineError
 from comparisons.engines.exudyn_engine import ExudynEngine
-from nsd_core.drive import Drive, DriveError
-from nsd_core.geometry import device_geometry
-from nsd_core.params import ParameterError, Params
-from nsd_core.quasistatic import quasi_static_path
+from nsd_core.device.drive import Drive, DriveError
+from nsd_core.device.geometry import device_geometry
+from nsd_core.device.params import ParameterError, Params
+from nsd_core.device.quasistatic import quasi_static_path
+from nsd_core.device.results import column_units
 from independent_reference import rod_force_from_wall_balance
-from nsd_core.results import column_units
 
 P = Params()
 G = device_geometry(P)
@@ -48,7 +48,7 @@ def test_result_has_the_common_columns_and_stats(cycle10):
 def test_rest_state_is_the_precompressed_equilibrium(rest):
     """Spring push = F_press, ropes pull F_press - W, nothing moves, no drive force.
 
-    The rest state is an exact static equilibrium (nsd-model.md) and the engine starts from it with
+    The rest state is an exact static equilibrium (docs/model.md) and the engine starts from it with
     consistent initial accelerations, so every residual is at round-off level; the bounds leave
     three orders of magnitude (1e-6 N against 3800 N, 1 nm against micrometre-level concerns).
     """

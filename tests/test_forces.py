@@ -6,10 +6,10 @@ import pytest
 from hypothesis import given, settings, strategies as st
 from scipy.integrate import solve_ivp
 
-from nsd_core.forces import (SpringLaw, WireLaw, advance_spring_zeta, advance_wire_stress, bouc_wen_slope,
+from nsd_core.device.forces import (SpringLaw, WireLaw, advance_spring_zeta, advance_wire_stress, bouc_wen_slope,
                              precompressed_spring, rope_tension, sma_wire, spring_push)
-from nsd_core.geometry import device_geometry
-from nsd_core.params import Params
+from nsd_core.device.geometry import device_geometry
+from nsd_core.device.params import Params
 
 G = device_geometry(Params())
 WIRE: WireLaw = G.wire
@@ -73,7 +73,7 @@ def test_sma_flag_shaped_loop_returns_near_zero():
     up, s_up, dn, s_dn = sma_loop(0.06)
     load = np.interp([0.02, 0.04], up, s_up) / 1e6
     unload = np.interp([0.02, 0.04], dn[::-1], s_dn[::-1]) / 1e6
-    # nsd-model.md: plateaus near 420-470 MPa on loading and 170-200 MPa on unloading
+    # docs/model.md: plateaus near 420-470 MPa on loading and 170-200 MPa on unloading
     assert 400 < load[0] < 480 and 400 < load[1] < 480
     assert 150 < unload[0] < 215 and 150 < unload[1] < 215
     assert abs(s_dn[-1]) < 0.1 * s_up.max()  # superelastic: returns near zero stress

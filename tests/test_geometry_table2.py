@@ -13,9 +13,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nsd_core.drive import Drive
-from nsd_core.geometry import device_geometry
-from nsd_core.params import Params
+from nsd_core.device.drive import Drive
+from nsd_core.device.geometry import device_geometry
+from nsd_core.device.params import Params
 
 TABLE2 = tomllib.loads((Path(__file__).resolve().parents[1] / "references" / "paper-data.toml").read_text())["table2"]
 G = device_geometry(Params())

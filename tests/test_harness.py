@@ -17,7 +17,7 @@ frequency = 10.0
 
 
 def nsd(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "nsd_core.cli", *args], capture_output=True, text=True,
+    return subprocess.run([sys.executable, "-m", "nsd_cli.main", *args], capture_output=True, text=True,
                           timeout=600, cwd=cwd)
 
 

@@ -1,6 +1,6 @@
 """The in-house model at 1 Hz against a quasi-static reference that shares no code with it.
 
-``independent_reference`` is written from nsd-model.md and Table 2 alone (no nsd_core import): an
+``independent_reference`` is written from docs/model.md and Table 2 alone (no nsd_core import): an
 error in nsd_core.geometry or nsd_core.forces, which every engine and nsd_core.quasistatic share,
 shows here. At 1 Hz and A = 15 mm the device is quasi-static to 4.8e-5 of the peak force
 (measured), so the limit is 1e-4; a wire's lower radius off by 5 % moves the force by ~4 %.
@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 
 from independent_reference import Device, T2, quasi_static_force, rod_force_from_wall_balance
-from nsd_core.cycle import steady_cycle
-from nsd_core.device import simulate
-from nsd_core.drive import Drive
-from nsd_core.params import Params
-from nsd_core.quasistatic import quasi_static_path
+from nsd_core.device.cycle import steady_cycle
+from nsd_core.device.model import simulate
+from nsd_core.device.drive import Drive
+from nsd_core.device.params import Params
+from nsd_core.device.quasistatic import quasi_static_path
 
 LIMIT_1HZ = 1e-4        # measured 4.8e-5 (A = 15 mm): the vertical dynamics left at 1 Hz
 D = Drive(0.015, 1.0, cycles=2, samples_per_cycle=500)

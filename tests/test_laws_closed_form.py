@@ -23,8 +23,8 @@ import math
 import numpy as np
 import pytest
 
-from nsd_core.forces import SpringLaw, WireLaw, advance_spring_zeta, advance_wire_stress, sma_stress_slope
-from nsd_core.params import Params
+from nsd_core.device.forces import SpringLaw, WireLaw, advance_spring_zeta, advance_wire_stress, sma_stress_slope
+from nsd_core.device.params import Params
 
 P = Params()
 KSD, BETA, GAMMA = P.spring_ksd, P.spring_beta, P.spring_gamma
@@ -96,7 +96,7 @@ def test_bouc_wen_with_beta_and_gamma_swapped_is_told_apart():
 
 
 def test_precompressed_rest_state_is_the_exact_monotonic_loading():
-    from nsd_core.forces import precompressed_spring
+    from nsd_core.device.forces import precompressed_spring
     x_pre, zeta0 = precompressed_spring(P.spring_kse, KSD, BETA, GAMMA, 1.0, P.precompression_force)
     z = KSD / (BETA + GAMMA) * (1 - math.exp(-(BETA + GAMMA) * x_pre))   # loading from rest, s = +1
     assert zeta0 == pytest.approx(z, rel=1e-12)

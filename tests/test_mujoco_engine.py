@@ -9,10 +9,10 @@ import pytest
 
 from comparisons.engines.base import EngineError
 from comparisons.engines.mujoco_engine import MujocoEngine, build_mjcf
-from nsd_core.drive import Drive
-from nsd_core.geometry import device_geometry
-from nsd_core.params import ParameterError, Params
-from nsd_core.quasistatic import quasi_static_path
+from nsd_core.device.drive import Drive
+from nsd_core.device.geometry import device_geometry
+from nsd_core.device.params import ParameterError, Params
+from nsd_core.device.quasistatic import quasi_static_path
 from independent_reference import rod_force_from_wall_balance
 
 P = Params()

@@ -4,8 +4,8 @@ import tomllib
 
 import pytest
 
-from nsd_core.drive import Drive, DriveError
-from nsd_core.params import FIELDS, ParameterError, Params, load_params, parse_set
+from nsd_core.device.drive import Drive, DriveError
+from nsd_core.device.params import FIELDS, ParameterError, Params, load_params, parse_set
 from tests.conftest import ROOT
 
 PAPER = tomllib.loads((ROOT / "references" / "paper-data.toml").read_text())
@@ -79,7 +79,7 @@ def test_derived_geometry_matches_table2():
     p = Params()
     assert p.wire_lower_radius == pytest.approx(0.0265, abs=1e-12)
     assert math.degrees(math.atan((p.wire_lower_radius - p.wire_upper_radius) / p.wire_span)) == pytest.approx(12.8)
-    # sweeping theta keeps h_w and R_w,u (nsd-model.md); theta = 0 gives a vertical wire
+    # sweeping theta keeps h_w and R_w,u (docs/model.md); theta = 0 gives a vertical wire
     assert Params(wire_inclination_deg=0.0).wire_lower_radius == pytest.approx(p.wire_upper_radius)
 
 

@@ -12,10 +12,10 @@ from comparisons.config import load_cases, load_tolerances
 from comparisons.energy import energy_balance_rel
 from comparisons.engines.perturb import check, describe, perturbed
 from comparisons.power import power_study
-from nsd_core.device import simulate
-from nsd_core.drive import Drive
-from nsd_core.geometry import device_geometry
-from nsd_core.params import ParameterError, Params
+from nsd_core.device.model import simulate
+from nsd_core.device.drive import Drive
+from nsd_core.device.geometry import device_geometry
+from nsd_core.device.params import ParameterError, Params
 
 P = Params()
 

@@ -8,8 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from nsd_core.problems import andrews, bricard, iftomm, slider_crank
-from nsd_core.problems.common import digits, library_error
+from nsd_core.engine.problems import andrews, bricard, iftomm, slider_crank
+from nsd_core.engine.problems.common import digits, library_error
 
 
 def test_andrews_digits_at_t003():
@@ -74,8 +74,8 @@ def test_bricard_rank_deficient_right_answer():
 
 
 def test_bricard_jacobian_rank_is_four():
-    from nsd_core.closure import closure
-    from nsd_core.kinematics import positions
+    from nsd_core.engine.closure import closure
+    from nsd_core.engine.kinematics import positions
     mech, _ = bricard.bricard_mechanism()
     s = np.linalg.svd(closure(mech, positions(mech, np.zeros(5)))[1], compute_uv=False)
     assert s[3] > 1e-3 and s[4] < 1e-12  # Grubler says 0 DOF; the rank says 1

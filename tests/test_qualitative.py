@@ -13,9 +13,9 @@ import functools
 import numpy as np
 import pytest
 
-from nsd_core.cycle import loop_area
-from nsd_core.params import Params
-from nsd_core.study import quasi_static_cycle
+from nsd_core.device.cycle import loop_area
+from nsd_core.device.params import Params
+from nsd_core.device.quasistatic import quasi_static_cycle
 
 A = 0.024
 
@@ -111,9 +111,9 @@ def test_figure7_regions_quasi_static():
 
 
 def test_figure7_regions_dynamic_10hz():
-    from nsd_core.cycle import loading_quarter
-    from nsd_core.device import simulate
-    from nsd_core.drive import Drive
+    from nsd_core.device.cycle import loading_quarter
+    from nsd_core.device.model import simulate
+    from nsd_core.device.drive import Drive
     r = simulate(Params(), Drive(A, 10.0, cycles=2, samples_per_cycle=160), rtol=1e-6, atol=1e-9)
     q = loading_quarter(r, 10.0)
     u, F = r["u"][q], r["F"][q]

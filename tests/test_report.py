@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-NSD = [sys.executable, "-m", "nsd_core.cli"]
+NSD = [sys.executable, "-m", "nsd_cli.main"]
 CASES = """[defaults]
 cycles = 1
 samples_per_cycle = 200

@@ -18,13 +18,16 @@ from pathlib import Path
 
 import pytest
 
-from nsd_core import cli
-from nsd_core.params import Params, load_params
-from nsd_core.study import PAPER_STUDIES, Store, make_designs, paper_designs, run_sweep
-from nsd_core.tables import TABLE5, TABLE6, table_rows, x_max_at_slack
+from nsd_cli import main as cli
+from nsd_core.device.params import Params, load_params
+from nsd_core.device.working_range import x_max_at_slack
+from nsd_core.study.designs import PAPER_STUDIES, make_designs, paper_designs
+from nsd_core.study.store import Store
+from nsd_core.study.sweep import run_sweep
+from nsd_core.study.tables import TABLE5, TABLE6, table_rows
 
 ROOT = Path(__file__).resolve().parents[1]
-PAPER_DATA = Path("/work/shared/reference/paper-data.toml")
+PAPER_DATA = Path(__file__).resolve().parents[1] / "references" / "paper-data.toml"
 FAST = dict(rtol=1e-5, atol=1e-8)
 TINY = ["--cycles", "1", "--samples-per-cycle", "32", "--rtol", "1e-5", "--atol", "1e-8"]
 
@@ -73,7 +76,7 @@ def test_paper_numbers_match_the_transcription():
 # ---------------------------------------------------------------- resumable sweeps
 def test_killed_sweep_resumes_and_stores_every_design_once(tmp_path):
     out = tmp_path / "sweep"
-    args = [sys.executable, "-m", "nsd_core.cli", "sweep", "--param", "rod_length", "--values",
+    args = [sys.executable, "-m", "nsd_cli.main", "sweep", "--param", "rod_length", "--values",
             "0.03,0.04,0.05", *TINY, "--workers", "1", "--out", str(out)]
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     proc = subprocess.Popen(args, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
@@ -159,7 +162,7 @@ def test_tables_cli_prints_and_writes_every_entry_within_the_goal(tmp_path, caps
 
 
 def test_slack_point_matches_the_stepped_quasi_static_path():
-    from nsd_core.quasistatic import x_max
+    from nsd_core.device.quasistatic import x_max
     for p in (Params(), Params(precompression_force=2400.0)):
         assert x_max_at_slack(p) == pytest.approx(x_max(p, step=1e-4), abs=6e-5)
 

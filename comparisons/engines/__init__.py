@@ -2,8 +2,10 @@
 from __future__ import annotations
 
 import importlib
+import time
+from typing import Any
 
-from nsd_core.params import ParameterError
+from nsd_core.device.params import ParameterError, Params
 
 ENGINES = {
     "semirecursive": ("comparisons.engines.semirecursive_engine", "SemirecursiveEngine"),
@@ -19,3 +21,18 @@ def get_engine(name: str):
         raise ParameterError(f"engine {name!r}: unknown; allowed: {', '.join(ENGINES)}")
     module, cls = ENGINES[name]
     return getattr(importlib.import_module(module), cls)()
+
+def run_engine(name: str, params: Params, drive, settings: dict | None = None):
+    """Run one engine by name: the runner the study layer is given to sweep any engine."""
+    return get_engine(name).run(params, drive, settings or None)
+
+
+def run_job(engine: str, params: Params, drive, settings: dict) -> dict[str, Any]:
+    """One engine on one case, in a worker process. Never raises: failures come back as data."""
+    start = time.perf_counter()
+    try:
+        result = run_engine(engine, params, drive, settings)
+        return {"status": "ok", "result": result, "wall_time": time.perf_counter() - start}
+    except Exception as e:  # an engine's failure is reported for its case; the others go on
+        msg = " ".join(f"{type(e).__name__}: {e}".split())
+        return {"status": "error", "message": msg[:500], "wall_time": time.perf_counter() - start}

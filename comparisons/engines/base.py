@@ -16,9 +16,9 @@ from __future__ import annotations
 
 from typing import Any, Protocol
 
-from nsd_core.drive import Drive
-from nsd_core.params import Params
-from nsd_core.results import RunResult
+from nsd_core.device.drive import Drive
+from nsd_core.device.params import Params
+from nsd_core.device.results import RunResult
 
 
 class EngineError(RuntimeError):
@@ -34,7 +34,7 @@ class Engine(Protocol):
 
 def merged_settings(defaults: dict[str, Any], settings: dict[str, Any] | None, engine: str) -> dict[str, Any]:
     """Defaults updated by ``settings``; an unknown key is bad input (a one-line ParameterError)."""
-    from nsd_core.params import ParameterError
+    from nsd_core.device.params import ParameterError
     out = dict(defaults)
     for k, v in (settings or {}).items():
         if k not in defaults:

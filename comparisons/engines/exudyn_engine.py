@@ -1,6 +1,6 @@
 """The device in Exudyn: redundant-coordinate rigid bodies, joints as constraints, the drive as motion.
 
-Model (nsd-model.md, drive mode). Base = ground. Wall, rod and cap are ``ObjectRigidBody`` bodies on
+Model (docs/model.md, drive mode). Base = ground. Wall, rod and cap are ``ObjectRigidBody`` bodies on
 ``NodeRigidBodyEP`` nodes (3 positions + 4 Euler parameters each, the Euler-parameter normalisation
 an algebraic equation: Exudyn's redundant coordinates). Constraints (index 3, Lagrange multipliers):
 - the wall's vertical guide: a GenericJoint ground-wall locking X, Y and the three rotations;
@@ -63,13 +63,13 @@ from exudyn.itemInterface import (LoadForceVector, MarkerNodePosition, ObjectGen
 from exudyn.rigidBodyUtilities import RigidBodyInertia
 
 from comparisons.engines.base import EngineError, merged_settings
+from nsd_core.device.drive import Drive
+from nsd_core.device.forces import advance_spring_zeta, advance_wire_stress, rope_tension, spring_push, wire_tension
+from nsd_core.device.geometry import device_geometry
+from nsd_core.device.outputs import device_columns
+from nsd_core.device.params import ParameterError, Params
+from nsd_core.device.results import RunResult
 from comparisons.engines.perturb import perturbed
-from nsd_core.drive import Drive
-from nsd_core.forces import advance_spring_zeta, advance_wire_stress, rope_tension, spring_push, wire_tension
-from nsd_core.geometry import device_geometry
-from nsd_core.outputs import device_columns
-from nsd_core.params import ParameterError, Params
-from nsd_core.results import RunResult
 
 
 class _Elements:

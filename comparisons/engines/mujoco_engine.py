@@ -1,4 +1,4 @@
-"""MuJoCo engine: the negative-stiffness device of nsd-model.md in drive mode (Table 1, first row).
+"""MuJoCo engine: the negative-stiffness device of docs/model.md in drive mode (Table 1, first row).
 
 Model (MJCF generated in code from ``device_geometry(params)``; no XML file):
 - world -> ``cap``: three slide joints, ``drive`` along e_psi, ``lateral`` along e_z x e_psi (both
@@ -61,16 +61,16 @@ import time
 import mujoco
 import numpy as np
 
-from nsd_core.drive import Drive
-from nsd_core.forces import (advance_spring_zeta, advance_wire_stress, bouc_wen_slope, rope_tension,
+from nsd_core.device.drive import Drive
+from nsd_core.device.forces import (advance_spring_zeta, advance_wire_stress, bouc_wen_slope, rope_tension,
                              sma_stress_slope, spring_push, wire_tension)
-from nsd_core.geometry import DeviceGeometry, device_geometry
-from nsd_core.outputs import device_columns
-from nsd_core.params import Params
-from nsd_core.results import RunResult
+from nsd_core.device.geometry import DeviceGeometry, device_geometry
+from nsd_core.device.outputs import device_columns
+from nsd_core.device.params import Params
+from nsd_core.device.results import RunResult
 
-from .base import EngineError, merged_settings
-from .perturb import perturbed
+from comparisons.engines.base import EngineError, merged_settings
+from comparisons.engines.perturb import perturbed
 
 _EULER_LIKE = ("Euler", "implicit", "implicitfast")
 

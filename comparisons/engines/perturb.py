@@ -22,8 +22,8 @@ import dataclasses
 
 import numpy as np
 
-from nsd_core.geometry import DeviceGeometry, RigidBody, device_geometry
-from nsd_core.params import ParameterError
+from nsd_core.device.geometry import DeviceGeometry, RigidBody, device_geometry
+from nsd_core.device.params import ParameterError
 
 BODIES = ("cap", "wall", "rod")
 POINTS = ("rope_base_points", "rope_cap_points", "wire_cap_points", "wire_wall_points")

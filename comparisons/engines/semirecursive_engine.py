@@ -1,13 +1,13 @@
 """The in-house two-step semirecursive model (nsd_core.device) behind the shared engine interface."""
 from __future__ import annotations
 
-from nsd_core.device import DEFAULT_SOLVER, simulate
-from nsd_core.drive import Drive
-from nsd_core.integrate import SolverError
-from nsd_core.params import Params
-from nsd_core.results import RunResult
+from nsd_core.device.model import DEFAULT_SOLVER, simulate
+from nsd_core.device.drive import Drive
+from nsd_core.engine.errors import SolverError
+from nsd_core.device.params import Params
+from nsd_core.device.results import RunResult
 
-from .base import EngineError, merged_settings
+from comparisons.engines.base import EngineError, merged_settings
 
 
 class SemirecursiveEngine:

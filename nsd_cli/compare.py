@@ -1,0 +1,137 @@
+"""``nsd compare``: the cross-validation gate. Prints the table, writes results, optional JUnit XML."""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from xml.sax.saxutils import escape, quoteattr
+
+from comparisons.config import load_cases, load_convergence, load_tolerances
+from comparisons.engines import REFERENCE
+from comparisons.harness import compare
+from nsd_cli.options import add_param_arguments, base_params, parse_engines
+from nsd_core.device.params import ParameterError
+from nsd_core.device.results import atomic_write_text
+
+HELP = "run engines side by side against tolerances"
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--cases", help="case file (TOML); default: the four Figure 6 cases")
+    p.add_argument("--tolerances", help="tolerance file (TOML); default: comparisons/tolerances.toml")
+    p.add_argument("--engines", default="semirecursive,mujoco,exudyn",
+                   help="comma-separated engines; the first reference is semirecursive")
+    add_param_arguments(p, "parameter overrides applied to every case")
+    p.add_argument("--workers", type=int, default=None, help="parallel processes (default: all cores)")
+    p.add_argument("--junit", help="write JUnit XML here (one test per case and engine)")
+    p.add_argument("--convergence", action="store_true",
+                   help="also run the case file's [convergence] study (discrepancy vs step size per engine)")
+    p.add_argument("--report", action="store_true", help="also write the validation report into OUT/report")
+    p.add_argument("--power", action="store_true",
+                   help="measure the gate's detection power instead: inject small modelling errors into one "
+                        "engine's own model at a time (OUT/power.json; exit 1 if one is not seen)")
+    p.add_argument("--power-engines", default="mujoco,exudyn", help="engines whose own model gets the errors")
+    p.add_argument("--power-cases", default=None,
+                   help="comma-separated case names for --power (default: every case of the case file)")
+    p.add_argument("--out", required=True, help="output folder")
+
+
+
+
+def check_settings(cases, engines) -> None:
+    """Unknown solver settings are bad input (exit 2), found before anything runs or is written."""
+    from comparisons.engines import get_engine
+    from comparisons.engines.base import merged_settings
+    for e in engines:
+        defaults = get_engine(e).default_settings
+        for c in cases:
+            merged_settings(defaults, c.settings.get(e), f"case {c.name}: {e}")
+
+
+def format_table(summary: dict) -> str:
+    lines = [f"{'case':16s} {'engine':14s} {'vs':14s} {'metric':18s} {'value':>11s} {'limit':>11s}  verdict"]
+    for m in summary["metrics"]:
+        verdict = ("PASS" if m["pass"] else "FAIL") if m["gated"] else ("ok" if m["pass"] else "over")
+        lines.append(f"{m['case']:16s} {m['engine']:14s} {m['reference'] or '-':14s} {m['metric']:18s} "
+                     f"{m['value']:11.3e} {m['limit']:11.3e}  {verdict}")
+    for c, per in summary["runs"].items():
+        for e, r in per.items():
+            if r["status"] != "ok":
+                lines.append(f"{c:16s} {e:14s} {'-':14s} {'run':18s} {'-':>11s} {'-':>11s}  ERROR: {r['message']}")
+    return "\n".join(lines)
+
+
+def _failure_text(m: dict) -> str:
+    vs = m["reference"] or "own bound"
+    return f"{m['metric']} = {m['value']:.4g} > {m['limit']:.4g} (vs {vs})"
+
+
+def junit_xml(summary: dict) -> str:
+    cases = []
+    for c, per in summary["runs"].items():
+        for e, r in per.items():
+            name = quoteattr(f"{c}.{e}")
+            t = r.get("wall_time", 0.0)
+            if r["status"] != "ok":
+                cases.append(f'  <testcase classname="nsd.compare" name={name} time="{t:.3f}">'
+                             f'<error message={quoteattr(r["message"])}/></testcase>')
+                continue
+            bad = [m for m in summary["metrics"] if m["case"] == c and m["engine"] == e and m["gated"] and not m["pass"]]
+            body = "".join(f'<failure message={quoteattr(m["metric"])}>{escape(_failure_text(m))}</failure>' for m in bad)
+            cases.append(f'  <testcase classname="nsd.compare" name={name} time="{t:.3f}">{body}</testcase>')
+    n = len(cases)
+    fails = sum(1 for x in cases if "<failure" in x)
+    errs = sum(1 for x in cases if "<error" in x)
+    return (f'<?xml version="1.0" encoding="utf-8"?>\n<testsuite name="nsd compare" tests="{n}" '
+            f'failures="{fails}" errors="{errs}">\n' + "\n".join(cases) + "\n</testsuite>\n")
+
+
+def run(args) -> int:
+    engines = parse_engines(args.engines)
+    base = base_params(args)
+    cases = load_cases(args.cases, base)
+    tolerances = load_tolerances(args.tolerances)
+    check_settings(cases, engines)
+    conv = load_convergence(args.cases, cases) if args.convergence else None
+    if args.convergence and conv is None:
+        raise ParameterError("--convergence: the case file has no [convergence] table")
+    if args.power:
+        return _run_power(args, cases, tolerances)
+    if REFERENCE not in engines:
+        print(f"note: {REFERENCE} not among the engines: pairs are reported, nothing is gated")
+    print(f"nsd compare: {len(cases)} cases x {len(engines)} engines -> {args.out}")
+    summary = compare(cases, engines, tolerances, args.out, workers=args.workers, convergence=conv)
+    print(format_table(summary))
+    if args.junit:
+        atomic_write_text(args.junit, junit_xml(summary))
+    for line in summary["failures"]:
+        print(f"FAILED {line}")
+    print(f"verdict: {summary['verdict']} ({summary['total_wall_time']:.1f} s); wrote {Path(args.out) / 'results.json'}")
+    if args.report:
+        from reports.build import build_report
+        paths = build_report(args.out, Path(args.out) / "report")
+        print(f"report: {paths['pdf']}")
+    return summary["exit_code"]
+
+
+def _run_power(args, cases, tolerances) -> int:
+    from comparisons.power import format_power, power_study
+    engines = parse_engines(args.power_engines)
+    if REFERENCE in engines:
+        raise ParameterError(f"--power-engines {args.power_engines!r}: the reference {REFERENCE} cannot be perturbed")
+    if args.power_cases:
+        names = [n.strip() for n in args.power_cases.split(",") if n.strip()]
+        known = {c.name: c for c in cases}
+        for n in names:
+            if n not in known:
+                raise ParameterError(f"--power-cases {n!r}: unknown case; allowed: {', '.join(known)}")
+        cases = [known[n] for n in names]
+    check_settings(cases, engines)
+    print(f"nsd compare --power: {len(cases)} cases x {len(engines)} engines -> {args.out}")
+    out = power_study(cases, engines, tolerances, args.out, workers=args.workers)
+    print(format_power(out))
+    print(f"{sum(t['seen_at_nominal'] for t in out['table'])} of {len(out['table'])} injected errors fail the gate "
+          f"({out['wall_time']:.0f} s); wrote {Path(args.out) / 'power.json'}")
+    if args.report and (Path(args.out) / "results.json").is_file():
+        from reports.build import build_report
+        print(f"report: {build_report(args.out, Path(args.out) / 'report')['pdf']}")
+    return 0 if out["all_seen"] else 1

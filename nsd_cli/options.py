@@ -1,0 +1,99 @@
+"""Options and checks that several subcommands share, defined once."""
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+
+from nsd_core.device.params import ParameterError, Params, load_params, parse_set
+
+
+class Progress:
+    """A progress bar on stderr, shown only once a run has taken more than ``after`` seconds."""
+
+    def __init__(self, label: str, after: float = 2.0, stream=sys.stderr):
+        self.label, self.after, self.stream = label, after, stream
+        self.start = time.perf_counter()
+        self.last = -1
+
+    def __call__(self, fraction: float) -> None:
+        if time.perf_counter() - self.start < self.after:
+            return
+        pct = int(100 * min(max(fraction, 0.0), 1.0))
+        tty = self.stream.isatty()
+        if pct == self.last or (not tty and pct % 10):
+            return
+        self.last = pct
+        bar = "#" * (pct // 4) + "." * (25 - pct // 4)
+        end = "\r" if tty and pct < 100 else "\n"
+        self.stream.write(f"{self.label} [{bar}] {pct:3d}%{end}")
+        self.stream.flush()
+
+
+def add_param_arguments(p: argparse.ArgumentParser, what: str = "parameter overrides") -> None:
+    """--params FILE and --set NAME=VALUE (repeatable): the device's parameters."""
+    p.add_argument("--params", help=f"TOML file of {what}")
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="override one parameter")
+
+
+def base_params(args) -> Params:
+    """The parameter set that --params and --set describe (checked: exit 2 on bad input)."""
+    return load_params(args.params, parse_set(args.set))
+
+
+def add_solver_arguments(p: argparse.ArgumentParser) -> None:
+    """The in-house engine's integrator settings (None: the engine's default)."""
+    p.add_argument("--method", default=None, help="semirecursive integrator: RK45, DOP853 (default), RK23, Radau, LSODA")
+    p.add_argument("--rtol", type=float, default=None, help="relative tolerance")
+    p.add_argument("--atol", type=float, default=None, help="absolute tolerance")
+    p.add_argument("--max-step", type=float, default=None, help="largest step [s]")
+
+
+def solver_settings(args) -> dict:
+    """The solver options given on the command line (positive finite numbers), by setting name."""
+    for n in ("rtol", "atol", "max_step"):
+        positive(f"--{n.replace('_', '-')}", getattr(args, n))
+    return {k: getattr(args, k) for k in ("method", "rtol", "atol", "max_step") if getattr(args, k) is not None}
+
+
+def positive(name: str, v, whole: bool = False) -> None:
+    """None passes; otherwise a finite number > 0 (a whole number >= 1 when ``whole``)."""
+    if v is None:
+        return
+    if not math.isfinite(v) or v <= 0 or (whole and v != int(v)):
+        raise ParameterError(f"{name} = {v}: must be a {'whole number >= 1' if whole else 'finite number > 0'}")
+
+
+def parse_numbers(option: str, text: str | None, context: str = "") -> list[float]:
+    """Comma-separated finite numbers."""
+    if not text:
+        raise ParameterError(f"{option}: required{context} (comma-separated numbers)")
+    out = []
+    for item in text.split(","):
+        try:
+            v = float(item)
+        except ValueError:
+            raise ParameterError(f"{option} {item.strip()!r}: not a number (comma-separated numbers expected)") from None
+        if not math.isfinite(v):
+            raise ParameterError(f"{option} {item.strip()!r}: must be finite")
+        out.append(v)
+    return out
+
+
+def parse_engines(text: str, check_available: bool = False) -> list[str]:
+    """Comma-separated engine names from the one registry (comparisons.engines), each once."""
+    from comparisons.engines import ENGINES, get_engine
+    names = [e.strip() for e in text.split(",") if e.strip()]
+    for e in names:
+        if e not in ENGINES:
+            raise ParameterError(f"--engines {e!r}: unknown engine; allowed: {', '.join(ENGINES)}")
+    if not names or len(set(names)) != len(names):
+        raise ParameterError(f"--engines {text!r}: give each engine once")
+    if check_available:
+        for e in names:
+            try:
+                get_engine(e)
+            except Exception as exc:  # noqa: BLE001 - any import failure means not usable here
+                raise ParameterError(f"--engines {e}: not available ({type(exc).__name__}: {exc})".splitlines()[0]) from None
+    return names

@@ -1,0 +1,25 @@
+"""``nsd report``: the validation report (PDF and one PNG per page) from an ``nsd compare`` folder.
+
+Exit codes: 0 written; 2 bad input (missing folder, no or malformed results.json), nothing written.
+"""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+
+HELP = "write the validation report (PDF and PNGs) from a results folder"
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--from", dest="source", required=True, metavar="DIR",
+                   help="results folder written by nsd compare --out DIR")
+    p.add_argument("--out", required=True, metavar="DIR2", help="folder for validation.pdf and the PNGs")
+
+
+def run(args) -> int:
+    from reports.build import build_report
+    paths = build_report(args.source, args.out)
+    print(f"report: {paths['pdf']} ({len(paths['pngs'])} pages, {paths['seconds']:.1f} s); "
+          f"PNGs in {Path(paths['pdf']).parent}")
+    return 0

@@ -1,0 +1,118 @@
+"""The time series every engine returns: the same columns, units and signs, and atomic writers.
+
+Sign convention (docs/model.md, "Drive and outputs"): F is the horizontal force the drive applies to
+the cap along psi, F = m_c u'' - (rod + ropes + wires on the cap) . e_psi. Each part column is the
+part's contribution to F, i.e. minus its force on the cap along psi, so that
+F_device = F_rod + F_ropes + F_wires and F = m_c u'' + F_device.
+"""
+from __future__ import annotations
+
+import importlib.metadata as md
+import json
+import os
+import platform
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+BASE_COLUMNS = {
+    "t": "s", "u": "m", "F": "N", "F_device": "N", "F_rod": "N", "F_ropes": "N", "F_wires": "N",
+    "spring_push": "N", "spring_zeta": "N", "cap_z": "m", "wall_z": "m", "closure": "m",
+}
+
+
+def column_units(n_ropes: int, n_wires: int) -> dict[str, str]:
+    """Ordered column names with units for a device with n_ropes ropes and n_wires wires."""
+    cols = dict(BASE_COLUMNS)
+    for i in range(n_ropes):
+        cols[f"rope{i}_tension"] = "N"
+        cols[f"rope{i}_F"] = "N"
+    for j in range(n_wires):
+        cols[f"wire{j}_tension"] = "N"
+        cols[f"wire{j}_F"] = "N"
+        cols[f"wire{j}_strain"] = "-"
+        cols[f"wire{j}_stress"] = "Pa"
+    return cols
+
+
+@dataclass
+class RunResult:
+    """One engine's run of one drive: columns (name -> array) and what it took."""
+    engine: str
+    columns: dict[str, np.ndarray]
+    units: dict[str, str]
+    stats: dict[str, Any] = field(default_factory=dict)
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        return self.columns[name]
+
+    def stack(self, prefix: str) -> np.ndarray:
+        """All per-element columns of one kind, e.g. stack('rope') -> (n_t, n_ropes) tensions."""
+        names = [n for n in self.columns if n.startswith(prefix) and n.endswith("_tension")]
+        return np.column_stack([self.columns[n] for n in names]) if names else np.zeros((len(self["t"]), 0))
+
+
+def atomic_write_text(path: str | Path, text: str) -> None:
+    """Write to a temporary file in the same folder, then rename: readers never see half a file."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w") as f:
+            f.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def atomic_write_json(path: str | Path, data: Any) -> None:
+    atomic_write_text(path, json.dumps(data, indent=2, default=_json_default) + "\n")
+
+
+def _json_default(o):
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, (np.floating, np.integer, np.bool_)):
+        return o.item()
+    raise TypeError(f"not JSON serialisable: {type(o).__name__}")
+
+
+def write_columns(path: str | Path, columns: dict[str, tuple[str, np.ndarray]]) -> None:
+    """Numeric columns {name: (unit, values)} as CSV with "name [unit]" headers, atomically."""
+    header = ",".join(f"{n} [{u}]" for n, (u, _) in columns.items())
+    data = np.column_stack([v for _, v in columns.values()])
+    lines = [header] + [",".join(f"{v:.10g}" for v in row) for row in data]
+    atomic_write_text(path, "\n".join(lines) + "\n")
+
+
+def write_csv(path: str | Path, result: RunResult) -> None:
+    """A run's time series, every column with its unit (read back by ``read_csv``)."""
+    write_columns(path, {n: (result.units[n], result.columns[n]) for n in result.units})
+
+
+def read_csv(path: str | Path, engine: str = "") -> RunResult:
+    with open(path) as f:
+        header = f.readline().strip().split(",")
+    names, units = [], {}
+    for h in header:
+        name, _, unit = h.partition(" [")
+        names.append(name)
+        units[name] = unit.rstrip("]")
+    data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    return RunResult(engine, {n: data[:, i] for i, n in enumerate(names)}, units)
+
+
+def versions() -> dict[str, str]:
+    """Python and package versions, recorded with every result."""
+    out = {"python": platform.python_version()}
+    for pkg in ("nsd-harness", "numpy", "scipy", "numba", "mujoco", "exudyn", "matplotlib"):
+        try:
+            out[pkg] = md.version(pkg)
+        except md.PackageNotFoundError:
+            pass
+    return out

@@ -1,0 +1,146 @@
+"""Open-tree dynamics in relative coordinates: Eqs. 6-8, computed recursively.
+
+Body i's inertia in origin-point form, with g its centre of mass (global) and J_G its inertia:
+    M_i = [[m I, -m g~], [m g~, J_G - m g~ g~]],
+    Q_i = [f - m w x g',  n_O - w x J_G w - m g x (w x g')],   g' = s' + w x g,
+where (f, n_O) is the applied wrench about the global origin. The composite inertias
+M^S = T^T M T (Eq. 7) and accumulated forces Q^S = T^T Q (Eq. 8) are sums over each subtree,
+accumulated leaves to root, so no dense T^T M T is ever formed. The tree's equations are
+    R_d^T M^S R_d z'' = R_d^T (Q^S - P^S),  P^S = T^T M (T R'_d z')  (Eq. 6 with lambda = 0).
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from nsd_core.engine.kinematics import Kinematics, cross3
+from nsd_core.engine.mechanism import Mechanism
+
+
+@njit(cache=True)
+def body_terms_kernel(mass, com, inertia, gravity, A, r, Z, has_vel, Mb, Qb):
+    """Per-body M_i into Mb (n,6,6) and gravity + velocity terms added into Qb (n,6)."""
+    n = mass.shape[0]
+    g = np.empty(3)
+    JG = np.empty((3, 3))
+    G = np.empty((3, 3))
+    t1 = np.empty(3)
+    gd = np.empty(3)
+    wgd = np.empty(3)
+    Jw = np.empty(3)
+    for i in range(n):
+        m = mass[i]
+        if m == 0.0 and np.all(inertia[i] == 0.0):
+            continue  # massless auxiliary body
+        for a in range(3):
+            acc = r[i, a]
+            for b in range(3):
+                acc += A[i, a, b] * com[i, b]
+            g[a] = acc
+        for a in range(3):
+            for b in range(3):
+                acc = 0.0
+                for c in range(3):
+                    for d in range(3):
+                        acc += A[i, a, c] * inertia[i, c, d] * A[i, b, d]
+                JG[a, b] = acc
+        G[0, 0], G[0, 1], G[0, 2] = 0.0, -g[2], g[1]
+        G[1, 0], G[1, 1], G[1, 2] = g[2], 0.0, -g[0]
+        G[2, 0], G[2, 1], G[2, 2] = -g[1], g[0], 0.0
+        for a in range(3):
+            for b in range(3):
+                GG = 0.0
+                for c in range(3):
+                    GG += G[a, c] * G[c, b]
+                Mb[i, a, b] = m if a == b else 0.0
+                Mb[i, a, 3 + b] = -m * G[a, b]
+                Mb[i, 3 + a, b] = m * G[a, b]
+                Mb[i, 3 + a, 3 + b] = JG[a, b] - m * GG
+        for a in range(3):
+            t1[a] = m * gravity[a]
+        cross3(g, t1, gd)
+        for a in range(3):
+            Qb[i, a] += t1[a]
+            Qb[i, 3 + a] += gd[a]
+        if has_vel:
+            w = Z[i, 3:]
+            cross3(w, g, t1)
+            for a in range(3):
+                gd[a] = Z[i, a] + t1[a]
+            cross3(w, gd, wgd)
+            for a in range(3):
+                Jw[a] = JG[a, 0] * w[0] + JG[a, 1] * w[1] + JG[a, 2] * w[2]
+            cross3(w, Jw, t1)
+            cross3(g, wgd, gd)
+            for a in range(3):
+                Qb[i, a] -= m * wgd[a]
+                Qb[i, 3 + a] -= t1[a] + m * gd[a]
+
+
+@njit(cache=True)
+def tree_kernel(parent, B, vp, Mb, Fb, Mred, Qred):
+    """Subtree sums (Eqs. 7-8) leaves to root, then R_d^T M^S R_d and R_d^T (Q^S - P^S)."""
+    n = parent.shape[0]
+    for i in range(n):  # P_i = M_i vp_i moves to the force side
+        for a in range(6):
+            acc = 0.0
+            for b in range(6):
+                acc += Mb[i, a, b] * vp[i, b]
+            Fb[i, a] -= acc
+    for i in range(n - 1, -1, -1):
+        p = parent[i]
+        if p >= 0:
+            for a in range(6):
+                Fb[p, a] += Fb[i, a]
+                for b in range(6):
+                    Mb[p, a, b] += Mb[i, a, b]
+    F = np.empty(6)
+    for k in range(n):
+        for a in range(6):
+            acc = 0.0
+            for b in range(6):
+                acc += Mb[k, a, b] * B[k, b]
+            F[a] = acc
+        j = k
+        while j >= 0:  # ancestors of k share k's subtree composite inertia
+            acc = 0.0
+            for a in range(6):
+                acc += B[j, a] * F[a]
+            Mred[j, k] = acc
+            Mred[k, j] = acc
+            j = parent[j]
+        acc = 0.0
+        for a in range(6):
+            acc += B[k, a] * Fb[k, a]
+        Qred[k] = acc
+
+
+def body_inertia_terms(m: Mechanism, k: Kinematics, wrench: np.ndarray):
+    """Per-body M_i (n,6,6) and Q_i (n,6), gravity and velocity terms included."""
+    Mb = np.zeros((m.n, 6, 6))
+    Qb = np.array(wrench, dtype=float, copy=True)
+    Z = k.Z if k.Z is not None else np.zeros((m.n, 6))
+    body_terms_kernel(m.mass, m.com, m.inertia, m.gravity, k.A, k.r, Z, k.Z is not None, Mb, Qb)
+    return Mb, Qb
+
+
+def tree_equations(m: Mechanism, k: Kinematics, wrench: np.ndarray, gen_force=None):
+    """Reduced mass matrix R_d^T M^S R_d and force R_d^T (Q^S - P^S) (+ joint forces)."""
+    Mb, Qb = body_inertia_terms(m, k, wrench)
+    vp = k.vp if k.vp is not None else np.zeros((m.n, 6))
+    M_red, Q_red = np.zeros((m.n, m.n)), np.zeros(m.n)
+    tree_kernel(m.arrays.parent, k.B, vp, Mb, Qb, M_red, Q_red)
+    if gen_force is not None:
+        Q_red = Q_red + gen_force
+    return M_red, Q_red
+
+
+def kinetic_energy(m: Mechanism, k: Kinematics) -> float:
+    """T = 1/2 sum Z_i^T M_i Z_i."""
+    Mb, _ = body_inertia_terms(m, Kinematics(k.A, k.r, k.B), np.zeros((m.n, 6)))
+    return 0.5 * float(np.einsum("ni,nij,nj->", k.Z, Mb, k.Z))
+
+
+def potential_energy_gravity(m: Mechanism, k: Kinematics) -> float:
+    g = k.r + np.einsum("nij,nj->ni", k.A, m.com)
+    return -float(np.sum(m.mass * (g @ m.gravity)))

@@ -1,0 +1,133 @@
+"""Running a sweep: every design not yet stored, on local cores (ProcessPoolExecutor) or a Dask
+cluster (``scheduler``). The parent stores each result as it arrives, so an interrupted sweep
+loses at most the designs in flight. A design whose run raises is stored as failed with its
+message; an executor breaking down is not stored (that is not the design's fault) and is retried
+on the next run.
+"""
+from __future__ import annotations
+
+import shutil
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from functools import partial
+from multiprocessing import get_context
+from pathlib import Path
+from typing import Callable, Iterator
+
+from nsd_core import __version__
+from nsd_core.device.params import ParameterError
+from nsd_core.device.results import atomic_write_json
+from nsd_core.study.designs import PAPER_STUDIES, Design
+from nsd_core.study.run import EngineRunner, run_design
+from nsd_core.study.store import Store
+
+
+def _serial(designs: list[Design], job) -> Iterator[tuple[Design, dict]]:
+    for d in designs:
+        yield d, job(d)
+
+
+def _local(designs: list[Design], job, workers: int) -> Iterator[tuple[Design, dict]]:
+    # spawn, not fork: the parent may hold threads (a Dask client, numba) that fork would copy badly
+    with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn")) as ex:
+        futures = {ex.submit(job, d): d for d in designs}
+        try:
+            for f in as_completed(futures):
+                yield futures[f], f.result()
+        finally:
+            for f in futures:
+                f.cancel()
+
+
+def _dask(designs: list[Design], job, address) -> Iterator[tuple[Design, dict]]:
+    try:
+        from distributed import Client, as_completed as dask_completed
+    except ImportError:
+        raise ParameterError("--scheduler: needs dask.distributed (pip install 'nsd-harness[dask]')") from None
+    client = address if hasattr(address, "submit") else Client(address, timeout="20s")
+    try:
+        futures = {client.submit(job, d, key=f"nsd-design-{d.key}", pure=False): d for d in designs}
+        for f in dask_completed(list(futures)):
+            yield futures[f], f.result()
+    finally:
+        if client is not address:
+            client.close()
+
+
+def run_sweep(designs: list[Design], out: str | Path, workers: int = 1, scheduler=None,
+              retry_failed: bool = False, log: Callable[[str], None] | None = None,
+              run_engine: EngineRunner | None = None) -> dict:
+    """Run every design not yet stored, store each as it finishes, then write the summaries.
+
+    ``run_engine``: see ``nsd_core.study.run.run_design`` (None: the in-house model only)."""
+    job = partial(run_design, run_engine=run_engine)
+    log = log or (lambda s: print(s, file=sys.stderr, flush=True))
+    store = Store(out)
+    unique: dict[str, Design] = {}
+    for d in designs:
+        unique.setdefault(d.key, d)
+    pending = []
+    for k, d in unique.items():
+        rec = store.load(k)
+        if rec is None or (retry_failed and rec["status"] == "failed"):
+            pending.append(d)
+    log(f"sweep: {len(designs)} designs ({len(unique)} distinct), {len(unique) - len(pending)} already "
+        f"stored, {len(pending)} to run on "
+        + (f"Dask at {scheduler}" if scheduler is not None else f"{workers} local worker(s)"))
+    start = time.perf_counter()
+    if not pending:
+        runner = iter(())
+    elif scheduler is not None:
+        runner = _dask(pending, job, scheduler)
+    elif workers > 1 and len(pending) > 1:
+        runner = _local(pending, job, min(workers, len(pending)))
+    else:
+        runner = _serial(pending, job)
+    for n, (d, res) in enumerate(runner, 1):
+        rec = store.save(d, res)
+        tail = f"{res['wall_time']:.1f} s" if rec["status"] == "ok" else f"FAILED: {rec['error']}"
+        log(f"  [{n}/{len(pending)}] {d.label} ({d.key}): {tail}")
+    elapsed = time.perf_counter() - start
+    return write_summaries(designs, store, elapsed)
+
+
+def write_summaries(designs: list[Design], store: Store, elapsed: float) -> dict:
+    """Per study: DIR/<study>/summary.json and the steady-cycle CSVs; DIR/sweep.json as index."""
+    studies: dict[str, list] = {}
+    for d in designs:
+        rec = store.load(d.key)
+        entry = {"value": d.value, "key": d.key, "engine": d.engine, "status": rec["status"] if rec else "missing",
+                 "error": rec["error"] if rec else None, "amplitude": d.amplitude,
+                 "amplitude_rule": d.amplitude_rule, "frequency": d.frequency}
+        if rec and rec["status"] == "ok":
+            m = rec["metrics"]
+            for k in ("x_max_quasi_static", "theta_max_deg", "dissipated_energy", "peak_force",
+                      "force_at_plus_A", "initial_stiffness", "stiffness_regions", "x_max",
+                      "outside_working_range", "events", "wire_elongation_max", "wire_elongation_min"):
+                entry[k] = m.get(k)
+            entry["run_wall_time"] = rec["wall_time"]
+            name = f"{d.study}={d.value:g}" + ("" if d.engine == "semirecursive" else f"@{d.engine}") + ".csv"
+            dest = store.root / d.study / name
+            dest.parent.mkdir(parents=True, exist_ok=True)
+            tmp = dest.with_name(f".{dest.name}.tmp")
+            shutil.copyfile(store.folder(d.key) / "steady.csv", tmp)
+            tmp.replace(dest)
+            entry["steady_csv"] = f"{d.study}/{name}"
+            entry["cycle_csv"] = f"designs/{d.key}/cycle.csv"
+        studies.setdefault(d.study, []).append(entry)
+    for name, entries in studies.items():
+        figs = PAPER_STUDIES.get(name, (None, None))[1]
+        atomic_write_json(store.root / name / "summary.json", {
+            "study": name, "parameter": name, "paper": figs, "frequency": entries[0]["frequency"],
+            "values": [e["value"] for e in entries], "designs": entries,
+            "notes": "dissipated_energy = loop area of the steady cycle [J]; theta_max = asin(X_max/l_d) "
+                     "from the quasi-static X_max; stiffness in the steady CSV is dF/du [N/m], blank at turning points"})
+    index = {"studies": {n: f"{n}/summary.json" for n in studies},
+             "designs": len({d.key for d in designs}),
+             "ok": sum(e["status"] == "ok" for es in studies.values() for e in es),
+             "failed": sorted({e["key"] for es in studies.values() for e in es if e["status"] == "failed"}),
+             "missing": sorted({e["key"] for es in studies.values() for e in es if e["status"] == "missing"}),
+             "elapsed_this_run_s": elapsed, "version": __version__}
+    atomic_write_json(store.root / "sweep.json", index)
+    return index
