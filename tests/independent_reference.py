@@ -13,8 +13,8 @@ gets the drive force by virtual work, this one writes Newton's equations body by
   F = m_c u'' - (ropes + wires + rod on the cap)_x.
 
 Drive along +X (psi = 0) only. Also: ``rod_force_from_wall_balance``, the rod's horizontal force on
-the cap recomputed from the wall's vertical balance of an engine's output columns (the rod as a
-two-force member), a check that shares nothing with the engine's drive-force equation.
+the cap recomputed from the wall's vertical balance of an engine's output columns and the rod's own
+Newton-Euler equations, a check that shares nothing with the engine's drive-force equation.
 """
 from __future__ import annotations
 
@@ -173,9 +173,12 @@ def rod_force_from_wall_balance(r, n_wires: int = T2["n_wires"]) -> np.ndarray:
     """The rod's contribution to F (drive along +X) from an engine's columns, via the wall.
 
     Wall, vertically: m_w (z_w'' + g) = P + sum(wire pulls up) + R_z, R the rod's force on the
-    wall (z_w'' by finite differences). The rod carries -R at its lower joint and, with its weight
-    at mid-length and its inertia neglected, f_x = u (f_z - m_d g/2)/h at its upper joint (f the
-    cap's force on it, f_z = m_d g + R_z). The rod's contribution to F is then f_x.
+    wall, so the wall pushes the rod with f_b,z = -R_z. The rod (uniform, mass m_d, length l_d, at
+    angle phi = atan(u/h) from the vertical, h = z_c - z_w) then follows from Newton-Euler in the
+    drive plane: m_d a_c = f_b + f_t - m_d g e_z and I phi'' = (r/2) x f_t - (r/2) x f_b with
+    I = m_d l_d^2/12, a_c = (u''/2, (z_c'' + z_w'')/2); f_t is the cap's force on the rod:
+    f_t,x = (I phi'' + h m_d a_c,x / 2 + u (f_t,z - f_b,z)/2) / h. Accelerations by finite
+    differences of the output columns. The rod's contribution to F is f_t,x.
     """
     dv = Device()
     t, u, zc, zw = r["t"], r["u"], r["cap_z"], r["wall_z"]
@@ -184,7 +187,12 @@ def rod_force_from_wall_balance(r, n_wires: int = T2["n_wires"]) -> np.ndarray:
     for k in range(len(t)):
         wv, wl = dv.wires(u[k], zc[k], zw[k])
         up[k] = float(T[k] @ (wv[:, 2] / wl))
-    zdd = np.gradient(np.gradient(zw, t), t)
-    R_z = dv.mw * (zdd + GRAVITY) - r["spring_push"] - up
-    f_z = dv.md * GRAVITY + R_z
-    return u * (f_z - dv.md * GRAVITY / 2) / (zc - zw)
+
+    def dd(x):
+        return np.gradient(np.gradient(x, t), t)
+
+    h = zc - zw
+    f_bz = -(dv.mw * (dd(zw) + GRAVITY) - r["spring_push"] - up)
+    f_tz = dv.md * (0.5 * (dd(zc) + dd(zw)) + GRAVITY) - f_bz
+    inertia = dv.md * dv.ld ** 2 / 12.0
+    return (inertia * dd(np.arctan2(u, h)) + 0.5 * h * dv.md * 0.5 * dd(u) + 0.5 * u * (f_tz - f_bz)) / h

@@ -98,10 +98,11 @@ def test_ten_hertz_cycle_agrees_with_the_quasi_static_path(cycle10):
 
 
 def test_rod_force_agrees_with_the_wall_balance(cycle10):
-    """The rod's share of F (from the drive constraints' multipliers) against a two-force rod
-    loaded by the wall's vertical balance; the rod's inertia is left out: measured 5.2e-4 of the peak."""
+    """The rod's share of F (from the drive constraints' multipliers) against the rod's
+    Newton-Euler equations loaded by the wall's vertical balance (MuJoCo and the in-house model
+    measure 1.5e-4 of the peak on this drive: finite-difference accelerations)."""
     _, r = cycle10
-    assert np.max(np.abs(rod_force_from_wall_balance(r) - r["F_rod"])) < 1e-3 * np.max(np.abs(r["F"]))
+    assert np.max(np.abs(rod_force_from_wall_balance(r) - r["F_rod"])) < 3e-4 * np.max(np.abs(r["F"]))
 
 
 def test_per_step_forces_match_implicit_user_function_forces():

@@ -54,7 +54,7 @@ def test_nsd_core_quasistatic_agrees_with_the_independent_one():
 
 
 def test_rod_force_from_the_wall_balance(inhouse):
-    """The rod's share of F (the multiplier of the cut joint) equals the two-force-rod value
-    obtained from the wall's vertical balance (measured 1.3e-5 of the peak at 1 Hz)."""
+    """The rod's share of F (the multiplier of the cut joint) equals the value the rod's own
+    Newton-Euler equations give from the wall's vertical balance (measured 1.3e-5 of the peak at 1 Hz)."""
     r, _, _ = inhouse
     assert np.max(np.abs(rod_force_from_wall_balance(r) - r["F_rod"])) < 5e-5 * np.max(np.abs(r["F"]))

@@ -80,13 +80,13 @@ def test_loop_stays_closed_and_drive_is_exact(drive10):
 
 
 def test_rod_force_agrees_with_the_wall_balance(drive10):
-    """The rod's share of F (the residual of the drive joint's equation) against the value a
-    two-force rod gets from the wall's vertical balance (spring, wires, the wall's weight and
-    acceleration): a different equation, no shared code. What is left is the rod's own inertia,
-    measured 5.2e-4 of the peak at 10 Hz; 1e-3 is the bound."""
+    """The rod's share of F (the residual of the drive joint's equation) against the value the
+    rod's Newton-Euler equations give when loaded by the wall's vertical balance (spring, wires,
+    the wall's weight and acceleration): a different equation, no shared code. Measured 1.5e-4 of
+    the peak at 10 Hz (finite-difference accelerations on 200 samples); 3e-4 is the bound."""
     _, r = drive10
     rod = rod_force_from_wall_balance(r)
-    assert np.max(np.abs(rod - r["F_rod"])) < 1e-3 * np.max(np.abs(r["F"]))
+    assert np.max(np.abs(rod - r["F_rod"])) < 3e-4 * np.max(np.abs(r["F"]))
 
 
 def test_agrees_with_quasi_static_at_10hz(drive10):
