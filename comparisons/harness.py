@@ -92,7 +92,7 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
     return summary
 
 
-def _limit(tolerances, engine, case, metric):
+def limit_for(tolerances, engine, case, metric):
     """Per-engine-and-case limits when the tolerances have them (config.Tolerances), else the flat one."""
     return tolerances.limit(engine, case, metric) if hasattr(tolerances, "limit") else tolerances.get(metric)
 
@@ -110,7 +110,7 @@ def _metrics(cases, engines, tolerances, runs, results) -> list[dict]:
                 own["energy_balance_rel"] = energy_balance_rel(results[(c.name, e)], device_geometry(c.params),
                                                                c.drive.frequency, c.drive.unit_vector)
                 for k, v in own.items():
-                    if (lim := _limit(tolerances, e, c.name, k)) is not None:
+                    if (lim := limit_for(tolerances, e, c.name, k)) is not None:
                         rows.append(_row(c.name, e, None, k, v, lim, True))
         for a, b, gated in pairs:
             if (c.name, a) in results and (c.name, b) in results:
@@ -118,7 +118,7 @@ def _metrics(cases, engines, tolerances, runs, results) -> list[dict]:
                 m = pair_metrics(results[(c.name, a)], results[(c.name, b)], ra, rb, c.drive.amplitude,
                                  c.drive.frequency)
                 for k, v in m.items():
-                    if (lim := _limit(tolerances, a, c.name, k)) is not None:
+                    if (lim := limit_for(tolerances, a, c.name, k)) is not None:
                         rows.append(_row(c.name, a, b, k, v, lim, gated))
     return rows
 

@@ -24,7 +24,7 @@ from comparisons.config import Case
 from comparisons.energy import energy_balance_rel
 from comparisons.engines import REFERENCE, run_job
 from comparisons.engines.perturb import describe
-from comparisons.harness import _limit
+from comparisons.harness import limit_for
 from comparisons.metrics import own_metrics, pair_metrics
 
 # the issue's list: each body's mass +-1 %, each kind of attachment point moved 0.2 mm (up and
@@ -48,7 +48,7 @@ def _verdict(case: Case, engine: str, tolerances, run, ref, run_summary, ref_sum
     values.update(own_metrics(run))
     values["energy_balance_rel"] = energy_balance_rel(run, device_geometry(case.params), case.drive.frequency,
                                                       case.drive.unit_vector)
-    ratios = {k: v / lim for k, v in values.items() if (lim := _limit(tolerances, engine, case.name, k))}
+    ratios = {k: v / lim for k, v in values.items() if (lim := limit_for(tolerances, engine, case.name, k))}
     worst = max(ratios, key=ratios.get)
     return {"failed": any(r > 1.0 for r in ratios.values()), "metric": worst, "ratio": ratios[worst],
             "value": values[worst], "values": values, "failing": sorted(k for k, r in ratios.items() if r > 1.0)}
@@ -114,19 +114,33 @@ def summarise(rows: list[dict], injections: list[dict]) -> list[dict]:
         nominal = [r for r in mine if r["scale"] == 1.0]
         best = max(nominal, key=lambda r: r["ratio"]) if nominal else None
         seen_scales = sorted({r["scale"] for r in mine if r["failed"]})
+        # the metrics move in proportion to a small error, so the gate's threshold for this kind of
+        # error is about the listed size / (value/limit); a linear estimate, not a measurement
+        threshold = None
+        if best and best["ratio"] not in (None, float("inf")) and best["ratio"] > 0 and "by" in spec:
+            threshold = abs(spec["by"]) / best["ratio"]
         table.append({"injection": name, "seen_at_nominal": any(r["failed"] for r in nominal),
                       "engines_seeing": sorted({r["engine"] for r in nominal if r["failed"]}),
                       "best_metric": best["metric"] if best else None, "best_ratio": best["ratio"] if best else None,
                       "best_case": best["case"] if best else None,
-                      "smallest_seen_scale": seen_scales[0] if seen_scales else None})
+                      "smallest_seen_scale": seen_scales[0] if seen_scales else None,
+                      "threshold_estimate": threshold})
     return table
 
 
 def format_power(out: dict) -> str:
-    lines = [f"{'injection':34s} {'seen':5s} {'by':14s} {'metric':18s} {'value/limit':>11s}  smallest seen"]
+    lines = [f"{'injection':34s} {'seen':5s} {'by':14s} {'metric':18s} {'value/limit':>11s}  smallest seen  threshold~"]
     for t in out["table"]:
         small = "-" if t["smallest_seen_scale"] is None else f"x{t['smallest_seen_scale']:g} of listed"
         lines.append(f"{t['injection']:34s} {'yes' if t['seen_at_nominal'] else 'NO':5s} "
                      f"{','.join(t['engines_seeing']) or '-':14s} {t['best_metric'] or '-':18s} "
-                     f"{t['best_ratio'] or 0:11.3g}  {small}")
+                     f"{t['best_ratio'] or 0:11.3g}  {small:13s}  {threshold_text(t)}")
     return "\n".join(lines)
+
+
+def threshold_text(t: dict) -> str:
+    """The linear estimate of the smallest error of that kind the gate sees, in the error's unit."""
+    th, name = t.get("threshold_estimate"), t["injection"]
+    if th is None:
+        return "-"
+    return f"{th * 1e3:.2g} mm" if " mm" in name else f"{th * 100:.2g} %"
