@@ -119,7 +119,11 @@ def summarise(rows: list[dict], injections: list[dict]) -> list[dict]:
         threshold = None
         if best and best["ratio"] not in (None, float("inf")) and best["ratio"] > 0 and "by" in spec:
             threshold = abs(spec["by"]) / best["ratio"]
+        per_engine = {}
+        for r in nominal:
+            per_engine[r["engine"]] = max(per_engine.get(r["engine"], 0.0), r["ratio"])
         table.append({"injection": name, "seen_at_nominal": any(r["failed"] for r in nominal),
+                      "weakest_engine_ratio": min(per_engine.values()) if per_engine else None,
                       "engines_seeing": sorted({r["engine"] for r in nominal if r["failed"]}),
                       "best_metric": best["metric"] if best else None, "best_ratio": best["ratio"] if best else None,
                       "best_case": best["case"] if best else None,
