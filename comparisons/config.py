@@ -2,13 +2,13 @@
 from __future__ import annotations
 
 import math
-import tomllib
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from nsd_core.device.drive import Drive
-from nsd_core.device.params import ParameterError, Params, load_params
+from nsd_core.device.params import ParameterError, Params, load_params, read_toml
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_CASES = HERE / "cases.toml"
@@ -24,6 +24,9 @@ METRICS = {  # name -> (unit, description)
     "tracking_error": ("m", "largest drive tracking error"),
     "energy_balance_rel": ("-", "|drive work - (wires + spring hysteresis + stored change)| / drive work, steady cycle"),
 }
+CASE_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._+-]{0,63}")
+MAX_CASES = 200
+DEFAULT_KEYS = {"amplitude", "frequency", "direction_deg", "cycles", "samples_per_cycle", "params", "settings"}
 CASE_KEYS = {"name", "amplitude", "frequency", "direction_deg", "cycles", "samples_per_cycle", "params",
              "settings", "engine_params"}
 
@@ -50,12 +53,9 @@ class Case:
 
 
 def _read(path: Path, what: str) -> dict:
-    try:
-        return tomllib.loads(Path(path).read_text())
-    except FileNotFoundError:
-        raise ParameterError(f"{what} {path}: file not found") from None
-    except tomllib.TOMLDecodeError as e:
-        raise ParameterError(f"{what} {path}: not valid TOML ({e})") from None
+    if not str(path).strip():
+        raise ParameterError(f"{what} '': name a TOML file")
+    return read_toml(path, what)
 
 
 def _number(where: str, v, positive=True) -> float:
@@ -64,21 +64,78 @@ def _number(where: str, v, positive=True) -> float:
     return float(v)
 
 
+def _whole(where: str, v, low: int, high: int) -> int:
+    if isinstance(v, bool) or not isinstance(v, int) or not low <= v <= high:
+        raise ParameterError(f"{where} = {v!r}: must be a whole number in [{low}, {high}] (no decimal point)")
+    return v
+
+
+def _table(where: str, v) -> dict:
+    if not isinstance(v, dict):
+        raise ParameterError(f"{where} = {v!r}: must be a table")
+    return v
+
+
+def _engine_tables(where: str, v) -> dict[str, dict]:
+    """settings / engine_params: a table per engine of the registry (an unknown engine is an error)."""
+    from comparisons.engines import ENGINES
+    for e, t in _table(where, v).items():
+        if e not in ENGINES:
+            raise ParameterError(f"{where}.{e}: unknown engine; allowed: {', '.join(ENGINES)}")
+        _table(f"{where}.{e}", t)
+    return v
+
+
+def _case_name(where: str, v) -> str:
+    """A case name becomes a file name (cycles/NAME__ENGINE.csv): a plain name, never a path."""
+    if not isinstance(v, str) or not CASE_NAME.fullmatch(v) or v in (".", ".."):
+        raise ParameterError(f"{where} = {v!r}: must be a plain file name of 1-64 letters, digits, '.', '_', "
+                             "'+' or '-' (starting with a letter or digit)")
+    return v
+
+
 def load_convergence(path: str | Path | None, cases: list[Case]) -> dict | None:
     """The [convergence] table of a case file, validated; None when the file has none."""
     raw = _read(Path(path or DEFAULT_CASES), "--cases").get("convergence")
-    return parse_convergence(raw, cases) if raw else None
+    return parse_convergence(raw, cases) if raw is not None else None
 
-def parse_convergence(raw: dict, cases: list[Case]) -> dict:
+
+CONVERGENCE_KEYS = ("case", "cycles", "reference", "sweep")
+SWEEP_KEYS = ("setting", "values", "settings")
+
+
+def parse_convergence(raw, cases: list[Case]) -> dict:
+    """Types and names here; each engine checks its settings (nsd_cli.compare, before any run)."""
+    from comparisons.engines import ENGINES
+    raw = _table("convergence", raw)
+    for k in raw:
+        if k not in CONVERGENCE_KEYS:
+            raise ParameterError(f"convergence.{k}: unknown key; allowed: {', '.join(CONVERGENCE_KEYS)}")
     by_name = {c.name: c for c in cases}
     if raw.get("case") not in by_name:
-        raise ParameterError(f"convergence.case = {raw.get('case')!r}: must name a case of the file")
-    sweep = raw.get("sweep", {})
+        raise ParameterError(f"convergence.case = {raw.get('case')!r}: must name a case of the file "
+                             f"({', '.join(by_name)})")
+    cycles = _whole("convergence.cycles", raw.get("cycles", 1), 1, 100)
+    reference = _table("convergence.reference", raw.get("reference", {"rtol": 1e-10}))
+    sweep = _table("convergence.sweep", raw.get("sweep", {}))
+    if not sweep:
+        raise ParameterError("convergence.sweep: empty; give at least one engine = { setting, values }")
     for engine, spec in sweep.items():
-        if not isinstance(spec, dict) or "setting" not in spec or not spec.get("values"):
-            raise ParameterError(f"convergence.sweep.{engine}: needs setting = NAME and values = [..]")
-    return {"case": by_name[raw["case"]], "cycles": int(raw.get("cycles", 1)),
-            "reference": dict(raw.get("reference", {"rtol": 1e-10})), "sweep": sweep}
+        where = f"convergence.sweep.{engine}"
+        if engine not in ENGINES:
+            raise ParameterError(f"{where}: unknown engine; allowed: {', '.join(ENGINES)}")
+        for k in _table(where, spec):
+            if k not in SWEEP_KEYS:
+                raise ParameterError(f"{where}.{k}: unknown key; allowed: {', '.join(SWEEP_KEYS)}")
+        if not isinstance(spec.get("setting"), str):
+            raise ParameterError(f"{where}.setting = {spec.get('setting')!r}: must name a solver setting")
+        values = spec.get("values")
+        if not isinstance(values, list) or not 1 <= len(values) <= 20:
+            raise ParameterError(f"{where}.values = {values!r}: must be a list of 1 to 20 numbers")
+        for j, v in enumerate(values):
+            _number(f"{where}.values[{j}]", v)
+        _table(f"{where}.settings", spec.get("settings", {}))
+    return {"case": by_name[raw["case"]], "cycles": cycles, "reference": dict(reference), "sweep": sweep}
 
 
 def load_cases(path: str | Path | None = None, base_params: Params | None = None) -> list[Case]:
@@ -86,44 +143,60 @@ def load_cases(path: str | Path | None = None, base_params: Params | None = None
     unknown = set(data) - {"defaults", "case", "convergence"}
     if unknown:
         raise ParameterError(f"--cases: unknown table {sorted(unknown)[0]!r}; allowed: defaults, case, convergence")
-    defaults = data.get("defaults", {})
+    defaults = _table("defaults", data.get("defaults", {}))
+    for k in defaults:
+        if k not in DEFAULT_KEYS:
+            raise ParameterError(f"defaults.{k}: unknown key; allowed: {', '.join(sorted(DEFAULT_KEYS))}")
     raw_cases = data.get("case", [])
+    if not isinstance(raw_cases, list):
+        raise ParameterError("case: must be an array of tables ([[case]] entries), not a single [case] table")
     if not raw_cases:
         raise ParameterError("--cases: no [[case]] entries")
+    if len(raw_cases) > MAX_CASES:
+        raise ParameterError(f"--cases: {len(raw_cases)} cases; at most {MAX_CASES}")
+    d_params = _table("defaults.params", defaults.get("params", {}))
+    d_settings = _engine_tables("defaults.settings", defaults.get("settings", {}))
     out, names = [], set()
     for i, raw in enumerate(raw_cases):
+        raw = _table(f"case[{i}]", raw)
         merged = {**{k: v for k, v in defaults.items() if k not in ("params", "settings")}, **raw}
         bad = set(merged) - CASE_KEYS
         if bad:
             raise ParameterError(f"case[{i}].{sorted(bad)[0]}: unknown key; allowed: {', '.join(sorted(CASE_KEYS))}")
-        name = str(merged.get("name", f"case{i}"))
+        name = _case_name(f"case[{i}].name", merged.get("name", f"case{i}"))
         if name in names:
             raise ParameterError(f"case[{i}].name = {name!r}: duplicate case name")
         names.add(name)
         for key in ("amplitude", "frequency"):
             if key not in merged:
                 raise ParameterError(f"case {name}: missing {key}")
-        overrides = {**defaults.get("params", {}), **raw.get("params", {})}
+        overrides = {**d_params, **_table(f"case {name}.params", raw.get("params", {}))}
         base = base_params.to_dict() if base_params else {}
         params = load_params(None, {**base, **overrides})
         drive = Drive(_number(f"case {name}.amplitude", merged["amplitude"], positive=False),
                       _number(f"case {name}.frequency", merged["frequency"]),
-                      float(merged.get("direction_deg", 0.0)), int(merged.get("cycles", 2)),
-                      int(merged.get("samples_per_cycle", 2000)))
-        settings = {e: dict(s) for e, s in defaults.get("settings", {}).items()}
-        for e, s in raw.get("settings", {}).items():
+                      _number(f"case {name}.direction_deg", merged.get("direction_deg", 0.0), positive=False),
+                      _whole(f"case {name}.cycles", merged.get("cycles", 2), 1, Drive.CYCLES_MAX),
+                      _whole(f"case {name}.samples_per_cycle", merged.get("samples_per_cycle", 2000), 16,
+                             Drive.SAMPLES_MAX))
+        settings = {e: dict(s) for e, s in d_settings.items()}
+        for e, s in _engine_tables(f"case {name}.settings", raw.get("settings", {})).items():
             settings[e] = {**settings.get(e, {}), **s}
-        engine_params = {e: params.replace(**p) for e, p in raw.get("engine_params", {}).items()}
+        engine_params = {e: params.replace(**p) for e, p in
+                         _engine_tables(f"case {name}.engine_params", raw.get("engine_params", {})).items()}
         out.append(Case(name, drive, params, settings, engine_params))
     return out
 
 
-class Tolerances(dict):
-    """Default limits (metric -> value; a plain dict, as before) plus overrides per engine and per
-    engine and case: ``limit(engine, case, metric)`` takes the most specific one."""
+class Limits(dict):
+    """Metric -> default limit (a plain dict, as before). ``defaulted`` names the metrics a partial
+    file left out, which take the default file's limit (said in the table and in results.json, so
+    nothing is dropped silently); ``engines`` holds overrides per engine and per engine and case, and
+    ``limit(engine, case, metric)`` takes the most specific one."""
+    defaulted: tuple[str, ...] = ()
 
-    def __init__(self, defaults: dict[str, float], engines: dict[str, dict] | None = None):
-        super().__init__(defaults)
+    def __init__(self, *args, engines: dict[str, dict] | None = None):
+        super().__init__(*args)
         self.engines = engines or {}
 
     def limit(self, engine: str, case: str, metric: str) -> float | None:
@@ -139,22 +212,44 @@ def _metric_limits(where: str, table: dict) -> dict[str, float]:
     return {k: float(v) for k, v in table.items()}
 
 
-def load_tolerances(path: str | Path | None = None) -> Tolerances:
-    """[limits] metric = value, optionally [limits.ENGINE] metric = value and
-    [limits.ENGINE.case.CASE] metric = value (more specific wins); a flat file of metrics still works."""
+def _engine_limits(limits: dict) -> dict[str, dict]:
+    """[limits.ENGINE] metric = value and [limits.ENGINE.case."CASE"] metric = value."""
     from comparisons.engines import ENGINES
-    data = _read(Path(path or DEFAULT_TOLERANCES), "--tolerances")
-    limits = data.get("limits", data)
-    defaults = _metric_limits("tolerance ", {k: v for k, v in limits.items() if not isinstance(v, dict)})
     engines = {}
     for name, table in ((k, v) for k, v in limits.items() if isinstance(v, dict)):
         if name not in ENGINES:
             raise ParameterError(f"tolerance {name}: neither a metric nor an engine; allowed metrics: "
                                  f"{', '.join(METRICS)}; engines: {', '.join(ENGINES)}")
         own = _metric_limits(f"tolerance {name}.", {k: v for k, v in table.items() if k != "case"})
-        cases = table.get("case", {})
-        if not isinstance(cases, dict):
-            raise ParameterError(f"tolerance {name}.case = {cases!r}: must be a table of cases")
-        own["case"] = {c: _metric_limits(f"tolerance {name}.case.{c}.", t) for c, t in cases.items()}
+        cases = _table(f"tolerance {name}.case", table.get("case", {}))
+        own["case"] = {c: _metric_limits(f"tolerance {name}.case.{c}.", _table(f"tolerance {name}.case.{c}", t))
+                       for c, t in cases.items()}
         engines[name] = own
-    return Tolerances(defaults, engines)
+    return engines
+
+
+def load_tolerances(path: str | Path | None = None) -> Limits:
+    """[limits] metric = value (or bare metric = value lines), optionally per engine
+    [limits.ENGINE] and per engine and case [limits.ENGINE.case."CASE"] (the most specific wins)."""
+    what = "--tolerances"
+    data = _read(Path(path or DEFAULT_TOLERANCES), what)
+    if "limits" in data:
+        extra = sorted(set(data) - {"limits"})
+        if extra:
+            raise ParameterError(f"{what}: {extra[0]!r} beside [limits]; allowed: the [limits] table only")
+        limits = _table("limits", data["limits"])
+    else:
+        limits = data
+    if not limits:
+        raise ParameterError(f"{what} {path}: no limits; a gate that checks nothing would always pass "
+                             f"(give some of: {', '.join(METRICS)})")
+    out = Limits(_metric_limits("tolerance ", {k: v for k, v in limits.items() if not isinstance(v, dict)}),
+                 engines=_engine_limits(limits))
+    missing = [k for k in METRICS if k not in out]
+    if missing:
+        defaults = load_tolerances(DEFAULT_TOLERANCES) if path and Path(path) != DEFAULT_TOLERANCES else {}
+        for k in missing:
+            if k in defaults:
+                out[k] = defaults[k]
+        out.defaulted = tuple(k for k in missing if k in out)
+    return out

@@ -15,8 +15,6 @@ The result shows whether a discrepancy is numerical error that vanishes or a flo
 from __future__ import annotations
 
 import dataclasses
-import multiprocessing
-from concurrent.futures import ProcessPoolExecutor
 
 
 from comparisons.config import Case
@@ -36,8 +34,8 @@ def convergence_study(spec: dict, engines: list[str], workers: int) -> dict:
             s = spec["sweep"][e]
             fixed = {**case.settings.get(e, {}), **s.get("settings", {})}
             jobs += [(e, {**fixed, s["setting"]: v}, v) for v in s["values"]]
-    ctx = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+    from nsd_core.engine.workers import worker_pool
+    with worker_pool(workers) as pool:
         futs = [pool.submit(run_job, e, case.params_for(e), drive, settings) for e, settings, _ in jobs]
         outs = [f.result() for f in futs]
     if outs[0]["status"] != "ok":

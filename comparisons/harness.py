@@ -6,16 +6,19 @@ message is kept for that case; every other case still runs and is written).
 from __future__ import annotations
 
 import datetime as dt
-import multiprocessing
+import functools
+import hashlib
+import json
 import os
 import subprocess
 import time
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import as_completed
 from pathlib import Path
 from typing import Any, Callable
 
 from nsd_core.device.cycle import analyse
-from nsd_core.device.results import RunResult, atomic_write_json, versions, write_csv
+from nsd_core.device.results import RunResult, atomic_write_json, read_csv, versions, write_csv
+from nsd_core.engine.workers import worker_pool
 
 from comparisons.config import METRICS, Case
 from comparisons.engines import REFERENCE, run_job
@@ -29,6 +32,41 @@ ENGINE_COST = {"semirecursive": 1.0, "mujoco": 1.0, "exudyn": 3.0}  # rough rela
 
 
 
+@functools.lru_cache(maxsize=1)
+def code_fingerprint() -> str:
+    """A hash of the model and engine source (nsd_core, comparisons) and the installed versions: a
+    kept run is reused only by the code that made it, never after an edit or an upgrade."""
+    import nsd_core
+    h = hashlib.sha256(json.dumps(versions(), sort_keys=True).encode())
+    for pkg in (Path(nsd_core.__file__).parent, Path(__file__).parent):
+        for f in sorted(pkg.rglob("*.py")):
+            h.update(f.read_bytes())
+    return h.hexdigest()[:16]
+
+
+def job_key(case: Case, engine: str) -> str:
+    """What a kept run depends on: the engine, its parameters, the drive, its settings, the code."""
+    d = case.drive
+    text = json.dumps([engine, case.params_for(engine).to_dict(), [d.amplitude, d.frequency, d.direction_deg,
+                       d.cycles, d.samples_per_cycle], case.settings.get(engine, {}), code_fingerprint()],
+                      sort_keys=True, default=str)
+    return hashlib.sha256(text.encode()).hexdigest()[:20]
+
+
+def load_kept(out: Path, case: Case, engine: str) -> dict | None:
+    """A run an earlier call kept for exactly these inputs, or None."""
+    csv = out / "cycles" / f"{case.name}__{engine}.csv"
+    try:
+        rec = json.loads(csv.with_suffix(".json").read_text())
+        if rec.get("key") != job_key(case, engine) or not csv.is_file():
+            return None
+        res = read_csv(csv, engine)
+    except (OSError, ValueError):
+        return None
+    res.stats = rec.get("stats", {})
+    return {"status": "ok", "result": res, "wall_time": rec.get("wall_time", 0.0)}
+
+
 def git_revision() -> str:
     try:
         out = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, timeout=10,
@@ -40,8 +78,12 @@ def git_revision() -> str:
 
 def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float], out_dir: str | Path,
             workers: int | None = None, log: Callable[[str], None] = print,
-            convergence: dict | None = None) -> dict[str, Any]:
-    """Run, measure, and write ``out_dir/results.json`` and ``out_dir/cycles/CASE__ENGINE.csv``."""
+            convergence: dict | None = None, tally: dict | None = None) -> dict[str, Any]:
+    """Run, measure, and write ``out_dir/results.json`` and ``out_dir/cycles/CASE__ENGINE.csv``.
+
+    Resumable: a run kept by an earlier, interrupted call with the same inputs (its CSV and its
+    ``.json`` record with the same ``job_key``) is read back instead of run again. ``tally`` (a
+    dict) is kept up to date with ``kept``, ``total`` and ``dir`` for the interrupt message."""
     out = Path(out_dir)
     jobs = [(c, e) for c in cases for e in engines]
     jobs.sort(key=lambda j: -ENGINE_COST.get(j[1], 1.0) * j[0].drive.cycles / j[0].drive.frequency)
@@ -49,37 +91,62 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
     runs: dict[str, dict[str, dict]] = {c.name: {} for c in cases}
     results: dict[tuple[str, str], RunResult] = {}
     started = time.perf_counter()
-    ctx = multiprocessing.get_context("spawn")  # MuJoCo's callbacks are process-global: one per process
-    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
-        futures = {pool.submit(run_job, e, c.params_for(e), c.drive, c.settings.get(e, {})): (c, e) for c, e in jobs}
-        for fut in as_completed(futures):
-            case, engine = futures[fut]
-            job = fut.result()
-            entry: dict[str, Any] = {"status": job["status"], "wall_time": job["wall_time"]}
-            if job["status"] == "ok":
-                res: RunResult = job["result"]
-                results[(case.name, engine)] = res
-                csv = out / "cycles" / f"{case.name}__{engine}.csv"
+    tally = tally if tally is not None else {}
+    tally.update(kept=0, total=len(jobs), dir=str(out))
+
+    def keep(case: Case, engine: str, job: dict, resumed: bool = False) -> None:
+        entry: dict[str, Any] = {"status": job["status"], "wall_time": job["wall_time"]}
+        if job["status"] == "ok":
+            res: RunResult = job["result"]
+            results[(case.name, engine)] = res
+            csv = out / "cycles" / f"{case.name}__{engine}.csv"
+            if not resumed:  # the CSV first, then the record that marks it complete
                 write_csv(csv, res)
-                entry.update(csv=str(csv.relative_to(out)), stats=res.stats,
-                             summary=analyse(res, case.drive.amplitude, case.drive.frequency),
-                             wall_time_per_cycle=res.stats.get("wall_time", job["wall_time"]) / case.drive.cycles)
-                log(f"  {case.name:16s} {engine:14s} ok     {entry['wall_time_per_cycle']:7.2f} s/cycle")
-            else:
-                entry["message"] = job["message"]
-                log(f"  {case.name:16s} {engine:14s} FAILED {job['message']}")
-            runs[case.name][engine] = entry
+                atomic_write_json(csv.with_suffix(".json"), {"key": job_key(case, engine), "engine": engine,
+                                                             "stats": res.stats, "wall_time": job["wall_time"]})
+                # measure what was written, so a resumed run and an uninterrupted one agree exactly
+                res = read_csv(csv, engine)
+                res.stats = job["result"].stats
+                results[(case.name, engine)] = res
+            entry.update(csv=str(csv.relative_to(out)), stats=res.stats, resumed=resumed,
+                         summary=analyse(res, case.drive.amplitude, case.drive.frequency),
+                         wall_time_per_cycle=res.stats.get("wall_time", job["wall_time"]) / case.drive.cycles)
+            log(f"  {case.name:16s} {engine:14s} {'kept' if resumed else 'ok':6s} "
+                f"{entry['wall_time_per_cycle']:7.2f} s/cycle")
+            tally["kept"] += 1
+        else:
+            entry["message"] = job["message"]
+            log(f"  {case.name:16s} {engine:14s} FAILED {job['message']}")
+        runs[case.name][engine] = entry
+
+    todo = []
+    for c, e in jobs:
+        done = load_kept(out, c, e)
+        if done is not None:
+            keep(c, e, done, resumed=True)
+        else:
+            todo.append((c, e))
+    if todo:
+        with worker_pool(min(workers, len(todo))) as pool:
+            futures = {pool.submit(run_job, e, c.params_for(e), c.drive, c.settings.get(e, {})): (c, e)
+                       for c, e in todo}
+            for fut in as_completed(futures):
+                case, engine = futures[fut]
+                keep(case, engine, fut.result())
     metrics = _metrics(cases, engines, tolerances, runs, results)
     failed_engines = [(c, e) for c in runs for e, r in runs[c].items() if r["status"] != "ok"]
     failed_metrics = [m for m in metrics if m["gated"] and not m["pass"]]
-    exit_code = 3 if failed_engines else (1 if failed_metrics else 0)
+    nothing_gated = not any(m["gated"] for m in metrics)  # never a vacuous PASS
+    exit_code = 3 if failed_engines or nothing_gated else (1 if failed_metrics else 0)
     summary = {
         "verdict": {0: "PASS", 1: "FAIL", 3: "ERROR"}[exit_code], "exit_code": exit_code,
         "failures": [f"{m['case']}: {m['engine']} {m['metric']} = {m['value']:.3g} > {m['limit']:.3g}"
-                     for m in failed_metrics] + [f"{c}: {e} failed: {runs[c][e]['message']}" for c, e in failed_engines],
+                     for m in failed_metrics] + [f"{c}: {e} failed: {runs[c][e]['message']}" for c, e in failed_engines]
+        + (["nothing was gated: no metric of the tolerance file was measured"] if nothing_gated else []),
         "date": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds"), "git_revision": git_revision(),
         "reference": REFERENCE, "engines": engines, "cases": [c.describe() for c in cases],
-        "tolerances": dict(tolerances), "tolerances_by_engine": getattr(tolerances, "engines", {}),
+        "tolerances": dict(tolerances), "tolerances_defaulted": list(getattr(tolerances, "defaulted", ())),
+        "tolerances_by_engine": getattr(tolerances, "engines", {}),
         "metric_units": {k: v[0] for k, v in METRICS.items()},
         "params": cases[0].params.describe() if cases else [], "runs": runs, "metrics": metrics,
         "total_wall_time": time.perf_counter() - started, "workers": workers,

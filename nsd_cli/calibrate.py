@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import argparse
 
-from nsd_cli.options import add_param_arguments, base_params
+from nsd_cli.options import add_param_arguments, base_params, check_out_dir
 
 HELP = "fit the unprinted parameters to Tables 5 and 6"
 
@@ -19,10 +19,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args) -> int:
     from nsd_core.study.calibrate import DEFAULT_FIT, calibrate, format_report, write_outputs
     base = base_params(args)
-    fit = DEFAULT_FIT if not args.fit else tuple(s.strip() for s in args.fit.split(",") if s.strip())
+    fit = DEFAULT_FIT if args.fit is None else tuple(s.strip() for s in args.fit.split(",") if s.strip())
+    out = check_out_dir("--out", args.out)
     result = calibrate(base, fit)
     print(format_report(result))
-    if args.out:
-        for path in write_outputs(result, args.out, base, start_file=args.params):
+    if out is not None:
+        for path in write_outputs(result, out, base, start_file=args.params):
             print(f"wrote {path}")
     return 0
+

@@ -8,7 +8,8 @@ from xml.sax.saxutils import escape, quoteattr
 from comparisons.config import load_cases, load_convergence, load_tolerances
 from comparisons.engines import REFERENCE
 from comparisons.harness import compare
-from nsd_cli.options import add_param_arguments, base_params, parse_engines
+from nsd_cli.options import (WORKERS_MAX, add_param_arguments, base_params, check_out_dir, check_out_file,
+                             parse_engines, whole)
 from nsd_core.device.params import ParameterError
 from nsd_core.device.results import atomic_write_text
 
@@ -19,7 +20,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--cases", help="case file (TOML); default: the four Figure 6 cases")
     p.add_argument("--tolerances", help="tolerance file (TOML); default: comparisons/tolerances.toml")
     p.add_argument("--engines", default="semirecursive,mujoco,exudyn",
-                   help="comma-separated engines; the first reference is semirecursive")
+                   help="comma-separated engines; must include the reference, semirecursive")
     add_param_arguments(p, "parameter overrides applied to every case")
     p.add_argument("--workers", type=int, default=None, help="parallel processes (default: all cores)")
     p.add_argument("--junit", help="write JUnit XML here (one test per case and engine)")
@@ -37,22 +38,37 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 
-def check_settings(cases, engines) -> None:
-    """Unknown solver settings are bad input (exit 2), found before anything runs or is written."""
+def check_settings(cases, engines, convergence=None) -> None:
+    """Every engine's settings in every case (and the convergence study), checked by the engine's
+    own ``check_settings`` before anything runs or is written: a bad setting is exit 2."""
     from comparisons.engines import get_engine
-    from comparisons.engines.base import merged_settings
-    for e in engines:
-        defaults = get_engine(e).default_settings
+    from comparisons.engines.base import check_settings as check
+    named = set(engines) | {e for c in cases for e in c.settings}
+    for e in sorted(named):
+        eng = get_engine(e)
         for c in cases:
-            merged_settings(defaults, c.settings.get(e), f"case {c.name}: {e}")
+            check(eng, c.settings.get(e), f"case {c.name}: settings.{e}")
+    if convergence:
+        check(get_engine(REFERENCE), convergence["reference"], "convergence.reference")
+        for e, spec in convergence["sweep"].items():
+            eng = get_engine(e)
+            where = f"convergence.sweep.{e}"
+            if spec["setting"] not in eng.default_settings:
+                raise ParameterError(f"{where}.setting = {spec['setting']!r}: unknown; allowed: "
+                                     f"{', '.join(sorted(eng.default_settings))}")
+            fixed = {**convergence["case"].settings.get(e, {}), **spec.get("settings", {})}
+            for v in spec["values"]:
+                check(eng, {**fixed, spec["setting"]: v}, where)
 
 
 def format_table(summary: dict) -> str:
     lines = [f"{'case':16s} {'engine':14s} {'vs':14s} {'metric':18s} {'value':>11s} {'limit':>11s}  verdict"]
+    defaulted = set(summary.get("tolerances_defaulted", ()))
     for m in summary["metrics"]:
         verdict = ("PASS" if m["pass"] else "FAIL") if m["gated"] else ("ok" if m["pass"] else "over")
+        note = " (default limit)" if m["metric"] in defaulted else ""
         lines.append(f"{m['case']:16s} {m['engine']:14s} {m['reference'] or '-':14s} {m['metric']:18s} "
-                     f"{m['value']:11.3e} {m['limit']:11.3e}  {verdict}")
+                     f"{m['value']:11.3e} {m['limit']:11.3e}  {verdict}{note}")
     for c, per in summary["runs"].items():
         for e, r in per.items():
             if r["status"] != "ok":
@@ -87,28 +103,35 @@ def junit_xml(summary: dict) -> str:
 
 def run(args) -> int:
     engines = parse_engines(args.engines)
+    if REFERENCE not in engines:
+        raise ParameterError(f"--engines {args.engines}: must include the reference {REFERENCE}; without it "
+                             "nothing is gated and the verdict would mean nothing")
+    whole("--workers", args.workers, 1, WORKERS_MAX)
     base = base_params(args)
     cases = load_cases(args.cases, base)
     tolerances = load_tolerances(args.tolerances)
-    check_settings(cases, engines)
     conv = load_convergence(args.cases, cases) if args.convergence else None
     if args.convergence and conv is None:
         raise ParameterError("--convergence: the case file has no [convergence] table")
     if args.power:
         return _run_power(args, cases, tolerances)
-    if REFERENCE not in engines:
-        print(f"note: {REFERENCE} not among the engines: pairs are reported, nothing is gated")
-    print(f"nsd compare: {len(cases)} cases x {len(engines)} engines -> {args.out}")
-    summary = compare(cases, engines, tolerances, args.out, workers=args.workers, convergence=conv)
+    check_settings(cases, engines, conv)
+    out = check_out_dir("--out", args.out)
+    check_out_file("--junit", args.junit)
+    if tolerances.defaulted:
+        print(f"note: {', '.join(tolerances.defaulted)} not in {args.tolerances}: default limits used "
+              "(marked 'default' in the table)")
+    print(f"nsd compare: {len(cases)} cases x {len(engines)} engines -> {out}")
+    summary = compare(cases, engines, tolerances, out, workers=args.workers, convergence=conv, tally=args.tally)
     print(format_table(summary))
     if args.junit:
         atomic_write_text(args.junit, junit_xml(summary))
     for line in summary["failures"]:
         print(f"FAILED {line}")
-    print(f"verdict: {summary['verdict']} ({summary['total_wall_time']:.1f} s); wrote {Path(args.out) / 'results.json'}")
+    print(f"verdict: {summary['verdict']} ({summary['total_wall_time']:.1f} s); wrote {out / 'results.json'}")
     if args.report:
         from reports.build import build_report
-        paths = build_report(args.out, Path(args.out) / "report")
+        paths = build_report(out, out / "report")
         print(f"report: {paths['pdf']}")
     return summary["exit_code"]
 
@@ -126,12 +149,13 @@ def _run_power(args, cases, tolerances) -> int:
                 raise ParameterError(f"--power-cases {n!r}: unknown case; allowed: {', '.join(known)}")
         cases = [known[n] for n in names]
     check_settings(cases, engines)
-    print(f"nsd compare --power: {len(cases)} cases x {len(engines)} engines -> {args.out}")
-    out = power_study(cases, engines, tolerances, args.out, workers=args.workers)
+    folder = check_out_dir("--out", args.out)
+    print(f"nsd compare --power: {len(cases)} cases x {len(engines)} engines -> {folder}")
+    out = power_study(cases, engines, tolerances, folder, workers=args.workers)
     print(format_power(out))
     print(f"{sum(t['seen_at_nominal'] for t in out['table'])} of {len(out['table'])} injected errors fail the gate "
-          f"({out['wall_time']:.0f} s); wrote {Path(args.out) / 'power.json'}")
-    if args.report and (Path(args.out) / "results.json").is_file():
+          f"({out['wall_time']:.0f} s); wrote {folder / 'power.json'}")
+    if args.report and (folder / "results.json").is_file():
         from reports.build import build_report
-        print(f"report: {build_report(args.out, Path(args.out) / 'report')['pdf']}")
+        print(f"report: {build_report(folder, folder / 'report')['pdf']}")
     return 0 if out["all_seen"] else 1

@@ -2,9 +2,9 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
-from nsd_cli.options import Progress, add_param_arguments, add_solver_arguments, base_params, solver_settings
+from nsd_cli.options import (Progress, add_param_arguments, add_solver_arguments, base_params, check_out_dir,
+                             solver_settings)
 
 HELP = "one force-displacement cycle of the in-house model"
 
@@ -28,8 +28,9 @@ def run(args) -> int:
     params = base_params(args)
     drive = Drive(args.amplitude, args.frequency, args.direction, args.cycles, args.samples_per_cycle)
     solver = {**DEFAULT_SOLVER, **solver_settings(args)}
+    drive.check_followable(params)
+    out = check_out_dir("--out", args.out)
     result, summary = cycle(params, drive, progress=Progress("nsd cycle"), **solver)
-    out = Path(args.out)
     write_csv(out / "cycle.csv", result)
     atomic_write_json(out / "summary.json", summary)
     regions = " ".join(f"{r['sign']}[{r['from'] * 1e3:.2f},{r['to'] * 1e3:.2f}]mm" for r in summary["stiffness_regions"])

@@ -9,17 +9,37 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import signal
 import sys
+import threading
 
 from nsd_core.device.drive import DriveError
 from nsd_core.engine.errors import InputError, SolverError
 
+DESCRIPTION = """Cross-validation harness for a negative-stiffness seismic isolation device: an in-house
+two-step semirecursive multibody model checked against MuJoCo and Exudyn models that call the
+same force laws (Dai et al. 2024)."""
+EPILOG = """exit codes: 0 ok; 1 a tolerance exceeded (compare) or a benchmark goal missed;
+2 bad input (one line naming the field, the value and what is allowed; nothing written);
+3 a solver or engine failed (including "exceeded N steps"); 4 a drive the mechanism cannot follow;
+130 / 143 interrupted by Ctrl-C / SIGTERM (finished cases are kept; a re-run resumes them).
+Run `nsd COMMAND --help` for each command's options."""
+
 SUBCOMMANDS = ("cycle", "compare", "report", "sweep", "tables", "calibrate", "benchmark")
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """Bad options get one line on stderr (naming the option, the value and what is allowed) and exit 2,
+    like every other bad input; ``nsd CMD --help`` shows the usage."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {' '.join(message.split())} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="nsd", description=__doc__.split("\n\n")[0].replace("\n", " "))
-    sub = parser.add_subparsers(dest="command", required=True)
+    parser = OneLineParser(prog="nsd", description=DESCRIPTION,
+                           epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=OneLineParser)
     for name in SUBCOMMANDS:
         mod = importlib.import_module(f"nsd_cli.{name}")
         p = sub.add_parser(name, help=mod.HELP, description=(mod.__doc__ or mod.HELP).strip())
@@ -28,8 +48,33 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class Interrupted(BaseException):
+    """SIGINT or SIGTERM arrived: stop, keep what is finished, say so in one line."""
+
+    def __init__(self, signum: int):
+        super().__init__(signum)
+        self.signum = signum
+
+
+def _raise_interrupted(signum, frame):
+    raise Interrupted(signum)
+
+
+def _handle_signals():
+    """Ctrl-C and SIGTERM raise Interrupted in the main thread (returns the handlers to restore)."""
+    if threading.current_thread() is not threading.main_thread():
+        return {}
+    saved = {}
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        saved[sig] = signal.signal(sig, _raise_interrupted)
+    return saved
+
+
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    args.tally = {}  # subcommands that keep results as they go fill in kept / total / dir
+    saved = _handle_signals()
     try:
         return int(args.handler(args) or 0)
     except InputError as e:
@@ -41,6 +86,18 @@ def main(argv: list[str] | None = None) -> int:
     except SolverError as e:
         print(f"nsd: solver failure: {e}", file=sys.stderr)
         return 3
+    except (Interrupted, KeyboardInterrupt) as e:
+        signum = e.signum if isinstance(e, Interrupted) else signal.SIGINT
+        for sig in saved:  # a second Ctrl-C while we tidy up must not print a traceback
+            signal.signal(sig, signal.SIG_IGN)
+        t = args.tally
+        where = (f"; {t['kept']} of {t['total']} cases kept in {t['dir']}" if "total" in t
+                 else "; nothing kept")
+        print(f"nsd: interrupted{where}", file=sys.stderr, flush=True)
+        return 128 + int(signum)
+    finally:
+        for sig, handler in saved.items():
+            signal.signal(sig, handler)
 
 
 if __name__ == "__main__":

@@ -3,8 +3,11 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
+import tempfile
 import time
+from pathlib import Path
 
 from nsd_core.device.params import ParameterError, Params, load_params, parse_set
 
@@ -51,10 +54,74 @@ def add_solver_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def solver_settings(args) -> dict:
-    """The solver options given on the command line (positive finite numbers), by setting name."""
-    for n in ("rtol", "atol", "max_step"):
-        positive(f"--{n.replace('_', '-')}", getattr(args, n))
-    return {k: getattr(args, k) for k in ("method", "rtol", "atol", "max_step") if getattr(args, k) is not None}
+    """The solver options given on the command line, checked by the in-house engine's own settings
+    check (types, ranges, the step-size floor, the method), by setting name."""
+    from comparisons.engines.base import check_settings
+    from comparisons.engines.semirecursive_engine import SemirecursiveEngine
+    given = {k: getattr(args, k) for k in ("method", "rtol", "atol", "max_step") if getattr(args, k) is not None}
+    try:
+        check_settings(SemirecursiveEngine, given, "semirecursive")
+    except ParameterError as e:  # name the option the user typed
+        for k in given:
+            if str(e).startswith(f"semirecursive.{k} "):
+                raise ParameterError(f"--{k.replace('_', '-')}" + str(e)[len(f"semirecursive.{k}"):]) from None
+        raise
+    return given
+
+
+def whole(name: str, v, low: int, high: int) -> None:
+    """None passes; otherwise a whole number in [low, high]."""
+    if v is not None and not low <= v <= high:
+        raise ParameterError(f"{name} = {v}: must be a whole number in [{low}, {high}]")
+
+
+WORKERS_MAX = 256
+
+
+def _nearest_existing(path: Path) -> Path:
+    p = path.absolute()
+    while not p.exists() and p != p.parent:
+        p = p.parent
+    return p
+
+
+def _writable_folder(option: str, value: str, folder: Path) -> None:
+    """The folder exists or can be made, and a file can be created in it (probed, then removed)."""
+    base = _nearest_existing(folder)
+    if not base.is_dir():
+        raise ParameterError(f"{option} {value}: {base} is a file, not a folder")
+    if not os.access(base, os.W_OK | os.X_OK):
+        raise ParameterError(f"{option} {value}: {base} is not writable")
+    try:
+        with tempfile.TemporaryFile(dir=base):
+            pass
+    except OSError as e:
+        raise ParameterError(f"{option} {value}: {base} is not writable ({e.strerror or e})") from None
+
+
+def check_out_dir(option: str, value: str | None) -> Path | None:
+    """--out must name a folder (existing or to be made) that can be written, checked before any
+    computation so that a run never fails at the end for want of a place to put its results."""
+    if value is None:
+        return None
+    if not value.strip():
+        raise ParameterError(f"{option} '': name an output folder")
+    path = Path(value)
+    if path.exists() and not path.is_dir():
+        raise ParameterError(f"{option} {value}: exists and is not a folder")
+    _writable_folder(option, value, path)
+    return path
+
+
+def check_out_file(option: str, value: str | None) -> Path | None:
+    """An output file (--junit): not a folder, in a folder that can be written."""
+    if value is None:
+        return None
+    path = Path(value)
+    if not value.strip() or value.endswith(("/", os.sep)) or path.is_dir():
+        raise ParameterError(f"{option} {value!r}: must name a file, not a folder")
+    _writable_folder(option, value, path.parent)
+    return path
 
 
 def positive(name: str, v, whole: bool = False) -> None:

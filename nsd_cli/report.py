@@ -7,6 +7,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from nsd_cli.options import check_out_dir
+
 
 HELP = "write the validation report (PDF and PNGs) from a results folder"
 
@@ -18,8 +20,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args) -> int:
-    from reports.build import build_report
-    paths = build_report(args.source, args.out)
+    from reports.build import build_report, load
+    load(args.source)  # the results folder first: bad input is found before anything else
+    out = check_out_dir("--out", args.out)
+    paths = build_report(args.source, out)
     print(f"report: {paths['pdf']} ({len(paths['pngs'])} pages, {paths['seconds']:.1f} s); "
           f"PNGs in {Path(paths['pdf']).parent}")
     return 0

@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import argparse
 import os
-from pathlib import Path
+import re
+import socket
 
-from nsd_cli.options import (add_param_arguments, add_solver_arguments, base_params, parse_engines, parse_numbers,
-                             positive, solver_settings)
+from nsd_cli.options import (WORKERS_MAX, add_param_arguments, add_solver_arguments, base_params, check_out_dir,
+                             parse_engines, parse_numbers, positive, solver_settings, whole)
 from nsd_core.device.params import FIELDS, ParameterError
 
+MAX_VALUES = 200
 HELP = "parametric sweeps (the paper's Section 4.3)"
 
 
@@ -32,37 +34,62 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", required=True, help="output folder (resumable)")
 
 
+def check_scheduler(address: str | None) -> None:
+    """--scheduler: tcp://HOST:PORT (or HOST:PORT) where a Dask scheduler answers, checked in seconds
+    before anything is written, rather than a traceback after a 20 s timeout."""
+    if address is None:
+        return
+    m = re.fullmatch(r"(?:tcp://)?([A-Za-z0-9.\-]+|\[[0-9a-fA-F:]+\]):([0-9]{1,5})", address.strip())
+    if not m or not 0 < int(m.group(2)) < 65536:
+        raise ParameterError(f"--scheduler {address!r}: must be tcp://HOST:PORT of a running Dask scheduler")
+    host = m.group(1).strip("[]")
+    try:
+        socket.create_connection((host, int(m.group(2))), timeout=3).close()
+    except OSError as e:
+        raise ParameterError(f"--scheduler {address}: nothing answers there ({e.strerror or e}); start "
+                             "`dask scheduler` first or leave --scheduler out for local workers") from None
+
+
 def run(args) -> int:
-    from comparisons.engines import run_engine
+    from comparisons.engines import get_engine, run_engine
+    from comparisons.engines.base import check_settings
+    from nsd_core.device.drive import Drive
     from nsd_core.study.designs import make_designs, paper_designs
     from nsd_core.study.sweep import run_sweep
     base = base_params(args)
     for n in ("amplitude", "frequency"):
         positive(f"--{n}", getattr(args, n))
-    for n in ("cycles", "samples_per_cycle", "workers"):
-        positive(f"--{n.replace('_', '-')}", getattr(args, n), whole=True)
-    if args.samples_per_cycle < 16:
-        raise ParameterError(f"--samples-per-cycle = {args.samples_per_cycle}: must be >= 16")
+    whole("--workers", args.workers, 1, WORKERS_MAX)
     if args.paper == bool(args.param):
         raise ParameterError("--param / --paper: give exactly one (--param NAME --values ... or --paper)")
+    if args.paper and args.values is not None:
+        raise ParameterError("--values: only with --param (--paper has its own values)")
     engines = tuple(parse_engines(args.engines, check_available=True))
+    settings = solver_settings(args)
     kw = dict(base=base, amplitude=args.amplitude, frequency=args.frequency, engines=engines,
-              settings=solver_settings(args), cycles=args.cycles, samples_per_cycle=args.samples_per_cycle,
+              settings=settings, cycles=args.cycles, samples_per_cycle=args.samples_per_cycle,
               direction_deg=args.direction)
+    Drive(args.amplitude or 0.0, args.frequency, args.direction, args.cycles, args.samples_per_cycle)
     if args.paper:
         designs = paper_designs(**kw)
     else:
         if args.param not in FIELDS:
             raise ParameterError(f"--param {args.param}: unknown parameter; allowed: {', '.join(sorted(FIELDS))}")
-        designs = make_designs(args.param, parse_numbers("--values", args.values, f" with --param {args.param}"), **kw)
+        values = parse_numbers("--values", args.values, f" with --param {args.param}")
+        if len(values) > MAX_VALUES:
+            raise ParameterError(f"--values: {len(values)} values; at most {MAX_VALUES}")
+        designs = make_designs(args.param, values, **kw)
     for d in designs:
         if d.amplitude >= d.params["rod_length"]:
             raise ParameterError(f"--amplitude = {d.amplitude}: must be < rod_length = {d.params['rod_length']} "
                                  f"(design {d.label})")
-    index = run_sweep(designs, args.out, workers=args.workers, scheduler=args.scheduler,
-                      retry_failed=args.retry_failed, run_engine=run_engine)
+        check_settings(get_engine(d.engine), d.settings, d.engine)
+    check_scheduler(args.scheduler)
+    out = check_out_dir("--out", args.out)
+    index = run_sweep(designs, out, workers=args.workers, scheduler=args.scheduler,
+                      retry_failed=args.retry_failed, run_engine=run_engine, tally=args.tally)
     print(f"{index['ok']} design entries ok, {len(index['failed'])} failed, {len(index['missing'])} missing; "
-          f"{index['elapsed_this_run_s']:.1f} s; wrote {Path(args.out) / 'sweep.json'}")
+          f"{index['elapsed_this_run_s']:.1f} s; wrote {out / 'sweep.json'}")
     for study, path in index["studies"].items():
-        print(f"  {study}: {Path(args.out) / path}")
+        print(f"  {study}: {out / path}")
     return 3 if index["failed"] or index["missing"] else 0

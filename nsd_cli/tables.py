@@ -3,9 +3,8 @@ from __future__ import annotations
 
 import argparse
 import os
-from pathlib import Path
 
-from nsd_cli.options import add_param_arguments, base_params, positive
+from nsd_cli.options import WORKERS_MAX, add_param_arguments, base_params, check_out_dir, positive, whole
 from nsd_core.device.params import ParameterError
 
 HELP = "the paper's Tables 5 and 6 next to the model"
@@ -25,10 +24,14 @@ def run(args) -> int:
     if args.method not in ("slack", "path"):
         raise ParameterError(f"--method {args.method!r}: allowed: slack, path")
     positive("--step", args.step)
-    positive("--workers", args.workers, whole=True)
+    positive("--step", args.step)
+    if args.step is not None and not 1e-7 <= args.step <= 1e-3:
+        raise ParameterError(f"--step = {args.step}: must be in [1e-7, 1e-3] m")
+    whole("--workers", args.workers, 1, WORKERS_MAX)
+    out = check_out_dir("--out", args.out)
     rows = table_rows(base, method=args.method, step=args.step, workers=args.workers)
     print(format_rows(rows))
-    if args.out:
-        write_csv(Path(args.out) / "tables.csv", rows)
-        print(f"wrote {Path(args.out) / 'tables.csv'}")
+    if out is not None:
+        write_csv(out / "tables.csv", rows)
+        print(f"wrote {out / 'tables.csv'}")
     return 0

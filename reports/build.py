@@ -65,6 +65,8 @@ def _json(path: Path, what: str) -> Any:
 def load(results_dir: str | Path) -> ReportData:
     """Read and check a results folder; ParameterError (one line) if it is missing or malformed."""
     root = Path(results_dir)
+    if not str(results_dir).strip():
+        raise ParameterError("--from '': name the --out folder of nsd compare")
     if not root.is_dir():
         raise ParameterError(f"--from {root}: no such folder (give the --out folder of nsd compare)")
     summary = _json(root / "results.json", "written by nsd compare --out")
@@ -91,6 +93,8 @@ def load(results_dir: str | Path) -> ReportData:
             if run["status"] != "ok":
                 continue
             csv = root / str(run.get("csv", ""))
+            if run.get("csv") and root.resolve() not in csv.resolve().parents:
+                raise ParameterError(f"{root / 'results.json'}: malformed (cycle file {run['csv']!r} lies outside --from)")
             if not run.get("csv") or not csv.is_file():
                 raise ParameterError(f"--from {root}: cycle file {run.get('csv')!r} of {case}/{engine} is missing")
             try:
@@ -100,6 +104,9 @@ def load(results_dir: str | Path) -> ReportData:
             for col in ("t", "u", "F", "closure"):
                 if col not in data.results[(case, engine)].columns:
                     raise ParameterError(f"{csv}: malformed (no column {col!r})")
+    if not data.results:
+        raise ParameterError(f"--from {root}: no engine run succeeded there; there is nothing to report "
+                             "(see the errors in results.json)")
     bench = root / "benchmark" / "results.json"
     if bench.is_file():
         b = _json(bench, "written by nsd benchmark")

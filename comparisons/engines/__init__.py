@@ -23,8 +23,11 @@ def get_engine(name: str):
     return getattr(importlib.import_module(module), cls)()
 
 def run_engine(name: str, params: Params, drive, settings: dict | None = None):
-    """Run one engine by name: the runner the study layer is given to sweep any engine."""
-    return get_engine(name).run(params, drive, settings or None)
+    """Run one engine by name: the runner the study layer is given to sweep any engine. Whatever the
+    engine prints (Exudyn's memory-allocation warnings) goes to stderr, never into stdout's table."""
+    from nsd_core.engine.workers import stdout_to_stderr
+    with stdout_to_stderr():
+        return get_engine(name).run(params, drive, settings or None)
 
 
 def run_job(engine: str, params: Params, drive, settings: dict) -> dict[str, Any]:

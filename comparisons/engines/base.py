@@ -35,9 +35,68 @@ class Engine(Protocol):
 def merged_settings(defaults: dict[str, Any], settings: dict[str, Any] | None, engine: str) -> dict[str, Any]:
     """Defaults updated by ``settings``; an unknown key is bad input (a one-line ParameterError)."""
     from nsd_core.device.params import ParameterError
+    if settings is not None and not isinstance(settings, dict):
+        raise ParameterError(f"{engine} = {settings!r}: must be a table of setting = value")
     out = dict(defaults)
     for k, v in (settings or {}).items():
         if k not in defaults:
             raise ParameterError(f"{engine}.{k}: unknown solver setting; allowed: {', '.join(sorted(defaults))}")
         out[k] = v
     return out
+
+
+# Floors that keep one run's work bounded (issue 12): no step below STEP_FLOOR seconds, tolerances
+# a double can honour, and at most MAX_FIXED_STEPS steps for an engine with a fixed step.
+STEP_FLOOR = 1e-8
+STEP_SETTINGS = ("step_size", "timestep", "max_step")
+MAX_FIXED_STEPS = 20_000_000
+
+
+def check_settings(engine, settings: dict[str, Any] | None, where: str) -> dict[str, Any]:
+    """Every setting typed like its default and in range, then the engine's own ``validate_settings``
+    hook: a bad setting is bad input (exit 2) found before any work starts."""
+    from nsd_core.device.params import ParameterError
+    s = merged_settings(engine.default_settings, settings, where)
+    for k, v in (settings or {}).items():
+        d = engine.default_settings[k]
+        name = f"{where}.{k} = {v!r}"
+        if k == "perturb":   # an injected modelling error (nsd compare --power): its own checks
+            from comparisons.engines.perturb import check as check_perturbation
+            check_perturbation(v)
+            continue
+        if isinstance(d, bool):
+            if not isinstance(v, bool):
+                raise ParameterError(f"{name}: must be true or false")
+        elif isinstance(d, str):
+            if not isinstance(v, str):
+                raise ParameterError(f"{name}: must be a string")
+        elif isinstance(d, list):
+            if not isinstance(v, list) or len(v) != len(d) or not all(_finite(x) for x in v):
+                raise ParameterError(f"{name}: must be a list of {len(d)} finite numbers")
+        elif d is None or isinstance(d, int):  # counts: a whole number >= 1 (None: the engine chooses)
+            if isinstance(v, bool) or not isinstance(v, int) or not 1 <= v <= 10_000_000:
+                raise ParameterError(f"{name}: must be a whole number in [1, 10000000]")
+        elif isinstance(d, float):
+            if not _finite(v) or not v > 0:
+                raise ParameterError(f"{name}: must be a finite number > 0")
+            if k in STEP_SETTINGS and v < STEP_FLOOR:
+                raise ParameterError(f"{name}: must be >= {STEP_FLOOR:g} s (the step-size floor)")
+            if k == "rtol" and not 1e-13 <= v <= 0.1:
+                raise ParameterError(f"{name}: must be in [1e-13, 0.1]")
+            if k == "atol" and not v <= 1.0:
+                raise ParameterError(f"{name}: must be in (0, 1]")
+    hook = getattr(engine, "validate_settings", None)
+    if hook is not None:
+        hook(s)
+    return s
+
+
+def _finite(v) -> bool:
+    import math
+    return not isinstance(v, bool) and isinstance(v, (int, float)) and math.isfinite(v)
+
+
+def check_step_count(engine: str, n_steps: int) -> None:
+    """A fixed-step run longer than MAX_FIXED_STEPS fails for its case (exit 3), before it starts."""
+    if n_steps > MAX_FIXED_STEPS:
+        raise EngineError(f"{engine}: exceeded {MAX_FIXED_STEPS} steps ({n_steps} needed at this step size)")

@@ -62,7 +62,7 @@ from exudyn.itemInterface import (LoadForceVector, MarkerNodePosition, ObjectGen
                                   SensorObject)
 from exudyn.rigidBodyUtilities import RigidBodyInertia
 
-from comparisons.engines.base import EngineError, merged_settings
+from comparisons.engines.base import check_step_count, EngineError, merged_settings
 from nsd_core.device.drive import Drive
 from nsd_core.device.forces import advance_spring_zeta, advance_wire_stress, rope_tension, spring_push, wire_tension
 from nsd_core.device.geometry import device_geometry
@@ -182,6 +182,7 @@ def _check_settings(s):
 
 class ExudynEngine:
     name = "exudyn"
+    validate_settings = staticmethod(lambda s: _check_settings(s))
     default_settings = {
         "step_size": 1.0e-5,          # largest step [s]; the step used divides the output interval
         "min_steps_per_cycle": 20000,  # and at most 1/(f n): 5e-6 s at 10 Hz, where steps are cheap
@@ -227,6 +228,7 @@ class ExudynEngine:
         p = g.params
         n_out = len(t_out)
         n_steps = per_out * (n_out - 1)
+        check_step_count(self.name, n_steps)
         h = drive.duration / n_steps
         e, w, A = drive.unit_vector, drive.omega, drive.amplitude
         v0 = A * w  # du/dt at t = 0: start with velocities consistent with the drive

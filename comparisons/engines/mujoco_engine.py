@@ -69,10 +69,20 @@ from nsd_core.device.outputs import device_columns
 from nsd_core.device.params import Params
 from nsd_core.device.results import RunResult
 
-from comparisons.engines.base import EngineError, merged_settings
+from comparisons.engines.base import check_step_count, EngineError, merged_settings
 from comparisons.engines.perturb import perturbed
 
 _EULER_LIKE = ("Euler", "implicit", "implicitfast")
+
+
+def _check_settings(s: dict) -> None:
+    """MuJoCo's own constraints on its settings (types and ranges are checked in base.check_settings)."""
+    from nsd_core.device.params import ParameterError
+    allowed = _EULER_LIKE + ("RK4",)
+    if s["integrator"] not in allowed:
+        raise ParameterError(f"mujoco.integrator = {s['integrator']!r}: allowed: {', '.join(allowed)}")
+    if s["solref_factor"] < 2.0:
+        raise ParameterError(f"mujoco.solref_factor = {s['solref_factor']!r}: must be >= 2 (MuJoCo's minimum)")
 
 
 def _f(x) -> str:
@@ -191,6 +201,7 @@ class _Device:
 
 class MujocoEngine:
     name = "mujoco"
+    validate_settings = staticmethod(lambda s: _check_settings(s))
     default_settings = {
         "timestep": 1e-5,            # [s] largest step; the step used divides the output interval
         "integrator": "Euler",       # Euler | implicitfast | implicit | RK4
@@ -221,6 +232,7 @@ class MujocoEngine:
         # RK4 stages span the whole step: its first-order stage prediction wants a commit every step
         commit_every = max(1, int(s["commit_every"] or (10 if euler else 1)))
         n_steps = n_sub * (len(t_out) - 1)
+        check_step_count(self.name, n_steps)
         try:
             model = mujoco.MjModel.from_xml_string(build_mjcf(g, drive, s, h))
         except ValueError as exc:

@@ -14,6 +14,13 @@ class SemirecursiveEngine:
     name = "semirecursive"
     default_settings = dict(DEFAULT_SOLVER)
 
+    @staticmethod
+    def validate_settings(s: dict) -> None:
+        from nsd_core.device.params import ParameterError
+        from nsd_core.engine.integrate import METHODS
+        if s["method"] not in METHODS:
+            raise ParameterError(f"semirecursive.method = {s['method']!r}: allowed: {', '.join(METHODS)}")
+
     def run(self, params: Params, drive: Drive, settings: dict | None = None) -> RunResult:
         s = merged_settings(self.default_settings, settings, self.name)
         try:

@@ -23,19 +23,33 @@ class Drive:
     cycles: int = 2           # the last one is the steady cycle that is compared
     samples_per_cycle: int = 1000
 
+    # Bounds that keep one run's work finite (issue 12): below F_MIN a cycle is so long that the
+    # 250 Hz vertical mode must be resolved over minutes of simulated time; above F_MAX the drive's
+    # inertia force m_c A (2 pi f)^2 leaves the range any force law here was written for.
+    F_MIN, F_MAX = 0.05, 100.0   # Hz
+    CYCLES_MAX = 1000
+    SAMPLES_MAX = 200_000        # per cycle
+    TOTAL_SAMPLES_MAX = 2_000_000
+
     def __post_init__(self):
         for name in ("amplitude", "frequency", "direction_deg"):
             v = getattr(self, name)
-            if not isinstance(v, (int, float)) or not math.isfinite(v):
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
                 raise ParameterError(f"{name} = {v!r}: must be a finite number")
         if self.amplitude < 0:
             raise ParameterError(f"amplitude = {self.amplitude}: must be >= 0 m (0 holds the device at rest)")
-        if self.frequency <= 0:
-            raise ParameterError(f"frequency = {self.frequency}: must be > 0 Hz")
-        if not isinstance(self.cycles, int) or self.cycles < 1:
-            raise ParameterError(f"cycles = {self.cycles!r}: must be a whole number >= 1")
-        if not isinstance(self.samples_per_cycle, int) or self.samples_per_cycle < 16:
-            raise ParameterError(f"samples_per_cycle = {self.samples_per_cycle!r}: must be a whole number >= 16")
+        if not self.F_MIN <= self.frequency <= self.F_MAX:
+            raise ParameterError(f"frequency = {self.frequency}: must be in [{self.F_MIN}, {self.F_MAX}] Hz")
+        if not -360.0 <= self.direction_deg <= 360.0:
+            raise ParameterError(f"direction_deg = {self.direction_deg}: must be in [-360, 360] deg")
+        for name, top in (("cycles", self.CYCLES_MAX), ("samples_per_cycle", self.SAMPLES_MAX)):
+            v = getattr(self, name)
+            low = 1 if name == "cycles" else 16
+            if isinstance(v, bool) or not isinstance(v, int) or not low <= v <= top:
+                raise ParameterError(f"{name} = {v!r}: must be a whole number in [{low}, {top}]")
+        if self.cycles * self.samples_per_cycle > self.TOTAL_SAMPLES_MAX:
+            raise ParameterError(f"cycles x samples_per_cycle = {self.cycles * self.samples_per_cycle}: must be "
+                                 f"<= {self.TOTAL_SAMPLES_MAX} output samples")
 
     def check_followable(self, p: Params) -> None:
         if self.amplitude >= p.rod_length:

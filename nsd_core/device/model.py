@@ -34,6 +34,8 @@ X, Y, Z = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)
 
 MAX_WIRE_STRAIN = 0.2  # beyond it the SMA law (Eq. 17, fitted up to ~8 %) says nothing about a real wire
 
+# The default cases need at most ~1800 accepted steps per cycle (README); about 55x that is a runaway
+MAX_STEPS_PER_CYCLE = 100_000
 DEFAULT_SOLVER = {"method": "DOP853", "rtol": 1e-7, "atol": 1e-12, "max_step": 1e-3}
 
 
@@ -154,7 +156,8 @@ def simulate(params: Params, drive: Drive, method: str = DEFAULT_SOLVER["method"
 
     try:
         traj = integrate(system, y0, t_eval, method=method, rtol=rtol, atol=atol, max_step=max_step,
-                         min_pivot_ratio=0.0, progress=progress, outputs=record)
+                         min_pivot_ratio=0.0, progress=progress, outputs=record,
+                         max_steps=MAX_STEPS_PER_CYCLE * drive.cycles)
     except ConstraintError as err:
         raise SolverError(str(err)) from None
     t, cap, wall, sig, zeta, clo, F, lam = (np.array(c) for c in zip(*rows))

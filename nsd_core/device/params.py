@@ -134,15 +134,16 @@ def _coerce(name: str, value: Any):
     kind = FIELDS[name].metadata["kind"]
     if isinstance(value, str):
         try:
-            value = float(value)
+            value = int(value) if kind is int else float(value)
         except ValueError:
-            raise ParameterError(f"{name} = {value!r}: not a number") from None
+            what = "a whole number" if kind is int else "a number"
+            raise ParameterError(f"{name} = {value!r}: not {what}") from None
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise ParameterError(f"{name} = {value!r}: must be a number ({FIELDS[name].metadata['unit']})")
     if kind is int:
-        if not math.isfinite(value) or value != int(value):
-            raise ParameterError(f"{name} = {value!r}: must be a whole number")
-        return int(value)
+        if not isinstance(value, int):  # 4.0 in a file is a typo for a count, not a count
+            raise ParameterError(f"{name} = {value!r}: must be a whole number (an integer, no decimal point)")
+        return value
     return float(value)
 
 
@@ -165,19 +166,54 @@ def parse_set(items: list[str]) -> dict[str, str]:
     return out
 
 
+def read_toml(path: str | Path, what: str) -> dict:
+    """A TOML input file as a dict; every way it can be unreadable is one ParameterError line."""
+    path = Path(path)
+    try:
+        if path.is_dir():
+            raise ParameterError(f"{what} {path}: is a folder; a TOML file is expected")
+        if path.stat().st_size > 1_000_000:
+            raise ParameterError(f"{what} {path}: {path.stat().st_size} bytes; at most 1 MB expected")
+        return tomllib.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ParameterError(f"{what} {path}: file not found") from None
+    except PermissionError:
+        raise ParameterError(f"{what} {path}: not readable (permission denied)") from None
+    except UnicodeDecodeError:
+        raise ParameterError(f"{what} {path}: not a text file (UTF-8 TOML expected)") from None
+    except tomllib.TOMLDecodeError as e:
+        raise ParameterError(f"{what} {path}: not valid TOML ({e})") from None
+    except OSError as e:
+        raise ParameterError(f"{what} {path}: cannot be read ({e.strerror or e})") from None
+
+
+def params_from_toml(data: dict, what: str) -> dict[str, Any]:
+    """The overrides of a parameter file: flat ``name = value`` or under ``[params]``; a free-form
+    ``[provenance]`` table may sit beside them (nsd calibrate writes one). Anything else is an error
+    rather than silently ignored (a key beside [params] would otherwise not apply)."""
+    data = {k: v for k, v in data.items() if k != "provenance"}
+    if "params" in data:
+        extra = sorted(set(data) - {"params"})
+        if extra:
+            raise ParameterError(f"{what}: {extra[0]!r} beside [params]; put every parameter under [params] "
+                                 "(allowed tables: params, provenance)")
+        data = data["params"]
+        if not isinstance(data, dict):
+            raise ParameterError(f"{what}: params = {data!r}: must be a table of name = value")
+    for k, v in data.items():
+        if isinstance(v, (dict, list)):
+            raise ParameterError(f"{what}: {k} = {type(v).__name__}: must be a number (tables allowed: params, "
+                                 "provenance)")
+    return data
+
+
 def load_params(path: str | Path | None = None, overrides: Mapping[str, Any] | None = None) -> Params:
     """Defaults, then a TOML file (flat ``name = value`` or under ``[params]``), then overrides."""
     p = Params()
     if path is not None:
-        try:
-            data = tomllib.loads(Path(path).read_text())
-        except FileNotFoundError:
-            raise ParameterError(f"--params {path}: file not found") from None
-        except tomllib.TOMLDecodeError as e:
-            raise ParameterError(f"--params {path}: not valid TOML ({e})") from None
-        data = data.get("params", data)
-        data = {k: v for k, v in data.items() if not isinstance(v, dict)}
-        p = with_overrides(p, data)
+        if not str(path).strip():
+            raise ParameterError("--params '': name a TOML file")
+        p = with_overrides(p, params_from_toml(read_toml(path, "--params"), f"--params {path}"))
     if overrides:
         p = with_overrides(p, overrides)
     return p
@@ -188,20 +224,35 @@ _POSITIVE = [n for n, f in FIELDS.items() if f.metadata["kind"] is float
                            "spring_gamma")]
 
 
+# Magnitude bounds per unit: generous (orders of magnitude beyond the device's values) but finite, so
+# that an input like rope_stiffness = 1e15 or rod_length = 1e308 is bad input, not a run that
+# overflows or never ends (issue 12).
+MAGNITUDE_MAX = {"m": 10.0, "kg": 1e4, "N/m": 1e10, "Pa": 1e13, "N": 1e8, "1/m": 1e8, "deg": 360.0,
+                 "kg/m^3": 1e5, "m/s^2": 100.0, "-": 1e6}
+
+
 def validate(p: Params) -> None:
     """Reject anything physically impossible or outside the model's validity (one-line errors)."""
     for name in FIELDS:
         v = getattr(p, name)
         if isinstance(v, float) and not math.isfinite(v):
             raise ParameterError(f"{name} = {v}: must be a finite number")
+    for name, f in FIELDS.items():
+        top = MAGNITUDE_MAX.get(f.metadata["unit"])
+        v = getattr(p, name)
+        if top is not None and abs(v) > top:
+            raise ParameterError(f"{name} = {v}: must be within +-{top:g} {f.metadata['unit']} "
+                                 "(far outside any device this model describes)")
     for name in _POSITIVE:
         v = getattr(p, name)
         if not v > 0:
             raise ParameterError(f"{name} = {v}: must be > 0 ({FIELDS[name].metadata['unit']})")
     if p.n_ropes < 3:
         raise ParameterError(f"n_ropes = {p.n_ropes}: must be >= 3 (fewer ropes cannot hold the cap centred)")
-    if p.n_wires < 0:
-        raise ParameterError(f"n_wires = {p.n_wires}: must be >= 0")
+    if p.n_ropes > 64:
+        raise ParameterError(f"n_ropes = {p.n_ropes}: must be <= 64")
+    if not 0 <= p.n_wires <= 64:
+        raise ParameterError(f"n_wires = {p.n_wires}: must be in [0, 64]")
     if not 0.0 <= p.wire_inclination_deg < 45.0:
         raise ParameterError(f"wire_inclination_deg = {p.wire_inclination_deg}: must be in [0, 45)")
     if p.wire_span <= 0:

@@ -17,6 +17,7 @@ from scipy.integrate import DOP853, LSODA, RK23, RK45, Radau
 from nsd_core.engine.errors import InputError, SolverError
 from nsd_core.engine.semirecursive import SemiRecursiveSystem
 
+STEP_FLOOR = 1e-8  # s: the smallest max_step accepted (issue 12: bounded work)
 METHODS = {"RK45": RK45, "DOP853": DOP853, "RK23": RK23, "Radau": Radau, "LSODA": LSODA}
 
 
@@ -33,10 +34,18 @@ class Trajectory:
 def integrate(system: SemiRecursiveSystem, y0: np.ndarray, t_eval: np.ndarray, method: str = "RK45",
               rtol: float = 1e-8, atol: float = 1e-10, max_step: float = np.inf,
               min_pivot_ratio: float = 1e-3, progress: Callable[[float], None] | None = None,
-              outputs: Callable[[float, np.ndarray], None] | None = None) -> Trajectory:
-    """Integrate from t_eval[0] to t_eval[-1]; ``outputs(t, y)`` is called at every t_eval."""
+              outputs: Callable[[float, np.ndarray], None] | None = None,
+              max_steps: int | None = None) -> Trajectory:
+    """Integrate from t_eval[0] to t_eval[-1]; ``outputs(t, y)`` is called at every t_eval.
+
+    ``max_steps`` bounds the work: a run that needs more accepted steps stops with a SolverError
+    ("exceeded N steps") instead of running for hours on a stiff or runaway input."""
     if method not in METHODS:
         raise InputError(f"method = {method!r}: allowed {', '.join(METHODS)}")
+    for name, v, low, high in (("rtol", rtol, 1e-13, 0.1), ("atol", atol, 1e-300, 1.0),
+                               ("max_step", max_step, STEP_FLOOR, np.inf)):
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not low <= v <= high or np.isnan(v):
+            raise InputError(f"{name} = {v!r}: must be a number in [{low:g}, {high:g}]")
     t0, t1 = float(t_eval[0]), float(t_eval[-1])
     start = time.perf_counter()
     nfev = [0]
@@ -65,6 +74,9 @@ def integrate(system: SemiRecursiveSystem, y0: np.ndarray, t_eval: np.ndarray, m
             if solver.status == "failed":
                 raise SolverError(f"{method} failed at t = {solver.t:.6g} s: {msg}")
             steps += 1
+            if max_steps is not None and steps > max_steps:
+                raise SolverError(f"exceeded {max_steps} steps at t = {solver.t:.6g} s of {t1:.6g} s "
+                                  f"(step {solver.step_size:.3g} s): a stiff or runaway input")
             if k < len(t_eval) and t_eval[k] <= solver.t:
                 dense = solver.dense_output()
                 while k < len(t_eval) and t_eval[k] <= solver.t:

@@ -86,7 +86,8 @@ class SemiRecursiveSystem:
         self.fast = fast  # compiled kernels (nsd_core.fastpath); False: the numpy specification
         self.partition: Partition | None = None
         self._z = None  # last full configuration: the Newton warm start (keeps the assembly branch)
-        self._lin = None  # (z, S) at the last evaluation: dz_dep = S dz, the Newton predictor
+        self._lin = None  # (z, S, trusted) at the last evaluation: dz_dep = S dz, the Newton predictor
+        self._good = None  # (t, z, z', z'') at the last evaluation with a well-conditioned dependent block
 
     # ---- partition (Eq. 9) ----
     def choose_partition(self, z: np.ndarray, n_dependent: int | None = None) -> Partition:
@@ -123,10 +124,19 @@ class SemiRecursiveSystem:
             # the last evaluation). With large steps (loose tolerances, or across a singular
             # position where two assembly branches meet) Newton from the plain warm start can land
             # on another branch, or on the same one shifted by 2 pi; the predictor tells which.
-            z_lin, S = self._lin
-            dz = z - z_lin
-            dz[P.dependent] = 0.0
-            pred = z_lin[P.dependent] + S @ dz
+            z_lin, S, trusted = self._lin
+            if trusted or self._good is None:
+                dz = z - z_lin
+                dz[P.dependent] = 0.0
+                pred = z_lin[P.dependent] + S @ dz
+            else:
+                # next to a singular position S = -Jd^-1 Jr is round-off (two branches meet there, the
+                # velocity picks one): follow the branch by continuity of the velocity instead, with
+                # a Taylor step from the last well-conditioned evaluation
+                t_g, z_g, zd_g, zdd_g = self._good
+                h = t - t_g
+                dep = P.dependent
+                pred = z_g[dep] + h * zd_g[dep] + 0.5 * h * h * zdd_g[dep]
             move = float(np.max(np.abs(pred - z_lin[P.dependent])))
         z_start = z.copy()
         try:
@@ -213,7 +223,8 @@ class SemiRecursiveSystem:
             return None
         S = -Jd_inv @ J[P.rows]
         S[:, P.dependent] = 0.0
-        self._lin = (z.copy(), S)
+        trusted = _well_conditioned(Jd_inv, J[np.ix_(P.rows, P.dependent)])
+        self._lin = (z.copy(), S, trusted)
         kin = Kinematics(A, r, B, Z, vp)
         wrench, gen, extra_rate = self.forces(t, kin, z, zd, extra)
         zdd, lam, tau = np.empty(n), np.empty(len(P.dependent)), np.empty(len(pr))
@@ -224,6 +235,8 @@ class SemiRecursiveSystem:
                             P.dependent, P.free, pr, np.asarray(qdd, dtype=float), Jd_inv, zdd, lam, tau)
         except np.linalg.LinAlgError:
             return None
+        if trusted:
+            self._good = (t, z.copy(), zd.copy(), zdd.copy())
         return Evaluation(t, z, zd, zdd, kin, np.asarray(extra_rate, dtype=float), lam, tau, Phi)
 
     def _rhs_numpy(self, t, z, zfd, qd, qdd, extra):
@@ -238,7 +251,8 @@ class SemiRecursiveSystem:
         zd[P.dependent] = -Jd_inv @ (Jr @ zd)
         S = -Jd_inv @ Jr
         S[:, P.dependent] = 0.0
-        self._lin = (z.copy(), S)
+        trusted = _well_conditioned(Jd_inv, Jr[:, P.dependent])
+        self._lin = (z.copy(), S, trusted)
         velocities(m, kin, zd)
         _, _, c = closure(m, kin, with_rates=True)
         wrench, gen, extra_rate = self.forces(t, kin, z, zd, extra)
@@ -258,6 +272,8 @@ class SemiRecursiveSystem:
         res = MRz @ zfdd + M @ zdd0 - Q
         lam = Jd_inv.T @ res[P.dependent]
         tau = res[pr] - Jr[:, pr].T @ lam
+        if trusted:
+            self._good = (t, z.copy(), zd.copy(), zdd.copy())
         return Evaluation(t, z, zd, zdd, kin, np.asarray(extra_rate, dtype=float), lam, tau, Phi)
 
     # ---- the ODE in y = [z_f, z'_f, extra] ----
@@ -299,6 +315,18 @@ class SemiRecursiveSystem:
             return 1.0
         z = self.assemble(t, y[:len(P.free)])
         return _block_ratio(closure(self.m, positions(self.m, z))[1], P)
+
+
+# Condition estimate max|Jd^-1| max|Jd| above which S = -Jd^-1 Jr is not trusted as a predictor
+# (the device: <= 63 at A = 25.5 mm; the N-four-bar: median 1.5, ~3e3 next to its flat position)
+COND_TRUST = 1e3
+
+
+def _well_conditioned(Jd_inv: np.ndarray, Jd: np.ndarray) -> bool:
+    if Jd.size == 0:
+        return True
+    est = float(np.max(np.abs(Jd_inv)) * np.max(np.abs(Jd)))
+    return bool(np.isfinite(est) and est < COND_TRUST)
 
 
 def _block_ratio(J: np.ndarray, P: Partition) -> float:

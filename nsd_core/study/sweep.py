@@ -9,15 +9,15 @@ from __future__ import annotations
 import shutil
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import as_completed
 from functools import partial
-from multiprocessing import get_context
 from pathlib import Path
 from typing import Callable, Iterator
 
 from nsd_core import __version__
 from nsd_core.device.params import ParameterError
 from nsd_core.device.results import atomic_write_json
+from nsd_core.engine.workers import worker_pool
 from nsd_core.study.designs import PAPER_STUDIES, Design
 from nsd_core.study.run import EngineRunner, run_design
 from nsd_core.study.store import Store
@@ -29,8 +29,9 @@ def _serial(designs: list[Design], job) -> Iterator[tuple[Design, dict]]:
 
 
 def _local(designs: list[Design], job, workers: int) -> Iterator[tuple[Design, dict]]:
-    # spawn, not fork: the parent may hold threads (a Dask client, numba) that fork would copy badly
-    with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn")) as ex:
+    # spawn, not fork: the parent may hold threads (a Dask client, numba) that fork would copy badly;
+    # on Ctrl-C or SIGTERM the workers are terminated, not waited for (nsd_core.engine.workers)
+    with worker_pool(workers) as ex:
         futures = {ex.submit(job, d): d for d in designs}
         try:
             for f in as_completed(futures):
@@ -57,10 +58,11 @@ def _dask(designs: list[Design], job, address) -> Iterator[tuple[Design, dict]]:
 
 def run_sweep(designs: list[Design], out: str | Path, workers: int = 1, scheduler=None,
               retry_failed: bool = False, log: Callable[[str], None] | None = None,
-              run_engine: EngineRunner | None = None) -> dict:
+              run_engine: EngineRunner | None = None, tally: dict | None = None) -> dict:
     """Run every design not yet stored, store each as it finishes, then write the summaries.
 
-    ``run_engine``: see ``nsd_core.study.run.run_design`` (None: the in-house model only)."""
+    ``run_engine``: see ``nsd_core.study.run.run_design`` (None: the in-house model only).
+    ``tally`` (a dict) is kept up to date with ``kept``, ``total`` and ``dir`` for an interrupt message."""
     job = partial(run_design, run_engine=run_engine)
     log = log or (lambda s: print(s, file=sys.stderr, flush=True))
     store = Store(out)
@@ -72,6 +74,8 @@ def run_sweep(designs: list[Design], out: str | Path, workers: int = 1, schedule
         rec = store.load(k)
         if rec is None or (retry_failed and rec["status"] == "failed"):
             pending.append(d)
+    tally = tally if tally is not None else {}
+    tally.update(kept=len(unique) - len(pending), total=len(unique), dir=str(store.root))
     log(f"sweep: {len(designs)} designs ({len(unique)} distinct), {len(unique) - len(pending)} already "
         f"stored, {len(pending)} to run on "
         + (f"Dask at {scheduler}" if scheduler is not None else f"{workers} local worker(s)"))
@@ -86,6 +90,7 @@ def run_sweep(designs: list[Design], out: str | Path, workers: int = 1, schedule
         runner = _serial(pending, job)
     for n, (d, res) in enumerate(runner, 1):
         rec = store.save(d, res)
+        tally["kept"] += 1
         tail = f"{res['wall_time']:.1f} s" if rec["status"] == "ok" else f"FAILED: {rec['error']}"
         log(f"  [{n}/{len(pending)}] {d.label} ({d.key}): {tail}")
     elapsed = time.perf_counter() - start

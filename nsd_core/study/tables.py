@@ -8,7 +8,6 @@ x_max = l_d sin(theta_max) holds to 4 digits in every column).
 from __future__ import annotations
 
 import math
-from concurrent.futures import ProcessPoolExecutor
 
 
 from nsd_core.device.params import Params
@@ -45,7 +44,8 @@ def table_rows(base: Params | None = None, method: str = "slack", step: float = 
             jobs.append((base.replace(**{spec["parameter"]: v}), method, step))
             meta.append((t, spec, i, v))
     if workers > 1 and method == "path":  # the path method costs seconds per entry: spread them
-        with ProcessPoolExecutor(max_workers=workers) as ex:
+        from nsd_core.engine.workers import worker_pool
+        with worker_pool(workers) as ex:
             xs = list(ex.map(_entry, jobs))
     else:
         xs = [_entry(j) for j in jobs]

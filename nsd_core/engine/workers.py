@@ -1,0 +1,62 @@
+"""Worker processes that stop when asked: a process pool whose workers leave Ctrl-C to the parent,
+send anything they print to stderr, and are terminated (not waited for) when the parent is
+interrupted, so that Ctrl-C or SIGTERM stops a run within seconds and leaves no process behind."""
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import sys
+from concurrent.futures import ProcessPoolExecutor
+from multiprocessing import get_context
+
+
+def _worker_init() -> None:
+    # Ctrl-C reaches the whole process group: the parent alone decides what to keep and stops us
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    # a worker's stdout would land in the middle of the parent's table (Exudyn's allocation warnings)
+    os.dup2(2, 1)
+
+
+@contextlib.contextmanager
+def worker_pool(workers: int):
+    """A spawn-context ProcessPoolExecutor (MuJoCo's callbacks are process-global: one per process)
+    that terminates its workers when the body raises (KeyboardInterrupt, SIGTERM, an error)."""
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn"), initializer=_worker_init)
+    try:
+        yield pool
+    except BaseException:
+        stop(pool)
+        raise
+    pool.shutdown(wait=True)
+
+
+def stop(pool: ProcessPoolExecutor, grace: float = 3.0) -> None:
+    """Cancel what is queued and end the running workers now (SIGTERM, then SIGKILL after ``grace``)."""
+    procs = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for p in procs:
+        if p.is_alive():
+            p.terminate()
+    for p in procs:
+        p.join(timeout=grace)
+        if p.is_alive():
+            p.kill()
+            p.join(timeout=grace)
+
+
+@contextlib.contextmanager
+def stdout_to_stderr():
+    """Send file descriptor 1 to stderr for the duration (engines' C++ code prints on stdout)."""
+    sys.stdout.flush()
+    saved = os.dup(1)
+    try:
+        os.dup2(2, 1)
+        yield
+    finally:
+        try:
+            sys.stdout.flush()
+        except (OSError, ValueError):
+            pass
+        os.dup2(saved, 1)
+        os.close(saved)

@@ -1,0 +1,364 @@
+"""Hostile input (issue 12): every malformed flag or file of every subcommand gets exit code 2, exactly
+one line on stderr naming the field/value/what is allowed, no traceback, nothing written, in seconds.
+
+Table-driven and run in-process through ``nsd_cli.main.main(argv)`` (fast); a few go through a real
+subprocess at the end. ``{d}`` in an argument is the test's folder, ``{out}`` an output folder
+inside it that must not appear. Files are given as {name: text or bytes}.
+"""
+import json
+import os
+import subprocess
+import sys
+import time
+
+import pytest
+
+from nsd_cli.main import main
+
+CASE = '[[case]]\nname = "q"\namplitude = 0.015\nfrequency = 10.0\n'
+CONV = '\n[convergence]\ncase = "q"\n[convergence.sweep]\nmujoco = { setting = "timestep", values = [1e-5] }\n'
+OK_RESULTS = {"verdict": "PASS", "exit_code": 0, "failures": [], "engines": ["semirecursive"],
+              "cases": [{"name": "q", "amplitude": 0.015, "frequency": 10.0}], "metrics": [], "tolerances": {},
+              "runs": {"q": {"semirecursive": {"status": "ok", "csv": "cycles/q__semirecursive.csv"}}}}
+
+
+def case_file(extra="", case=CASE):
+    return {"c.toml": case + extra}
+
+
+def with_case_key(line):
+    """A case file whose one case has ``line`` (replacing the line of the same key, if any)."""
+    key = line.split("=")[0].strip()
+    kept = [x for x in CASE.splitlines() if x.split("=")[0].strip() != key]
+    return {"c.toml": "\n".join(kept + [line]) + "\n"}
+
+
+CYCLE = ["cycle", "--amplitude", "0.015", "--frequency", "10", "--out", "{out}"]
+
+
+def cycle(*extra, drop=()):
+    args = list(CYCLE)
+    for flag in drop:
+        i = args.index(flag)
+        del args[i:i + 2]
+    return args + list(extra)
+
+
+def cyc_with(flag, value):
+    """nsd cycle with one flag replaced by ``value``."""
+    args = list(CYCLE)
+    if flag in args:
+        args[args.index(flag) + 1] = value
+    else:
+        args += [flag, value]
+    return args
+
+
+COMPARE = ["compare", "--engines", "semirecursive,mujoco", "--out", "{out}"]
+SWEEP = ["sweep", "--param", "rod_length", "--values", "0.03", "--out", "{out}"]
+
+# (id, argv, files, fragment that the one stderr line must contain)
+CASES = []
+
+
+def add(id_, argv, files=None, fragment=""):
+    CASES.append(pytest.param(argv, files or {}, fragment, id=id_))
+
+
+# ---- top level and argparse-level errors
+add("no-subcommand", [], fragment="required")
+add("unknown-subcommand", ["simulate"], fragment="invalid choice")
+add("unknown-flag", cycle("--bogus", "1"), fragment="--bogus")
+add("cycle-no-out", cycle(drop=("--out",)), fragment="--out")
+for v in ("x", "", "1,2", "0x"):
+    add(f"cycle-amplitude-{v or 'empty'}", cyc_with("--amplitude", v), fragment="--amplitude")
+# ---- nsd cycle: the drive
+for v in ("nan", "inf", "-inf", "-0.001"):
+    add(f"cycle-amplitude-{v}", cyc_with("--amplitude", v), fragment="amplitude")
+for v in ("0", "-1", "nan", "inf", "1e-6", "0.01", "101", "1e9", "x"):
+    add(f"cycle-frequency-{v}", cyc_with("--frequency", v), fragment="frequency")
+for v in ("nan", "inf", "1e9", "-400"):
+    add(f"cycle-direction-{v}", cyc_with("--direction", v), fragment="direction")
+for v in ("0", "-1", "1.5", "1001", "x"):
+    add(f"cycle-cycles-{v}", cyc_with("--cycles", v), fragment="cycles")
+for v in ("0", "15", "1.5", "10000000"):
+    add(f"cycle-samples-{v}", cyc_with("--samples-per-cycle", v), fragment="samples")
+add("cycle-too-many-samples", cycle("--cycles", "1000", "--samples-per-cycle", "100000"), fragment="samples")
+# ---- solver flags (cycle and sweep share them)
+for flag, vals in (("--rtol", ("0", "-1", "nan", "inf", "1", "1e-20")), ("--atol", ("0", "-1", "nan", "2")),
+                   ("--max-step", ("0", "-1", "nan", "1e-12", "inf")), ("--method", ("bogus", "", "rk45"))):
+    for v in vals:
+        add(f"cycle{flag}-{v or 'empty'}", cyc_with(flag, v), fragment=flag.lstrip("-").split("-")[0])
+# ---- parameters: --set
+for item, frag in (("n_ropes", "name=value"), ("=3", "name=value"), ("bogus=1", "bogus"), ("n_ropes=2", "n_ropes"),
+                   ("n_ropes=4.5", "n_ropes"), ("n_ropes=x", "n_ropes"), ("n_ropes=65", "n_ropes"),
+                   ("n_wires=-1", "n_wires"), ("rope_stiffness=1e15", "rope_stiffness"),
+                   ("rope_stiffness=-1", "rope_stiffness"), ("rope_stiffness=nan", "rope_stiffness"),
+                   ("rope_stiffness=inf", "rope_stiffness"), ("rod_length=1e308", "rod_length"),
+                   ("wire_inclination_deg=45", "wire_inclination_deg"), ("wire_lower_radius=0.03", "derived"),
+                   ("gravity=inf", "gravity"), ("precompression_force=1", "precompression_force"),
+                   ("cap_mass=0", "cap_mass"), ("wire_eps_t=1.5", "wire_eps_t"), ("rod_length=", "rod_length")):
+    add(f"set-{item}", cycle("--set", item), fragment=frag)
+# ---- parameters: --params files
+PARAMS_FILES = {
+    "missing": (None, "not found"), "folder": ("DIR", "folder"), "binary": (b"\x00\xff\xfe" * 50, "text"),
+    "invalid-toml": ("rod_length = = 1", "TOML"), "unknown-param": ("bogus = 1", "bogus"),
+    "n_ropes-2": ("n_ropes = 2", "n_ropes"), "n_ropes-float": ("n_ropes = 4.0", "whole number"),
+    "string-value": ('rod_length = "abc"', "rod_length"), "bool-value": ("rod_length = true", "rod_length"),
+    "list-value": ("rod_length = [0.03]", "rod_length"), "beside-params": ("n_ropes = 2\n[params]\nrod_length = 0.03", "beside"),
+    "unknown-table": ("[extra]\nrod_length = 0.03", "extra"), "params-number": ("params = 3", "params"),
+    "nested-unknown": ("[params]\nrod_length = 0.03\n[params.sub]\nx = 1", "sub"),
+    "nan-value": ("rod_length = nan", "rod_length"), "huge-value": ("rope_stiffness = 1e300", "rope_stiffness"),
+}
+for name, (content, frag) in PARAMS_FILES.items():
+    files = {} if content is None else ({"p.toml/": ""} if content == "DIR" else {"p.toml": content})
+    add(f"params-{name}", cycle("--params", "{d}/p.toml"), files, frag)
+add("params-empty-name", cycle("--params", ""), fragment="--params")
+# ---- output paths
+add("out-empty", cyc_with("--out", ""), fragment="--out")
+add("out-is-file", cyc_with("--out", "{d}/f.txt"), {"f.txt": "x"}, "not a folder")
+add("out-under-file", cyc_with("--out", "{d}/f.txt/sub"), {"f.txt": "x"}, "not a folder")
+add("drive-beyond-rod-before-out", cycle("--set", "rod_length=0.01"), fragment="")  # exit 4, see below
+CASES.pop()  # (kept out: that is exit 4 by design, tested in test_cli)
+
+# ---- nsd compare: flags
+for v, frag in (("bullet", "unknown engine"), ("", "engine"), (",", "engine"),
+                ("semirecursive,semirecursive", "once"), ("mujoco,exudyn", "reference"), ("mujoco", "reference")):
+    add(f"compare-engines-{v or 'empty'}", ["compare", "--engines", v, "--out", "{out}"], fragment=frag)
+for v in ("0", "-1", "100000", "x"):
+    add(f"compare-workers-{v}", COMPARE + ["--workers", v], fragment="workers")
+add("compare-junit-folder", COMPARE + ["--junit", "{d}"], fragment="--junit")
+add("compare-junit-empty", COMPARE + ["--junit", ""], fragment="--junit")
+add("compare-junit-under-file", COMPARE + ["--junit", "{d}/f.txt/j.xml"], {"f.txt": "x"}, "--junit")
+add("compare-out-is-file", ["compare", "--out", "{d}/f.txt"], {"f.txt": "x"}, "not a folder")
+add("compare-convergence-without-table", COMPARE + ["--cases", "{d}/c.toml", "--convergence"], case_file(), "convergence")
+add("compare-set-bad", COMPARE + ["--set", "n_ropes=2"], fragment="n_ropes")
+# ---- case files
+CASEFILES = {
+    "missing": (None, "not found"), "folder": ("DIR", "folder"), "binary": (b"\x89PNG\x00\x00" * 30, "text"),
+    "invalid-toml": ("[[case]\nname=", "TOML"), "unknown-table": (CASE + "[extra]\nx = 1\n", "extra"),
+    "case-as-table": ('[case]\nname = "q"\namplitude = 0.015\nfrequency = 10.0\n', "array"),
+    "case-number": ("case = 3", "case"), "no-cases": ("[defaults]\ncycles = 1\n", "no [[case]]"),
+    "case-list-of-numbers": ("case = [1, 2]", "case[0]"), "empty": ("", "no [[case]]"),
+    "defaults-number": ("defaults = 3\n" + CASE, "defaults"), "defaults-unknown": ("[defaults]\nbogus = 1\n" + CASE, "bogus"),
+    "defaults-name": ('[defaults]\nname = "x"\n' + CASE, "name"),
+    "defaults-params-number": ("[defaults]\nparams = 3\n" + CASE, "defaults.params"),
+    "defaults-settings-bullet": ("[defaults.settings.bullet]\nx = 1\n" + CASE, "bullet"),
+    "defaults-cycles-float": ("[defaults]\ncycles = 1.5\n" + CASE, "cycles"),
+    "duplicate-names": (CASE + CASE, "duplicate"),
+    "missing-amplitude": ('[[case]]\nname = "q"\nfrequency = 10.0\n', "amplitude"),
+    "missing-frequency": ('[[case]]\nname = "q"\namplitude = 0.015\n', "frequency"),
+    "too-many-cases": ("".join(f'[[case]]\nname = "c{i}"\namplitude = 0.01\nfrequency = 10.0\n' for i in range(201)),
+                       "at most"),
+}
+for name, (content, frag) in CASEFILES.items():
+    files = {} if content is None else ({"c.toml/": ""} if content == "DIR" else {"c.toml": content})
+    add(f"cases-{name}", COMPARE + ["--cases", "{d}/c.toml"], files, frag)
+CASE_KEYS = {
+    "unknown-key": ("frequncy = 3", "frequncy"), "name-dotdot": ('name = "../../x"', "plain file name"),
+    "name-slash": ('name = "a/b"', "plain file name"), "name-empty": ('name = ""', "plain file name"),
+    "name-number": ("name = 5", "name"), "name-dots": ('name = ".."', "plain file name"),
+    "name-long": (f'name = "{"a" * 65}"', "plain file name"), "name-space": ('name = "a b"', "plain file name"),
+    "amplitude-string": ('amplitude = "x"', "amplitude"), "amplitude-nan": ("amplitude = nan", "amplitude"),
+    "amplitude-negative": ("amplitude = -1.0", "amplitude"), "amplitude-bool": ("amplitude = true", "amplitude"),
+    "frequency-zero": ("frequency = 0.0", "frequency"), "frequency-huge": ("frequency = 1e9", "frequency"),
+    "frequency-inf": ("frequency = inf", "frequency"), "frequency-tiny": ("frequency = 1e-6", "frequency"),
+    "cycles-float": ("cycles = 1.5", "cycles"), "cycles-zero": ("cycles = 0", "cycles"),
+    "cycles-string": ('cycles = "2"', "cycles"), "cycles-huge": ("cycles = 100000", "cycles"),
+    "samples-small": ("samples_per_cycle = 10", "samples_per_cycle"),
+    "samples-float": ("samples_per_cycle = 100.0", "samples_per_cycle"),
+    "direction-string": ('direction_deg = "x"', "direction_deg"), "direction-huge": ("direction_deg = 1e6", "direction"),
+    "params-number": ("params = 3", "params"), "params-unknown": ("params = { bogus = 1 }", "bogus"),
+    "params-n_ropes": ("params = { n_ropes = 2 }", "n_ropes"), "params-n_ropes-float": ("params = { n_ropes = 4.0 }", "n_ropes"),
+    "settings-number": ("settings = 3", "settings"), "settings-bullet": ("settings.bullet = { x = 1 }", "bullet"),
+    "settings-engine-number": ("settings.semirecursive = 3", "settings.semirecursive"),
+    "sr-unknown": ("settings.semirecursive = { bogus = 1 }", "bogus"),
+    "sr-rtol-zero": ("settings.semirecursive = { rtol = 0.0 }", "rtol"),
+    "sr-rtol-string": ('settings.semirecursive = { rtol = "x" }', "rtol"),
+    "sr-rtol-bool": ("settings.semirecursive = { rtol = true }", "rtol"),
+    "sr-atol-negative": ("settings.semirecursive = { atol = -1.0 }", "atol"),
+    "sr-max-step-tiny": ("settings.semirecursive = { max_step = 1e-12 }", "max_step"),
+    "sr-method": ('settings.semirecursive = { method = "bogus" }', "method"),
+    "sr-method-number": ("settings.semirecursive = { method = 3 }", "method"),
+    "ex-step-zero": ("settings.exudyn = { step_size = 0.0 }", "step_size"),
+    "ex-step-string": ('settings.exudyn = { step_size = "x" }', "step_size"),
+    "ex-step-tiny": ("settings.exudyn = { step_size = 1e-12 }", "step_size"),
+    "ex-solver": ('settings.exudyn = { solver = "bogus" }', "solver"),
+    "ex-rho": ("settings.exudyn = { spectral_radius = 2.0 }", "spectral_radius"),
+    "ex-min-steps-float": ("settings.exudyn = { min_steps_per_cycle = 1.5 }", "min_steps_per_cycle"),
+    "ex-min-steps-zero": ("settings.exudyn = { min_steps_per_cycle = 0 }", "min_steps_per_cycle"),
+    "ex-unknown": ("settings.exudyn = { bogus = 1 }", "bogus"),
+    "ex-newton-nan": ("settings.exudyn = { newton_rel_tol = nan }", "newton_rel_tol"),
+    "mj-timestep-neg": ("settings.mujoco = { timestep = -1.0 }", "timestep"),
+    "mj-integrator": ('settings.mujoco = { integrator = "bogus" }', "integrator"),
+    "mj-solimp": ("settings.mujoco = { solimp = [1.0, 2.0] }", "solimp"),
+    "mj-commit-zero": ("settings.mujoco = { commit_every = 0 }", "commit_every"),
+    "mj-solref-small": ("settings.mujoco = { solref_factor = 1.0 }", "solref_factor"),
+    "engine-params-bullet": ("engine_params.bullet = { rope_stiffness = 1.0 }", "bullet"),
+    "engine-params-number": ("engine_params.mujoco = 3", "engine_params.mujoco"),
+    "engine-params-unknown": ("engine_params.mujoco = { bogus = 1 }", "bogus"),
+    "engine-params-bad": ("engine_params.mujoco = { n_ropes = 2 }", "n_ropes"),
+}
+for name, (line, frag) in CASE_KEYS.items():
+    add(f"case-{name}", COMPARE + ["--cases", "{d}/c.toml"], with_case_key(line), frag)
+# ---- tolerance files
+TOLS = {
+    "missing": (None, "not found"), "folder": ("DIR", "folder"), "empty": ("", "no limits"),
+    "empty-limits": ("[limits]\n", "no limits"), "binary": (b"\xff\x00" * 40, "text"),
+    "invalid-toml": ("[limits\n", "TOML"), "unknown-metric": ("[limits]\nmax_dF = 1e-3\n", "unknown metric"),
+    "zero": ("[limits]\nmax_dF_rel = 0.0\n", "max_dF_rel"), "negative": ("[limits]\nmax_dF_rel = -1.0\n", "max_dF_rel"),
+    "nan": ("[limits]\nmax_dF_rel = nan\n", "max_dF_rel"), "inf": ("[limits]\nmax_dF_rel = inf\n", "max_dF_rel"),
+    "string": ('[limits]\nmax_dF_rel = "x"\n', "max_dF_rel"), "bool": ("[limits]\nmax_dF_rel = true\n", "max_dF_rel"),
+    "limits-number": ("limits = 5\n", "limits"), "beside-limits": ("[limits]\nmax_dF_rel = 1e-3\n[other]\nx = 1\n", "other"),
+    "nested": ("[limits.max_dF_rel]\nx = 1\n", "max_dF_rel"),
+}
+for name, (content, frag) in TOLS.items():
+    files = {} if content is None else ({"t.toml/": ""} if content == "DIR" else {"t.toml": content})
+    add(f"tolerances-{name}", COMPARE + ["--tolerances", "{d}/t.toml"], files, frag)
+# ---- convergence tables
+CONVS = {
+    "unknown-key": (CONV + "bogus = 1\n", "bogus"), "case-unknown": (CONV.replace('case = "q"', 'case = "z"'), "convergence.case"),
+    "cycles-float": (CONV.replace('case = "q"', 'case = "q"\ncycles = 1.5'), "cycles"),
+    "cycles-zero": (CONV.replace('case = "q"', 'case = "q"\ncycles = 0'), "cycles"),
+    "reference-number": (CONV.replace('case = "q"', 'case = "q"\nreference = 3'), "reference"),
+    "reference-unknown": (CONV.replace('case = "q"', 'case = "q"\nreference = { bogus = 1 }'), "bogus"),
+    "reference-rtol": (CONV.replace('case = "q"', 'case = "q"\nreference = { rtol = 0.0 }'), "rtol"),
+    "sweep-empty": ('\n[convergence]\ncase = "q"\n[convergence.sweep]\n', "sweep"),
+    "sweep-bullet": (CONV.replace("mujoco = {", "bullet = {"), "bullet"),
+    "sweep-number": (CONV.replace('mujoco = { setting = "timestep", values = [1e-5] }', "mujoco = 3"), "mujoco"),
+    "no-setting": (CONV.replace('setting = "timestep", ', ""), "setting"),
+    "setting-unknown": (CONV.replace('"timestep"', '"bogus"'), "bogus"),
+    "values-empty": (CONV.replace("[1e-5]", "[]"), "values"), "values-string": (CONV.replace("[1e-5]", '["x"]'), "values"),
+    "values-zero": (CONV.replace("[1e-5]", "[0.0]"), "values"), "values-nan": (CONV.replace("[1e-5]", "[nan]"), "values"),
+    "values-number": (CONV.replace("[1e-5]", "1e-5"), "values"),
+    "values-tiny-step": (CONV.replace("[1e-5]", "[1e-12]"), "timestep"),
+    "spec-unknown-key": (CONV.replace("values = [1e-5]", "values = [1e-5], bogus = 1"), "bogus"),
+    "spec-settings-unknown": (CONV.replace("values = [1e-5]", "values = [1e-5], settings = { bogus = 1 }"), "bogus"),
+    "convergence-number": ("\nconvergence = 3\n", "convergence"),
+}
+for name, (extra, frag) in CONVS.items():
+    add(f"convergence-{name}", COMPARE + ["--cases", "{d}/c.toml", "--convergence"], case_file(extra), frag)
+# ---- nsd sweep
+for argv, frag in ((["sweep", "--out", "{out}"], "--param"), (SWEEP + ["--paper"], "exactly one"),
+                   (["sweep", "--param", "bogus", "--values", "1", "--out", "{out}"], "bogus"),
+                   (["sweep", "--param", "rod_length", "--out", "{out}"], "--values"),
+                   (["sweep", "--paper", "--values", "1", "--out", "{out}"], "--values")):
+    add(f"sweep-{'-'.join(a for a in argv[1:4] if a.startswith('--'))}", argv, fragment=frag)
+for v, frag in (("a", "not a number"), ("1,nan", "finite"), ("1e308", "rod_length"), ("", "--values"),
+                (",".join(["0.03"] * 201), "at most"), ("0.03,,", "not a number"), ("-0.03", "rod_length")):
+    add(f"sweep-values-{v[:12] or 'empty'}", ["sweep", "--param", "rod_length", "--values", v, "--out", "{out}"],
+        fragment=frag)
+for v, frag in (("2.5", "n_ropes"), ("2", "n_ropes")):
+    add(f"sweep-n_ropes-{v}", ["sweep", "--param", "n_ropes", "--values", v, "--out", "{out}"], fragment=frag)
+for flag, v, frag in (("--amplitude", "0.5", "rod_length"), ("--amplitude", "-1", "amplitude"),
+                      ("--amplitude", "nan", "amplitude"), ("--frequency", "0", "frequency"),
+                      ("--frequency", "1e9", "frequency"), ("--cycles", "0", "cycles"),
+                      ("--samples-per-cycle", "8", "samples"), ("--engines", "bogus", "unknown engine"),
+                      ("--workers", "0", "workers"), ("--workers", "100000", "workers"),
+                      ("--scheduler", "not an address", "scheduler"), ("--scheduler", "tcp://127.0.0.1:1", "nothing answers"),
+                      ("--method", "bogus", "method"), ("--rtol", "0", "rtol"), ("--max-step", "1e-12", "max-step"),
+                      ("--direction", "nan", "direction"), ("--out", "{d}/f.txt", "not a folder")):
+    add(f"sweep{flag}-{v[:16]}", SWEEP + [flag, v], {"f.txt": "x"} if "f.txt" in v else None, frag)
+# ---- nsd report
+REPORTS = {
+    "from-missing": ([], "no such folder"), "from-file": ([("r", "x")], "no such folder"),
+    "no-results": ([("r/", "")], "results.json"), "results-invalid": ([("r/results.json", "{")], "results.json"),
+    "results-list": ([("r/results.json", "[]")], "malformed"),
+    "results-missing-keys": ([("r/results.json", json.dumps({"verdict": "PASS"}))], "malformed"),
+    "results-wrong-type": ([("r/results.json", json.dumps({**OK_RESULTS, "runs": []}))], "malformed"),
+    "csv-missing": ([("r/results.json", json.dumps(OK_RESULTS))], "missing"),
+    "csv-outside": ([("r/results.json", json.dumps({**OK_RESULTS, "runs": {"q": {"semirecursive": {
+        "status": "ok", "csv": "../../etc/passwd"}}}}))], "outside"),
+    "all-failed": ([("r/results.json", json.dumps({**OK_RESULTS, "runs": {"q": {"semirecursive": {
+        "status": "error", "message": "boom"}}}}))], "nothing to report"),
+    "csv-garbage": ([("r/results.json", json.dumps(OK_RESULTS)), ("r/cycles/q__semirecursive.csv", "a,b\nx,y\n")],
+                    "cycle CSV"),
+}
+for name, (files, frag) in REPORTS.items():
+    add(f"report-{name}", ["report", "--from", "{d}/r", "--out", "{out}"], dict(files), frag)
+add("report-from-empty", ["report", "--from", "", "--out", "{out}"], fragment="--from")
+# ---- nsd tables, calibrate, benchmark
+for flag, v, frag in (("--method", "bogus", "method"), ("--step", "0", "step"), ("--step", "nan", "step"),
+                      ("--step", "1", "step"), ("--workers", "0", "workers"), ("--out", "{d}/f.txt", "not a folder"),
+                      ("--set", "n_ropes=2", "n_ropes"), ("--params", "{d}/missing.toml", "not found")):
+    add(f"tables{flag}-{v[:10]}", ["tables", flag, v], {"f.txt": "x"} if "f.txt" in v else None, frag)
+for v, frag in (("bogus", "bogus"), ("n_ropes", "n_ropes"), ("", "--fit"), ("rod_length", "rod_length"),
+                ("spring_kse,spring_kse", "once")):
+    add(f"calibrate-fit-{v or 'empty'}", ["calibrate", "--fit", v], fragment=frag)
+add("calibrate-out-file", ["calibrate", "--out", "{d}/f.txt"], {"f.txt": "x"}, "not a folder")
+add("calibrate-set", ["calibrate", "--set", "rope_stiffness=-1"], fragment="rope_stiffness")
+for v, frag in (("0", "repeats"), ("-1", "repeats"), ("x", "repeats"), ("21", "repeats")):
+    add(f"benchmark-repeats-{v}", ["benchmark", "--repeats", v, "--out", "{out}"], fragment=frag)
+add("benchmark-out-file", ["benchmark", "--out", "{d}/f.txt"], {"f.txt": "x"}, "not a folder")
+add("benchmark-out-empty", ["benchmark", "--out", ""], fragment="--out")
+
+
+def snapshot(root):
+    out = {}
+    for dirpath, dirs, files in os.walk(root):
+        for n in dirs + files:
+            p = os.path.join(dirpath, n)
+            out[p] = os.stat(p).st_mtime_ns if n in files else None
+    return out
+
+
+def materialise(d, files):
+    for name, content in files.items():
+        path = d / name.rstrip("/")
+        if name.endswith("/"):
+            path.mkdir(parents=True, exist_ok=True)
+            continue
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_bytes(content) if isinstance(content, bytes) else path.write_text(content)
+
+
+TIMES = []
+
+
+def test_there_are_at_least_150_hostile_inputs():
+    assert len(CASES) >= 150, len(CASES)
+
+
+@pytest.mark.parametrize("argv,files,fragment", CASES)
+def test_hostile_input(tmp_path, capsys, argv, files, fragment):
+    d = tmp_path / "w"
+    d.mkdir()
+    materialise(d, files)
+    argv = [a.replace("{d}", str(d)).replace("{out}", str(d / "out")) for a in argv]
+    before = snapshot(tmp_path)
+    start = time.perf_counter()
+    try:
+        code = main(argv)
+    except SystemExit as e:  # argparse
+        code = e.code
+    elapsed = time.perf_counter() - start
+    TIMES.append(elapsed)
+    err = capsys.readouterr().err
+    lines = err.strip().splitlines()
+    assert code == 2, err
+    assert len(lines) == 1, err
+    assert "Traceback" not in err
+    assert fragment.lower() in lines[0].lower(), lines[0]
+    assert snapshot(tmp_path) == before, "something was written"
+    assert elapsed < 15.0, f"{elapsed:.1f} s"
+
+
+def nsd(*args, **kw):
+    return subprocess.run([sys.executable, "-m", "nsd_cli.main", *args], capture_output=True, text=True,
+                          timeout=120, **kw)
+
+
+@pytest.mark.parametrize("args", [
+    ["compare", "--engines", "mujoco,exudyn"],
+    ["cycle", "--amplitude", "0.015", "--frequency", "1e9"],
+    ["sweep", "--param", "rod_length", "--values", "1e308"],
+    ["report", "--from", "/nonexistent"],
+])
+def test_hostile_input_in_a_real_process(tmp_path, args):
+    out = tmp_path / "out"
+    start = time.perf_counter()
+    p = nsd(*args, "--out", str(out), cwd=tmp_path)
+    assert p.returncode == 2, p.stderr
+    assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr, p.stderr
+    assert p.stdout == "" and list(tmp_path.iterdir()) == []
+    assert time.perf_counter() - start < 60

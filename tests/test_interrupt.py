@@ -1,0 +1,98 @@
+"""Clean interrupts (issue 12): Ctrl-C (SIGINT to the process group, as a terminal sends it) or SIGTERM
+(to the parent alone, as `kill` sends it) stops nsd compare and nsd sweep within seconds with one line
+"interrupted; N of M cases kept in DIR", exit 130 / 143, no traceback, no worker left behind, no
+half-written file; a re-run resumes what was kept and completes."""
+import glob
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+
+import psutil
+import pytest
+
+pytestmark = pytest.mark.slow
+
+CASES = """
+[defaults]
+cycles = 1
+samples_per_cycle = 100
+[[case]]
+name = "a"
+amplitude = 0.015
+frequency = 10.0
+[[case]]
+name = "b"
+amplitude = 0.02
+frequency = 10.0
+[[case]]
+name = "c"
+amplitude = 0.015
+frequency = 1.0
+"""
+
+
+def start(args):
+    return subprocess.Popen([sys.executable, "-m", "nsd_cli.main", *args], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+
+
+def interrupt_after_first_kept(p, pattern, signum, to_group):
+    """Wait until a first result is kept, then signal; returns (stderr, seconds to stop, children)."""
+    t0 = time.time()
+    while not glob.glob(pattern):
+        assert p.poll() is None, p.communicate()
+        assert time.time() - t0 < 400, "nothing was kept in 400 s"
+        time.sleep(0.2)
+    children = psutil.Process(p.pid).children(recursive=True)
+    sent = time.time()
+    os.killpg(p.pid, signum) if to_group else p.send_signal(signum)
+    out, err = p.communicate(timeout=60)
+    return out, err, time.time() - sent, children
+
+
+def check_stopped(p, err, seconds, children, signum, out_dir):
+    assert p.returncode == 128 + signum, err
+    assert "Traceback" not in err, err
+    last = err.strip().splitlines()[-1]
+    m = re.fullmatch(r"nsd: interrupted; (\d+) of (\d+) cases kept in (.+)", last)
+    assert m and m.group(3) == str(out_dir), last
+    assert 1 <= int(m.group(1)) < int(m.group(2))
+    assert seconds < 10, f"took {seconds:.1f} s to stop"
+    deadline = time.time() + 5
+    while time.time() < deadline and any(c.is_running() and c.status() != psutil.STATUS_ZOMBIE for c in children):
+        time.sleep(0.1)
+    assert not [c.pid for c in children if c.is_running() and c.status() != psutil.STATUS_ZOMBIE]
+    assert not glob.glob(str(out_dir / "**" / "*.tmp*"), recursive=True), "a half-written file was left"
+    return int(m.group(1))
+
+
+@pytest.mark.parametrize("signum,to_group", [(signal.SIGINT, True), (signal.SIGTERM, False)])
+def test_compare_interrupted_then_resumed(tmp_path, signum, to_group):
+    cases = tmp_path / "cases.toml"
+    cases.write_text(CASES)
+    out = tmp_path / "out"
+    args = ["compare", "--cases", str(cases), "--engines", "semirecursive,mujoco", "--workers", "2", "--out", str(out)]
+    p = start(args)
+    _, err, seconds, children = interrupt_after_first_kept(p, str(out / "cycles" / "*.json"), signum, to_group)
+    kept = check_stopped(p, err, seconds, children, signum, out)
+    assert not (out / "results.json").exists()
+    again = subprocess.run([sys.executable, "-m", "nsd_cli.main", *args], capture_output=True, text=True, timeout=600)
+    assert again.returncode == 0, again.stdout + again.stderr
+    assert again.stdout.count(" kept ") >= kept  # read back, not run again
+    assert (out / "results.json").exists()
+
+
+def test_sweep_interrupted_then_resumed(tmp_path):
+    out = tmp_path / "sweep"
+    args = ["sweep", "--param", "rod_length", "--values", "0.028,0.029,0.03,0.031", "--frequency", "1",
+            "--cycles", "1", "--samples-per-cycle", "100", "--workers", "2", "--out", str(out)]
+    p = start(args)
+    _, err, seconds, children = interrupt_after_first_kept(p, str(out / "designs" / "*" / "result.json"),
+                                                           signal.SIGTERM, False)
+    kept = check_stopped(p, err, seconds, children, signal.SIGTERM, out)
+    again = subprocess.run([sys.executable, "-m", "nsd_cli.main", *args], capture_output=True, text=True, timeout=600)
+    assert again.returncode == 0, again.stdout + again.stderr
+    assert f"{kept} already stored" in again.stderr
