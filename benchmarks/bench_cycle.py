@@ -1,10 +1,15 @@
-"""Wall time per cycle of the in-house semirecursive model on the four Figure 6 cases.
+"""Wall time per cycle of the in-house model, its compile time, accuracy, and the paper-sweep time.
 
-    python benchmarks/bench_cycle.py [--repeats 3] [--out out/bench]
+    python benchmarks/bench_cycle.py [--repeats 3] [--sweep] [--out out/bench]
 
-Runs each case for 2 cycles (the default drive) ``repeats`` times after one warm-up (numba's
-compilation is cached on disk, so the warm-up measures a steady process), and reports the median
-wall time per cycle, steps and right-hand-side evaluations. Single process, one core.
+- compile: a fresh process with an empty numba cache (NUMBA_CACHE_DIR) runs one short drive; a
+  second fresh process on that now-warm cache runs it again. Their difference is compilation.
+- per cycle: each Figure 6 case (2 cycles, 2000 samples per cycle, as ``nsd compare``) at the
+  default solver settings, ``repeats`` times after a warm-up, interleaved across cases; median.
+- accuracy: max|dF| / max|F| on the last cycle against the same model at rtol 1e-10
+  (benchmarks/refcompare.py), the harness's measure.
+- ``--sweep``: ``nsd sweep --paper`` (41 designs, all local cores) in a fresh process, warm cache.
+Single-machine numbers: quote them with the machine's load (recorded in the JSON).
 """
 from __future__ import annotations
 
@@ -12,42 +17,109 @@ import argparse
 import json
 import os
 import platform
+import resource
 import statistics
+import subprocess
+import sys
+import tempfile
 import time
 from pathlib import Path
 
-from nsd_core.device.model import simulate
-from nsd_core.device.drive import Drive
-from nsd_core.device.params import Params
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from refcompare import discrepancy, in_house_reference  # noqa: E402
+
+from nsd_core.device.drive import Drive  # noqa: E402
+from nsd_core.device.model import DEFAULT_SOLVER, simulate  # noqa: E402
+from nsd_core.device.params import Params  # noqa: E402
 
 CASES = [(0.015, 1.0), (0.015, 10.0), (0.0255, 1.0), (0.0255, 10.0)]
+FIRST_RUN = ("import time; t0 = time.perf_counter(); from nsd_core.device.model import simulate; "
+             "from nsd_core.device.drive import Drive; from nsd_core.device.params import Params; "
+             "simulate(Params(), Drive(0.015, 10.0, cycles=1, samples_per_cycle=100)); "
+             "print(time.perf_counter() - t0)")
+
+
+def first_run_seconds(cache_dir: str) -> tuple[float, float]:
+    """(wall, CPU) seconds of a fresh process's import and first short run."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=cache_dir)
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    out = subprocess.run([sys.executable, "-c", FIRST_RUN], env=env, capture_output=True, text=True, check=True)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
+    return float(out.stdout.strip().splitlines()[-1]), cpu
+
+
+def compile_times() -> dict:
+    with tempfile.TemporaryDirectory() as cache:
+        cold, cold_cpu = first_run_seconds(cache)
+        warm, warm_cpu = first_run_seconds(cache)
+    return {"cold_cache_first_run_s": cold, "warm_cache_first_run_s": warm, "compile_s": cold - warm,
+            "cold_cache_first_run_cpu_s": cold_cpu, "warm_cache_first_run_cpu_s": warm_cpu,
+            "compile_cpu_s": cold_cpu - warm_cpu}
+
+
+def sweep_time(workers: int) -> tuple[float, float]:
+    """(wall, CPU of all its processes) seconds of ``nsd sweep --paper`` in a fresh process."""
+    nsd = Path(sys.executable).with_name("nsd")
+    with tempfile.TemporaryDirectory() as out:
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        t0 = time.perf_counter()
+        subprocess.run([str(nsd), "sweep", "--paper", "--workers", str(workers), "--out", out], check=True,
+                       capture_output=True)
+        wall = time.perf_counter() - t0
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        return wall, (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
 
 
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--sweep", action="store_true", help="also time nsd sweep --paper (warm cache)")
+    ap.add_argument("--no-compile", action="store_true", help="skip the cold-cache compile measurement")
     ap.add_argument("--out", default="out/bench")
     args = ap.parse_args()
+    report = {"machine": platform.platform(), "cpus": os.cpu_count(), "load_average_start": os.getloadavg(),
+              "solver": DEFAULT_SOLVER}
+    if not args.no_compile:
+        report["compile"] = compile_times()
+        print("compile [s]: " + ", ".join(f"{k} {v:.1f}" for k, v in report["compile"].items()))
     p = Params()
-    simulate(p, Drive(0.015, 10.0, cycles=1, samples_per_cycle=100))  # warm-up: load compiled kernels
+    simulate(p, Drive(0.015, 10.0, cycles=1, samples_per_cycle=100))  # warm-up: load compiled code
+    drives = [Drive(A, f, cycles=2, samples_per_cycle=2000) for A, f in CASES]
+    times = {i: [] for i in range(len(CASES))}
+    cpu = {i: [] for i in range(len(CASES))}
+    results = {}
+    for _ in range(max(3, args.repeats)):
+        for i, d in enumerate(drives):  # interleaved, so load changes hit every case alike
+            t0, c0 = time.perf_counter(), time.process_time()
+            results[i] = simulate(p, d)
+            times[i].append((time.perf_counter() - t0) / d.cycles)
+            cpu[i].append((time.process_time() - c0) / d.cycles)
     rows = []
-    for A, f in CASES:
-        times, stats = [], None
-        for _ in range(args.repeats):
-            t0 = time.perf_counter()
-            r = simulate(p, Drive(A, f, cycles=2, samples_per_cycle=2000))
-            times.append((time.perf_counter() - t0) / 2)
-            stats = r.stats
-        row = {"amplitude": A, "frequency": f, "median_s_per_cycle": statistics.median(times),
-               "min_s_per_cycle": min(times), "steps": stats["steps"], "nfev": stats["nfev"],
-               "method": stats["method"], "rtol": stats["rtol"]}
+    for i, ((A, f), d) in enumerate(zip(CASES, drives)):
+        ref, _ = in_house_reference(p, d)
+        acc = discrepancy(results[i], ref, d)
+        st = results[i].stats
+        row = {"amplitude": A, "frequency": f, "median_s_per_cycle": statistics.median(times[i]),
+               "min_s_per_cycle": min(times[i]), "median_cpu_s_per_cycle": statistics.median(cpu[i]),
+               "runs": len(times[i]), "steps": st["steps"], "nfev": st["nfev"],
+               "dF": acc["dF"], "dA": acc["dA"]}
         rows.append(row)
-        print(f"A = {A} m, f = {f:4.1f} Hz: median {row['median_s_per_cycle']:.2f} s/cycle "
-              f"(min {row['min_s_per_cycle']:.2f}), {row['steps']} steps, {row['nfev']} rhs evaluations / 2 cycles")
+        print(f"A = {A} m, f = {f:4.1f} Hz: median {1e3 * row['median_s_per_cycle']:.1f} ms/cycle wall "
+              f"(min {1e3 * row['min_s_per_cycle']:.1f}), {1e3 * row['median_cpu_s_per_cycle']:.1f} ms/cycle CPU, "
+              f"{st['steps']} steps, {st['nfev']} rhs / 2 cycles, "
+              f"dF = {acc['dF']:.2g}")
+    report["cases"] = rows
+    if args.sweep:
+        report["sweep_paper_s"], report["sweep_paper_cpu_s"] = sweep_time(os.cpu_count() or 1)
+        print(f"nsd sweep --paper: {report['sweep_paper_s']:.1f} s wall, {report['sweep_paper_cpu_s']:.1f} s CPU "
+              f"in all processes, on {os.cpu_count()} cores (warm cache)")
+    report["load_average_end"] = os.getloadavg()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    (out / "bench_cycle.json").write_text(json.dumps({"machine": platform.platform(), "cpus": os.cpu_count(),
-                                                      "load_average": os.getloadavg(), "cases": rows}, indent=2))
+    tmp = out / "bench_cycle.json.tmp"
+    tmp.write_text(json.dumps(report, indent=2))
+    tmp.replace(out / "bench_cycle.json")
 
 
 if __name__ == "__main__":

@@ -1,7 +1,8 @@
 """Build the validation report from an ``nsd compare`` results folder.
 
 ``build_report(results_dir, out_dir)`` reads ``results.json`` and the cycle CSVs (and, when present,
-``benchmark/results.json`` and a parametric study under ``study/``), checks everything first, and
+``benchmark/results.json``, ``work_precision/work_precision.json`` of benchmarks/work_precision.py
+and a parametric study under ``study/``), checks everything first, and
 only then writes ``out_dir/validation.pdf`` and one PNG per page. Every file is rendered under a
 temporary name and moved into place with ``os.replace``: a reader never sees half a report, and bad
 input (raised as ParameterError, one line) leaves nothing behind.
@@ -36,6 +37,7 @@ class ReportData:
     study: list[dict] = field(default_factory=list)
     tables: list[dict] = field(default_factory=list)  # rows of nsd tables' tables.csv, if present
     power: dict | None = None  # power.json of nsd compare --power, if present
+    work_precision: dict | None = None  # benchmarks/work_precision.py's JSON, if present
 
     @property
     def cases(self) -> list[dict]:
@@ -115,6 +117,8 @@ def load(results_dir: str | Path) -> ReportData:
     if power.is_file():
         pw = _json(power, "written by nsd compare --power")
         data.power = pw if isinstance(pw, dict) and isinstance(pw.get("table"), list) else None
+    from reports.figures_wp import load_work_precision
+    data.work_precision = load_work_precision(root / "work_precision" / "work_precision.json")
     data.study = _load_study(root / "study")
     data.tables = _load_tables(root / "study" / "tables.csv")
     return data
@@ -163,7 +167,7 @@ def _load_study(folder: Path) -> list[dict]:
 
 def pages(data: ReportData) -> list[tuple[str, Callable]]:
     """(file stem, figure function) per page, in order. Each function returns one Figure."""
-    from reports import figures, figures_extra, pages as text_pages
+    from reports import figures, figures_extra, figures_wp, pages as text_pages
     out: list[tuple[str, Callable]] = []
     for i, fn in enumerate(text_pages.summary_pages(data)):
         out.append((f"summary{'' if i == 0 else f'_{i + 1}'}", fn))
@@ -184,6 +188,8 @@ def pages(data: ReportData) -> list[tuple[str, Callable]]:
         out.append((f"closure{'' if i == 0 else f'_{i + 1}'}", lambda c=chunk: figures.closure_figure(data, c)))
     if data.benchmark:
         out.append(("benchmark", lambda: figures_extra.benchmark_figure(data)))
+    if data.work_precision:
+        out.append(("work_precision", lambda: figures_wp.work_precision_figure(data)))
     if data.tables:
         out.append(("tables", lambda: figures_extra.tables_figure(data)))
     for s in data.study:

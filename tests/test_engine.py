@@ -26,17 +26,18 @@ def no_forces(m):
 
 def run(system, z0, t_end, n_out=51, **kw):
     system.choose_partition(z0)
-    z0 = system.assemble(0.0, z0[system.partition.free])
+    z0 = system.assemble(system.workspace(), 0.0, z0[system.partition.free]).copy()
     system.choose_partition(z0)
+    ws = system.workspace()
     energies, closures, states = [], [], []
 
     def out(t, y):
-        ev = system.evaluate(t, y)
+        ev = system.evaluate(ws, t, y)
         energies.append(kinetic_energy(system.m, ev.kin) + potential_energy_gravity(system.m, ev.kin))
         closures.append(np.max(np.abs(ev.Phi)) if len(ev.Phi) else 0.0)
         states.append(ev.z.copy())
 
-    integrate(system, system.state(z0, np.zeros(system.m.n)), np.linspace(0, t_end, n_out), **kw, outputs=out)
+    integrate(system, ws, system.state(z0, np.zeros(system.m.n)), np.linspace(0, t_end, n_out), **kw, outputs=out)
     return np.array(energies), np.array(closures), np.array(states)
 
 
@@ -105,26 +106,27 @@ def test_prescribed_coordinate_reaction_is_the_drive_force():
     s = SemiRecursiveSystem(m, [0], motion, forces)
     s.choose_partition(np.zeros(1))
     for t in (0.1, 0.7, 1.3):
-        ev = s.evaluate(t, np.zeros(0))
+        ev = s.evaluate(s.workspace(), t, np.zeros(0))
         x, _, xdd = motion(t)
         assert ev.drive_force[0] == pytest.approx(mass * xdd[0] + k * x[0], rel=1e-12, abs=1e-12)
 
 
 @pytest.mark.parametrize("A", [0.015, 0.0255])
 def test_compiled_fast_path_equals_the_numpy_specification(A):
-    """nsd_core.fastpath fuses the numpy steps of rhs_parts; both must give the same numbers."""
+    """nsd_core.engine.compiled runs the numpy steps of rhs_parts compiled; both must give the same numbers."""
     from nsd_core.device.model import device_system, rest_coordinates
     from nsd_core.device.drive import Drive
     d = Drive(A, 10.0)
     s, g = device_system(Params(), d)
     z0 = rest_coordinates(g)
-    y = s.state(s.assemble(0.0, z0[s.partition.free]), np.zeros(len(z0)), np.r_[np.zeros(g.n_wires), g.spring_zeta0])
+    ws = s.workspace()
+    y = s.state(s.assemble(ws, 0.0, z0[s.partition.free]).copy(), np.zeros(len(z0)), np.r_[np.zeros(g.n_wires), g.spring_zeta0])
     y[1] = -0.05  # a vertical velocity, so that velocity terms matter
     for t in (0.003, 0.011, 0.02):
         s.fast = True
-        a = s.evaluate(t, y)
+        a = s.evaluate(ws, t, y)
         s.fast = False
-        b = s.evaluate(t, y)
+        b = s.evaluate(ws, t, y)
         for name in ("z", "zd", "zdd", "lam", "drive_force", "extra_rate"):
             np.testing.assert_allclose(getattr(a, name), getattr(b, name), rtol=1e-9,
                                        atol=1e-9 * max(1.0, np.max(np.abs(getattr(b, name)))), err_msg=name)

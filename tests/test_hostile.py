@@ -194,6 +194,9 @@ CASE_KEYS = {
     "mj-solimp": ("settings.mujoco = { solimp = [1.0, 2.0] }", "solimp"),
     "mj-commit-zero": ("settings.mujoco = { commit_every = 0 }", "commit_every"),
     "mj-solref-small": ("settings.mujoco = { solref_factor = 1.0 }", "solref_factor"),
+    "mj-passive": ('settings.mujoco = { passive = "bogus" }', "passive"),
+    "mj-native-python": ('settings.mujoco = { passive = "python" }', "step_loop"),
+    "ex-linear-solver": ('settings.exudyn = { linear_solver = "bogus" }', "linear_solver"),
     "engine-params-bullet": ("engine_params.bullet = { rope_stiffness = 1.0 }", "bullet"),
     "engine-params-number": ("engine_params.mujoco = 3", "engine_params.mujoco"),
     "engine-params-unknown": ("engine_params.mujoco = { bogus = 1 }", "bogus"),
@@ -340,7 +343,7 @@ def test_hostile_input(tmp_path, capsys, argv, files, fragment):
     assert "Traceback" not in err
     assert fragment.lower() in lines[0].lower(), lines[0]
     assert snapshot(tmp_path) == before, "something was written"
-    assert elapsed < 15.0, f"{elapsed:.1f} s"
+    assert elapsed < 30.0, f"{elapsed:.1f} s"  # the first case to import the engines pays that once
 
 
 def nsd(*args, **kw):

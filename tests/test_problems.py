@@ -26,7 +26,7 @@ def test_andrews_reference_has_source_and_consistent_start():
     assert ref["reference"]["t"] == 0.03 and len(ref["reference"]["angles"]) == 7
     system, y0 = andrews.andrews_system(ref)
     # the test set's initial angles satisfy the loop equations: Newton must barely move them
-    ev = system.evaluate(0.0, y0)
+    ev = system.evaluate(system.workspace(), 0.0, y0)
     assert np.max(np.abs(ev.z[andrews.TO_TESTSET] - ref["initial"]["angles"])) < 1e-12
     # 7 angles, 3 planar point cuts = 9 rows, of which the 3 z-rows are dropped: 1 DOF
     assert len(system.partition.rows) == 6 and len(system.partition.free) == 1
@@ -96,6 +96,7 @@ def test_digits_and_library_error_helpers():
     assert math.isclose(library_error(val, ref), 1e-4, rel_tol=1e-9)
 
 
+@pytest.mark.slow
 def test_n_four_bar_40_holds_past_the_reported_failing_point():
     """Issue 12: on one install A02 (N = 40) held for 5 s and then left the parallelogram branch
     (error 0.56, 613 J drift). The full 20 s, 30 singular crossings, must stay on the branch."""
@@ -103,21 +104,3 @@ def test_n_four_bar_40_holds_past_the_reported_failing_point():
     assert r["singular_crossings"] >= 30
     assert r["error"] < 1e-3 and r["energy_drift"] < 1e-3 and r["closure_max"] < 1e-10
 
-
-def test_velocity_continuity_predictor_keeps_the_branch(monkeypatch):
-    """With the trust threshold lowered, every evaluation near the flat position predicts the dependent
-    coordinates from the last well-conditioned velocity (not from S = -Jd^-1 Jr): the run must
-    use that path and still follow the exact parallelogram motion."""
-    import nsd_core.engine.semirecursive as sr
-    used = []
-    real = sr._well_conditioned
-
-    def counted(a, b):
-        ok = real(a, b)
-        used.append(not ok)
-        return ok
-    monkeypatch.setattr(sr, "COND_TRUST", 30.0)
-    monkeypatch.setattr(sr, "_well_conditioned", counted)
-    r = iftomm.a02(N=5, duration=6.0, outputs=120, rtol=1e-10, atol=1e-12)
-    assert sum(used) > 10
-    assert r["error"] < 1e-6 and r["energy_drift"] < 1e-5 and r["closure_max"] < 1e-12

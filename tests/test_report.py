@@ -211,3 +211,29 @@ def test_tables_page_from_nsd_tables(run_dir, tmp_path):
     assert paths["pages"] == EXPECTED + ["tables"]
     text = _page_text(paths["pdf"], len(EXPECTED))
     assert "Tables 5 and 6" in text and "worst" in text
+
+
+def test_work_precision_page_when_the_folder_has_it(run_dir, tmp_path):
+    """benchmarks/work_precision.py's JSON under work_precision/ adds the work-precision page; a
+    malformed one is skipped (an optional page never breaks the report)."""
+    from reports.build import build_report
+    dst = tmp_path / "run"
+    shutil.copytree(run_dir[0], dst)
+    (dst / "work_precision").mkdir()
+    runs = [{"engine": "semirecursive", "settings": {"rtol": r, "max_step": 1.0}, "case_default": False,
+             "cpu_per_cycle": c, "dF": e} for r, c, e in ((1e-3, 0.2, 4e-4), (1e-4, 0.3, 3e-5))]
+    runs += [{"engine": "mujoco", "settings": {"integrator": "Euler", "timestep": h}, "case_default": h == 1e-5,
+              "cpu_per_cycle": 1e-6 / h, "dF": 4 * h, "step_used": h} for h in (5e-5, 2.5e-5, 1e-5)]
+    runs += [{"engine": "exudyn", "settings": {"step_size": 2.5e-4}, "case_default": False, "cpu_per_cycle": 0.3,
+              "dF": 2.8e-5, "step_used": 2.5e-4}]
+    at = {"semirecursive": runs[1], "mujoco": runs[3], "exudyn": runs[5]}
+    wp = {"aim": 1e-4, "repeats": 3, "cpus": 2, "load_average_start": [3.0, 3.0, 3.0],
+          "cases": [{"name": "A15mm_f1Hz", "runs": runs, "at_aim": at, "ratio_best_peer_over_in_house": 0.1 / 0.3}],
+          "compile": {"mujoco": {"warm": {"startup_s": 1.5}, "cold": {"startup_s": 20.0}}}}
+    (dst / "work_precision" / "work_precision.json").write_text(json.dumps(wp))
+    paths = build_report(dst, tmp_path / "r")
+    assert paths["pages"] == EXPECTED + ["work_precision"]
+    text = _page_text(paths["pdf"], len(EXPECTED))
+    assert "Work-precision" in text and "A15mm_f1Hz" in text and "0.333" in text and "Euler h 2.50e-05" in text
+    (dst / "work_precision" / "work_precision.json").write_text('{"cases": "none"}')
+    assert build_report(dst, tmp_path / "r2")["pages"] == EXPECTED

@@ -5,8 +5,17 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from nsd_core.device.params import ParameterError, Params
+
+
+@njit(cache=True)
+def sine_displacement(amplitude, omega, t):
+    """u = A sin(omega t) and its first two derivatives; compiled, so the compiled model's motion
+    (nsd_core.device.compiled) and Drive.displacement are one formula."""
+    s = np.sin(omega * t)
+    return amplitude * s, amplitude * omega * np.cos(omega * t), -amplitude * omega * omega * s
 
 
 class DriveError(ValueError):
@@ -70,10 +79,9 @@ class Drive:
         return np.array([math.cos(a), math.sin(a), 0.0])
 
     def displacement(self, t):
-        """u, du/dt, d2u/dt2 at time t."""
-        w = self.omega
-        s, c = np.sin(w * t), np.cos(w * t)
-        return self.amplitude * s, self.amplitude * w * c, -self.amplitude * w * w * s
+        """u, du/dt, d2u/dt2 at time t (a number or an array of times)."""
+        t = np.asarray(t, dtype=float)
+        return sine_displacement(float(self.amplitude), self.omega, float(t) if t.ndim == 0 else t)
 
     def output_times(self) -> np.ndarray:
         n = self.cycles * self.samples_per_cycle

@@ -15,7 +15,7 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import vectorize
+from numba import njit, vectorize
 
 
 class WireLaw(NamedTuple):
@@ -43,15 +43,25 @@ class SpringLaw(NamedTuple):
     free_length: float
 
 
-def rope_tension(length, natural_length, stiffness):
-    """Eq. 16: T = k_r (l_r - l_r0) H(l_r - l_r0); a rope never pushes."""
-    return stiffness * np.maximum(np.asarray(length, dtype=float) - natural_length, 0.0)
+# ---- Scalar laws: the ONE implementation of each law, compiled (numba) -------------------------------
+# The array functions below are ufuncs built from these same functions, and compiled callers (MuJoCo's
+# C passive callback, compiled engines) call them directly, so every engine evaluates the same code.
+
+@njit(cache=True)
+def rope_tension_scalar(length, natural_length, stiffness):
+    """Eq. 16 for one rope: T = k_r (l_r - l_r0) H(l_r - l_r0)."""
+    return stiffness * max(length - natural_length, 0.0)
 
 
-@vectorize(["float64(float64, float64, float64, float64, float64, float64, float64, float64, float64, "
-            "float64, float64, float64)"], cache=True)
-def _sma_slope(eps, d, stress, E, Y, alpha, n, fT, a, Em, eps_t, c):
-    """Elementwise Eq. 17b-d slope; a compiled ufunc (one call for all wires, scalars too)."""
+@njit(cache=True)
+def wire_tension_scalar(stress, area):
+    """Eq. 17a for one wire: T = sigma A_w H(sigma)."""
+    return area * max(stress, 0.0)
+
+
+@njit(cache=True)
+def sma_slope_scalar(eps, d, stress, E, Y, alpha, n, fT, a, Em, eps_t, c):
+    """Eq. 17b-d slope d sigma / d eps for one wire straining in direction d (sign taken)."""
     d = 1.0 if d > 0 else (-1.0 if d < 0 else 0.0)
     unloading_towards_zero = 1.0 if eps * d < 0.0 else 0.0  # H(-eps deps), H(0) = 0
     beta = E * alpha * (eps - stress / E + fT * math.tanh(a * eps) * unloading_towards_zero)
@@ -59,6 +69,80 @@ def _sma_slope(eps, d, stress, E, Y, alpha, n, fT, a, Em, eps_t, c):
     sg = 1.0 if over > 0 else (-1.0 if over < 0 else 0.0)
     s = 0.5 * (math.tanh(c * (abs(eps) - eps_t)) + 1.0)
     return (1.0 - s) * E * (1.0 - d * sg * abs(over / Y) ** n) + s * Em
+
+
+@njit(cache=True)
+def bouc_wen_slope_scalar(zeta, direction, ksd, beta, gamma, n):
+    """Eq. 18b slope d zeta / d x_s for compressing in ``direction`` (sign taken)."""
+    sg = zeta * direction
+    sg = 1.0 if sg > 0 else (-1.0 if sg < 0 else 0.0)
+    return ksd - (gamma + beta * sg) * abs(zeta) ** n
+
+
+@njit(cache=True)
+def spring_push_scalar(length, zeta, kse, free_length):
+    """Eq. 18a for the spring: P = max(k_se x_s + zeta, 0), x_s = L_s0 - L (push only)."""
+    return max(kse * (free_length - length) + zeta, 0.0)
+
+
+@njit(cache=True)
+def advance_wire_stress_scalar(strain0, strain1, stress, E, Y, alpha, n, fT, a, Em, eps_t, c, substeps, order):
+    """Eq. 17 integrated in strain from strain0 to strain1 (fixed direction): RK4 (order 4) or Heun
+    (order 2) in ``substeps`` steps."""
+    d = strain1 - strain0
+    d = 1.0 if d > 0 else (-1.0 if d < 0 else 0.0)
+    h = (strain1 - strain0) / substeps
+    y = stress
+    for k in range(substeps):
+        x = strain0 + k * h
+        x_end = strain1 if k == substeps - 1 else x + h
+        k1 = sma_slope_scalar(x, d, y, E, Y, alpha, n, fT, a, Em, eps_t, c)
+        if order == 2:
+            y = y + 0.5 * h * (k1 + sma_slope_scalar(x_end, d, y + h * k1, E, Y, alpha, n, fT, a, Em, eps_t, c))
+            continue
+        xm = x + 0.5 * h
+        k2 = sma_slope_scalar(xm, d, y + 0.5 * h * k1, E, Y, alpha, n, fT, a, Em, eps_t, c)
+        k3 = sma_slope_scalar(xm, d, y + 0.5 * h * k2, E, Y, alpha, n, fT, a, Em, eps_t, c)
+        k4 = sma_slope_scalar(x_end, d, y + h * k3, E, Y, alpha, n, fT, a, Em, eps_t, c)
+        y = y + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+    return y
+
+
+@njit(cache=True)
+def advance_spring_zeta_scalar(x0, x1, zeta, ksd, beta, gamma, n, substeps, order):
+    """Eq. 18b integrated in the compression from x0 to x1 (fixed direction), as above."""
+    d = x1 - x0
+    d = 1.0 if d > 0 else (-1.0 if d < 0 else 0.0)
+    h = (x1 - x0) / substeps
+    y = zeta
+    for _ in range(substeps):
+        k1 = bouc_wen_slope_scalar(y, d, ksd, beta, gamma, n)
+        if order == 2:
+            y = y + 0.5 * h * (k1 + bouc_wen_slope_scalar(y + h * k1, d, ksd, beta, gamma, n))
+            continue
+        k2 = bouc_wen_slope_scalar(y + 0.5 * h * k1, d, ksd, beta, gamma, n)
+        k3 = bouc_wen_slope_scalar(y + 0.5 * h * k2, d, ksd, beta, gamma, n)
+        k4 = bouc_wen_slope_scalar(y + h * k3, d, ksd, beta, gamma, n)
+        y = y + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+    return y
+
+
+_F8 = "float64"
+_sma_slope = vectorize([f"{_F8}({', '.join([_F8] * 12)})"], cache=True)(sma_slope_scalar.py_func)
+_bouc_wen_slope = vectorize([f"{_F8}({', '.join([_F8] * 6)})"], cache=True)(bouc_wen_slope_scalar.py_func)
+_advance_wire = vectorize([f"{_F8}({', '.join([_F8] * 12)}, int64, int64)"], cache=True)(
+    advance_wire_stress_scalar.py_func)
+_advance_spring = vectorize([f"{_F8}({', '.join([_F8] * 7)}, int64, int64)"], cache=True)(
+    advance_spring_zeta_scalar.py_func)
+_rope = vectorize([f"{_F8}({_F8}, {_F8}, {_F8})"], cache=True)(rope_tension_scalar.py_func)
+_wire = vectorize([f"{_F8}({_F8}, {_F8})"], cache=True)(wire_tension_scalar.py_func)
+
+
+# ---- Array forms (numpy arrays, one entry per element, or floats) ----------------------------------
+
+def rope_tension(length, natural_length, stiffness):
+    """Eq. 16: T = k_r (l_r - l_r0) H(l_r - l_r0); a rope never pushes."""
+    return _rope(np.asarray(length, dtype=float), natural_length, stiffness)
 
 
 def sma_stress_slope(strain, direction, stress, law: WireLaw):
@@ -83,13 +167,6 @@ def sma_wire(length, length_rate, stress, law: WireLaw):
     return wire_tension(stress, law), rate
 
 
-@vectorize(["float64(float64, float64, float64, float64, float64, float64)"], cache=True)
-def _bouc_wen_slope(zeta, direction, ksd, beta, gamma, n):
-    sg = zeta * direction
-    sg = 1.0 if sg > 0 else (-1.0 if sg < 0 else 0.0)
-    return ksd - (gamma + beta * sg) * abs(zeta) ** n
-
-
 def bouc_wen_slope(zeta, direction, law: SpringLaw):
     """Eq. 18b as a slope: d zeta / d x_s = k_sd - (gamma_s + beta_s sgn(zeta dx_s)) |zeta|^n_s."""
     return _bouc_wen_slope(zeta, direction, law.ksd, law.beta, law.gamma, law.n)
@@ -97,7 +174,7 @@ def bouc_wen_slope(zeta, direction, law: SpringLaw):
 
 def wire_tension(stress, law: WireLaw):
     """Eq. 17a: T = sigma A_w H(sigma); a wire never pushes."""
-    return law.area * np.maximum(stress, 0.0)
+    return _wire(stress, law.area)
 
 
 def spring_push(length, length_rate, zeta, law: SpringLaw):
@@ -112,41 +189,27 @@ def spring_push(length, length_rate, zeta, law: SpringLaw):
     return np.maximum(raw, 0.0), bouc_wen_slope(zeta, xdot, law) * xdot, raw
 
 
-def _advance_along(slope, x0, x1, state, substeps: int, order: int):
-    """Integrate d state/dx = slope(x, state) from x0 to x1 (fixed direction) in ``substeps`` steps
-    of classical RK4 (order 4) or Heun's method (order 2, half the slope calls)."""
+def _check_order(order: int) -> None:
     if order not in (2, 4):
         raise ValueError(f"order = {order!r}: allowed 2 (Heun) or 4 (RK4)")
-    x0 = np.asarray(x0, dtype=float)
-    x1 = np.asarray(x1, dtype=float)
-    h = (x1 - x0) / substeps
-    y = np.asarray(state, dtype=float)
-    for k in range(substeps):
-        x = x0 + k * h
-        x_end = x1 if k == substeps - 1 else x + h
-        k1 = slope(x, y)
-        if order == 2:
-            y = y + 0.5 * h * (k1 + slope(x_end, y + h * k1))
-            continue
-        k2 = slope(x + 0.5 * h, y + 0.5 * h * k1)
-        k3 = slope(x + 0.5 * h, y + 0.5 * h * k2)
-        k4 = slope(x_end, y + h * k3)
-        y = y + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
-    return y
 
 
 def advance_wire_stress(strain0, strain1, stress, law: WireLaw, substeps: int = 1, order: int = 4):
-    """Stress after the strain moves from strain0 to strain1 (Eq. 17 integrated in strain)."""
-    direction = np.sign(np.asarray(strain1, dtype=float) - strain0)
-    return _advance_along(lambda e, s: sma_stress_slope(e, direction, s, law), strain0, strain1, stress,
-                          substeps, order)
+    """Stress after the strain moves from strain0 to strain1 (Eq. 17 integrated in strain along the
+    straight increment: ``substeps`` steps of classical RK4 (order 4) or Heun's method (order 2))."""
+    _check_order(order)
+    return _advance_wire(np.asarray(strain0, dtype=float), np.asarray(strain1, dtype=float),
+                         np.asarray(stress, dtype=float), law.E, law.Y, law.alpha, law.n, law.fT, law.a, law.Em,
+                         law.eps_t, law.c, int(substeps), int(order))
 
 
 def advance_spring_zeta(compression0, compression1, zeta, law: SpringLaw, substeps: int = 1, order: int = 4):
-    """Hysteretic force after the compression moves from compression0 to compression1 (Eq. 18b)."""
-    direction = np.sign(np.asarray(compression1, dtype=float) - compression0)
-    return _advance_along(lambda x, z: bouc_wen_slope(z, direction, law), compression0, compression1, zeta,
-                          substeps, order)
+    """Hysteretic force after the compression moves from compression0 to compression1 (Eq. 18b,
+    integrated as in advance_wire_stress)."""
+    _check_order(order)
+    return _advance_spring(np.asarray(compression0, dtype=float), np.asarray(compression1, dtype=float),
+                           np.asarray(zeta, dtype=float), law.ksd, law.beta, law.gamma, law.n, int(substeps),
+                           int(order))
 
 
 def precompressed_spring(kse, ksd, beta, gamma, n, push) -> tuple[float, float]:

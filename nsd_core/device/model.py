@@ -18,12 +18,13 @@ from nsd_core import __version__
 from nsd_core.device.drive import Drive, DriveError
 from nsd_core.device.forces import rope_tension, sma_wire, spring_push
 from nsd_core.device.geometry import DeviceGeometry, device_geometry
-from nsd_core.engine.integrate import SolverError, integrate
+from nsd_core.engine.integrate import SolverError, check_tolerances, integrate
 from nsd_core.engine.elements import AxialElements
 from nsd_core.engine.mechanism import Cut, Mechanism, mechanism
 from nsd_core.device.outputs import device_columns
-from nsd_core.device.params import Params
+from nsd_core.device.params import ParameterError, Params
 from nsd_core.device.results import RunResult
+from nsd_core.engine.compiled_model import split_state
 from nsd_core.engine.semirecursive import ConstraintError, SemiRecursiveSystem
 
 BODY = {name: i for i, name in enumerate(
@@ -34,9 +35,19 @@ X, Y, Z = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)
 
 MAX_WIRE_STRAIN = 0.2  # beyond it the SMA law (Eq. 17, fitted up to ~8 %) says nothing about a real wire
 
+# DOP853, rtol 1e-7, atol 1e-12, max_step 1e-3 (measured, benchmarks/integrators.py, on the four
+# Figure 6 cases against rtol 1e-10: max|dF|/max|F| <= 1e-5, aim 1e-4). Looser settings pass the
+# smooth cases but not reliably the rope-slack ones (the laws' kinks make the error erratic:
+# rtol 3e-6 gave 1.1e-4 on A = 25.5 mm, 10 Hz), rtol 1e-6 breaks the four-fold symmetry at 4e-6,
+# and atol above 1e-12 lets round-off ring at rest. The step is limited by the stability of the
+# lightly damped ~255 Hz vertical mode (h omega ~ 4.8 at 3 ms): a cap of 1e-3 s below that limit
+# costs fewer right-hand sides than none (39k instead of 48k per two 1 Hz cycles: no rejected
+# steps). max_step None: no limit.
 # The default cases need at most ~1800 accepted steps per cycle (README); about 55x that is a runaway
 MAX_STEPS_PER_CYCLE = 100_000
-DEFAULT_SOLVER = {"method": "DOP853", "rtol": 1e-7, "atol": 1e-12, "max_step": 1e-3}
+DEFAULT_SOLVER = {"method": "DOP853", "rtol": 1e-7, "atol": 1e-12, "max_step": 1e-3, "backend": "auto"}
+BACKENDS = ("auto", "compiled", "scipy", "numpy")  # auto: compiled where it offers the method
+COMPILED_METHODS = ("DOP853", "RK45")
 
 
 def device_mechanism(g: DeviceGeometry) -> Mechanism:
@@ -128,42 +139,106 @@ def device_system(params: Params, drive: Drive) -> tuple[SemiRecursiveSystem, De
 
 def simulate(params: Params, drive: Drive, method: str = DEFAULT_SOLVER["method"],
              rtol: float = DEFAULT_SOLVER["rtol"], atol: float = DEFAULT_SOLVER["atol"],
-             max_step: float = DEFAULT_SOLVER["max_step"], progress=None) -> RunResult:
+             max_step: float | None = DEFAULT_SOLVER["max_step"], progress=None,
+             backend: str = DEFAULT_SOLVER["backend"]) -> RunResult:
     """Run the drive on the in-house semirecursive model; returns the common columns.
 
-    Raises DriveError (|u| >= l_d), SolverError (integration failure). The initial state is the
-    precompressed rest state (docs/model.md), an exact static equilibrium.
+    backend "auto" (default): "compiled" for the methods it offers, else "scipy". "compiled": the
+    compiled right-hand side and step loop (nsd_core.device.compiled; methods RK45, DOP853);
+    "scipy": SemiRecursiveSystem (compiled kernels, the force laws through numpy) driven by scipy's
+    solvers (any method of nsd_core.engine.integrate); "numpy": the same on the readable numpy
+    specification of every step. Raises DriveError (|u| >= l_d), SolverError (integration failure).
+    The initial state is the precompressed rest state (docs/model.md), an exact static equilibrium.
     """
     drive.check_followable(params)
+    if backend not in BACKENDS:
+        raise ParameterError(f"backend = {backend!r}: allowed {', '.join(BACKENDS)}")
+    if backend == "auto":
+        backend = "compiled" if method in COMPILED_METHODS else "scipy"
+    if backend == "compiled" and method not in COMPILED_METHODS:
+        raise ParameterError(f"method = {method!r}: the compiled backend offers {', '.join(COMPILED_METHODS)}")
+    step_cap = np.inf if max_step is None else max_step
     start = time.perf_counter()
     system, g = device_system(params, drive)
+    system.fast = backend != "numpy"
     z0 = rest_coordinates(g)
     extra0 = np.concatenate([g.initial_wire_stress(), [g.spring_zeta0]])
-    y0 = system.state(system.assemble(0.0, z0[system.partition.free]), np.zeros(len(z0)), extra0)
+    ws = system.workspace()
+    z_rest = system.assemble(ws, 0.0, z0[system.partition.free]).copy()
+    y0 = system.state(z_rest, np.zeros(len(z0)), extra0)
     t_eval = drive.output_times()
+    if backend == "compiled":
+        return _simulate_compiled(system, g, drive, z_rest, y0, t_eval, method, rtol, atol, step_cap, start)
     rows = []
 
     def record(t, y):
-        ev = system.evaluate(t, y)
+        ev = system.evaluate(ws, t, y)
         lam = np.zeros(3)
         lam[system.partition.rows] = ev.lam
         cap_pos = ev.kin.r[BODY["cap"]]
         e = drive.unit_vector
         F = ev.drive_force[0] * e[0] + ev.drive_force[1] * e[1]
         check_validity(t, ev.kin, system.forces)
-        rows.append((t, cap_pos.copy(), ev.z[BODY["wall"]], y[-g.n_wires - 1:-1].copy(), y[-1],
+        extra = split_state(y, len(system.partition.free)).extra
+        rows.append((t, cap_pos.copy(), ev.z[BODY["wall"]], extra[:g.n_wires].copy(), extra[g.n_wires],
                      float(np.max(np.abs(ev.Phi))), F, lam))
 
     try:
-        traj = integrate(system, y0, t_eval, method=method, rtol=rtol, atol=atol, max_step=max_step,
+        traj = integrate(system, ws, y0, t_eval, method=method, rtol=rtol, atol=atol, max_step=step_cap,
                          min_pivot_ratio=0.0, progress=progress, outputs=record,
                          max_steps=MAX_STEPS_PER_CYCLE * drive.cycles)
     except ConstraintError as err:
         raise SolverError(str(err)) from None
     t, cap, wall, sig, zeta, clo, F, lam = (np.array(c) for c in zip(*rows))
-    stats = {"engine": "semirecursive", "version": __version__, "method": method, "rtol": rtol,
+    stats = {"engine": "semirecursive", "version": __version__, "method": method, "backend": backend, "rtol": rtol,
              "atol": atol, "max_step": max_step, "steps": traj.steps, "nfev": traj.nfev,
              "wall_time": time.perf_counter() - start, "tracking_error": 0.0,
              "closure_max": float(np.max(clo))}
     return device_columns("semirecursive", g, drive, t, cap, wall, sig.reshape(len(t), g.n_wires), zeta, clo,
+                          drive_force=F, rod_force=lam, stats=stats)
+
+
+def _check_lengths(t, lengths, forces: DeviceForces) -> None:
+    """check_validity on recorded element lengths (samples, elements): the first bad sample raises."""
+    g = forces.g
+    bad = np.any(lengths <= 0.0, axis=1)
+    if g.n_wires:
+        strain = (lengths[:, forces.wires] - g.wire.natural_length) / g.wire.natural_length
+        bad |= np.max(strain, axis=1) > MAX_WIRE_STRAIN
+    if np.any(bad):
+        k = int(np.argmax(bad))
+        L = lengths[k]
+        if np.any(L <= 0.0):
+            raise DriveError(f"t = {t[k]:.6g} s: an element's length reached zero: outside the model's validity")
+        raise DriveError(f"t = {t[k]:.6g} s: wire strain {np.max(strain[k]):.3g} beyond "
+                         f"{MAX_WIRE_STRAIN}: outside the SMA law's validity")
+
+
+def _simulate_compiled(system, g, drive, z_rest, y0, t_eval, method, rtol, atol, max_step, start):
+    check_tolerances(rtol, atol, max_step)  # the bounds of the scipy path, the same way
+    from nsd_core.device.compiled import compiled_model, run
+    from nsd_core.engine.rk import TOO_MANY_STEPS
+    model = compiled_model(system, g, drive, system.forces.elements)
+    out, (steps, nfev, status, n_done) = run(model, z_rest, y0, t_eval, method, rtol, atol, max_step,
+                                             MAX_STEPS_PER_CYCLE * drive.cycles)
+    _check_lengths(t_eval[:n_done], out.lengths[:n_done], system.forces)
+    if status == TOO_MANY_STEPS:
+        raise SolverError(f"exceeded {MAX_STEPS_PER_CYCLE * drive.cycles} steps at t = "
+                          f"{t_eval[min(n_done, len(t_eval) - 1)]:.6g} s of {t_eval[-1]:.6g} s: "
+                          "a stiff or runaway input")
+    if status != 0:
+        raise SolverError(f"{method} (compiled) failed at t = {t_eval[min(n_done, len(t_eval) - 1)]:.6g} s "
+                          f"or before: status {status} (nsd_core.engine.compiled, nsd_core.engine.rk)")
+    parts = split_state(out.y, len(system.partition.free))
+    e = drive.unit_vector
+    lam = np.zeros((len(t_eval), 3))
+    lam[:, system.partition.rows] = out.lam
+    F = out.tau[:, 0] * e[0] + out.tau[:, 1] * e[1]
+    stats = {"engine": "semirecursive", "version": __version__, "method": method, "backend": "compiled",
+             "rtol": rtol, "atol": atol, "max_step": None if max_step == np.inf else max_step,
+             "steps": int(steps), "nfev": int(nfev),
+             "wall_time": time.perf_counter() - start, "tracking_error": 0.0,
+             "closure_max": float(np.max(out.closure))}
+    return device_columns("semirecursive", g, drive, t_eval, out.r[:, BODY["cap"]], out.z[:, BODY["wall"]],
+                          parts.extra[:, :g.n_wires], parts.extra[:, g.n_wires], out.closure,
                           drive_force=F, rod_force=lam, stats=stats)

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from nsd_core.engine.kinematics import Kinematics, cross3
+from nsd_core.engine.kinematics import SCRATCH_ROWS, Kinematics, cross3
 from nsd_core.engine.mechanism import Mechanism
 
 
@@ -27,15 +27,11 @@ def _global(body, local, A, r, is_point, out):
 
 
 @njit(cache=True)
-def closure_kernel(parent, kind, ca, va, cb, vb, A, r, B, Z, vp, with_rates, Phi, J, c):
+def closure_kernel(parent, kind, ca, va, cb, vb, A, r, B, Z, vp, with_rates, Phi, J, c, scratch):
+    """Adds Phi, Phi_z and (with rates) c into the given arrays. scratch: (>= 10, 3)."""
     row = 0
-    p = np.empty(3)
-    t1 = np.empty(3)
-    t2 = np.empty(3)
-    vel = np.empty(3)
-    av = np.empty(3)
-    bv = np.empty(3)
-    axb = np.empty(3)
+    p, t1, t2, vel = scratch[0], scratch[1], scratch[2], scratch[3]
+    av, bv, axb = scratch[4], scratch[5], scratch[6]
     for k in range(kind.shape[0]):
         if kind[k] == 0:  # point coincidence: 3 rows
             for side in range(2):
@@ -74,9 +70,10 @@ def closure_kernel(parent, kind, ca, va, cb, vb, A, r, B, Z, vp, with_rates, Phi
                     J[row, j] += sign * (B[j, 3] * axb[0] + B[j, 4] * axb[1] + B[j, 5] * axb[2])
                     j = parent[j]
             if with_rates:
-                wa = np.zeros(3)
-                wb = np.zeros(3)
-                al = np.zeros(3)
+                wa, wb, al = scratch[7], scratch[8], scratch[9]
+                wa[:] = 0.0
+                wb[:] = 0.0
+                al[:] = 0.0
                 if ca[k] >= 0:
                     for a in range(3):
                         wa[a] = Z[ca[k], 3 + a]
@@ -104,7 +101,7 @@ def closure(m: Mechanism, k: Kinematics, with_rates: bool = False):
     Z = k.Z if with_rates else np.zeros((m.n, 6))
     vp = k.vp if with_rates else Z
     closure_kernel(a.parent, a.cut_kind, a.cut_a, a.cut_va, a.cut_b, a.cut_vb, k.A, k.r, k.B, Z, vp,
-                   with_rates, Phi, J, c)
+                   with_rates, Phi, J, c, np.empty((SCRATCH_ROWS, 3)))
     return Phi, J, (c if with_rates else None)
 
 

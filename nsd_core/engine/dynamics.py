@@ -13,24 +13,29 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from nsd_core.engine.kinematics import Kinematics, cross3
+from nsd_core.engine.kinematics import SCRATCH_ROWS, Kinematics, cross3
 from nsd_core.engine.mechanism import Mechanism
 
 
 @njit(cache=True)
-def body_terms_kernel(mass, com, inertia, gravity, A, r, Z, has_vel, Mb, Qb):
-    """Per-body M_i into Mb (n,6,6) and gravity + velocity terms added into Qb (n,6)."""
+def body_terms_kernel(mass, com, inertia, gravity, A, r, Z, has_vel, Mb, Qb, scratch):
+    """Per-body M_i into Mb (n,6,6) and gravity + velocity terms added into Qb (n,6).
+    scratch: (>= 11, 3), so that nothing is allocated per call."""
     n = mass.shape[0]
-    g = np.empty(3)
-    JG = np.empty((3, 3))
-    G = np.empty((3, 3))
-    t1 = np.empty(3)
-    gd = np.empty(3)
-    wgd = np.empty(3)
-    Jw = np.empty(3)
+    g = scratch[0]
+    JG = scratch[1:4]
+    G = scratch[4:7]
+    t1 = scratch[7]
+    gd = scratch[8]
+    wgd = scratch[9]
+    Jw = scratch[10]
     for i in range(n):
         m = mass[i]
-        if m == 0.0 and np.all(inertia[i] == 0.0):
+        massless = m == 0.0
+        for a in range(3):
+            for b in range(3):
+                massless = massless and inertia[i, a, b] == 0.0
+        if massless:
             continue  # massless auxiliary body
         for a in range(3):
             acc = r[i, a]
@@ -78,8 +83,9 @@ def body_terms_kernel(mass, com, inertia, gravity, A, r, Z, has_vel, Mb, Qb):
 
 
 @njit(cache=True)
-def tree_kernel(parent, B, vp, Mb, Fb, Mred, Qred):
-    """Subtree sums (Eqs. 7-8) leaves to root, then R_d^T M^S R_d and R_d^T (Q^S - P^S)."""
+def tree_kernel(parent, B, vp, Mb, Fb, Mred, Qred, F):
+    """Subtree sums (Eqs. 7-8) leaves to root, then R_d^T M^S R_d and R_d^T (Q^S - P^S). F: a 6-vector
+    of scratch."""
     n = parent.shape[0]
     for i in range(n):  # P_i = M_i vp_i moves to the force side
         for a in range(6):
@@ -94,7 +100,6 @@ def tree_kernel(parent, B, vp, Mb, Fb, Mred, Qred):
                 Fb[p, a] += Fb[i, a]
                 for b in range(6):
                     Mb[p, a, b] += Mb[i, a, b]
-    F = np.empty(6)
     for k in range(n):
         for a in range(6):
             acc = 0.0
@@ -120,7 +125,8 @@ def body_inertia_terms(m: Mechanism, k: Kinematics, wrench: np.ndarray):
     Mb = np.zeros((m.n, 6, 6))
     Qb = np.array(wrench, dtype=float, copy=True)
     Z = k.Z if k.Z is not None else np.zeros((m.n, 6))
-    body_terms_kernel(m.mass, m.com, m.inertia, m.gravity, k.A, k.r, Z, k.Z is not None, Mb, Qb)
+    body_terms_kernel(m.mass, m.com, m.inertia, m.gravity, k.A, k.r, Z, k.Z is not None, Mb, Qb,
+                      np.empty((SCRATCH_ROWS, 3)))
     return Mb, Qb
 
 
@@ -129,7 +135,7 @@ def tree_equations(m: Mechanism, k: Kinematics, wrench: np.ndarray, gen_force=No
     Mb, Qb = body_inertia_terms(m, k, wrench)
     vp = k.vp if k.vp is not None else np.zeros((m.n, 6))
     M_red, Q_red = np.zeros((m.n, m.n)), np.zeros(m.n)
-    tree_kernel(m.arrays.parent, k.B, vp, Mb, Qb, M_red, Q_red)
+    tree_kernel(m.arrays.parent, k.B, vp, Mb, Qb, M_red, Q_red, np.empty(6))
     if gen_force is not None:
         Q_red = Q_red + gen_force
     return M_red, Q_red

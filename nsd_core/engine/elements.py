@@ -34,8 +34,9 @@ def _point_state(body, local, A, r, Z, p, v):
 
 
 @njit(cache=True)
-def element_kinematics(body_up, pts_up, body_lo, pts_lo, A, r, Z, P_up, P_lo, N, L, Ld):
-    pu, pl, vu, vl = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
+def element_kinematics(body_up, pts_up, body_lo, pts_lo, A, r, Z, P_up, P_lo, N, L, Ld, scratch):
+    """Points, unit vectors, lengths and length rates of every element. scratch: (>= 4, 3)."""
+    pu, pl, vu, vl = scratch[0], scratch[1], scratch[2], scratch[3]
     for e in range(body_up.shape[0]):
         _point_state(body_up[e], pts_up[e], A, r, Z, pu, vu)
         _point_state(body_lo[e], pts_lo[e], A, r, Z, pl, vl)
@@ -83,7 +84,7 @@ class AxialElements:
     def state(self, kin):
         """Unit vectors, lengths and length rates of all elements at kin (velocities required)."""
         element_kinematics(self.body_up, self.pts_up, self.body_lo, self.pts_lo, kin.A, kin.r, kin.Z,
-                           self.P_up, self.P_lo, self.N, self.L, self.Ld)
+                           self.P_up, self.P_lo, self.N, self.L, self.Ld, np.empty((4, 3)))
         return self.L, self.Ld
 
     def wrench(self, tensions: np.ndarray) -> np.ndarray:

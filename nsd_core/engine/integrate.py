@@ -15,6 +15,7 @@ import numpy as np
 from scipy.integrate import DOP853, LSODA, RK23, RK45, Radau
 
 from nsd_core.engine.errors import InputError, SolverError
+from nsd_core.engine.compiled_model import Workspace
 from nsd_core.engine.semirecursive import SemiRecursiveSystem
 
 STEP_FLOOR = 1e-8  # s: the smallest max_step accepted (issue 12: bounded work)
@@ -31,28 +32,37 @@ class Trajectory:
     wall_time: float
 
 
-def integrate(system: SemiRecursiveSystem, y0: np.ndarray, t_eval: np.ndarray, method: str = "RK45",
-              rtol: float = 1e-8, atol: float = 1e-10, max_step: float = np.inf,
-              min_pivot_ratio: float = 1e-3, progress: Callable[[float], None] | None = None,
-              outputs: Callable[[float, np.ndarray], None] | None = None,
-              max_steps: int | None = None) -> Trajectory:
-    """Integrate from t_eval[0] to t_eval[-1]; ``outputs(t, y)`` is called at every t_eval.
-
-    ``max_steps`` bounds the work: a run that needs more accepted steps stops with a SolverError
-    ("exceeded N steps") instead of running for hours on a stiff or runaway input."""
-    if method not in METHODS:
-        raise InputError(f"method = {method!r}: allowed {', '.join(METHODS)}")
+def check_tolerances(rtol, atol, max_step) -> None:
+    """The bounds every integrator here accepts (scipy's and the compiled one, nsd_core.engine.rk)."""
     for name, v, low, high in (("rtol", rtol, 1e-13, 0.1), ("atol", atol, 1e-300, 1.0),
                                ("max_step", max_step, STEP_FLOOR, np.inf)):
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not low <= v <= high or np.isnan(v):
             raise InputError(f"{name} = {v!r}: must be a number in [{low:g}, {high:g}]")
+
+
+def integrate(system: SemiRecursiveSystem, ws: Workspace, y0: np.ndarray, t_eval: np.ndarray, method: str = "RK45",
+              rtol: float = 1e-8, atol: float = 1e-10, max_step: float = np.inf,
+              min_pivot_ratio: float = 1e-3, progress: Callable[[float], None] | None = None,
+              outputs: Callable[[float, np.ndarray], None] | None = None,
+              max_steps: int | None = None, first_step: float | None = None) -> Trajectory:
+    """Integrate from t_eval[0] to t_eval[-1] with the per-run workspace ws (system.workspace());
+    ``outputs(t, y)`` is called at every t_eval.
+
+    ``max_steps`` bounds the work: a run that needs more accepted steps stops with a SolverError
+    ("exceeded N steps") instead of running for hours on a stiff or runaway input.
+    ``first_step``: the first step (default: the solver's own guess, whose trial evaluation may lie
+    anywhere up to t_eval[-1] when the state starts at rest; a prescribed motion that has moved far
+    by then can put that trial where the loops cannot close)."""
+    if method not in METHODS:
+        raise InputError(f"method = {method!r}: allowed {', '.join(METHODS)}")
+    check_tolerances(rtol, atol, max_step)
     t0, t1 = float(t_eval[0]), float(t_eval[-1])
     start = time.perf_counter()
     nfev = [0]
 
     def fun(t, y):
         nfev[0] += 1
-        return system.rhs(t, y)
+        return system.rhs(ws, t, y)
 
     ys = np.zeros((len(t_eval), len(y0)))
     partitions = [(t0, system.partition)]
@@ -61,7 +71,7 @@ def integrate(system: SemiRecursiveSystem, y0: np.ndarray, t_eval: np.ndarray, m
     steps = 0
     t = t0
     while True:
-        solver = METHODS[method](fun, t, y, t1, rtol=rtol, atol=atol, max_step=max_step)
+        solver = METHODS[method](fun, t, y, t1, rtol=rtol, atol=atol, max_step=max_step, first_step=first_step)
         while k < len(t_eval) and t_eval[k] <= t:
             ys[k] = y
             if outputs:
@@ -90,9 +100,9 @@ def integrate(system: SemiRecursiveSystem, y0: np.ndarray, t_eval: np.ndarray, m
             if progress:
                 progress((solver.t - t0) / (t1 - t0))
             if min_pivot_ratio > 0 and solver.status == "running" and \
-                    len(system.partition.dependent) and system.pivot_ratio(solver.t, solver.y) < min_pivot_ratio:
+                    len(system.partition.dependent) and system.pivot_ratio(ws, solver.t, solver.y) < min_pivot_ratio:
                 before = system.partition
-                y_new = system.repartition(solver.t, solver.y)
+                y_new = system.repartition(ws, solver.t, solver.y)
                 if system.partition is before:
                     continue  # no better partition here (a singular position of the mechanism)
                 t, y = solver.t, y_new

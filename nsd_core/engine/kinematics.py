@@ -61,6 +61,9 @@ def _rodrigues(u, angle, R):
     R[2, 2] = c + z * z * C
 
 
+SCRATCH_ROWS = 12  # rows of the (rows, 3) scratch array every recursion kernel takes
+
+
 @njit(cache=True)
 def cross3(a, b, out):
     out[0] = a[1] * b[2] - a[2] * b[1]
@@ -69,13 +72,14 @@ def cross3(a, b, out):
 
 
 @njit(cache=True)
-def positions_kernel(parent, jtype, axis, offset, z, A, r, B):
-    """Root to leaves: body rotations A, origins r and the columns b_i of R_d. jtype 1 = revolute."""
+def positions_kernel(parent, jtype, axis, offset, z, A, r, B, scratch):
+    """Root to leaves: body rotations A, origins r and the columns b_i of R_d. jtype 1 = revolute.
+    scratch: any (>= 6, 3) array, so that nothing is allocated per call."""
     n = parent.shape[0]
-    Rj = np.empty((3, 3))
-    u = np.empty(3)
-    d = np.empty(3)
-    tmp = np.empty(3)
+    Rj = scratch[0:3]
+    u = scratch[3]
+    d = scratch[4]
+    tmp = scratch[5]
     for i in range(n):
         p = parent[i]
         for a in range(3):
@@ -113,13 +117,13 @@ def positions_kernel(parent, jtype, axis, offset, z, A, r, B):
 
 
 @njit(cache=True)
-def velocities_kernel(parent, jtype, B, r, zd, Z, vp):
-    """Root to leaves: Z_i = Z_p + b_i z'_i and vp_i = vp_p + b'_i z'_i (Eqs. 4-5)."""
+def velocities_kernel(parent, jtype, B, r, zd, Z, vp, scratch):
+    """Root to leaves: Z_i = Z_p + b_i z'_i and vp_i = vp_p + b'_i z'_i (Eqs. 4-5). scratch: (>= 4, 3)."""
     n = parent.shape[0]
-    udot = np.empty(3)
-    ddot = np.empty(3)
-    t1 = np.empty(3)
-    t2 = np.empty(3)
+    udot = scratch[0]
+    ddot = scratch[1]
+    t1 = scratch[2]
+    t2 = scratch[3]
     for i in range(n):
         p = parent[i]
         if p < 0:
@@ -175,7 +179,8 @@ def positions(m: Mechanism, z: np.ndarray) -> Kinematics:
     n = m.n
     A, r, B = np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((n, 6))
     a = m.arrays
-    positions_kernel(a.parent, a.jtype, m.joint_axis, m.joint_offset, np.asarray(z, dtype=float), A, r, B)
+    positions_kernel(a.parent, a.jtype, m.joint_axis, m.joint_offset, np.asarray(z, dtype=float), A, r, B,
+                     np.empty((SCRATCH_ROWS, 3)))
     return Kinematics(A, r, B)
 
 
@@ -183,5 +188,5 @@ def velocities(m: Mechanism, k: Kinematics, zd: np.ndarray) -> Kinematics:
     """Fill Z (Eq. 4) and the velocity-product terms vp (Eq. 5) into k, root to leaves."""
     k.Z, k.vp = np.empty((m.n, 6)), np.empty((m.n, 6))
     a = m.arrays
-    velocities_kernel(a.parent, a.jtype, k.B, k.r, np.asarray(zd, dtype=float), k.Z, k.vp)
+    velocities_kernel(a.parent, a.jtype, k.B, k.r, np.asarray(zd, dtype=float), k.Z, k.vp, np.empty((SCRATCH_ROWS, 3)))
     return k

@@ -18,7 +18,9 @@ from typing import Callable
 
 import numpy as np
 
-from nsd_core.engine.fastpath import dynamics_kernel, newton_kernel, velocity_kernel
+from nsd_core.engine.compiled import OK, reduced_dynamics, velocities_and_predictor
+from nsd_core.engine.compiled import assemble as assemble_kernel
+from nsd_core.engine.compiled_model import SystemModel, Workspace, build_model, make_workspace, split_state
 from nsd_core.engine.closure import closure, full_pivot_elimination
 from nsd_core.engine.dynamics import tree_equations
 from nsd_core.engine.kinematics import Kinematics, positions, velocities
@@ -71,7 +73,13 @@ class Evaluation:
 
 
 class SemiRecursiveSystem:
-    """A mechanism, its prescribed coordinates and its applied forces, as an ODE in the free ones."""
+    """A mechanism, its prescribed coordinates and its applied forces, as an ODE in the free ones.
+
+    The system is the model: the mechanism, the partition (and the configuration it was chosen at,
+    which fixes the assembly branch) and the compiled arrays of both (``model``). What a run
+    changes (the Newton warm start, the predictor, every scratch array) lives in a ``Workspace``
+    (nsd_core.engine.compiled_model) that the caller makes with ``workspace()`` and passes in.
+    """
 
     def __init__(self, mech: Mechanism, prescribed: list[int], motion: MotionFn, forces: ForceFn,
                  n_extra: int = 0, prefer_free: list[int] | None = None, newton_tol: float = 1e-13,
@@ -83,11 +91,10 @@ class SemiRecursiveSystem:
         self.n_extra = n_extra
         self.prefer_free = list(prefer_free or [])
         self.newton_tol = newton_tol
-        self.fast = fast  # compiled kernels (nsd_core.fastpath); False: the numpy specification
+        self.fast = fast  # compiled kernels (nsd_core.engine.compiled); False: the numpy specification
         self.partition: Partition | None = None
-        self._z = None  # last full configuration: the Newton warm start (keeps the assembly branch)
-        self._lin = None  # (z, S, trusted) at the last evaluation: dz_dep = S dz, the Newton predictor
-        self._good = None  # (t, z, z', z'') at the last evaluation with a well-conditioned dependent block
+        self.model: SystemModel | None = None
+        self.z_ref: np.ndarray | None = None  # configuration the partition was chosen at
 
     # ---- partition (Eq. 9) ----
     def choose_partition(self, z: np.ndarray, n_dependent: int | None = None) -> Partition:
@@ -95,49 +102,64 @@ class SemiRecursiveSystem:
         k = positions(self.m, z)
         _, J, _ = closure(self.m, k)
         others = [i for i in range(self.m.n) if i not in set(self.prescribed)]
-        # coordinates the user prefers free are offered as pivots last
-        cand = [i for i in others if i not in self.prefer_free] + [i for i in others if i in self.prefer_free]
         # redundant equations (rank-deficient Phi_z) are left out by the elimination
-        rows, dep, piv = full_pivot_elimination(J, cand, n_pivots=n_dependent) if J.shape[0] else ([], [], np.ones(1))
+        rows, dep, piv = full_pivot_elimination(J, others, n_pivots=n_dependent) if J.shape[0] else ([], [], np.ones(1))
+        # coordinates the user prefers free stay free whenever the others alone reach the same rank
+        # (Table 1: the same tree is driven at the plate or at the base, free elsewhere); else, and
+        # when re-partitioning near a singular position (n_dependent given), they are offered as
+        # pivots last
+        if self.prefer_free and J.shape[0]:
+            rest = [i for i in others if i not in self.prefer_free]
+            pick = full_pivot_elimination(J, rest) if rest and n_dependent is None else ([], [], np.ones(0))
+            if len(pick[1]) < len(dep):
+                pick = full_pivot_elimination(J, rest + [i for i in others if i in self.prefer_free],
+                                              n_pivots=n_dependent)
+            rows, dep, piv = pick
         free = np.array([i for i in others if i not in dep], dtype=int)
         ratio = float(piv.min() / piv.max()) if len(piv) else 1.0
-        self.partition = Partition(free, np.array(dep, dtype=int), np.array(rows, dtype=int), ratio)
-        self._z = np.array(z, dtype=float)
-        self._lin = None
+        self._set_partition(Partition(free, np.array(dep, dtype=int), np.array(rows, dtype=int), ratio), z)
         return self.partition
 
+    def _set_partition(self, partition: Partition, z: np.ndarray) -> None:
+        self.partition = partition
+        self.z_ref = np.array(z, dtype=float)
+        self.model = build_model(self.m, partition, self.prescribed, n_extra=self.n_extra,
+                                 newton_tol=self.newton_tol)
+
+    def workspace(self, z: np.ndarray | None = None) -> Workspace:
+        """A fresh per-run workspace; Newton starts from z (default: where the partition was chosen)."""
+        return make_workspace(self.model, self.z_ref if z is None else z)
+
     # ---- positions and velocities on the constraint manifold ----
-    def assemble(self, t: float, zf: np.ndarray, q: np.ndarray | None = None) -> np.ndarray:
+    def assemble(self, ws: Workspace, t: float, zf: np.ndarray, q: np.ndarray | None = None) -> np.ndarray:
         """Full configuration on the loop manifold for free coordinates zf at time t (q: the prescribed
-        positions at t, when the caller already has them)."""
+        positions at t, when the caller already has them). Returns ws.z."""
         P = self.partition
-        z = self._z.copy()
         if q is None:
             q = self.motion(t)[0]
+        if self.fast:
+            ws.q[:] = q
+            z_before = ws.z.copy()
+            if assemble_kernel(self.model, ws, t, np.ascontiguousarray(zf, dtype=float)) == OK:
+                return ws.z
+            ws.z[:] = z_before  # a singular block or no convergence: the specification copes or says why
+        ws.kin_current[0] = 0
+        z = ws.z.copy()
         z[self.prescribed] = q
         z[P.free] = zf
         if len(P.dependent) == 0:
-            return z
+            ws.z[:] = z
+            return ws.z
         pred = None
-        if self._lin is not None:
+        if ws.has_lin[0]:
             # first-order predictor along the constraint manifold, z_dep + S dz (S = -Jd^-1 Jr from
             # the last evaluation). With large steps (loose tolerances, or across a singular
             # position where two assembly branches meet) Newton from the plain warm start can land
             # on another branch, or on the same one shifted by 2 pi; the predictor tells which.
-            z_lin, S, trusted = self._lin
-            if trusted or self._good is None:
-                dz = z - z_lin
-                dz[P.dependent] = 0.0
-                pred = z_lin[P.dependent] + S @ dz
-            else:
-                # next to a singular position S = -Jd^-1 Jr is round-off (two branches meet there, the
-                # velocity picks one): follow the branch by continuity of the velocity instead, with
-                # a Taylor step from the last well-conditioned evaluation
-                t_g, z_g, zd_g, zdd_g = self._good
-                h = t - t_g
-                dep = P.dependent
-                pred = z_g[dep] + h * zd_g[dep] + 0.5 * h * h * zdd_g[dep]
-            move = float(np.max(np.abs(pred - z_lin[P.dependent])))
+            dz = z - ws.z_lin
+            dz[P.dependent] = 0.0
+            pred = ws.z_lin[P.dependent] + ws.S @ dz
+            move = float(np.max(np.abs(pred - ws.z_lin[P.dependent])))
         z_start = z.copy()
         try:
             z = self._newton(t, z)
@@ -163,25 +185,12 @@ class SemiRecursiveSystem:
                         float(np.max(np.abs(z_alt[P.dependent] - z[P.dependent]))) > 1e-8
                         and float(np.max(np.abs(z_alt[P.dependent] - pred))) < dev)):
                     z = z_alt
-        self._z = z
-        return z
+        ws.z[:] = z
+        return ws.z
 
     def _newton(self, t: float, z: np.ndarray) -> np.ndarray:
         """Newton on the independent loop equations for the dependent coordinates (in place)."""
         P = self.partition
-        if self.fast:
-            a, m = self.m.arrays, self.m
-            n = m.n
-            zz = z.copy()
-            try:
-                code = newton_kernel(a.parent, a.jtype, m.joint_axis, m.joint_offset, a.cut_kind, a.cut_a,
-                                     a.cut_va, a.cut_b, a.cut_vb, zz, P.rows, P.dependent, self.newton_tol, 30,
-                                     m.n_constraints,
-                                     np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((n, 6)))
-            except np.linalg.LinAlgError:
-                code = -1  # singular block: the numpy loop below copes
-            if code == 1:
-                return zz
         for _ in range(30):
             k = positions(self.m, z)
             Phi, J, _ = closure(self.m, k)
@@ -196,50 +205,32 @@ class SemiRecursiveSystem:
                                   f"(|Phi| = {np.max(np.abs(Phi)):.3g})")
         return z
 
-    def rhs_parts(self, t: float, zf: np.ndarray, zfd: np.ndarray, extra: np.ndarray) -> Evaluation:
-        P, m, pr = self.partition, self.m, self.prescribed
+    def rhs_parts(self, ws: Workspace, t: float, zf: np.ndarray, zfd: np.ndarray, extra: np.ndarray) -> Evaluation:
         q, qd, qdd = self.motion(t)
-        z = self.assemble(t, zf, q)
-        if self.fast and len(P.dependent):
-            ev = self._rhs_compiled(t, z, zfd, qd, qdd, extra)
+        z = self.assemble(ws, t, zf, q)
+        if self.fast:
+            ev = self._rhs_compiled(ws, t, zfd, qd, qdd, extra)
             if ev is not None:
                 return ev
-        return self._rhs_numpy(t, z, zfd, qd, qdd, extra)
+        return self._rhs_numpy(ws, t, z.copy(), zfd, qd, qdd, extra)
 
-    def _rhs_compiled(self, t, z, zfd, qd, qdd, extra):
-        """The same equations as _rhs_numpy through nsd_core.fastpath (None: singular, use numpy)."""
-        P, m, pr, a = self.partition, self.m, self.prescribed, self.m.arrays
-        n, nc = m.n, m.n_constraints
-        A, r, B, Z, vp = np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((n, 6)), np.empty((n, 6)), np.empty((n, 6))
-        Phi, J, c = np.zeros(nc), np.zeros((nc, n)), np.zeros(nc)
-        Jd_inv = np.empty((len(P.dependent), len(P.dependent)))
-        zd = np.zeros(n)
-        zd[pr] = qd
-        zd[P.free] = zfd
-        try:
-            velocity_kernel(a.parent, a.jtype, m.joint_axis, m.joint_offset, a.cut_kind, a.cut_a, a.cut_va,
-                            a.cut_b, a.cut_vb, z, zd, P.rows, P.dependent, A, r, B, Z, vp, Phi, J, c, Jd_inv)
-        except np.linalg.LinAlgError:
+    def _rhs_compiled(self, ws, t, zfd, qd, qdd, extra):
+        """The same equations as _rhs_numpy through nsd_core.engine.compiled (None: singular, use numpy)."""
+        ws.qd[:] = qd
+        ws.qdd[:] = qdd
+        if velocities_and_predictor(self.model, ws, np.ascontiguousarray(zfd, dtype=float)) != OK:
             return None
-        S = -Jd_inv @ J[P.rows]
-        S[:, P.dependent] = 0.0
-        trusted = _well_conditioned(Jd_inv, J[np.ix_(P.rows, P.dependent)])
-        self._lin = (z.copy(), S, trusted)
-        kin = Kinematics(A, r, B, Z, vp)
+        kin = Kinematics(ws.A.copy(), ws.r.copy(), ws.B.copy(), ws.Z.copy(), ws.vp.copy())
+        z, zd = ws.z.copy(), ws.zd.copy()
         wrench, gen, extra_rate = self.forces(t, kin, z, zd, extra)
-        zdd, lam, tau = np.empty(n), np.empty(len(P.dependent)), np.empty(len(pr))
-        try:
-            dynamics_kernel(a.parent, m.mass, m.com, m.inertia, m.gravity, A, r, B, Z, vp,
-                            np.ascontiguousarray(wrench, dtype=float),
-                            np.zeros(n) if gen is None else np.asarray(gen, dtype=float), J, c, P.rows,
-                            P.dependent, P.free, pr, np.asarray(qdd, dtype=float), Jd_inv, zdd, lam, tau)
-        except np.linalg.LinAlgError:
+        ws.wrench[:] = wrench
+        ws.gen[:] = 0.0 if gen is None else gen
+        if reduced_dynamics(self.model, ws) != OK:
             return None
-        if trusted:
-            self._good = (t, z.copy(), zd.copy(), zdd.copy())
-        return Evaluation(t, z, zd, zdd, kin, np.asarray(extra_rate, dtype=float), lam, tau, Phi)
+        return Evaluation(t, z, zd, ws.zdd.copy(), kin, np.asarray(extra_rate, dtype=float), ws.lam.copy(),
+                          ws.tau.copy(), ws.Phi.copy())
 
-    def _rhs_numpy(self, t, z, zfd, qd, qdd, extra):
+    def _rhs_numpy(self, ws, t, z, zfd, qd, qdd, extra):
         P, m, pr = self.partition, self.m, self.prescribed
         kin = positions(m, z)
         Phi, J, _ = closure(m, kin)
@@ -251,8 +242,8 @@ class SemiRecursiveSystem:
         zd[P.dependent] = -Jd_inv @ (Jr @ zd)
         S = -Jd_inv @ Jr
         S[:, P.dependent] = 0.0
-        trusted = _well_conditioned(Jd_inv, Jr[:, P.dependent])
-        self._lin = (z.copy(), S, trusted)
+        if len(P.dependent):
+            ws.z_lin[:], ws.S[:], ws.has_lin[0] = z, S, 1
         velocities(m, kin, zd)
         _, _, c = closure(m, kin, with_rates=True)
         wrench, gen, extra_rate = self.forces(t, kin, z, zd, extra)
@@ -272,61 +263,48 @@ class SemiRecursiveSystem:
         res = MRz @ zfdd + M @ zdd0 - Q
         lam = Jd_inv.T @ res[P.dependent]
         tau = res[pr] - Jr[:, pr].T @ lam
-        if trusted:
-            self._good = (t, z.copy(), zd.copy(), zdd.copy())
         return Evaluation(t, z, zd, zdd, kin, np.asarray(extra_rate, dtype=float), lam, tau, Phi)
 
-    # ---- the ODE in y = [z_f, z'_f, extra] ----
-    def rhs(self, t: float, y: np.ndarray) -> np.ndarray:
-        nf = len(self.partition.free)
-        ev = self.rhs_parts(t, y[:nf], y[nf:2 * nf], y[2 * nf:])
-        return np.concatenate([y[nf:2 * nf], ev.zdd[self.partition.free], ev.extra_rate])
+    # ---- the ODE in y = [z_f, z'_f, extra] (nsd_core.engine.compiled_model.split_state) ----
+    def rhs(self, ws: Workspace, t: float, y: np.ndarray) -> np.ndarray:
+        zf, zfd, extra = split_state(y, len(self.partition.free))
+        ev = self.rhs_parts(ws, t, zf, zfd, extra)
+        return np.concatenate([zfd, ev.zdd[self.partition.free], ev.extra_rate])
 
     def state(self, z: np.ndarray, zd: np.ndarray, extra=()) -> np.ndarray:
         f = self.partition.free
         return np.concatenate([z[f], zd[f], np.asarray(extra, dtype=float)])
 
-    def evaluate(self, t: float, y: np.ndarray) -> Evaluation:
-        nf = len(self.partition.free)
-        return self.rhs_parts(t, y[:nf], y[nf:2 * nf], y[2 * nf:])
+    def evaluate(self, ws: Workspace, t: float, y: np.ndarray) -> Evaluation:
+        return self.rhs_parts(ws, t, *split_state(y, len(self.partition.free)))
 
-    def repartition(self, t: float, y: np.ndarray) -> np.ndarray:
+    def repartition(self, ws: Workspace, t: float, y: np.ndarray) -> np.ndarray:
         """Choose a new partition at the current configuration and map the state onto it.
 
-        The number of dependent coordinates is kept (the state layout stays the same), and the old
-        partition is kept when the new one is not clearly better conditioned: near a singular
-        position of the mechanism itself (the N-four-bar's flat position) every partition
-        degrades, and switching back and forth would only restart the integrator for nothing.
+        The number of dependent coordinates is kept (the state layout and the workspace stay the
+        same), and the old partition is kept when the new one is not clearly better conditioned:
+        near a singular position of the mechanism itself (the N-four-bar's flat position) every
+        partition degrades, and switching back and forth would only restart the integrator for nothing.
         """
-        ev = self.evaluate(t, y)
-        old, old_z, old_lin = self.partition, self._z, self._lin
+        ev = self.evaluate(ws, t, y)
+        old, old_z = self.partition, self.z_ref
         J = closure(self.m, ev.kin)[1]
         before = _block_ratio(J, old)
         new = self.choose_partition(ev.z, n_dependent=len(old.dependent))
         if _block_ratio(J, new) < 2.0 * before:
-            self.partition, self._z, self._lin = old, old_z, old_lin
+            self._set_partition(old, old_z)
             return y
-        return self.state(ev.z, ev.zd, y[len(y) - self.n_extra:])
+        ws.z[:] = ev.z
+        ws.has_lin[0] = 0  # the predictor belonged to the old partition
+        return self.state(ev.z, ev.zd, split_state(y, len(old.free)).extra)
 
-    def pivot_ratio(self, t: float, y: np.ndarray) -> float:
+    def pivot_ratio(self, ws: Workspace, t: float, y: np.ndarray) -> float:
         """Conditioning of the current dependent block (1 = ideal, 0 = singular)."""
         P = self.partition
         if len(P.dependent) == 0:
             return 1.0
-        z = self.assemble(t, y[:len(P.free)])
+        z = self.assemble(ws, t, split_state(y, len(P.free)).free_positions)
         return _block_ratio(closure(self.m, positions(self.m, z))[1], P)
-
-
-# Condition estimate max|Jd^-1| max|Jd| above which S = -Jd^-1 Jr is not trusted as a predictor
-# (the device: <= 63 at A = 25.5 mm; the N-four-bar: median 1.5, ~3e3 next to its flat position)
-COND_TRUST = 1e3
-
-
-def _well_conditioned(Jd_inv: np.ndarray, Jd: np.ndarray) -> bool:
-    if Jd.size == 0:
-        return True
-    est = float(np.max(np.abs(Jd_inv)) * np.max(np.abs(Jd)))
-    return bool(np.isfinite(est) and est < COND_TRUST)
 
 
 def _block_ratio(J: np.ndarray, P: Partition) -> float:

@@ -92,7 +92,7 @@ def andrews_system(ref: dict | None = None) -> tuple[SemiRecursiveSystem, np.nda
     z0 = np.zeros(mech.n)
     z0[TO_TESTSET] = ref["initial"]["angles"]
     sysm.choose_partition(z0)
-    z0 = sysm.assemble(0.0, z0[sysm.partition.free])
+    z0 = sysm.assemble(sysm.workspace(), 0.0, z0[sysm.partition.free]).copy()
     return sysm, sysm.state(z0, np.zeros(mech.n))
 
 

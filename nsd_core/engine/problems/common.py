@@ -38,12 +38,13 @@ def run_system(system: SemiRecursiveSystem, y0: np.ndarray, t_eval: np.ndarray, 
     """Integrate and call ``sample(Evaluation)`` at every output time. Wall time covers the
     integration and the output evaluations (what a user waits for), not model construction."""
     samples = []
+    ws = system.workspace()
 
     def record(t, y):
-        samples.append(sample(system.evaluate(t, y)))
+        samples.append(sample(system.evaluate(ws, t, y)))
 
     start = time.perf_counter()
-    traj = integrate(system, y0, np.asarray(t_eval, dtype=float), method=method, rtol=rtol, atol=atol,
+    traj = integrate(system, ws, y0, np.asarray(t_eval, dtype=float), method=method, rtol=rtol, atol=atol,
                      max_step=max_step, min_pivot_ratio=min_pivot_ratio, outputs=record)
     wall = time.perf_counter() - start
     return Run(np.asarray(t_eval, float), samples, wall, traj.steps, traj.nfev, len(traj.partitions) - 1)

@@ -44,7 +44,8 @@ def solve(r=0.1, l=0.35, w=2 * math.pi * 5, samples=200, periods=2) -> dict:
     system.choose_partition(np.array([0.0, 0.0, r + l]))
     t = np.linspace(0.0, periods * 2 * math.pi / w, samples + 1)
     start = time.perf_counter()
-    evs = [system.evaluate(ti, np.zeros(0)) for ti in t]
+    ws = system.workspace()
+    evs = [system.evaluate(ws, ti, np.zeros(0)) for ti in t]
     wall = time.perf_counter() - start
     x = np.array([e.z[2] for e in evs])
     xd = np.array([e.zd[2] for e in evs])

@@ -1,0 +1,202 @@
+"""Work-precision of the three engines on the default cases (the diagram of Hairer & Wanner).
+
+    .venv/bin/python benchmarks/work_precision.py --out out/run/work_precision
+    .venv/bin/python benchmarks/work_precision.py --out /tmp/wp --repeats 1 --quick --no-compile
+
+For every default case of comparisons/cases.toml (2 cycles, the last one compared) each engine runs a
+ladder of settings (LADDERS: tolerances for the in-house model, step sizes for MuJoCo and Exudyn),
+plus the case's own default settings; the error of a run is max|F - F_ref| / max|F_ref| on the last
+cycle against the in-house model at rtol 1e-10 (benchmarks/refcompare.py) and its work is the CPU
+time per cycle (time.process_time around ``engine.run``, model construction included, divided by
+the number of cycles; median over ``--repeats``). The runs are interleaved: each repeat visits every
+case and, within a case, the engines in turn rung by rung, so a load change on the machine hits all
+engines alike. A rung whose step is the same as an earlier one's (the step divides the output
+interval, so at 10 Hz every step >= 5e-5 s is 5e-5 s) is not run twice.
+
+Per case and engine, ``at_aim`` is the cheapest rung with error <= the aim (1e-4), and
+``ratio_best_peer_over_in_house`` the CPU time of the faster peer at the aim over the in-house
+model's. Compilation is measured apart (``compile``): for each engine a fresh Python process runs a
+short drive twice, with numba's cache as it is (``warm``: loading cached machine code) and with an
+empty cache directory (``cold``: compiling everything, as on a fresh install); the first run minus
+the second is that engine's start-up cost, not counted in any per-cycle time.
+The JSON (``work_precision.json``) is read by the report's work-precision page.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from comparisons.config import load_cases
+from comparisons.engines import get_engine
+from comparisons.engines.base import EngineError
+from nsd_core.device.results import atomic_write_json
+
+from refcompare import discrepancy, in_house_reference
+
+AIM = 1e-4
+ENGINES = ("semirecursive", "mujoco", "exudyn")
+LADDERS = {
+    "semirecursive": [{"rtol": r, "max_step": 1.0} for r in (1e-3, 1e-4, 1e-5, 1e-6)],
+    "mujoco": ([{"integrator": "Euler", "timestep": h} for h in (1e-4, 5e-5, 2.5e-5, 1e-5, 5e-6)]
+               + [{"integrator": "RK4", "timestep": h} for h in (1e-4, 5e-5, 2.5e-5)]),
+    "exudyn": [{"step_size": h, "min_steps_per_cycle": 1} for h in (1e-3, 5e-4, 2.5e-4, 1.25e-4, 6.25e-5, 2.5e-5)],
+}
+QUICK = {"semirecursive": [{"rtol": 1e-3, "max_step": 1.0}], "mujoco": [{"integrator": "Euler", "timestep": 5e-5}],
+         "exudyn": [{"step_size": 2.5e-4, "min_steps_per_cycle": 1}]}
+START_CODE = """
+import sys, time, json
+t0 = time.perf_counter(); c0 = time.process_time()
+from comparisons.engines import get_engine
+from nsd_core.device.drive import Drive
+from nsd_core.device.params import Params
+e = get_engine(sys.argv[1]); d = Drive(0.015, 10.0, cycles=1, samples_per_cycle=100)
+t1 = time.perf_counter(); e.run(Params(), d); t2 = time.perf_counter(); e.run(Params(), d); t3 = time.perf_counter()
+print(json.dumps({"import_s": t1 - t0, "first_run_s": t2 - t1, "second_run_s": t3 - t2}))
+"""
+
+
+def step_key(engine: str, drive, settings: dict):
+    """The step actually used (rungs with the same one are the same run); None for adaptive engines."""
+    dt_out = 1.0 / (drive.frequency * drive.samples_per_cycle)
+    if engine == "mujoco":
+        n = max(1, math.ceil(dt_out / float(settings["timestep"]) - 1e-9))   # as MujocoEngine.run
+        return settings["integrator"], dt_out / n
+    if engine == "exudyn":
+        from comparisons.engines.exudyn_engine import ExudynEngine
+        return ExudynEngine.step_used(drive, settings)
+    return None
+
+
+def compile_times(engines) -> dict:
+    """Start-up cost per engine in fresh processes: warm numba cache and an empty (cold) one."""
+    out = {}
+    root = Path(__file__).resolve().parent.parent
+    for e in engines:
+        out[e] = {}
+        for mode in ("warm", "cold"):
+            env = dict(os.environ, PYTHONPATH=str(root))
+            with tempfile.TemporaryDirectory() as cache:
+                if mode == "cold":
+                    env["NUMBA_CACHE_DIR"] = cache
+                try:
+                    p = subprocess.run([sys.executable, "-c", START_CODE, e], env=env, capture_output=True,
+                                       text=True, timeout=900, cwd=root)
+                    if p.returncode != 0:
+                        raise ValueError(f"exit {p.returncode}: {(p.stderr.strip().splitlines() or [''])[-1]}")
+                    r = json.loads(p.stdout.strip().splitlines()[-1])
+                    r["startup_s"] = r["first_run_s"] - r["second_run_s"]
+                except (subprocess.SubprocessError, ValueError, IndexError) as exc:
+                    r = {"error": f"{type(exc).__name__}: {' '.join(str(exc).split())[:200]}"}
+            out[e][mode] = r
+            print(f"  {e} {mode}: {r}", flush=True)
+    return out
+
+
+def run_case(case, ladders: dict, repeats: int) -> dict:
+    drive = case.drive
+    ref, note = in_house_reference(case.params, drive)
+    rungs = {e: [] for e in ladders}
+    for e, ladder in ladders.items():
+        seen = set()
+        for rung in [None] + ladder:          # None: the case's default settings
+            s = dict(case.settings.get(e, {})) if rung is None else {**case.settings.get(e, {}), **rung}
+            key = step_key(e, drive, {**get_engine(e).default_settings, **s})
+            if key is not None and key in seen and rung is not None:
+                continue
+            seen.add(key)
+            rungs[e].append({"engine": e, "settings": s, "case_default": rung is None, "cpu": [], "wall": []})
+    depth = max(len(v) for v in rungs.values())
+    for rep in range(repeats):
+        for i in range(depth):
+            for e in ENGINES:
+                if e not in rungs or i >= len(rungs[e]) or rungs[e][i].get("error"):
+                    continue
+                row = rungs[e][i]
+                c0, t0 = time.process_time(), time.perf_counter()
+                try:
+                    r = get_engine(e).run(case.params, drive, row["settings"])
+                except EngineError as exc:
+                    row["error"] = str(exc)
+                    continue
+                row["cpu"].append((time.process_time() - c0) / drive.cycles)
+                row["wall"].append((time.perf_counter() - t0) / drive.cycles)
+                if rep == 0:
+                    row.update(discrepancy(r, ref, drive))
+                    row["step_used"] = r.stats.get("timestep", r.stats.get("step_size"))
+                print(f"  {case.name} {e:13s} {row['settings']}  dF {row.get('dF', float('nan')):.2e}  "
+                      f"cpu/cycle {row['cpu'][-1]:.3f} s", flush=True)
+    runs = []
+    for e in rungs:
+        for row in rungs[e]:
+            if row["cpu"]:
+                row["cpu_per_cycle"] = statistics.median(row["cpu"])
+                row["wall_per_cycle"] = statistics.median(row["wall"])
+            runs.append(row)
+    at_aim = {}
+    for e in rungs:
+        ok = [r for r in runs if r["engine"] == e and "dF" in r and r["dF"] <= AIM]
+        if ok:
+            best = min(ok, key=lambda r: r["cpu_per_cycle"])
+            at_aim[e] = {k: best[k] for k in ("settings", "cpu_per_cycle", "wall_per_cycle", "dF", "step_used")}
+    peers = [at_aim[e]["cpu_per_cycle"] for e in ("mujoco", "exudyn") if e in at_aim]
+    ratio = (min(peers) / at_aim["semirecursive"]["cpu_per_cycle"]) if peers and "semirecursive" in at_aim else None
+    return {"name": case.name, "amplitude": drive.amplitude, "frequency": drive.frequency, "cycles": drive.cycles,
+            "samples_per_cycle": drive.samples_per_cycle, "reference": note, "runs": runs, "at_aim": at_aim,
+            "ratio_best_peer_over_in_house": ratio}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", required=True, help="folder for work_precision.json")
+    ap.add_argument("--cases", default=None, help="case file (default: comparisons/cases.toml)")
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--engines", nargs="+", default=list(ENGINES), choices=ENGINES)
+    ap.add_argument("--only", nargs="+", default=None, help="case names to run (default: all)")
+    ap.add_argument("--quick", action="store_true", help="one rung per engine (a smoke run)")
+    ap.add_argument("--no-compile", action="store_true", help="skip the start-up measurement")
+    ap.add_argument("--compile-only", action="store_true",
+                    help="only measure the start-up and add it to an existing work_precision.json in --out")
+    a = ap.parse_args(argv)
+    if a.repeats < 1:
+        print(f"--repeats = {a.repeats}: must be >= 1", file=sys.stderr)
+        return 2
+    out = Path(a.out) / "work_precision.json"
+    if a.compile_only:
+        report = json.loads(out.read_text()) if out.is_file() else {}
+        report["compile"] = compile_times(a.engines)
+        atomic_write_json(out, report)
+        print(f"wrote {out}")
+        return 0
+    ladders = {e: (QUICK if a.quick else LADDERS)[e] for e in a.engines}
+    cases = [c for c in load_cases(a.cases) if a.only is None or c.name in a.only]
+    report = {"aim": AIM, "metric": "last cycle max|F - F_ref| / max|F_ref|, F_ref: in-house rtol 1e-10",
+              "work": "CPU seconds per cycle (process_time, model construction included), median",
+              "machine": platform.platform(), "cpus": os.cpu_count(), "load_average_start": os.getloadavg(),
+              "repeats": a.repeats, "ladders": ladders, "cases": []}
+    for case in cases:
+        print(f"case {case.name}", flush=True)
+        report["cases"].append(run_case(case, ladders, a.repeats))
+        atomic_write_json(out, report)   # partial results survive an interruption
+    report["load_average_end"] = os.getloadavg()
+    if not a.no_compile:
+        report["compile"] = compile_times(a.engines)
+    atomic_write_json(out, report)
+    for c in report["cases"]:
+        aim = {e: f"{v['cpu_per_cycle']:.3f} s ({v['dF']:.1e})" for e, v in c["at_aim"].items()}
+        ratio = c["ratio_best_peer_over_in_house"]
+        print(f"{c['name']}: at the aim {aim}; best peer / in-house = {ratio if ratio is None else round(ratio, 2)}")
+    print(f"wrote {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,245 @@
+"""Exudyn in the seismic mode (docs/model.md, "Seismic mode"; Table 1, second row).
+
+In the frame that translates with the ground (the base is the ground; every body carries -m a_g,
+docs/model.md allows it for a translating base). Redundant-coordinate rigid bodies on Euler-parameter
+nodes, as the drive mode (``exudyn_engine``):
+- plate (the isolated mass M, polar inertia M r_g^2): GenericJoint to the ground locking Z and the
+  X, Y rotations (free: X, Y and the rotation about Z);
+- cap: GenericJoint to the plate locking X, Y (in the plate's frame) and all rotations: it slides
+  vertically in the plate and turns with it;
+- wall: vertical guide to the ground; rod: spherical joints at both ends.
+Loads, constant within a step and set in the pre-step function at the end-of-step state predicted
+by a second-order Taylor step from the converged one (as the drive mode's "per_step" forces):
+ropes, wires and spring through ``nsd_core.device.forces`` (force and moment on the cap, the cap's
+attachment points turning with it; vertical force on the wall), the supports on the plate
+(-k_b u - c_b u', torsional pair), and -m a_g(t_end) on every body. Hysteretic states are committed
+along the strain change of every converged step and predicted to the step's end.
+Solver: generalized-alpha (index 3), fixed step, spectral radius 0.8, Newton tolerances 1e-12/1e-14.
+"""
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+import exudyn as exu
+from exudyn.itemInterface import LoadForceVector, LoadTorqueVector, MarkerNodePosition, MarkerNodeRigid
+from exudyn.rigidBodyUtilities import RigidBodyInertia
+
+from comparisons.engines.base import EngineError, merged_settings
+from nsd_core.device.forces import advance_spring_zeta, advance_wire_stress, rope_tension, spring_push, wire_tension
+from nsd_core.device.geometry import device_geometry
+from nsd_core.device.ground import GroundMotion
+from nsd_core.device.isolation import Structure
+from nsd_core.device.params import Params
+from nsd_core.device.results import RunResult
+from nsd_core.device.seismic import seismic_units
+
+DEFAULTS = {"step_size": 1e-5, "spectral_radius": 0.8, "newton_rel_tol": 1e-12, "newton_abs_tol": 1e-14,
+            "rod_axial_inertia": 1e-3}
+
+
+class _Elements:
+    """Ropes, wires, spring on the cap (pose: position, rotation about Z) and the wall (height)."""
+
+    def __init__(self, g):
+        self.g, self.nr, self.nw = g, g.n_ropes, g.n_wires
+        self.cap_pts = np.vstack([g.rope_cap_points, g.wire_cap_points])
+        self.low_pts = np.vstack([g.rope_base_points, g.wire_wall_points])
+        self.sigma, self.zeta = np.array(g.initial_wire_stress(), dtype=float), float(g.spring_zeta0)
+        self.eps, self.x = self.strains(np.array([0.0, 0.0, g.cap_rest_z]), 0.0, g.wall_rest_z)
+
+    def geometry(self, cap, theta, wz):
+        c, s = math.cos(theta), math.sin(theta)
+        p = self.cap_pts
+        arm = np.column_stack([c * p[:, 0] - s * p[:, 1], s * p[:, 0] + c * p[:, 1], p[:, 2]])
+        low = self.low_pts.copy()
+        low[self.nr:, 2] += wz
+        v = cap + arm - low
+        return arm, v, np.sqrt(np.einsum("ij,ij->i", v, v))
+
+    def strains(self, cap, theta, wz):
+        L = self.geometry(cap, theta, wz)[2]
+        L0 = self.g.wire.natural_length
+        return (L[self.nr:] - L0) / L0, self.g.spring.free_length - wz
+
+    def advance(self, eps0, x0, sigma, zeta, eps1, x1):
+        sig = advance_wire_stress(eps0, eps1, sigma, self.g.wire, order=2) if self.nw else sigma
+        return sig, float(advance_spring_zeta(x0, x1, zeta, self.g.spring, order=2))
+
+    def commit(self, cap, theta, wz):
+        eps, x = self.strains(cap, theta, wz)
+        self.sigma, self.zeta = self.advance(self.eps, self.x, self.sigma, self.zeta, eps, x)
+        self.eps, self.x = eps, x
+
+    def loads(self, cap, theta, wz, sigma=None, zeta=None):
+        """(force on the cap, moment on the cap about its reference, vertical force on the wall)."""
+        g, nr = self.g, self.nr
+        arm, v, L = self.geometry(cap, theta, wz)
+        T = np.concatenate([rope_tension(L[:nr], g.rope_natural_length, g.rope_stiffness),
+                            wire_tension(self.sigma if sigma is None else sigma, g.wire)])
+        f = -(T / L)[:, None] * v
+        push = float(spring_push(wz, 0.0, self.zeta if zeta is None else zeta, g.spring)[0])
+        return f.sum(0), np.cross(arm, f).sum(0), -float(f[nr:, 2].sum()) + push
+
+    def predicted_loads(self, cap, theta, wz):
+        eps, x = self.strains(cap, theta, wz)
+        sig, zeta = self.advance(self.eps, self.x, self.sigma, self.zeta, eps, x)
+        return self.loads(cap, theta, wz, sig, zeta)
+
+
+class ExudynSeismic:
+    name = "exudyn"
+    default_settings = DEFAULTS
+
+    def run(self, params: Params, structure: Structure, ground: GroundMotion, duration: float | None = None,
+            dt_out: float = 1e-3, settings: dict | None = None) -> RunResult:
+        s = merged_settings(DEFAULTS, settings, "exudyn")
+        try:
+            return self._run(device_geometry(params), structure, ground, duration, dt_out, s)
+        except EngineError:
+            raise
+        except Exception as e:  # Exudyn raises RuntimeError/ValueError with multi-line text
+            raise EngineError(f"exudyn: {type(e).__name__}: {' '.join(str(e).split())[:300]}") from None
+
+    def _run(self, g, st: Structure, ground, duration, dt_out, s):
+        duration = ground.duration if duration is None else float(duration)
+        n_out = int(round(duration / dt_out))
+        per_out = max(1, math.ceil(dt_out / float(s["step_size"]) - 1e-9))
+        h = dt_out / per_out
+        n_steps = n_out * per_out
+        grav = list(g.gravity_vector)
+        SC = exu.SystemContainer()
+        mbs = SC.AddSystem()
+        gnd = mbs.CreateGround(referencePosition=[0.0, 0.0, 0.0])
+        cap_z, wall_z, ld = g.cap_rest_z, g.wall_rest_z, g.params.rod_length
+
+        def body(name, mass, inertia, pos):
+            d = mbs.CreateRigidBody(name=name, referencePosition=list(pos),
+                                    inertia=RigidBodyInertia(mass, inertia, com=[0.0, 0.0, 0.0]), gravity=grav,
+                                    nodeType=exu.NodeType.RotationEulerParameters, returnDict=True, show=False)
+            return d["nodeNumber"], d["bodyNumber"], mass
+
+        J = st.polar_inertia
+        rod_I = np.array(g.rod.inertia, dtype=float)
+        rod_I[2, 2] = float(s["rod_axial_inertia"]) * rod_I[0, 0]
+        plate = body("plate", st.mass, np.diag([J / 2, J / 2, J]), [0.0, 0.0, 0.0])
+        cap = body("cap", g.cap.mass, g.cap.inertia, [0.0, 0.0, cap_z])
+        wall = body("wall", g.wall.mass, g.wall.inertia, [0.0, 0.0, wall_z])
+        rod = body("rod", g.rod.mass, rod_I, [0.0, 0.0, wall_z + ld / 2])
+        mbs.CreateGenericJoint(itemNumbers=[gnd, plate[1]], position=[0.0, 0.0, 0.0],
+                               constrainedAxes=[0, 0, 1, 1, 1, 0], show=False)
+        mbs.CreateGenericJoint(itemNumbers=[plate[1], cap[1]], position=[0.0, 0.0, cap_z],
+                               constrainedAxes=[1, 1, 0, 1, 1, 1], show=False)
+        mbs.CreateGenericJoint(itemNumbers=[gnd, wall[1]], position=[0.0, 0.0, wall_z],
+                               constrainedAxes=[1, 1, 0, 1, 1, 1], show=False)
+        mbs.CreateSphericalJoint(itemNumbers=[wall[1], rod[1]], position=[0.0, 0.0, wall_z], show=False)
+        rc_joint = mbs.CreateSphericalJoint(itemNumbers=[rod[1], cap[1]], position=[0.0, 0.0, cap_z], show=False)
+
+        def force_load(node, f=(0.0, 0.0, 0.0)):
+            return mbs.AddLoad(LoadForceVector(markerNumber=mbs.AddMarker(MarkerNodePosition(nodeNumber=node)),
+                                               loadVector=list(f)))
+
+        def torque_load(node, m=(0.0, 0.0, 0.0)):
+            return mbs.AddLoad(LoadTorqueVector(markerNumber=mbs.AddMarker(MarkerNodeRigid(nodeNumber=node)),
+                                                loadVector=list(m)))
+
+        # every load starts at its t = 0 value: the solver's initial accelerations are computed with them
+        bodies = (plate, cap, wall, rod)
+        a_g0 = ground(0.0)[2]
+        inertial = [force_load(b[0], (-b[2] * a_g0[0], -b[2] * a_g0[1], 0.0)) for b in bodies]  # -m a_g
+        el = _Elements(g)
+        f0, m0, fw0 = el.loads(np.array([0.0, 0.0, cap_z]), 0.0, wall_z)
+        cap_f, cap_m, wall_f = force_load(cap[0], f0), torque_load(cap[0], m0), force_load(wall[0], (0.0, 0.0, fw0))
+        plate_f, plate_m = force_load(plate[0]), torque_load(plate[0])
+        OV = exu.OutputVariableType
+        out = []
+        counter = [0]
+
+        def pose(node):
+            q = mbs.GetNodeOutput(node, OV.Position)
+            R = mbs.GetNodeOutput(node, OV.RotationMatrix).reshape(3, 3)
+            return q, math.atan2(R[1, 0], R[0, 0])
+
+        def record(t, a_g):
+            (pq, th), (cq, cth) = pose(plate[0]), pose(cap[0])
+            pv, pa = mbs.GetNodeOutput(plate[0], OV.Velocity), mbs.GetNodeOutput(plate[0], OV.Acceleration)
+            om = mbs.GetNodeOutput(plate[0], OV.AngularVelocity)[2]
+            wz = mbs.GetNodeOutput(wall[0], OV.Position)[2]
+            f, _, _ = el.loads(cq, cth, wz)
+            rod_on_cap = -np.asarray(mbs.GetObjectOutput(rc_joint, OV.Force))  # the joint's force on body 0 (rod)
+            sx, sy = st.stiffness * pq[0] + st.damping * pv[0], st.stiffness * pq[1] + st.damping * pv[1]
+            dfx, dfy = -(f[0] + rod_on_cap[0]), -(f[1] + rod_on_cap[1])
+            rp = mbs.GetNodeOutput(rod[0], OV.Position)
+            ax = mbs.GetNodeOutput(rod[0], OV.RotationMatrix).reshape(3, 3)[:, 2] * (ld / 2)
+            row = {"t": t, "x": pq[0], "y": pq[1], "theta": th, "vx": pv[0], "vy": pv[1],
+                   "ax_abs": pa[0] + a_g[0], "ay_abs": pa[1] + a_g[1], "support_Fx": sx, "support_Fy": sy,
+                   "device_Fx": dfx, "device_Fy": dfy, "base_shear_x": sx + dfx, "base_shear_y": sy + dfy,
+                   "cap_z": cq[2], "wall_z": wz, "spring_zeta": el.zeta,
+                   "spring_push": float(spring_push(wz, 0.0, el.zeta, g.spring)[0]),
+                   "closure": float(np.linalg.norm(rp + ax - cq)), "omega": om}
+            for j, sig in enumerate(el.sigma):
+                row[f"wire{j}_stress"] = sig
+            out.append(row)
+
+        def predict(node, h):
+            q, th = pose(node)
+            v, a = mbs.GetNodeOutput(node, OV.Velocity), mbs.GetNodeOutput(node, OV.Acceleration)
+            w, al = mbs.GetNodeOutput(node, OV.AngularVelocity)[2], mbs.GetNodeOutput(node, OV.AngularAcceleration)[2]
+            return q + h * v + 0.5 * h * h * a, th + h * w + 0.5 * h * h * al, v + h * a, w + h * al, q, th
+
+        def pre_step(mbs_, t):
+            """t is the END of the step; the state is the converged one at t - h."""
+            n = counter[0]
+            counter[0] += 1
+            cq, cth = pose(cap[0])
+            wz = mbs.GetNodeOutput(wall[0], OV.Position)[2]
+            if n > 0:
+                el.commit(cq, cth, wz)
+            if n % per_out == 0:
+                record(t - h, ground(t - h)[2])
+            a_g = ground(t)[2]
+            for (node, _, m), ld_ in zip(bodies, inertial):
+                mbs_.SetLoadParameter(ld_, "loadVector", [-m * a_g[0], -m * a_g[1], 0.0])
+            cp, cthp, *_ = predict(cap[0], h)
+            wzp = wz + h * mbs.GetNodeOutput(wall[0], OV.Velocity)[2] + 0.5 * h * h * mbs.GetNodeOutput(wall[0], OV.Acceleration)[2]
+            f, m, fw = el.predicted_loads(cp, cthp, wzp)
+            mbs_.SetLoadParameter(cap_f, "loadVector", list(f))
+            mbs_.SetLoadParameter(cap_m, "loadVector", list(m))
+            mbs_.SetLoadParameter(wall_f, "loadVector", [0.0, 0.0, fw])
+            pp, thp, vp, wp, _, _ = predict(plate[0], h)
+            kt, ct = st.stiffness * st.support_radius ** 2, st.damping * st.support_radius ** 2
+            mbs_.SetLoadParameter(plate_f, "loadVector", [-st.stiffness * pp[0] - st.damping * vp[0],
+                                                          -st.stiffness * pp[1] - st.damping * vp[1], 0.0])
+            mbs_.SetLoadParameter(plate_m, "loadVector", [0.0, 0.0, -kt * thp - ct * wp])
+            return True
+
+        mbs.SetPreStepUserFunction(pre_step)
+        mbs.Assemble()
+        ss = exu.SimulationSettings()
+        ti = ss.timeIntegration
+        ti.numberOfSteps, ti.endTime = n_steps, n_steps * h
+        ti.verboseMode = 0
+        ti.adaptiveStep = False
+        ti.newton.relativeTolerance, ti.newton.absoluteTolerance = float(s["newton_rel_tol"]), float(s["newton_abs_tol"])
+        ti.newton.useModifiedNewton = True
+        ti.generalizedAlpha.spectralRadius = float(s["spectral_radius"])
+        ti.generalizedAlpha.storeInitialAlgebraicCoordinates = True
+        ss.solution.file.write = False
+        ss.solution.sensors.active = False
+        ss.show.statistics = ss.show.computationTime = False
+        t0 = time.perf_counter()
+        ok = mbs.SolveDynamic(ss, solverType=exu.DynamicSolverType.GeneralizedAlpha)
+        if not ok or counter[0] != n_steps:
+            raise EngineError(f"exudyn: solver failed in step {counter[0]} of {n_steps} (t = {counter[0] * h:.6g} s)")
+        cq, cth = pose(cap[0])
+        el.commit(cq, cth, mbs.GetNodeOutput(wall[0], OV.Position)[2])
+        record(n_steps * h, ground(n_steps * h)[2])
+        cols = {k: np.array([r[k] for r in out]) for k in out[0]}
+        cols["u"] = np.hypot(cols["x"], cols["y"])
+        stats = {"engine": "exudyn", "mode": "seismic", "wall_time": time.perf_counter() - t0, "steps": n_steps,
+                 "step_size": h, "settings": dict(s)}
+        units = seismic_units(cols)
+        units["omega"] = "rad/s"
+        return RunResult("exudyn", cols, units, stats)

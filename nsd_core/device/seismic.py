@@ -1,0 +1,339 @@
+"""The seismic mode on the in-house engine: Table 1, second row (docs/model.md, "Seismic mode").
+
+The same Figure 4 tree as the drive mode (``nsd_core.device.model``); only the choice of prescribed
+and free coordinates changes, so the generic engine needs no special case:
+    prescribed: the base's planar joint (base_x, base_y, base) follows the ground x_g, y_g, rotation 0;
+    free: the plate's X, Y and rotation (plate_x, plate_y, plate) and the cap's height (cap);
+    dependent: the wall's height and the rod's two angles (the cut spherical joint, Eq. 13).
+The plate carries the isolated mass M (polar inertia M r_g^2); the supports act between plate and
+base as joint forces on the plate's coordinates: -k_b u - c_b u' in X and Y (u relative to the
+base) and -k_b r_b^2 theta - c_b r_b^2 theta' about Z. With ``device=False`` the tree is the plate
+and the base alone: the supports-alone structure of the same input (the isolation effect's
+reference and a closed-form check).
+
+Energy balance in the frame that translates with the ground, where every body feels -m a_g:
+    E_input = -int a_g . P_rel dt = E_kinetic(rel) + E_gravity + E_supports_stored
+              + E_supports_dissipated + E_device,
+with P_rel the bodies' horizontal momentum relative to the base and E_device = int sum T dL/dt the
+work absorbed by ropes, wires and spring (stored and dissipated). E_input, E_device and
+E_supports_dissipated are integrated with the motion (three extra states), so the residual
+measures the mechanics, not an output quadrature.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+
+import numpy as np
+
+from nsd_core import __version__
+from nsd_core.device.drive import DriveError
+from nsd_core.device.forces import rope_tension, wire_tension
+from nsd_core.device.geometry import device_geometry
+from nsd_core.device.ground import GroundMotion
+from nsd_core.device.isolation import Structure
+from nsd_core.device.model import (BODY, DEFAULT_SOLVER, DeviceForces, check_validity, device_mechanism,
+                                   rest_coordinates)
+from nsd_core.device.params import ParameterError, Params
+from nsd_core.device.results import RunResult
+from nsd_core.engine.integrate import SolverError, integrate
+from nsd_core.engine.kinematics import cross_rows
+from nsd_core.engine.mechanism import mechanism
+from nsd_core.engine.semirecursive import ConstraintError, SemiRecursiveSystem
+
+GROUND_DRIVEN = ["base_x", "base_y", "base"]
+FREE = ["plate_x", "plate_y", "plate", "cap"]
+N_ENERGY = 3  # extra states: E_input, E_device, E_supports_dissipated
+
+
+class RodReachError(DriveError):
+    """|u| >= l_d: the rod cannot reach across the relative displacement (exit code 4)."""
+
+
+def _plate_body(structure: Structure) -> dict:
+    J = structure.polar_inertia
+    return dict(mass=structure.mass, com=(0.0, 0.0, 0.0), inertia=(J / 2.0, J / 2.0, J))  # a thin slab
+
+
+def seismic_mechanism(params: Params, structure: Structure, device: bool = True):
+    """The Figure 4 tree with the isolated mass on the plate (device=False: plate and base alone)."""
+    g = device_geometry(params)
+    if device:
+        mech = device_mechanism(g)
+        plate = BODY["plate"]
+        mass, com, inertia = mech.mass.copy(), mech.com.copy(), mech.inertia.copy()
+        body = _plate_body(structure)
+        mass[plate], com[plate], inertia[plate] = body["mass"], body["com"], np.diag(body["inertia"])
+        return dataclasses.replace(mech, mass=mass, com=com, inertia=inertia), g
+    X, Y, Z = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)
+    bodies = [dict(name="plate_x", parent=None, joint="P", axis=X),
+              dict(name="plate_y", parent="plate_x", joint="P", axis=Y),
+              dict(name="plate", parent="plate_y", joint="R", axis=Z, **_plate_body(structure)),
+              dict(name="base_x", parent=None, joint="P", axis=X),
+              dict(name="base_y", parent="base_x", joint="P", axis=Y),
+              dict(name="base", parent="base_y", joint="R", axis=Z, mass=g.base.mass, inertia=g.base.inertia)]
+    return mechanism(bodies, [], gravity=g.gravity_vector), g
+
+
+class SeismicForces:
+    """The device's elements (shared laws, via DeviceForces) plus the supports and energy rates."""
+
+    def __init__(self, mech, g, structure: Structure, device: bool, ground_cache: dict):
+        self.m, self.g, self.s = mech, g, structure
+        self.ix = {n: mech.names.index(n) for n in FREE[:3] + GROUND_DRIVEN}
+        self.device = DeviceForces(g, mech.n) if device else None
+        self.n_dev = (g.n_wires + 1) if device else 0
+        self.ground = ground_cache
+        self.massive = np.flatnonzero(mech.mass > 0)
+
+    def relative(self, z, zd):
+        """Plate relative to base: (u (2,), u' (2,), theta, theta')."""
+        i = self.ix
+        u = np.array([z[i["plate_x"]] - z[i["base_x"]], z[i["plate_y"]] - z[i["base_y"]]])
+        ud = np.array([zd[i["plate_x"]] - zd[i["base_x"]], zd[i["plate_y"]] - zd[i["base_y"]]])
+        return u, ud, z[i["plate"]] - z[i["base"]], zd[i["plate"]] - zd[i["base"]]
+
+    def relative_momentum(self, kin, v_g):
+        """Horizontal momentum of all bodies relative to the ground frame."""
+        b = self.massive
+        com = kin.r[b] + np.einsum("kij,kj->ki", kin.A[b], self.m.com[b])
+        v = kin.Z[b, :3] + cross_rows(kin.Z[b, 3:], com)
+        return self.m.mass[b] @ v[:, :2] - self.m.mass[b].sum() * v_g[:2]
+
+    def __call__(self, t, kin, z, zd, extra):
+        n, s, i = self.m.n, self.s, self.ix
+        if self.device is not None:
+            wrench, _, dev_rates = self.device(t, kin, z, zd, extra[:self.n_dev])
+            # elements are internal (no end on the ground): their power on the bodies is frame-free
+            absorbed = -float(np.sum(wrench * kin.Z))
+        else:
+            wrench, dev_rates, absorbed = np.zeros((n, 6)), np.zeros(0), 0.0
+        u, ud, th, thd = self.relative(z, zd)
+        kt = s.stiffness * s.support_radius ** 2
+        ct = s.damping * s.support_radius ** 2
+        gen = np.zeros(n)
+        gen[i["plate_x"]], gen[i["plate_y"]] = -s.stiffness * u - s.damping * ud
+        gen[i["plate"]] = -kt * th - ct * thd
+        _, v_g, a_g = self.ground["now"]
+        e_in = -float(a_g[:2] @ self.relative_momentum(kin, v_g))
+        e_sup = s.damping * float(ud @ ud) + ct * thd * thd
+        return wrench, gen, np.concatenate([dev_rates, [e_in, absorbed, e_sup]])
+
+
+class SeismicSystem(SemiRecursiveSystem):
+    """The generic system, stopping with RodReachError where |u| >= l_d (the rod lies flat)."""
+    reach = math.inf
+    last = (0.0, 0.0)  # (t, |u|) of the last evaluation
+
+    def rhs_parts(self, ws, t, zf, zfd, extra):
+        q = self.motion(t)[0]
+        u = math.hypot(zf[0] - q[0], zf[1] - q[1])
+        self.last = (t, u)
+        if u >= self.reach:
+            raise self.reach_error()
+        return super().rhs_parts(ws, t, zf, zfd, extra)
+
+    def reach_error(self) -> RodReachError:
+        t, u = self.last
+        return RodReachError(f"t = {t:.6g} s: |u| = {u:.6g} m >= rod_length = {self.reach} m: the rod cannot "
+                             f"reach" if u >= self.reach else f"t = {t:.6g} s: |u| = {u:.6g} m: the loop cannot "
+                             f"close as the rod nears the horizontal (rod_length = {self.reach} m)")
+
+
+def seismic_system(params: Params, structure: Structure, ground: GroundMotion, device: bool = True):
+    """(system, geometry, forces) for the seismic mode."""
+    mech, g = seismic_mechanism(params, structure, device)
+    cache = {}
+
+    def motion(t):
+        if cache.get("t") == t:  # the reach check and the engine ask for the same t in turn
+            return cache["now"]
+        d, v, a = ground(t)
+        q = (np.array([d[0], d[1], 0.0]), np.array([v[0], v[1], 0.0]), np.array([a[0], a[1], 0.0]))
+        cache["t"], cache["now"] = t, q
+        return q
+
+    forces = SeismicForces(mech, g, structure, device, cache)
+    prescribed = [mech.names.index(n) for n in GROUND_DRIVEN]
+    free = [mech.names.index(n) for n in FREE if n in mech.names]
+    system = SeismicSystem(mech, prescribed, motion, forces, n_extra=forces.n_dev + N_ENERGY, prefer_free=free)
+    if device:
+        system.reach = params.rod_length
+    z0 = rest_coordinates(g) if device else np.zeros(mech.n)
+    system.choose_partition(z0)
+    if sorted(system.partition.free) != sorted(free):
+        raise SolverError(f"seismic partition: free {system.partition.free}, expected {free}")  # pragma: no cover
+    return system, g, forces
+
+
+def _kinetic_and_height(mech, kin, v_g):
+    """Kinetic energy relative to the ground frame and sum(m g z_com) of the massive bodies."""
+    b = np.flatnonzero(mech.mass > 0)
+    A = kin.A[b]
+    com = kin.r[b] + np.einsum("kij,kj->ki", A, mech.com[b])
+    w = kin.Z[b, 3:]
+    v = kin.Z[b, :3] + cross_rows(w, com)
+    v[:, :2] -= v_g[None, :2]
+    Jw = np.einsum("kij,kjl,kml,km->ki", A, mech.inertia[b], A, w)  # (A J A^T) w
+    kinetic = 0.5 * float(np.sum(mech.mass[b] * np.sum(v * v, axis=1)) + np.sum(w * Jw))
+    return kinetic, float(np.sum(mech.mass[b] * com[:, 2])) * -mech.gravity[2]
+
+
+def simulate_seismic(params: Params, structure: Structure, ground: GroundMotion, duration: float | None = None,
+                     dt_out: float = 1e-3, device: bool = True, method: str = DEFAULT_SOLVER["method"],
+                     rtol: float = DEFAULT_SOLVER["rtol"], atol: float = DEFAULT_SOLVER["atol"],
+                     max_step: float = DEFAULT_SOLVER["max_step"], progress=None,
+                     backend: str = DEFAULT_SOLVER["backend"]) -> RunResult:
+    """The seismic response from relative rest at t = 0, sampled every ``dt_out`` up to ``duration``
+    (default: the ground motion's; longer: free vibration after it). Raises RodReachError (exit 4),
+    DriveError (outside the laws' validity), SolverError (exit 3). backend: "auto" and "scipy" run
+    SemiRecursiveSystem under scipy's solvers (the compiled path has no ground-record motion yet),
+    "numpy" the same on the numpy specification."""
+    if backend not in ("auto", "scipy", "numpy"):
+        raise ParameterError(f"backend = {backend!r}: the seismic mode offers auto, scipy, numpy")
+    duration = ground.duration if duration is None else float(duration)
+    if not (math.isfinite(duration) and duration > 0):
+        raise ParameterError(f"duration = {duration!r}: must be > 0 s")
+    if not (math.isfinite(dt_out) and 0 < dt_out <= duration):
+        raise ParameterError(f"dt_out = {dt_out!r}: must be in (0, duration]")
+    start = time.perf_counter()
+    system, g, forces = seismic_system(params, structure, ground, device)
+    system.fast = backend != "numpy"
+    mech, ix = system.m, forces.ix
+    z0 = rest_coordinates(g) if device else np.zeros(mech.n)
+    extra0 = np.concatenate([g.initial_wire_stress(), [g.spring_zeta0]]) if device else np.zeros(0)
+    ws = system.workspace()
+    y0 = system.state(system.assemble(ws, 0.0, z0[system.partition.free]).copy(), np.zeros(mech.n),
+                      np.concatenate([extra0, np.zeros(N_ENERGY)]))
+    n_out = int(round(duration / dt_out))
+    t_eval = np.linspace(0.0, n_out * dt_out, n_out + 1)
+    rows = []
+    height0 = []
+
+    def record(t, y):
+        ev = system.evaluate(ws, t, y)
+        d_g, v_g, a_g = forces.ground["now"]
+        u, ud, th, thd = forces.relative(ev.z, ev.zd)
+        s = structure
+        row = {"t": t, "x_g": d_g[0], "y_g": d_g[1], "ax_g": a_g[0], "ay_g": a_g[1], "x": u[0], "y": u[1],
+               "theta": th, "vx": ud[0], "vy": ud[1],
+               "ax_abs": ev.zdd[ix["plate_x"]], "ay_abs": ev.zdd[ix["plate_y"]],
+               "support_Fx": s.stiffness * u[0] + s.damping * ud[0],
+               "support_Fy": s.stiffness * u[1] + s.damping * ud[1],
+               "support_torque": s.support_radius ** 2 * (s.stiffness * th + s.damping * thd)}
+        E_in, E_dev, E_sup_diss = y[-N_ENERGY:]
+        kinetic, height = _kinetic_and_height(mech, ev.kin, v_g)
+        if not height0:
+            height0.append(height)
+        if device:
+            _device_outputs(row, ev, y, g, forces, system)
+        else:
+            row["device_Fx"] = row["device_Fy"] = 0.0
+        row["base_shear_x"] = row["support_Fx"] + row["device_Fx"]
+        row["base_shear_y"] = row["support_Fy"] + row["device_Fy"]
+        stored = 0.5 * s.stiffness * float(u @ u) + 0.5 * s.stiffness * s.support_radius ** 2 * th * th
+        row.update({"E_input": E_in, "E_kinetic": kinetic, "E_gravity": height - height0[0],
+                    "E_supports_stored": stored, "E_supports_dissipated": E_sup_diss, "E_device": E_dev})
+        row["E_residual"] = E_in - (kinetic + row["E_gravity"] + stored + E_sup_diss + E_dev)
+        rows.append(row)
+
+    try:
+        traj = integrate(system, ws, y0, t_eval, method=method, rtol=rtol, atol=atol, max_step=max_step,
+                         min_pivot_ratio=0.0, progress=progress, outputs=record,
+                         first_step=min(max_step, 1e-4, duration))  # the ground moves: start small
+    except ConstraintError as err:
+        if system.last[1] > 0.95 * system.reach:
+            raise system.reach_error() from None
+        raise SolverError(str(err)) from None
+    cols = {k: np.array([r[k] for r in rows]) for k in rows[0]}
+    cols["u"] = np.hypot(cols["x"], cols["y"])  # radial relative displacement (events use it)
+    stats = {"engine": "semirecursive", "mode": "seismic", "device": device, "version": __version__,
+             "method": method, "rtol": rtol, "atol": atol, "max_step": max_step, "steps": traj.steps,
+             "nfev": traj.nfev, "wall_time": time.perf_counter() - start, "model_time": float(t_eval[-1]),
+             "ground": ground.describe(), "structure": structure.to_dict()}
+    return RunResult("semirecursive", cols, seismic_units(cols), stats)
+
+
+def _device_outputs(row, ev, y, g, forces, system):
+    """Element forces, the device's force on the plate, cap and wall heights (drive-mode sign:
+    device_F = -(rod + ropes + wires on the cap), horizontal)."""
+    dev = forces.device
+    check_validity(row["t"], ev.kin, dev)
+    L, _ = dev.elements.state(ev.kin)
+    N = dev.elements.N
+    nw = g.n_wires
+    sigma = y[-N_ENERGY - nw - 1:-N_ENERGY - 1]
+    zeta = y[-N_ENERGY - 1]
+    t_rope = rope_tension(L[dev.ropes], g.rope_natural_length, g.rope_stiffness)
+    t_wire = wire_tension(sigma, g.wire)
+    lam = np.zeros(3)
+    lam[system.partition.rows] = ev.lam  # the rod's force on the cap (the cut's multiplier)
+    on_cap = lam - (t_rope[:, None] * N[dev.ropes]).sum(0) - (t_wire[:, None] * N[dev.wires]).sum(0)
+    row["device_Fx"], row["device_Fy"] = -on_cap[0], -on_cap[1]
+    x_s = g.spring.free_length - ev.z[BODY["wall"]]
+    row.update({"cap_z": ev.kin.r[BODY["cap"]][2], "wall_z": ev.z[BODY["wall"]],
+                "spring_push": max(g.spring.kse * x_s + zeta, 0.0), "spring_zeta": zeta,
+                "closure": float(np.max(np.abs(ev.Phi)))})
+    strain = (L[dev.wires] - g.wire.natural_length) / g.wire.natural_length
+    for i, T in enumerate(t_rope):
+        row[f"rope{i}_tension"] = T
+    for j in range(nw):
+        row[f"wire{j}_tension"], row[f"wire{j}_strain"], row[f"wire{j}_stress"] = t_wire[j], strain[j], sigma[j]
+
+
+_UNITS = {"t": "s", "x_g": "m", "y_g": "m", "ax_g": "m/s^2", "ay_g": "m/s^2", "x": "m", "y": "m", "u": "m",
+          "theta": "rad", "vx": "m/s", "vy": "m/s", "ax_abs": "m/s^2", "ay_abs": "m/s^2", "support_torque": "N m",
+          "cap_z": "m", "wall_z": "m", "closure": "m", "theta_": "rad"}
+
+
+def seismic_units(cols: dict) -> dict:
+    def unit(name):
+        if name in _UNITS:
+            return _UNITS[name]
+        if name.startswith("E_"):
+            return "J"
+        if name.endswith("_strain"):
+            return "-"
+        if name.endswith("_stress"):
+            return "Pa"
+        return "N"
+    return {name: unit(name) for name in cols}
+
+
+def seismic_summary(result: RunResult) -> dict:
+    """Peaks (with their times), the displacement left at the end, the energy balance and the
+    working-range events of a seismic run (what summary.json holds)."""
+    from nsd_core.device.cycle import events
+    c, t = result.columns, result["t"]
+
+    def peak(values):
+        k = int(np.argmax(values))
+        return {"value": float(values[k]), "t": float(t[k])}
+
+    E_in = c["E_input"]
+    out = {
+        "peak_displacement": peak(c["u"]),
+        "peak_x": peak(np.abs(c["x"])), "peak_y": peak(np.abs(c["y"])),
+        "peak_rotation": peak(np.abs(c["theta"])),
+        "peak_absolute_acceleration": peak(np.hypot(c["ax_abs"], c["ay_abs"])),
+        "peak_base_shear": peak(np.hypot(c["base_shear_x"], c["base_shear_y"])),
+        "peak_device_force": peak(np.hypot(c["device_Fx"], c["device_Fy"])),
+        "peak_support_force": peak(np.hypot(c["support_Fx"], c["support_Fy"])),
+        "peak_ground_acceleration": peak(np.hypot(c["ax_g"], c["ay_g"])),
+        "residual_displacement": {"x": float(c["x"][-1]), "y": float(c["y"][-1]), "u": float(c["u"][-1]),
+                                  "t": float(t[-1])},
+        "energy": {"input": float(E_in[-1]), "kinetic": float(c["E_kinetic"][-1]),
+                   "gravity": float(c["E_gravity"][-1]), "supports_stored": float(c["E_supports_stored"][-1]),
+                   "supports_dissipated": float(c["E_supports_dissipated"][-1]), "device": float(c["E_device"][-1]),
+                   "max_residual": float(np.max(np.abs(c["E_residual"]))),
+                   "relative_residual": float(np.max(np.abs(c["E_residual"])) / max(np.max(np.abs(E_in)), 1e-300))},
+    }
+    if "spring_push" in c:
+        ev = events(result)
+        out.update({"events": ev, "outside_working_range": any(e["kind"] == "ropes_slack" for e in ev),
+                    "cap_z": {"min": float(np.min(c["cap_z"])), "max": float(np.max(c["cap_z"]))},
+                    "closure_max": float(np.max(c["closure"]))})
+    else:
+        out.update({"events": [], "outside_working_range": False})
+    return out

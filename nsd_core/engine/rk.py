@@ -1,0 +1,291 @@
+"""Embedded Runge-Kutta pairs with the step loop compiled: Dormand-Prince 5(4) and DOP853.
+
+The algorithm is scipy's ``RK45``/``DOP853`` step for step (Hairer, Norsett & Wanner, Sec. II.4
+and II.10): the same initial step selection, error norms, step-size factors (safety 0.9, factors
+in [0.2, 10], no growth right after a rejection), and dense output; tests/test_compiled.py checks
+the accepted steps against scipy's on the same right-hand side. The Butcher tableaus are read from
+scipy's own coefficient arrays at import (data, not code). Outputs at the requested times come
+from each step's dense output, and the model is evaluated there once (reactions, kinematics).
+"""
+from __future__ import annotations
+
+import math
+from collections import namedtuple
+
+import numpy as np
+from numba import njit
+from scipy.integrate import DOP853 as _SciDOP853
+from scipy.integrate import RK45 as _SciRK45
+
+from numba import typeof, types
+
+from nsd_core.engine.compiled import OK, evaluate, rhs_into
+from nsd_core.engine.compiled_model import FORCE_FN, MODEL_TYPE, MOTION_FN, WORK_TYPE
+
+Tableau = namedtuple("Tableau", "A B C E E3 E5 P D A_extra C_extra info")
+# info: [n_stages, error_estimator_order, dop853 (1) or interpolating polynomial (0)]
+Outputs = namedtuple("Outputs", "y z zd r lam tau closure lengths step_t")  # step_t: accepted step ends
+NOT_FINITE, TOO_SMALL_STEP, TOO_MANY_STEPS = 20, 21, 22
+
+
+def _f(x):
+    return np.ascontiguousarray(x, dtype=float)
+
+
+def tableau(method: str) -> Tableau:
+    if method == "RK45":
+        s = _SciRK45
+        return Tableau(_f(s.A), _f(s.B), _f(s.C), _f(s.E), np.zeros(0), np.zeros(0), _f(s.P), np.zeros((0, 0)),
+                       np.zeros((0, 0)), np.zeros(0), np.array([s.n_stages, s.error_estimator_order, 0.0]))
+    if method == "DOP853":
+        s = _SciDOP853
+        return Tableau(_f(s.A), _f(s.B), _f(s.C), np.zeros(0), _f(s.E3), _f(s.E5), np.zeros((0, 0)), _f(s.D),
+                       _f(s.A_EXTRA), _f(s.C_EXTRA), np.array([s.n_stages, s.error_estimator_order, 1.0]))
+    raise ValueError(method)
+
+
+def make_outputs(n_samples: int, ny: int, n: int, nd: int, npr: int, ne: int, keep_steps: int = 0) -> Outputs:
+    """Arrays for the samples; the first ``keep_steps`` accepted step ends are kept too (tests)."""
+    return Outputs(np.zeros((n_samples, ny)), np.zeros((n_samples, n)), np.zeros((n_samples, n)),
+                   np.zeros((n_samples, n, 3)), np.zeros((n_samples, nd)), np.zeros((n_samples, npr)),
+                   np.zeros(n_samples), np.zeros((n_samples, ne)), np.zeros(keep_steps))
+
+
+@njit(cache=True)
+def _rms(v):
+    acc = 0.0
+    for x in v:
+        acc += x * x
+    return math.sqrt(acc / v.shape[0])
+
+
+@njit(cache=True)
+def _record(k, t, y, m, w, forces, motion, out):
+    code = evaluate(t, y, m, w, forces, motion)
+    out.y[k] = y
+    out.z[k] = w.z
+    out.zd[k] = w.zd
+    out.r[k] = w.r
+    out.lam[k] = w.lam
+    out.tau[k] = w.tau
+    c = 0.0
+    for v in w.Phi:
+        c = max(c, abs(v))
+    out.closure[k] = c
+    out.lengths[k] = w.L
+    return code
+
+
+@njit(cache=True)
+def _error_norm(tab, K, h, scale, err, err3):
+    ny = scale.shape[0]
+    ns = int(tab.info[0])
+    if tab.info[2] == 0.0:  # RK45: rms(h K^T E / scale)
+        for i in range(ny):
+            acc = 0.0
+            for s in range(ns + 1):
+                acc += K[s, i] * tab.E[s]
+            err[i] = acc * h / scale[i]
+        return _rms(err)
+    e5, e3 = 0.0, 0.0  # DOP853: the 5th- and 3rd-order estimates combined
+    for i in range(ny):
+        a5, a3 = 0.0, 0.0
+        for s in range(ns + 1):
+            a5 += K[s, i] * tab.E5[s]
+            a3 += K[s, i] * tab.E3[s]
+        e5 += (a5 / scale[i]) ** 2
+        e3 += (a3 / scale[i]) ** 2
+    if e5 == 0.0 and e3 == 0.0:
+        return 0.0
+    return abs(h) * e5 / math.sqrt((e5 + 0.01 * e3) * ny)
+
+
+@njit(cache=True)
+def _stage_state(K, coeffs, s, h, y, out):
+    for i in range(y.shape[0]):
+        acc = 0.0
+        for j in range(s):
+            acc += K[j, i] * coeffs[j]
+        out[i] = y[i] + acc * h
+
+
+@njit(cache=True)
+def _dense(tab, K, F, t_old, h, y_old, y_new, f_new, tq, out):
+    """Value of the step's interpolant at tq into out (F prepared by _prepare_dense for DOP853)."""
+    x = (tq - t_old) / h
+    ny = y_old.shape[0]
+    if tab.info[2] == 0.0:
+        order = tab.P.shape[1]
+        for i in range(ny):
+            acc, p = 0.0, 1.0
+            for j in range(order):
+                p *= x
+                q = 0.0
+                for s in range(K.shape[0]):
+                    q += K[s, i] * tab.P[s, j]
+                acc += q * p
+            out[i] = y_old[i] + h * acc
+        return
+    nF = F.shape[0]
+    for i in range(ny):
+        acc = 0.0
+        for k in range(nF):
+            acc += F[nF - 1 - k, i]
+            acc *= x if k % 2 == 0 else 1.0 - x
+        out[i] = acc + y_old[i]
+
+
+def _integrate(m, w, forces, motion, tab, y0, t_eval, settings, out, stats):
+    """Integrate from t_eval[0] to t_eval[-1], evaluating the model at every t_eval into out.
+
+    settings: rtol, atol, max_step, first_step (0 = select), max_steps (accepted steps; more is a
+    runaway: TOO_MANY_STEPS). stats: steps, nfev, status, samples done. Returns the status (0 ok)."""
+    rtol, atol, max_step = settings[0], settings[1], settings[2]
+    ny, ns = y0.shape[0], int(tab.info[0])
+    dop = tab.info[2] == 1.0
+    err_exp = -1.0 / (tab.info[1] + 1.0)
+    nk = tab.A_extra.shape[0] + ns + 1 if dop else ns + 1
+    K = np.zeros((nk, ny))
+    F = np.zeros((7 if dop else 0, ny))
+    y, y_new, f, f_new = y0.copy(), np.zeros(ny), np.zeros(ny), np.zeros(ny)
+    ys, scale, err, err3, yq = np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny)
+    t0, t1 = t_eval[0], t_eval[t_eval.shape[0] - 1]
+    nfev, steps, k = 0, 0, 0
+    t = t0
+    while k < t_eval.shape[0] and t_eval[k] <= t:
+        code = _record(k, t_eval[k], y, m, w, forces, motion, out)
+        if code != OK:
+            stats[2], stats[3] = code, k
+            return code
+        k += 1
+    code = rhs_into(t, y, m, w, forces, motion, f)
+    nfev += 1
+    if code != OK:
+        stats[2] = code
+        return code
+    h_abs = settings[3]
+    if h_abs <= 0.0:  # scipy's select_initial_step
+        for i in range(ny):
+            scale[i] = atol + abs(y[i]) * rtol
+            err[i] = y[i] / scale[i]
+            err3[i] = f[i] / scale[i]
+        d0, d1 = _rms(err), _rms(err3)
+        h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
+        h0 = min(h0, t1 - t0)
+        for i in range(ny):
+            ys[i] = y[i] + h0 * f[i]
+        code = rhs_into(t0 + h0, ys, m, w, forces, motion, f_new)
+        nfev += 1
+        if code != OK:
+            stats[2] = code
+            return code
+        for i in range(ny):
+            err[i] = (f_new[i] - f[i]) / scale[i]
+        d2 = _rms(err) / h0
+        if d1 <= 1e-15 and d2 <= 1e-15:
+            h1 = max(1e-6, h0 * 1e-3)
+        else:
+            h1 = (0.01 / max(d1, d2)) ** (1.0 / (tab.info[1] + 1.0))
+        h_abs = min(100.0 * h0, h1, t1 - t0, max_step)
+    while t < t1:
+        min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
+        if h_abs > max_step:
+            h_abs = max_step
+        elif h_abs < min_step:
+            h_abs = min_step
+        rejected = False
+        while True:
+            if h_abs < min_step:
+                stats[0], stats[1], stats[2] = steps, nfev, TOO_SMALL_STEP
+                return TOO_SMALL_STEP
+            t_new = t + h_abs
+            if t_new - t1 > 0:
+                t_new = t1
+            h = t_new - t
+            h_abs = abs(h)
+            K[0] = f
+            for s in range(1, ns):
+                _stage_state(K, tab.A[s], s, h, y, ys)
+                code = rhs_into(t + tab.C[s] * h, ys, m, w, forces, motion, K[s])
+                nfev += 1
+                if code != OK:
+                    stats[0], stats[1], stats[2] = steps, nfev, code
+                    return code
+            _stage_state(K, tab.B, ns, h, y, y_new)
+            code = rhs_into(t + h, y_new, m, w, forces, motion, f_new)
+            nfev += 1
+            if code != OK:
+                stats[0], stats[1], stats[2] = steps, nfev, code
+                return code
+            K[ns] = f_new
+            for i in range(ny):
+                scale[i] = atol + max(abs(y[i]), abs(y_new[i])) * rtol
+            en = _error_norm(tab, K, h, scale, err, err3)
+            if en < 1.0:
+                factor = 10.0 if en == 0.0 else min(10.0, 0.9 * en ** err_exp)
+                if rejected:
+                    factor = min(1.0, factor)
+                h_abs *= factor
+                break
+            h_abs *= max(0.2, 0.9 * en ** err_exp)
+            rejected = True
+        if steps < out.step_t.shape[0]:
+            out.step_t[steps] = t_new
+        steps += 1
+        if steps > settings[4]:
+            stats[0], stats[1], stats[2], stats[3] = steps, nfev, TOO_MANY_STEPS, k
+            return TOO_MANY_STEPS
+        if k < t_eval.shape[0] and t_eval[k] <= t_new and t_eval[k] != t_new and dop:
+            for s in range(ns + 1, nk):  # the three extra stages of DOP853's interpolant
+                _stage_state(K, tab.A_extra[s - ns - 1], s, h, y, ys)
+                code = rhs_into(t + tab.C_extra[s - ns - 1] * h, ys, m, w, forces, motion, K[s])
+                nfev += 1
+                if code != OK:
+                    stats[0], stats[1], stats[2] = steps, nfev, code
+                    return code
+            for i in range(ny):
+                dy = y_new[i] - y[i]
+                F[0, i] = dy
+                F[1, i] = h * K[0, i] - dy
+                F[2, i] = 2.0 * dy - h * (f_new[i] + K[0, i])
+                for j in range(tab.D.shape[0]):
+                    acc = 0.0
+                    for s in range(nk):
+                        acc += tab.D[j, s] * K[s, i]
+                    F[3 + j, i] = h * acc
+        while k < t_eval.shape[0] and t_eval[k] <= t_new:
+            if t_eval[k] == t_new:
+                yq[:] = y_new
+            else:
+                _dense(tab, K, F, t, h, y, y_new, f_new, t_eval[k], yq)
+            code = _record(k, t_eval[k], yq, m, w, forces, motion, out)
+            if code != OK:
+                stats[0], stats[1], stats[2], stats[3] = steps, nfev, code, k
+                return code
+            k += 1
+        for i in range(ny):
+            if not math.isfinite(y_new[i]):
+                stats[0], stats[1], stats[2] = steps, nfev, NOT_FINITE
+                return NOT_FINITE
+        t = t_new
+        y[:] = y_new
+        f[:] = f_new
+    stats[0], stats[1], stats[2], stats[3] = steps, nfev, OK, k
+    return OK
+
+
+TABLEAU_TYPE = typeof(tableau("DOP853"))
+OUTPUTS_TYPE = typeof(make_outputs(1, 1, 1, 1, 1, 1, 1))
+F1, I1 = types.float64[::1], types.int64[::1]
+# an explicit signature: the force and motion callbacks are typed as function pointers, so the
+# compiled loop is cached on disk once for every mechanism and force law
+integrate_kernel = njit(types.int64(MODEL_TYPE, WORK_TYPE, FORCE_FN, MOTION_FN, TABLEAU_TYPE, F1, F1, F1,
+                                    OUTPUTS_TYPE, I1), cache=True)(_integrate)
+
+
+def _rhs(t, y, m, w, forces, motion, dydt):
+    return rhs_into(t, y, m, w, forces, motion, dydt)
+
+
+# one right-hand side callable from Python (scipy's solvers, the tests)
+rhs_entry = njit(types.int64(types.float64, F1, MODEL_TYPE, WORK_TYPE, FORCE_FN, MOTION_FN, F1), cache=True)(_rhs)
