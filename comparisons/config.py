@@ -22,6 +22,7 @@ METRICS = {  # name -> (unit, description)
     "region_shift_rel": ("-", "largest stiffness-region boundary shift / amplitude (lines only)"),
     "closure_max": ("m", "largest loop-closure violation"),
     "tracking_error": ("m", "largest drive tracking error"),
+    "energy_balance_rel": ("-", "|drive work - (wires + spring hysteresis + stored change)| / drive work, steady cycle"),
 }
 CASE_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._+-]{0,63}")
 MAX_CASES = 200
@@ -202,12 +203,48 @@ def load_cases(path: str | Path | None = None, base_params: Params | None = None
 
 
 class Limits(dict):
-    """Metric -> limit; ``defaulted`` names the metrics a partial file left out, which take the
-    default file's limit (said in the table and in results.json, so nothing is dropped silently)."""
+    """Metric -> default limit (a plain dict, as before). ``defaulted`` names the metrics a partial
+    file left out, which take the default file's limit (said in the table and in results.json, so
+    nothing is dropped silently); ``engines`` holds overrides per engine and per engine and case, and
+    ``limit(engine, case, metric)`` takes the most specific one."""
     defaulted: tuple[str, ...] = ()
+
+    def __init__(self, *args, engines: dict[str, dict] | None = None):
+        super().__init__(*args)
+        self.engines = engines or {}
+
+    def limit(self, engine: str, case: str, metric: str) -> float | None:
+        e = self.engines.get(engine, {})
+        return e.get("case", {}).get(case, {}).get(metric, e.get(metric, self.get(metric)))
+
+
+def _metric_limits(where: str, table: dict) -> dict[str, float]:
+    for k, v in table.items():
+        if k not in METRICS:
+            raise ParameterError(f"{where}{k}: unknown metric; allowed: {', '.join(METRICS)}")
+        _number(f"{where}{k}", v)
+    return {k: float(v) for k, v in table.items()}
+
+
+def _engine_limits(limits: dict) -> dict[str, dict]:
+    """[limits.ENGINE] metric = value and [limits.ENGINE.case."CASE"] metric = value."""
+    from comparisons.engines import ENGINES
+    engines = {}
+    for name, table in ((k, v) for k, v in limits.items() if isinstance(v, dict)):
+        if name not in ENGINES:
+            raise ParameterError(f"tolerance {name}: neither a metric nor an engine; allowed metrics: "
+                                 f"{', '.join(METRICS)}; engines: {', '.join(ENGINES)}")
+        own = _metric_limits(f"tolerance {name}.", {k: v for k, v in table.items() if k != "case"})
+        cases = _table(f"tolerance {name}.case", table.get("case", {}))
+        own["case"] = {c: _metric_limits(f"tolerance {name}.case.{c}.", _table(f"tolerance {name}.case.{c}", t))
+                       for c, t in cases.items()}
+        engines[name] = own
+    return engines
 
 
 def load_tolerances(path: str | Path | None = None) -> Limits:
+    """[limits] metric = value (or bare metric = value lines), optionally per engine
+    [limits.ENGINE] and per engine and case [limits.ENGINE.case."CASE"] (the most specific wins)."""
     what = "--tolerances"
     data = _read(Path(path or DEFAULT_TOLERANCES), what)
     if "limits" in data:
@@ -220,11 +257,8 @@ def load_tolerances(path: str | Path | None = None) -> Limits:
     if not limits:
         raise ParameterError(f"{what} {path}: no limits; a gate that checks nothing would always pass "
                              f"(give some of: {', '.join(METRICS)})")
-    for k, v in limits.items():
-        if k not in METRICS:
-            raise ParameterError(f"tolerance {k}: unknown metric; allowed: {', '.join(METRICS)}")
-        _number(f"tolerance {k}", v)
-    out = Limits((k, float(v)) for k, v in limits.items())
+    out = Limits(_metric_limits("tolerance ", {k: v for k, v in limits.items() if not isinstance(v, dict)}),
+                 engines=_engine_limits(limits))
     missing = [k for k in METRICS if k not in out]
     if missing:
         defaults = load_tolerances(DEFAULT_TOLERANCES) if path and Path(path) != DEFAULT_TOLERANCES else {}

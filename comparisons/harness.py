@@ -24,6 +24,8 @@ from comparisons.config import METRICS, Case
 from comparisons.engines import REFERENCE, run_job
 from comparisons.convergence import convergence_study
 from comparisons.metrics import own_metrics, pair_metrics
+from comparisons.energy import energy_balance_rel
+from nsd_core.device.geometry import device_geometry
 
 ENGINE_COST = {"semirecursive": 1.0, "mujoco": 1.0, "exudyn": 3.0}  # rough relative cost, for scheduling
 
@@ -144,6 +146,7 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
         "date": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds"), "git_revision": git_revision(),
         "reference": REFERENCE, "engines": engines, "cases": [c.describe() for c in cases],
         "tolerances": dict(tolerances), "tolerances_defaulted": list(getattr(tolerances, "defaulted", ())),
+        "tolerances_by_engine": getattr(tolerances, "engines", {}),
         "metric_units": {k: v[0] for k, v in METRICS.items()},
         "params": cases[0].params.describe() if cases else [], "runs": runs, "metrics": metrics,
         "total_wall_time": time.perf_counter() - started, "workers": workers,
@@ -156,6 +159,11 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
     return summary
 
 
+def limit_for(tolerances, engine, case, metric):
+    """Per-engine-and-case limits when the tolerances have them (config.Tolerances), else the flat one."""
+    return tolerances.limit(engine, case, metric) if hasattr(tolerances, "limit") else tolerances.get(metric)
+
+
 def _metrics(cases, engines, tolerances, runs, results) -> list[dict]:
     """Every engine against the reference (gated) and every other pair (reported, not gated)."""
     rows = []
@@ -165,17 +173,20 @@ def _metrics(cases, engines, tolerances, runs, results) -> list[dict]:
     for c in cases:
         for e in engines:
             if (c.name, e) in results:
-                for k, v in own_metrics(results[(c.name, e)]).items():
-                    if k in tolerances:
-                        rows.append(_row(c.name, e, None, k, v, tolerances[k], True))
+                own = own_metrics(results[(c.name, e)])
+                own["energy_balance_rel"] = energy_balance_rel(results[(c.name, e)], device_geometry(c.params),
+                                                               c.drive.frequency, c.drive.unit_vector)
+                for k, v in own.items():
+                    if (lim := limit_for(tolerances, e, c.name, k)) is not None:
+                        rows.append(_row(c.name, e, None, k, v, lim, True))
         for a, b, gated in pairs:
             if (c.name, a) in results and (c.name, b) in results:
                 ra, rb = runs[c.name][a]["summary"], runs[c.name][b]["summary"]
                 m = pair_metrics(results[(c.name, a)], results[(c.name, b)], ra, rb, c.drive.amplitude,
                                  c.drive.frequency)
                 for k, v in m.items():
-                    if k in tolerances:
-                        rows.append(_row(c.name, a, b, k, v, tolerances[k], gated))
+                    if (lim := limit_for(tolerances, a, c.name, k)) is not None:
+                        rows.append(_row(c.name, a, b, k, v, lim, gated))
     return rows
 
 

@@ -27,6 +27,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--convergence", action="store_true",
                    help="also run the case file's [convergence] study (discrepancy vs step size per engine)")
     p.add_argument("--report", action="store_true", help="also write the validation report into OUT/report")
+    p.add_argument("--power", action="store_true",
+                   help="measure the gate's detection power instead: inject small modelling errors into one "
+                        "engine's own model at a time (OUT/power.json; exit 1 if one is not seen)")
+    p.add_argument("--power-engines", default="mujoco,exudyn", help="engines whose own model gets the errors")
+    p.add_argument("--power-cases", default=None,
+                   help="comma-separated case names for --power (default: every case of the case file)")
     p.add_argument("--out", required=True, help="output folder")
 
 
@@ -107,6 +113,8 @@ def run(args) -> int:
     conv = load_convergence(args.cases, cases) if args.convergence else None
     if args.convergence and conv is None:
         raise ParameterError("--convergence: the case file has no [convergence] table")
+    if args.power:
+        return _run_power(args, cases, tolerances)
     check_settings(cases, engines, conv)
     out = check_out_dir("--out", args.out)
     check_out_file("--junit", args.junit)
@@ -126,3 +134,28 @@ def run(args) -> int:
         paths = build_report(out, out / "report")
         print(f"report: {paths['pdf']}")
     return summary["exit_code"]
+
+
+def _run_power(args, cases, tolerances) -> int:
+    from comparisons.power import format_power, power_study
+    engines = parse_engines(args.power_engines)
+    if REFERENCE in engines:
+        raise ParameterError(f"--power-engines {args.power_engines!r}: the reference {REFERENCE} cannot be perturbed")
+    if args.power_cases:
+        names = [n.strip() for n in args.power_cases.split(",") if n.strip()]
+        known = {c.name: c for c in cases}
+        for n in names:
+            if n not in known:
+                raise ParameterError(f"--power-cases {n!r}: unknown case; allowed: {', '.join(known)}")
+        cases = [known[n] for n in names]
+    check_settings(cases, engines)
+    folder = check_out_dir("--out", args.out)
+    print(f"nsd compare --power: {len(cases)} cases x {len(engines)} engines -> {folder}")
+    out = power_study(cases, engines, tolerances, folder, workers=args.workers)
+    print(format_power(out))
+    print(f"{sum(t['seen_at_nominal'] for t in out['table'])} of {len(out['table'])} injected errors fail the gate "
+          f"({out['wall_time']:.0f} s); wrote {folder / 'power.json'}")
+    if args.report and (folder / "results.json").is_file():
+        from reports.build import build_report
+        print(f"report: {build_report(folder, folder / 'report')['pdf']}")
+    return 0 if out["all_seen"] else 1

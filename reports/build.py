@@ -36,6 +36,7 @@ class ReportData:
     benchmark: dict | None = None
     study: list[dict] = field(default_factory=list)
     tables: list[dict] = field(default_factory=list)  # rows of nsd tables' tables.csv, if present
+    power: dict | None = None  # power.json of nsd compare --power, if present
     work_precision: dict | None = None  # benchmarks/work_precision.py's JSON, if present
     polar: dict | None = None  # nsd polar's polar.json under DIR/polar, if present
 
@@ -113,6 +114,10 @@ def load(results_dir: str | Path) -> ReportData:
     if bench.is_file():
         b = _json(bench, "written by nsd benchmark")
         data.benchmark = b if isinstance(b, dict) and isinstance(b.get("problems"), dict) else None
+    power = root / "power.json"
+    if power.is_file():
+        pw = _json(power, "written by nsd compare --power")
+        data.power = pw if isinstance(pw, dict) and isinstance(pw.get("table"), list) else None
     from reports.figures_wp import load_work_precision
     data.work_precision = load_work_precision(root / "work_precision" / "work_precision.json")
     data.study = _load_study(root / "study")
@@ -179,6 +184,9 @@ def pages(data: ReportData) -> list[tuple[str, Callable]]:
         out.append((f"stiffness{tag}", lambda g=group: figures.stiffness_figure(data, g)))
     for i, chunk in enumerate(figures.chunks([c["name"] for c in data.cases], 4)):
         out.append((f"breakdown{'' if i == 0 else f'_{i + 1}'}", lambda c=chunk: figures.breakdown_figure(data, c)))
+    if data.power:
+        from .power_page import power_figure
+        out.append(("power", lambda: power_figure(data)))
     out.append(("convergence", lambda: figures_extra.convergence_figure(data)))
     out.append(("cost", lambda: figures_extra.cost_figure(data)))
     for i, chunk in enumerate(figures.chunks([c["name"] for c in data.cases], 4)):

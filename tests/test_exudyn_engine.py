@@ -15,6 +15,7 @@ from nsd_core.device.geometry import device_geometry
 from nsd_core.device.params import ParameterError, Params
 from nsd_core.device.quasistatic import quasi_static_path
 from nsd_core.device.results import column_units
+from independent_reference import rod_force_from_wall_balance
 
 P = Params()
 G = device_geometry(P)
@@ -88,12 +89,20 @@ def test_ten_hertz_cycle_agrees_with_the_quasi_static_path(cycle10):
     qs = quasi_static_path(P, r["u"], u_ddot=drive.displacement(t)[2])
     peak = np.max(np.abs(qs["F"]))
     assert peak > 1000.0  # the negative-stiffness device pulls the plate out at 15 mm
-    assert np.max(np.abs(r["F"] - qs["F"])) < 0.015 * peak
+    assert np.max(np.abs(r["F"] - qs["F"])) < 0.006 * peak
     area, area_qs = np.trapezoid(r["F"], r["u"]), np.trapezoid(qs["F"], r["u"])
-    assert abs(area - area_qs) < 0.03 * abs(area_qs)
-    assert np.max(np.abs(r["cap_z"] - qs["z_c"])) < 2e-5
+    assert abs(area - area_qs) < 6e-4 * abs(area_qs)
+    assert np.max(np.abs(r["cap_z"] - qs["z_c"])) < 1e-5
     # negative stiffness: the drive force opposes the displacement near the amplitude
     assert r["F"][np.argmax(r["u"])] < -1000.0
+
+
+def test_rod_force_agrees_with_the_wall_balance(cycle10):
+    """The rod's share of F (from the drive constraints' multipliers) against the rod's
+    Newton-Euler equations loaded by the wall's vertical balance (MuJoCo and the in-house model
+    measure 1.5e-4 of the peak on this drive: finite-difference accelerations)."""
+    _, r = cycle10
+    assert np.max(np.abs(rod_force_from_wall_balance(r) - r["F_rod"])) < 3e-4 * np.max(np.abs(r["F"]))
 
 
 def test_per_step_forces_match_implicit_user_function_forces():

@@ -121,13 +121,24 @@ def test_figure7_regions_dynamic_10hz():
     assert ok, msg
 
 
+LD_VALUES = [0.04, 0.05, 0.06, 0.08]
+# today's initial stiffness [N/m] at those rod lengths (quasi-static, A = 0.01 m, nominal constants)
+LD_K0_TODAY = [72150.5, 68754.0, 64268.6, 55835.0]
+
+
+def test_initial_stiffness_versus_rod_length_is_pinned():
+    """Today's numbers, so that a change of the wire law or the geometry shows (1 N/m)."""
+    k0 = [qs_(0.01, rod_length=l)["loading_stiffness"][0] for l in LD_VALUES]
+    np.testing.assert_allclose(k0, LD_K0_TODAY, atol=1.0)
+
+
+@pytest.mark.xfail(strict=True, raises=AssertionError,
+                   reason="not reproduced by this model: the initial stiffness stays positive for every rod "
+                          "length (+72, +69, +64, +56 kN/m at 0.04 ... 0.08 m); with h_wu fixed the wire angle "
+                          "falls only to ~6 deg at 0.08 m. Strict: the day it is reproduced this test says so.")
 def test_initial_stiffness_negative_above_0p05():
-    lds = [0.04, 0.05, 0.06, 0.08]
-    k0 = [qs_(0.01, rod_length=l)["loading_stiffness"][0] for l in lds]
-    ok, msg = check_initial_stiffness_sign(lds, k0)
-    if not ok:
-        pytest.xfail("not reproduced by this model: the initial stiffness stays positive for every rod "
-                     f"length ({msg}); with h_wu fixed the wire angle falls only to ~6 deg at 0.08 m")
+    k0 = [qs_(0.01, rod_length=l)["loading_stiffness"][0] for l in LD_VALUES]
+    ok, msg = check_initial_stiffness_sign(LD_VALUES, k0)
     assert ok, msg
 
 

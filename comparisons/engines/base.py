@@ -60,6 +60,10 @@ def check_settings(engine, settings: dict[str, Any] | None, where: str) -> dict[
     for k, v in (settings or {}).items():
         d = engine.default_settings[k]
         name = f"{where}.{k} = {v!r}"
+        if k == "perturb":   # an injected modelling error (nsd compare --power): its own checks
+            from comparisons.engines.perturb import check as check_perturbation
+            check_perturbation(v)
+            continue
         if isinstance(d, bool):
             if not isinstance(v, bool):
                 raise ParameterError(f"{name}: must be true or false")

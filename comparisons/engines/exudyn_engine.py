@@ -83,6 +83,7 @@ from nsd_core.device.geometry import device_geometry
 from nsd_core.device.outputs import device_columns
 from nsd_core.device.params import ParameterError, Params
 from nsd_core.device.results import RunResult
+from comparisons.engines.perturb import perturbed
 
 
 class _Elements:
@@ -221,6 +222,7 @@ class ExudynEngine:
         "state_integrator": "heun",   # hysteretic states per step in strain: "heun" or "rk4" (advance_*)
         "rod_axial_inertia": 1e-3,    # rod spin inertia / its transverse inertia (must be > 0)
         "drive_offsets": "prestep",   # "prestep": offset = u(t_end) set once per step; "user_function"
+        "perturb": None,              # a modelling error injected into this model only (engines/perturb.py)
         "force_code": "compiled",     # per_step loads: "compiled" (exudyn_native.step) or "python" (numpy)
         "linear_solver": "eigen_dense",  # Exudyn's linear solver: exudyn_dense | eigen_dense | eigen_sparse
     }
@@ -241,7 +243,7 @@ class ExudynEngine:
         s = merged_settings(self.default_settings, settings, self.name)
         _check_settings(s)
         drive.check_followable(params)
-        g = device_geometry(params)
+        g = perturbed(device_geometry(params), s["perturb"])
         try:
             return self._run(g, drive, s, drive.output_times(), self.steps_per_output(drive, s))
         except EngineError:

@@ -43,7 +43,8 @@ reset to the prescribed values every step, so the tracking error is the (reporte
 step, ~1e-15 m. The same holds for the lateral slide. The drive force vector is measured from the
 equations of motion of the two driven joints, F_k = m_c a_k - (qfrc_passive + qfrc_constraint -
 qfrc_bias)[k], i.e. m_c a minus rod, ropes and wires on the cap along each axis (the rod's share is
-the connect's constraint force), rotated back to (F_x, F_y).
+the connect's constraint force), rotated back to (F_x, F_y); m_c is read back from the compiled
+mjModel, so the force is that of MuJoCo's own model.
 
 Constraint softness: MuJoCo's equality constraints are soft. solref time constant
 ``solref_factor`` x timestep (2 = the smallest MuJoCo accepts) with solimp d = 0.9999 keeps the loop
@@ -80,6 +81,7 @@ from nsd_core.device.results import RunResult
 
 from comparisons.engines import mujoco_native
 from comparisons.engines.base import check_step_count, EngineError, merged_settings
+from comparisons.engines.perturb import perturbed
 
 _EULER_LIKE = ("Euler", "implicit", "implicitfast")
 
@@ -230,6 +232,7 @@ class MujocoEngine:
         "solver_tolerance": 1e-12,
         "solver_iterations": 20,
         "closure_limit": 1e-4,       # [m] a larger loop gap is an instability (EngineError)
+        "perturb": None,             # a modelling error injected into this model only (engines/perturb.py)
         "passive": "compiled",       # "compiled": C callback (mujoco_native); "python": _Device.passive
         "step_loop": "native",       # "native": compiled loop calling mj_step; "python": one call a step
     }
@@ -246,7 +249,7 @@ class MujocoEngine:
             raise ParameterError("mujoco.step_loop = native needs passive = compiled")
         compiled = s["passive"] == "compiled"
         drive.check_followable(params)
-        g = device_geometry(params)
+        g = perturbed(device_geometry(params), s["perturb"])
         t_out = drive.output_times()
         dt_out = float(t_out[1] - t_out[0])
         n_sub = max(1, math.ceil(dt_out / float(s["timestep"]) - 1e-9))
@@ -295,14 +298,14 @@ class MujocoEngine:
             lvel_at = vd[1:].tolist()
         u_at, acc_at = u[1:].tolist(), acc.tolist()
         v_at, lacc_at = v[1:].tolist(), lacc.tolist()
-        m_c, M = g.cap.mass, float(s["drive_armature"])
+        tip, cap_id = model.site("rod_tip").id, model.body("cap").id
+        m_c, M = float(model.body_mass[cap_id]), float(s["drive_armature"])   # the cap's mass in this model
 
         n_out = len(t_out)
         cap_pos, wall_z = np.zeros((n_out, 3)), np.zeros(n_out)
         sig, zet, clo, F = np.zeros((n_out, g.n_wires)), np.zeros(n_out), np.zeros(n_out), np.zeros((n_out, 2))
         qpos, qvel, qfa = data.qpos, data.qvel, data.qfrc_applied
         qpas, qcon, qbias = data.qfrc_passive, data.qfrc_constraint, data.qfrc_bias
-        tip, cap_id = model.site("rod_tip").id, model.body("cap").id
         track = 0.0
         previous_cb = mujoco.get_mjcb_passive()
         t0, c0 = time.perf_counter(), time.process_time()

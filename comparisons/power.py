@@ -1,0 +1,156 @@
+"""Detection power of the gate: small modelling errors injected into one engine's own model.
+
+For each injection (engines/perturb.py), each perturbed engine and each chosen case, the engine runs
+with its default settings plus ``perturb`` and is measured against the unperturbed reference exactly
+as the gate measures it (same metrics, same limits). A row records the largest value/limit ratio
+and the metric that gave it, and whether the gate failed. An injection is *seen* when it fails the
+gate in at least one case. Injections that pass are tried again 10x larger (the ``ladder``), so
+the report can say the smallest error of that kind the gate sees.
+"""
+from __future__ import annotations
+
+import multiprocessing
+import os
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+from typing import Any, Callable
+
+from nsd_core.device.cycle import analyse
+from nsd_core.device.geometry import device_geometry
+from nsd_core.device.results import atomic_write_json
+
+from comparisons.config import Case
+from comparisons.energy import energy_balance_rel
+from comparisons.engines import REFERENCE, run_job
+from comparisons.engines.perturb import describe
+from comparisons.harness import limit_for
+from comparisons.metrics import own_metrics, pair_metrics
+
+# the issue's list: each body's mass +-1 %, each kind of attachment point moved 0.2 mm (up and
+# radially), the rod +-0.2 mm, gravity off, one rope's stiffness +-1 %, the spring's constants
+# +-1 %, the wires' area +-1 %, two mis-set rest states
+INJECTIONS: list[dict] = (
+    [{"what": f"{b}_mass", "by": s * 0.01} for b in ("cap", "wall", "rod") for s in (1, -1)]
+    + [{"what": p, "index": 0, "axis": a, "by": 2e-4}
+       for p in ("rope_base_point", "rope_cap_point", "wire_cap_point", "wire_wall_point") for a in ("z", "x")]
+    + [{"what": "rod_length", "by": s * 2e-4} for s in (1, -1)]
+    + [{"what": "gravity", "by": -1.0}]
+    + [{"what": "rope_stiffness", "index": 0, "by": s * 0.01} for s in (1, -1)]
+    + [{"what": f"spring_{k}", "by": s * 0.01} for k in ("kse", "ksd", "beta", "gamma") for s in (1, -1)]
+    + [{"what": "wire_area", "by": s * 0.01} for s in (1, -1)]
+    + [{"what": "rest_ignores_weight"}, {"what": "spring_zeta0", "by": 0.01}]
+)
+
+
+# the compiled force paths take one stiffness for every rope; a per-rope error runs on the engines'
+# Python paths (the same equations, kept equal to the compiled ones by their own tests)
+PER_ROPE_SETTINGS = {"mujoco": {"passive": "python", "step_loop": "python"}, "exudyn": {"force_code": "python"}}
+
+
+def _verdict(case: Case, engine: str, tolerances, run, ref, run_summary, ref_summary) -> dict[str, Any]:
+    values = pair_metrics(run, ref, run_summary, ref_summary, case.drive.amplitude, case.drive.frequency)
+    values.update(own_metrics(run))
+    values["energy_balance_rel"] = energy_balance_rel(run, device_geometry(case.params), case.drive.frequency,
+                                                      case.drive.unit_vector)
+    ratios = {k: v / lim for k, v in values.items() if (lim := limit_for(tolerances, engine, case.name, k))}
+    worst = max(ratios, key=ratios.get)
+    return {"failed": any(r > 1.0 for r in ratios.values()), "metric": worst, "ratio": ratios[worst],
+            "value": values[worst], "values": values, "failing": sorted(k for k, r in ratios.items() if r > 1.0)}
+
+
+def power_study(cases: list[Case], engines: list[str], tolerances, out_dir: str | Path,
+                injections: list[dict] | None = None, workers: int | None = None, ladder: bool = True,
+                log: Callable[[str], None] = print) -> dict[str, Any]:
+    """Run every injection on every engine and case; write ``out_dir/power.json``; return the summary."""
+    injections = INJECTIONS if injections is None else injections
+    started = time.perf_counter()
+    ctx = multiprocessing.get_context("spawn")
+    workers = workers or os.cpu_count() or 1
+    refs: dict[str, tuple] = {}
+    rows: list[dict] = []
+    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+        ref_jobs = {c.name: pool.submit(run_job, REFERENCE, c.params, c.drive, c.settings.get(REFERENCE, {}))
+                    for c in cases}
+
+        def submit(spec, scale):
+            s = {k: v * scale if k == "by" else v for k, v in spec.items()}
+            extra = lambda e: PER_ROPE_SETTINGS.get(e, {}) if s["what"] == "rope_stiffness" else {}  # noqa: E731
+            return [(c, e, spec, s, scale, pool.submit(run_job, e, c.params_for(e), c.drive,
+                                                       {**c.settings.get(e, {}), "perturb": s, **extra(e)}))
+                    for c in cases for e in engines]
+
+        pending = [j for spec in injections for j in submit(spec, 1.0)]
+        for name, fut in ref_jobs.items():
+            job = fut.result()
+            if job["status"] != "ok":
+                raise RuntimeError(f"reference failed on {name}: {job['message']}")
+            case = next(c for c in cases if c.name == name)
+            refs[name] = (job["result"], analyse(job["result"], case.drive.amplitude, case.drive.frequency))
+        while pending:
+            c, e, spec, s, scale, fut = pending.pop(0)
+            job = fut.result()
+            row = {"case": c.name, "engine": e, "injection": describe(spec), "applied": describe(s),
+                   "perturb": s, "scale": scale}
+            if job["status"] != "ok":
+                row.update(failed=True, metric="run", ratio=float("inf"), value=None, error=job["message"])
+            else:
+                ref, ref_summary = refs[c.name]
+                summary = analyse(job["result"], c.drive.amplitude, c.drive.frequency)
+                row.update(_verdict(c, e, tolerances, job["result"], ref, summary, ref_summary))
+            rows.append(row)
+            log(f"  {row['applied']:32s} {e:8s} {c.name:14s} {'FAIL' if row['failed'] else 'pass'} "
+                f"{row['metric']} x{row['ratio']:.3g}")
+            seen = [r for r in rows if r["injection"] == row["injection"] and r["scale"] == scale]
+            if ladder and scale < 100 and len(seen) == len(cases) * len(engines) and not any(r["failed"] for r in seen):
+                pending += submit(spec, scale * 10)   # not seen at this size: try 10x larger
+    table = summarise(rows, injections)
+    out = {"cases": [c.describe() for c in cases], "engines": engines, "rows": rows, "table": table,
+           "all_seen": all(t["seen_at_nominal"] for t in table), "wall_time": time.perf_counter() - started}
+    atomic_write_json(Path(out_dir) / "power.json", out)
+    return out
+
+
+def summarise(rows: list[dict], injections: list[dict]) -> list[dict]:
+    """One line per injection: seen at its listed size? by which engine/case/metric; smallest seen."""
+    table = []
+    for spec in injections:
+        name = describe(spec)
+        mine = [r for r in rows if r["injection"] == name]
+        nominal = [r for r in mine if r["scale"] == 1.0]
+        best = max(nominal, key=lambda r: r["ratio"]) if nominal else None
+        seen_scales = sorted({r["scale"] for r in mine if r["failed"]})
+        # the metrics move in proportion to a small error, so the gate's threshold for this kind of
+        # error is about the listed size / (value/limit); a linear estimate, not a measurement
+        threshold = None
+        if best and best["ratio"] not in (None, float("inf")) and best["ratio"] > 0 and "by" in spec:
+            threshold = abs(spec["by"]) / best["ratio"]
+        per_engine = {}
+        for r in nominal:
+            per_engine[r["engine"]] = max(per_engine.get(r["engine"], 0.0), r["ratio"])
+        table.append({"injection": name, "seen_at_nominal": any(r["failed"] for r in nominal),
+                      "weakest_engine_ratio": min(per_engine.values()) if per_engine else None,
+                      "engines_seeing": sorted({r["engine"] for r in nominal if r["failed"]}),
+                      "best_metric": best["metric"] if best else None, "best_ratio": best["ratio"] if best else None,
+                      "best_case": best["case"] if best else None,
+                      "smallest_seen_scale": seen_scales[0] if seen_scales else None,
+                      "threshold_estimate": threshold})
+    return table
+
+
+def format_power(out: dict) -> str:
+    lines = [f"{'injection':34s} {'seen':5s} {'by':14s} {'metric':18s} {'value/limit':>11s}  smallest seen  threshold~"]
+    for t in out["table"]:
+        small = "-" if t["smallest_seen_scale"] is None else f"x{t['smallest_seen_scale']:g} of listed"
+        lines.append(f"{t['injection']:34s} {'yes' if t['seen_at_nominal'] else 'NO':5s} "
+                     f"{','.join(t['engines_seeing']) or '-':14s} {t['best_metric'] or '-':18s} "
+                     f"{t['best_ratio'] or 0:11.3g}  {small:13s}  {threshold_text(t)}")
+    return "\n".join(lines)
+
+
+def threshold_text(t: dict) -> str:
+    """The linear estimate of the smallest error of that kind the gate sees, in the error's unit."""
+    th, name = t.get("threshold_estimate"), t["injection"]
+    if th is None:
+        return "-"
+    return f"{th * 1e3:.2g} mm" if " mm" in name else f"{th * 100:.2g} %"

@@ -1,0 +1,78 @@
+"""The gate's detection power (nsd compare --power), its limits file and the energy-balance metric.
+
+Kept cheap: one 10 Hz case, MuJoCo only (about 2 s a run), three injections of the issue's list
+that the old 1e-3 gate let through or only just caught (a 1 % cap mass, gravity off, a 1 % wire area).
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from comparisons.config import load_cases, load_tolerances
+from comparisons.energy import energy_balance_rel
+from comparisons.engines.perturb import check, describe, perturbed
+from comparisons.power import power_study
+from nsd_core.device.model import simulate
+from nsd_core.device.drive import Drive
+from nsd_core.device.geometry import device_geometry
+from nsd_core.device.params import ParameterError, Params
+
+P = Params()
+
+
+def test_injected_errors_in_mujocos_own_model_fail_the_default_gate(tmp_path):
+    case = next(c for c in load_cases() if c.name == "A15mm_f10Hz")
+    inj = [{"what": "cap_mass", "by": 0.01}, {"what": "gravity", "by": -1.0}, {"what": "wire_area", "by": 0.01}]
+    out = power_study([case], ["mujoco"], load_tolerances(), tmp_path, injections=inj, workers=2, ladder=False,
+                      log=lambda s: None)
+    assert (tmp_path / "power.json").is_file()
+    for row in out["rows"]:
+        assert row["failed"], row
+        assert row["ratio"] > 3.0, row   # not by a hair: measured 20x (cap mass) and more
+    assert out["all_seen"]
+
+
+def test_perturbations_change_only_what_they_name():
+    g = device_geometry(P)
+    h = perturbed(g, {"what": "wire_wall_point", "index": 1, "axis": "z", "by": 2e-4})
+    d = h.wire_wall_points - g.wire_wall_points
+    assert d[1, 2] == pytest.approx(2e-4) and np.count_nonzero(d) == 1
+    assert np.array_equal(h.rope_natural_length, g.rope_natural_length)
+    assert perturbed(g, {"what": "cap_mass", "by": 0.01}).cap.mass == pytest.approx(1.01 * P.cap_mass)
+    assert perturbed(g, {"what": "gravity", "by": -1.0}).params.gravity == 0.0
+    assert perturbed(g, None) is g
+    assert describe({"what": "rod_length", "by": -2e-4}) == "rod_length -0.2 mm"
+    for bad, field in [({"what": "nose_mass"}, "perturb.what"), ({"what": "cap_mass", "by": "x"}, "perturb.by"),
+                       ({"what": "cap_mass", "size": 1}, "perturb.size")]:
+        with pytest.raises(ParameterError, match=field):
+            check(bad)
+
+
+def test_limits_per_engine_and_case(tmp_path):
+    f = tmp_path / "tol.toml"
+    f.write_text("[limits]\nmax_dF_rel = 1e-3\n[limits.mujoco]\nmax_dF_rel = 2e-4\n"
+                 "[limits.mujoco.case.\"A\"]\nmax_dF_rel = 1e-5\n")
+    t = load_tolerances(f)
+    assert t["max_dF_rel"] == 1e-3 and t.limit("exudyn", "A", "max_dF_rel") == 1e-3
+    assert t.limit("mujoco", "B", "max_dF_rel") == 2e-4 and t.limit("mujoco", "A", "max_dF_rel") == 1e-5
+    f.write_text("[limits]\nmax_dF_rel = 1e-3\n[limits.adams]\nmax_dF_rel = 2e-4\n")
+    with pytest.raises(ParameterError, match="adams"):
+        load_tolerances(f)
+    f.write_text("max_dF_rel = 1e-3\n")   # the old flat form still reads
+    assert load_tolerances(f)["max_dF_rel"] == 1e-3
+
+
+def test_default_limits_sit_near_1e_4():
+    t = load_tolerances()
+    for e in ("mujoco", "exudyn"):
+        assert t.limit(e, "any other case", "max_dF_rel") <= 1.5e-4
+        assert t.limit(e, "A15mm_f1Hz", "max_dF_rel") <= 1e-4
+
+
+def test_energy_balance_closes_and_sees_a_wrong_force():
+    d = Drive(0.015, 10.0, cycles=2, samples_per_cycle=1000)
+    r = simulate(P, d)
+    g = device_geometry(P)
+    assert energy_balance_rel(r, g, 10.0, d.unit_vector) < 1e-4       # measured 1.9e-6 at 2000 samples
+    r.columns["F"] = r["F"] * 1.001                                     # the drive force 0.1 % off
+    assert energy_balance_rel(r, g, 10.0, d.unit_vector) > 5e-4
