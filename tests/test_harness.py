@@ -8,7 +8,7 @@ import pytest
 CASE = """
 [defaults]
 cycles = 1
-samples_per_cycle = 300
+samples_per_cycle = 1000   # the energy balance is a trapezoid quadrature: ~7e-4 at 100 samples, ~2e-6 at 2000
 [[case]]
 name = "quick"
 amplitude = 0.015
