@@ -31,6 +31,7 @@ from nsd_core.device.results import RunResult
 from nsd_core.device.seismic import seismic_units
 
 from comparisons.engines.base import EngineError, merged_settings
+from comparisons.engines.mujoco_engine import wall_rod_loop_mjcf
 
 DEFAULTS = {"timestep": 1e-5, "solref_factor": 2.0, "solimp": [0.9999, 0.9999, 0.001, 0.5, 2.0],
             "solver_tolerance": 1e-12, "solver_iterations": 20, "closure_limit": 1e-4, "hysteresis_substeps": 1}
@@ -41,7 +42,6 @@ def _f(x) -> str:
 
 
 def build_mjcf(g, st: Structure, s: dict, h: float) -> str:
-    rod_t = g.rod.inertia[0, 0]
     J = st.polar_inertia
     return f"""<mujoco model="nsd_seismic">
   <option timestep="{_f(h)}" integrator="Euler" gravity="0 0 {_f(-g.params.gravity)}" solver="Newton"
@@ -59,21 +59,7 @@ def build_mjcf(g, st: Structure, s: dict, h: float) -> str:
         <joint name="cap_z" type="slide" axis="0 0 1"/>
       </body>
     </body>
-    <body name="wall" pos="0 0 {_f(g.wall_rest_z)}">
-      <inertial pos="{_f(g.wall.com)}" mass="{_f(g.wall.mass)}" diaginertia="{_f(np.diag(g.wall.inertia))}"/>
-      <joint name="wall_z" type="slide" axis="0 0 1"/>
-      <body name="rod">
-        <inertial pos="{_f(g.rod.com)}" mass="{_f(g.rod.mass)}" diaginertia="{_f(rod_t)} {_f(rod_t)} {_f(1e-3 * rod_t)}"/>
-        <joint name="rod_ball" type="ball"/>
-        <site name="rod_tip" pos="0 0 {_f(g.params.rod_length)}"/>
-      </body>
-    </body>
-  </worldbody>
-  <equality>
-    <connect name="loop" body1="rod" body2="cap" anchor="0 0 {_f(g.params.rod_length)}"
-             solref="{_f(s['solref_factor'] * h)} 1.0" solimp="{_f(s['solimp'])}"/>
-  </equality>
-</mujoco>
+{wall_rod_loop_mjcf(g, f"{_f(s['solref_factor'] * h)} 1.0", s['solimp'])}</mujoco>
 """
 
 
