@@ -104,6 +104,8 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
                 write_csv(csv, res)
                 atomic_write_json(csv.with_suffix(".json"), {"key": job_key(case, engine), "engine": engine,
                                                              "stats": res.stats, "wall_time": job["wall_time"]})
+            tally["kept"] += 1  # on disk (its record written): what the interrupt message counts
+            if not resumed:
                 # measure what was written, so a resumed run and an uninterrupted one agree exactly
                 res = read_csv(csv, engine)
                 res.stats = job["result"].stats
@@ -113,7 +115,6 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
                          wall_time_per_cycle=res.stats.get("wall_time", job["wall_time"]) / case.drive.cycles)
             log(f"  {case.name:16s} {engine:14s} {'kept' if resumed else 'ok':6s} "
                 f"{entry['wall_time_per_cycle']:7.2f} s/cycle")
-            tally["kept"] += 1
         else:
             entry["message"] = job["message"]
             log(f"  {case.name:16s} {engine:14s} FAILED {job['message']}")

@@ -31,7 +31,36 @@ frequency = 10.0
 name = "c"
 amplitude = 0.015
 frequency = 1.0
+[[case]]
+name = "d"
+amplitude = 0.02
+frequency = 1.0
+[[case]]
+name = "e"
+amplitude = 0.01
+frequency = 1.0
+[[case]]
+name = "f"
+amplitude = 0.012
+frequency = 1.0
 """
+# the compiled engines run a case in well under a second: enough cases that some are still running
+# when the first is kept
+
+
+@pytest.fixture(scope="module", autouse=True)
+def warm_compiled_code(tmp_path_factory):
+    """Run each command once to the end first, so numba's on-disk cache is warm: a signal cannot
+    interrupt a compilation in progress (it is handled when the compiler returns), and these tests
+    are about interrupting work, not compilation (a fresh clone starts with a cold cache)."""
+    d = tmp_path_factory.mktemp("warm")
+    (d / "cases.toml").write_text(CASES.split("[[case]]")[0] + "[[case]]" + CASES.split("[[case]]")[1])
+    for args in (["compare", "--cases", str(d / "cases.toml"), "--engines", "semirecursive,mujoco", "--workers", "2",
+                  "--out", str(d / "compare")],
+                 ["sweep", "--param", "rod_length", "--values", "0.03", "--frequency", "1", "--cycles", "1",
+                  "--samples-per-cycle", "100", "--workers", "1", "--out", str(d / "sweep")]):
+        r = subprocess.run([sys.executable, "-m", "nsd_cli.main", *args], capture_output=True, text=True, timeout=900)
+        assert r.returncode == 0, r.stdout + r.stderr
 
 
 def start(args):
@@ -87,8 +116,8 @@ def test_compare_interrupted_then_resumed(tmp_path, signum, to_group):
 
 def test_sweep_interrupted_then_resumed(tmp_path):
     out = tmp_path / "sweep"
-    args = ["sweep", "--param", "rod_length", "--values", "0.028,0.029,0.03,0.031", "--frequency", "1",
-            "--cycles", "1", "--samples-per-cycle", "100", "--workers", "2", "--out", str(out)]
+    args = ["sweep", "--param", "rod_length", "--values", "0.026,0.027,0.028,0.029,0.03,0.031,0.032,0.033",
+            "--frequency", "1", "--cycles", "2", "--samples-per-cycle", "100", "--workers", "2", "--out", str(out)]
     p = start(args)
     _, err, seconds, children = interrupt_after_first_kept(p, str(out / "designs" / "*" / "result.json"),
                                                            signal.SIGTERM, False)
