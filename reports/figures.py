@@ -133,12 +133,16 @@ def cycles_figure(data, group: dict):
     return fig
 
 
+TURNING = 0.99  # fraction of A up to which dF/du is drawn (the drive's velocity is 14 % of its peak there)
+
+
 def stiffness_figure(data, group: dict):
     """Tangent stiffness dF/du on the loading quarter (u: 0 -> +A) per engine, working regions of the
     reference shaded (Figure 7), X_max marked where the ropes went slack."""
     fig = new_figure(LANDSCAPE, "Tangent stiffness on the loading branch (Figure 7 working regions)",
                      "dF/du along u = 0 -> +A of the steady cycle; shaded: the reference's regions of positive "
-                     "and negative stiffness; X_max: displacement at which every rope is slack")
+                     "and negative stiffness; X_max: displacement at which every rope is slack; curves end at "
+                     f"{TURNING:g} A, where du/dt -> 0 makes dF/du noise")
     extra = [Patch(facecolor=SHADE["+"], label="k > 0 region"), Patch(facecolor=SHADE["-"], label="k < 0 region"),
              Line2D([], [], color="k", ls="-.", lw=1.0, label="X_max (reference)")]
     _engines_legend(fig, data, extra=extra)
@@ -155,10 +159,13 @@ def stiffness_figure(data, group: dict):
                 u, F = res["u"][q], res["F"][q]
                 keep = np.concatenate([[True], np.diff(u) > 0])  # strictly rising: a defined gradient
                 k = tangent_stiffness(u[keep], F[keep])
-                ax.plot(u[keep] * 1e3, k / 1e3, **style(e))
+                # the curve stops short of the turning point: there du/dt -> 0 and the quotient of two
+                # vanishing differences is noise, not stiffness (it drew spikes at u = A)
+                drawn = u[keep] < TURNING * case["amplitude"]
+                ax.plot(u[keep][drawn] * 1e3, k[drawn] / 1e3, **style(e))
                 # the y-range ignores the turning point (u -> A, du -> 0), where dF/du is noise
                 ks.append(k[u[keep] < 0.97 * case["amplitude"]])
-                shown.append(k[np.isfinite(k)])
+                shown.append(k[drawn & np.isfinite(k)])
         run = data.run(name, data.reference)
         summ = run.get("summary") or next((data.run(name, e).get("summary") for e in data.engines
                                           if data.run(name, e).get("summary")), None)
@@ -173,7 +180,7 @@ def stiffness_figure(data, group: dict):
         every = np.concatenate(shown) / 1e3
         if every.size and (every.max() > hi + pad or every.min() < lo - pad):  # say so, never hide it
             ax.text(0.02, 0.03, f"axis clipped: dF/du spans {every.min():.3g} ... {every.max():.3g} kN/m "
-                    "(near u = A)", transform=ax.transAxes, fontsize=7,
+                    "(X_max region)", transform=ax.transAxes, fontsize=7,
                     va="bottom", bbox=dict(fc="white", ec="none", alpha=0.8, pad=1))
         if summ:
             regs = summ.get("stiffness_regions", [])
