@@ -9,6 +9,8 @@
 - accuracy: max|dF| / max|F| on the last cycle against the same model at rtol 1e-10
   (benchmarks/refcompare.py), the harness's measure.
 - ``--sweep``: ``nsd sweep --paper`` (41 designs, all local cores) in a fresh process, warm cache.
+- ``--paths``: the default cases off the line (circle, figure eight), compiled backend against the
+  scipy-driven one at the same settings, interleaved; CPU per cycle and their agreement.
 Single-machine numbers: quote them with the machine's load (recorded in the JSON).
 """
 from __future__ import annotations
@@ -28,11 +30,15 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from refcompare import discrepancy, in_house_reference  # noqa: E402
 
+import numpy as np  # noqa: E402
+
 from nsd_core.device.drive import Drive  # noqa: E402
 from nsd_core.device.model import DEFAULT_SOLVER, simulate  # noqa: E402
 from nsd_core.device.params import Params  # noqa: E402
 
 CASES = [(0.015, 1.0), (0.015, 10.0), (0.0255, 1.0), (0.0255, 10.0)]
+PATH_CASES = [dict(amplitude=0.015, frequency=10.0, path="circle"), dict(amplitude=0.022, frequency=10.0, path="circle"),
+              dict(amplitude=0.015, frequency=10.0, path="figure8", minor=0.0075)]  # comparisons/cases.toml
 FIRST_RUN = ("import time; t0 = time.perf_counter(); from nsd_core.device.model import simulate; "
              "from nsd_core.device.drive import Drive; from nsd_core.device.params import Params; "
              "simulate(Params(), Drive(0.015, 10.0, cycles=1, samples_per_cycle=100)); "
@@ -71,10 +77,36 @@ def sweep_time(workers: int) -> tuple[float, float]:
         return wall, (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
 
 
+def path_times(repeats: int) -> list[dict]:
+    """Compiled against scipy-driven backend on the paths off the line (CPU s per cycle, median)."""
+    p, rows = Params(), []
+    drives = [Drive(**c, cycles=2, samples_per_cycle=2000) for c in PATH_CASES]
+    cpu = {(i, b): [] for i in range(len(drives)) for b in ("compiled", "scipy")}
+    last = {}
+    for _ in range(repeats):
+        for i, d in enumerate(drives):
+            for b in ("compiled", "scipy"):
+                c0 = time.process_time()
+                last[i, b] = simulate(p, d, backend=b)
+                cpu[i, b].append((time.process_time() - c0) / d.cycles)
+    for i, (c, d) in enumerate(zip(PATH_CASES, drives)):
+        a, b = last[i, "compiled"], last[i, "scipy"]
+        scale = max(np.max(np.abs(b["F_x"])), np.max(np.abs(b["F_y"])))
+        diff = max(np.max(np.abs(a["F_x"] - b["F_x"])), np.max(np.abs(a["F_y"] - b["F_y"]))) / scale
+        row = {**c, "compiled_cpu_s_per_cycle": statistics.median(cpu[i, "compiled"]),
+               "scipy_cpu_s_per_cycle": statistics.median(cpu[i, "scipy"]), "dF_compiled_vs_scipy": float(diff)}
+        rows.append(row)
+        print(f"{c['path']} A = {c['amplitude']} m, f = {c['frequency']} Hz: compiled "
+              f"{1e3 * row['compiled_cpu_s_per_cycle']:.1f} ms/cycle CPU, scipy {1e3 * row['scipy_cpu_s_per_cycle']:.1f}"
+              f" ms/cycle CPU, max|dF| compiled vs scipy / max|F| = {diff:.2g}")
+    return rows
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--sweep", action="store_true", help="also time nsd sweep --paper (warm cache)")
+    ap.add_argument("--paths", action="store_true", help="also the paths off the line: compiled vs scipy backend")
     ap.add_argument("--no-compile", action="store_true", help="skip the cold-cache compile measurement")
     ap.add_argument("--out", default="out/bench")
     args = ap.parse_args()
@@ -114,6 +146,8 @@ def main() -> None:
         report["sweep_paper_s"], report["sweep_paper_cpu_s"] = sweep_time(os.cpu_count() or 1)
         print(f"nsd sweep --paper: {report['sweep_paper_s']:.1f} s wall, {report['sweep_paper_cpu_s']:.1f} s CPU "
               f"in all processes, on {os.cpu_count()} cores (warm cache)")
+    if args.paths:
+        report["paths"] = path_times(max(3, args.repeats))
     report["load_average_end"] = os.getloadavg()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

@@ -6,7 +6,8 @@ and ``device_motion`` through function pointers with the device's numbers packed
 nsd_core.device.forces (Eqs. 16-18), the same ones the vectorised numpy laws call.
 
 force_params = [n_ropes, n_wires, k_r, L_r0 (n_ropes), WireLaw (11 fields), SpringLaw (6 fields)]
-motion_params = [A, omega, e_x, e_y] (u(t) = A sin(omega t) along (e_x, e_y), plus locked base)
+motion_params = Drive.motion_params (any path: line, circle, ellipse, figure8, a table), evaluated by
+the Drive's own ``plate_motion``; the plate's rotation and the base's planar joint are held at zero.
 Element order: ropes, wires, then the spring; extra states: wire stresses, then the spring's zeta.
 """
 from __future__ import annotations
@@ -15,7 +16,7 @@ import numpy as np
 from numba import njit
 
 from nsd_core.engine.compiled_model import FORCE_SIG, MOTION_SIG, build_model, make_workspace, split_state
-from nsd_core.device.drive import Drive, sine_displacement
+from nsd_core.device.drive import Drive, plate_motion
 from nsd_core.device.forces import (bouc_wen_slope_scalar, rope_tension_scalar, sma_slope_scalar, spring_push_scalar,
                                     wire_tension_scalar)
 from nsd_core.device.geometry import DeviceGeometry
@@ -50,14 +51,14 @@ def device_forces(t, z, zd, L, Ld, extra, p, T, gen, rate):
 
 @njit(MOTION_SIG, cache=True)
 def device_motion(t, p, q, qd, qdd):
-    """Plate X, Y driven along (e_x, e_y); plate rotation and the base's planar joint held at zero."""
-    u, ud, udd = sine_displacement(p[0], p[1], t)
+    """Plate X, Y on the drive's path (plate_motion); plate rotation and the base's planar joint at zero."""
+    x, y, xd, yd, xdd, ydd = plate_motion(t, p)
     q[:] = 0.0
     qd[:] = 0.0
     qdd[:] = 0.0
-    q[0], q[1] = u * p[2], u * p[3]
-    qd[0], qd[1] = ud * p[2], ud * p[3]
-    qdd[0], qdd[1] = udd * p[2], udd * p[3]
+    q[0], q[1] = x, y
+    qd[0], qd[1] = xd, yd
+    qdd[0], qdd[1] = xdd, ydd
     return 0
 
 
@@ -67,8 +68,7 @@ def force_params(g: DeviceGeometry) -> np.ndarray:
 
 
 def motion_params(drive: Drive) -> np.ndarray:
-    e = drive.unit_vector
-    return np.array([drive.amplitude, drive.omega, e[0], e[1]])
+    return drive.motion_params
 
 
 def compiled_model(system, g: DeviceGeometry, drive: Drive, elements):

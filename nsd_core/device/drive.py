@@ -13,7 +13,9 @@ at 0 and its position p(t) = (x, y) follows one of these paths, written in the p
   velocity and acceleration, at rest at both ends); x and y are world coordinates, psi is ignored.
 
 Every engine asks the Drive for the plate's position, velocity and acceleration vectors
-(``plate``/``plate_at``) instead of re-deriving a sine.
+(``plate``/``plate_at``) instead of re-deriving a sine. All of them, and the compiled engine's motion
+callback (nsd_core.device.compiled), evaluate one compiled function, ``plate_motion``, on the
+Drive's packed parameters (``motion_params``): one implementation of every path.
 """
 from __future__ import annotations
 
@@ -30,12 +32,63 @@ PATHS = ("line", "circle", "ellipse", "figure8")
 MAX_TABLE_BYTES = 50_000_000  # ~1e6 rows of t,x,y: far beyond any record a run could follow
 
 
+# path kinds in motion_params[0]; an ellipse is a circle with B != A
+LINE, SPIRAL, FIGURE8, TABLE = 0, 1, 2, 3
+HEADER = 8  # [kind, A, B, omega, T_ramp = 1/f, cos psi, sin psi, n_intervals]; a table's knots and
+#             coefficients follow (n + 1 knots, then the cubic's coefficients c[m, i, axis] as scipy's PPoly)
+
+
 @njit(cache=True)
-def sine_displacement(amplitude, omega, t):
-    """u = A sin(omega t) and its first two derivatives; compiled, so the compiled model's motion
-    (nsd_core.device.compiled) and Drive.displacement are one formula."""
-    s = np.sin(omega * t)
-    return amplitude * s, amplitude * omega * np.cos(omega * t), -amplitude * omega * omega * s
+def _cubic(p, base, n, i, axis, s):
+    """Value and two derivatives of the table's cubic on interval i, s = t - x_i (Horner)."""
+    c0, c1 = p[base + i * 2 + axis], p[base + (n + i) * 2 + axis]
+    c2, c3 = p[base + (2 * n + i) * 2 + axis], p[base + (3 * n + i) * 2 + axis]
+    return ((c0 * s + c1) * s + c2) * s + c3, (3.0 * c0 * s + 2.0 * c1) * s + c2, 6.0 * c0 * s + 2.0 * c1
+
+
+@njit(cache=True)
+def plate_motion(t, p):
+    """x, y, x', y', x'', y'' of the plate at time t for the packed path p (see ``Drive.motion_params``).
+
+    The closed forms of the module docstring in the path's frame (a along e_psi, b across), rotated
+    by psi; a table is the clamped cubic spline's piecewise polynomial (scipy's PPoly evaluation:
+    the interval x_i <= t < x_(i+1), the end intervals extended beyond the knots)."""
+    kind = int(p[0])
+    if kind == TABLE:
+        n = int(p[7])
+        knots = p[HEADER:HEADER + n + 1]
+        i = np.searchsorted(knots, t, side="right") - 1
+        i = min(max(i, 0), n - 1)
+        s = t - knots[i]
+        base = HEADER + n + 1
+        x, xd, xdd = _cubic(p, base, n, i, 0, s)
+        y, yd, ydd = _cubic(p, base, n, i, 1, s)
+        return x, y, xd, yd, xdd, ydd
+    A, B, w = p[1], p[2], p[3]
+    s, c = math.sin(w * t), math.cos(w * t)
+    a0, a1, a2 = A * s, A * w * c, -A * w * w * s
+    b0, b1, b2 = 0.0, 0.0, 0.0
+    if kind == FIGURE8:
+        s2, c2 = math.sin(2 * w * t), math.cos(2 * w * t)
+        b0, b1, b2 = B * s2, 2 * B * w * c2, -4 * B * w * w * s2
+    elif kind == SPIRAL:  # r(t)/R = (1 - cos(pi f t))/2 in the first cycle, then 1
+        r, rd, rdd = 1.0, 0.0, 0.0
+        if t < p[4]:
+            k = 0.5 * w
+            r, rd, rdd = 0.5 * (1.0 - math.cos(k * t)), 0.5 * k * math.sin(k * t), 0.5 * k * k * math.cos(k * t)
+        a0, a1, a2 = A * r * s, A * (rd * s + r * w * c), A * (rdd * s + 2 * rd * w * c - r * w * w * s)
+        b0, b1, b2 = B * r * c, B * (rd * c - r * w * s), B * (rdd * c - 2 * rd * w * s - r * w * w * c)
+    e0, e1 = p[5], p[6]
+    return (e0 * a0 - e1 * b0, e1 * a0 + e0 * b0, e0 * a1 - e1 * b1, e1 * a1 + e0 * b1,
+            e0 * a2 - e1 * b2, e1 * a2 + e0 * b2)
+
+
+@njit(cache=True)
+def _plate_series(t, p):
+    out = np.empty((t.shape[0], 6))
+    for k in range(t.shape[0]):
+        out[k, 0], out[k, 1], out[k, 2], out[k, 3], out[k, 4], out[k, 5] = plate_motion(t[k], p)
+    return out
 
 
 class DriveError(ValueError):
@@ -101,6 +154,7 @@ class Drive:
     path: str = "line"        # line | circle | ellipse | figure8 | a CSV file of t,x,y
     minor: float | None = None  # B [m]: ellipse (required), figure8 (default A/2)
     _table: object = field(default=None, init=False, repr=False, compare=False)
+    _packed: object = field(default=None, init=False, repr=False, compare=False)
 
     # Bounds that keep one run's work finite (issue 12): below F_MIN a cycle is so long that the
     # 250 Hz vertical mode must be resolved over minutes of simulated time; above F_MAX the drive's
@@ -144,6 +198,27 @@ class Drive:
                 raise ParameterError(f"path = {self.path!r}: the table ends at t = {spline.x[-1]:g} s, before "
                                      f"cycles/frequency = {self.duration:g} s")
             object.__setattr__(self, "_table", spline)
+        object.__setattr__(self, "_packed", self._pack())
+
+    def _pack(self) -> np.ndarray:
+        psi = math.radians(self.direction_deg)
+        if self._table is not None:
+            x, c = self._table.x, self._table.c  # c: (4, n, 2), highest power first
+            head = [TABLE, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, len(x) - 1]
+            p = np.concatenate([head, x, np.ascontiguousarray(c).ravel()])
+        else:
+            kind = {"line": LINE, "figure8": FIGURE8}.get(self.path, SPIRAL)
+            p = np.array([kind, self.amplitude, self.minor_axis, self.omega, 1.0 / self.frequency,
+                          math.cos(psi), math.sin(psi), 0.0])
+        p = np.ascontiguousarray(p, dtype=float)
+        p.setflags(write=False)
+        return p
+
+    @property
+    def motion_params(self) -> np.ndarray:
+        """The path packed for ``plate_motion`` (read-only): what the compiled engine's motion
+        callback receives, and what ``plate``/``plate_at`` evaluate."""
+        return self._packed
 
     @property
     def is_line(self) -> bool:
@@ -191,53 +266,12 @@ class Drive:
     def plate(self, t):
         """Plate position, velocity and acceleration (x, y) at times t: three arrays of shape t.shape + (2,)."""
         t = np.asarray(t, dtype=float)
-        if self._table is not None:
-            return self._table(t), self._table(t, 1), self._table(t, 2)
-        A, B, w = self.amplitude, self.minor_axis, self.omega
-        s, c = np.sin(w * t), np.cos(w * t)
-        if self.path == "line":
-            a, b = (A * s, A * w * c, -A * w * w * s), (0.0 * t,) * 3
-        elif self.path == "figure8":
-            s2, c2 = np.sin(2 * w * t), np.cos(2 * w * t)
-            a = (A * s, A * w * c, -A * w * w * s)
-            b = (B * s2, 2 * B * w * c2, -4 * B * w * w * s2)
-        else:  # circle / ellipse with the spiral-out ramp r(t)/R = (1 - cos(pi f t))/2 in cycle one
-            ramp = t < 1.0 / self.frequency
-            k = 0.5 * w  # pi f
-            r = np.where(ramp, 0.5 * (1.0 - np.cos(k * t)), 1.0)
-            rd = np.where(ramp, 0.5 * k * np.sin(k * t), 0.0)
-            rdd = np.where(ramp, 0.5 * k * k * np.cos(k * t), 0.0)
-            a = (A * r * s, A * (rd * s + r * w * c), A * (rdd * s + 2 * rd * w * c - r * w * w * s))
-            b = (B * r * c, B * (rd * c - r * w * s), B * (rdd * c - 2 * rd * w * s - r * w * w * c))
-        e0, e1 = self.unit_vector[:2]
-        return tuple(np.stack([e0 * ai - e1 * bi, e1 * ai + e0 * bi], axis=-1) for ai, bi in zip(a, b))
+        out = _plate_series(np.ascontiguousarray(t.ravel()), self._packed).reshape(t.shape + (3, 2))
+        return out[..., 0, :], out[..., 1, :], out[..., 2, :]
 
     def plate_at(self, t: float) -> tuple[float, float, float, float, float, float]:
-        """x, y, x', y', x'', y'' at one time t: the same closed forms as ``plate`` in scalar
-        arithmetic, cheap enough for an integrator's right-hand side (tested equal)."""
-        if self._table is not None:
-            p, v, a = self.plate(float(t))
-            return float(p[0]), float(p[1]), float(v[0]), float(v[1]), float(a[0]), float(a[1])
-        A, w = self.amplitude, self.omega
-        s, c = math.sin(w * t), math.cos(w * t)
-        a0, a1, a2 = A * s, A * w * c, -A * w * w * s
-        b0 = b1 = b2 = 0.0
-        if self.path == "figure8":
-            B = self.minor_axis
-            s2, c2 = math.sin(2 * w * t), math.cos(2 * w * t)
-            b0, b1, b2 = B * s2, 2 * B * w * c2, -4 * B * w * w * s2
-        elif self.path != "line":
-            B = self.minor_axis
-            r, rd, rdd = 1.0, 0.0, 0.0
-            if t < 1.0 / self.frequency:
-                k = 0.5 * w
-                r, rd, rdd = 0.5 * (1.0 - math.cos(k * t)), 0.5 * k * math.sin(k * t), 0.5 * k * k * math.cos(k * t)
-            a0, a1, a2 = A * r * s, A * (rd * s + r * w * c), A * (rdd * s + 2 * rd * w * c - r * w * w * s)
-            b0, b1, b2 = B * r * c, B * (rd * c - r * w * s), B * (rdd * c - 2 * rd * w * s - r * w * w * c)
-        psi = math.radians(self.direction_deg)
-        e0, e1 = math.cos(psi), math.sin(psi)
-        return (e0 * a0 - e1 * b0, e1 * a0 + e0 * b0, e0 * a1 - e1 * b1, e1 * a1 + e0 * b1,
-                e0 * a2 - e1 * b2, e1 * a2 + e0 * b2)
+        """x, y, x', y', x'', y'' at one time t (``plate_motion``: cheap enough for a right-hand side)."""
+        return plate_motion(float(t), self._packed)
 
     def displacement(self, t):
         """u, du/dt, d2u/dt2 at time t: the plate's motion projected on e_psi (the whole motion for a line)."""

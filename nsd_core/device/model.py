@@ -151,10 +151,8 @@ def simulate(params: Params, drive: Drive, method: str = DEFAULT_SOLVER["method"
     drive.check_followable(params)
     if backend not in BACKENDS:
         raise ParameterError(f"backend = {backend!r}: allowed {', '.join(BACKENDS)}")
-    if backend == "auto":  # the compiled drive callback knows the line drive only (issue 13: paths via scipy)
-        backend = "compiled" if method in COMPILED_METHODS and drive.is_line else "scipy"
-    if backend == "compiled" and not drive.is_line:
-        raise ParameterError(f"path = {drive.path!r}: the compiled backend drives lines only; use backend scipy")
+    if backend == "auto":  # every path runs compiled (the motion callback is the Drive's plate_motion)
+        backend = "compiled" if method in COMPILED_METHODS else "scipy"
     if backend == "compiled" and method not in COMPILED_METHODS:
         raise ParameterError(f"method = {method!r}: the compiled backend offers {', '.join(COMPILED_METHODS)}")
     step_cap = np.inf if max_step is None else max_step
