@@ -80,7 +80,7 @@ def _unit(azimuth_deg: float) -> np.ndarray:
 
 
 # ---- the one implementation of every ground motion: compiled scalar functions on a flat block ----
-# A motion is a block of floats (``GroundMotion.block()``); ``ground_at`` evaluates it at one time.
+# A motion is a block of floats (``GroundMotion.block()``); ``ground_values`` evaluates it at one time.
 # The Python classes call the same functions (``ground_series``), and so does the compiled seismic
 # path's motion and force callbacks (nsd_core.device.compiled_seismic), from the model's parameters.
 #   record:   [0, R00, R01, R10, R11, n_a, n_b, component a (5 n_a), component b (5 n_b)]
@@ -143,32 +143,30 @@ def pulse_at(t, A, f, gamma, nu):
 
 
 @njit(cache=True)
-def ground_at(t, p, o, out):
-    """The ground motion of the block at p[o:] at time t: out = [d_x, d_y, v_x, v_y, a_x, a_y]."""
+def ground_values(t, p, o):
+    """The ground motion of the block at p[o:] at time t: (d_x, d_y, v_x, v_y, a_x, a_y)."""
     kind = p[o]
     if kind == RECORD:
         na, nb = int(p[o + 5]), int(p[o + 6])
         da, va, aa = piecewise_linear_at(t, p, o + 7, na)
         db, vb, ab = piecewise_linear_at(t, p, o + 7 + 5 * na, nb)
         r00, r01, r10, r11 = p[o + 1], p[o + 2], p[o + 3], p[o + 4]
-        out[0], out[1] = r00 * da + r01 * db, r10 * da + r11 * db
-        out[2], out[3] = r00 * va + r01 * vb, r10 * va + r11 * vb
-        out[4], out[5] = r00 * aa + r01 * ab, r10 * aa + r11 * ab
-        return
+        return (r00 * da + r01 * db, r10 * da + r11 * db, r00 * va + r01 * vb, r10 * va + r11 * vb,
+                r00 * aa + r01 * ab, r10 * aa + r11 * ab)
     if kind == HARMONIC:
         s, sd, sdd = harmonic_at(t, p[o + 1], p[o + 2], p[o + 3])
         ex, ey = p[o + 4], p[o + 5]
     else:
         s, sd, sdd = pulse_at(t, p[o + 1], p[o + 2], p[o + 3], p[o + 4])
         ex, ey = p[o + 5], p[o + 6]
-    out[0], out[1], out[2], out[3], out[4], out[5] = s * ex, s * ey, sd * ex, sd * ey, sdd * ex, sdd * ey
+    return s * ex, s * ey, sd * ex, sd * ey, sdd * ex, sdd * ey
 
 
 @njit(cache=True)
 def ground_series(ts, p, out):
-    """ground_at at every time of ts into out (len(ts), 6)."""
+    """ground_values at every time of ts into out (len(ts), 6)."""
     for k in range(ts.shape[0]):
-        ground_at(ts[k], p, 0, out[k])
+        out[k, 0], out[k, 1], out[k, 2], out[k, 3], out[k, 4], out[k, 5] = ground_values(ts[k], p, 0)
 
 
 @njit(cache=True)
@@ -207,7 +205,7 @@ class PiecewiseLinear:
 
 class GroundMotion:
     """Interface: ``__call__(t) -> (d, v, a)``, each (2,) or (len(t), 2); ``duration``; ``meta``;
-    ``block()``: the motion as ground_at's flat block (what the compiled path reads)."""
+    ``block()``: the motion as ground_values' flat block (what the compiled path reads)."""
     duration: float
     meta: dict
 
@@ -215,7 +213,7 @@ class GroundMotion:
         raise NotImplementedError
 
     def __call__(self, t):
-        """ground_at on this motion's block: the one implementation, here and in the compiled path."""
+        """ground_values on this motion's block: the one implementation, here and in the compiled path."""
         ts = np.ascontiguousarray(t, dtype=float)
         out = np.empty((ts.size, 6))
         ground_series(ts.ravel(), self._block(), out)
