@@ -26,7 +26,7 @@ WIRE_FIELDS, SPRING_FIELDS = 11, 6
 
 
 @njit(FORCE_SIG, cache=True)
-def device_forces(t, z, zd, L, Ld, extra, p, T, gen, rate):
+def device_forces(t, z, zd, P, L, Ld, extra, p, T, gen, rate):
     """Tensions of ropes (Eq. 16), wires (Eq. 17) and the spring (Eq. 18, pushing: T < 0)."""
     nr, nw = int(p[0]), int(p[1])
     k_r = p[2]

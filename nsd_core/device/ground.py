@@ -24,13 +24,13 @@ windows are given in the record's own (full-scale) time.
 """
 from __future__ import annotations
 
-import bisect
 import math
 import warnings
 from dataclasses import dataclass, field
 from functools import lru_cache
 
 import numpy as np
+from numba import njit
 
 from nsd_core.device.params import ParameterError
 
@@ -79,6 +79,102 @@ def _unit(azimuth_deg: float) -> np.ndarray:
     return np.array([math.cos(a), math.sin(a)])
 
 
+# ---- the one implementation of every ground motion: compiled scalar functions on a flat block ----
+# A motion is a block of floats (``GroundMotion.block()``); ``ground_values`` evaluates it at one time.
+# The Python classes call the same functions (``ground_series``), and so does the compiled seismic
+# path's motion and force callbacks (nsd_core.device.compiled_seismic), from the model's parameters.
+#   record:   [0, R00, R01, R10, R11, n_a, n_b, component a (5 n_a), component b (5 n_b)]
+#             a component: its sample times, a, slope, v, d (PiecewiseLinear), n values each
+#   harmonic: [1, A, omega, duration, e_x, e_y]
+#   pulse:    [2, A, f_p, gamma, nu (rad), e_x, e_y]
+RECORD, HARMONIC, PULSE = 0.0, 1.0, 2.0
+
+
+@njit(cache=True)
+def piecewise_linear_at(t, p, start, n):
+    """(d, v, a) at t of a component stored at p[start:start + 5 n] (t_k, a_k, s_k, v_k, d_k):
+    zero before t_0; a = a_k + s_k tau on [t_k, t_k+1), v and d its exact integrals."""
+    if t < p[start]:
+        return 0.0, 0.0, 0.0
+    lo, hi = 0, n - 1  # the last k with t_k <= t (bisection; the last sample holds past the end)
+    while lo < hi:
+        mid = (lo + hi + 1) // 2
+        if p[start + mid] <= t:
+            lo = mid
+        else:
+            hi = mid - 1
+    tau = t - p[start + lo]
+    a0, s, v0, d0 = p[start + n + lo], p[start + 2 * n + lo], p[start + 3 * n + lo], p[start + 4 * n + lo]
+    return (d0 + v0 * tau + a0 * tau * tau / 2.0 + s * tau * tau * tau / 6.0,
+            v0 + a0 * tau + s * tau * tau / 2.0, a0 + s * tau)
+
+
+@njit(cache=True)
+def harmonic_at(t, A, w, duration):
+    """a = A sin(w t) on [0, duration], zero outside; v, d its integrals from rest (closed forms)."""
+    tc = min(max(t, 0.0), duration)
+    a = A * math.sin(w * tc) if 0.0 <= t <= duration else 0.0
+    v = A * (1.0 - math.cos(w * tc)) / w
+    d = A * (tc / w - math.sin(w * tc) / (w * w)) + v * max(t - duration, 0.0)
+    return d, v, a
+
+
+@njit(cache=True)
+def _pulse_terms(A, f, gamma, nu, tau):
+    W = 2.0 * math.pi * f
+    d, v, a = 0.0, 0.0, 0.0
+    for w, c in ((W, 0.5), (W * (1.0 + 1.0 / gamma), 0.25), (W * (1.0 - 1.0 / gamma), 0.25)):
+        d += c * math.sin(w * tau + nu) / w
+        v += c * math.cos(w * tau + nu)
+        a -= c * w * math.sin(w * tau + nu)
+    return A * d, A * v, A * a
+
+
+@njit(cache=True)
+def pulse_at(t, A, f, gamma, nu):
+    """Mavroeidis-Papageorgiou velocity pulse started at 0 (t_0 = gamma/(2 f)): (d, v, a)."""
+    half = gamma / (2.0 * f)
+    tau = min(max(t - half, -half), half)
+    d, v, a = _pulse_terms(A, f, gamma, nu, tau)
+    d0 = _pulse_terms(A, f, gamma, nu, -half)[0]
+    if not 0.0 <= t <= 2.0 * half:
+        v, a = 0.0, 0.0
+    return d - d0, v, a
+
+
+@njit(cache=True)
+def ground_values(t, p, o):
+    """The ground motion of the block at p[o:] at time t: (d_x, d_y, v_x, v_y, a_x, a_y)."""
+    kind = p[o]
+    if kind == RECORD:
+        na, nb = int(p[o + 5]), int(p[o + 6])
+        da, va, aa = piecewise_linear_at(t, p, o + 7, na)
+        db, vb, ab = piecewise_linear_at(t, p, o + 7 + 5 * na, nb)
+        r00, r01, r10, r11 = p[o + 1], p[o + 2], p[o + 3], p[o + 4]
+        return (r00 * da + r01 * db, r10 * da + r11 * db, r00 * va + r01 * vb, r10 * va + r11 * vb,
+                r00 * aa + r01 * ab, r10 * aa + r11 * ab)
+    if kind == HARMONIC:
+        s, sd, sdd = harmonic_at(t, p[o + 1], p[o + 2], p[o + 3])
+        ex, ey = p[o + 4], p[o + 5]
+    else:
+        s, sd, sdd = pulse_at(t, p[o + 1], p[o + 2], p[o + 3], p[o + 4])
+        ex, ey = p[o + 5], p[o + 6]
+    return s * ex, s * ey, sd * ex, sd * ey, sdd * ex, sdd * ey
+
+
+@njit(cache=True)
+def ground_series(ts, p, out):
+    """ground_values at every time of ts into out (len(ts), 6)."""
+    for k in range(ts.shape[0]):
+        out[k, 0], out[k, 1], out[k, 2], out[k, 3], out[k, 4], out[k, 5] = ground_values(ts[k], p, 0)
+
+
+@njit(cache=True)
+def _piecewise_series(ts, p, n, out):
+    for k in range(ts.shape[0]):
+        out[k, 0], out[k, 1], out[k, 2] = piecewise_linear_at(ts[k], p, 0, n)
+
+
 class PiecewiseLinear:
     """One acceleration component, linear between samples, integrated exactly from rest at t[0]."""
 
@@ -95,40 +191,42 @@ class PiecewiseLinear:
         self.slope = np.append(np.diff(a) / h, 0.0)
         self.v = np.concatenate([[0.0], np.cumsum(h * (a[1:] + a[:-1]) / 2.0)])
         self.d = np.concatenate([[0.0], np.cumsum(h * self.v[:-1] + h * h * (2.0 * a[:-1] + a[1:]) / 6.0)])
-        self._t, self._a, self._s = self.t.tolist(), self.a.tolist(), self.slope.tolist()
-        self._v, self._d = self.v.tolist(), self.d.tolist()
+        self.block = np.concatenate([self.t, self.a, self.slope, self.v, self.d])  # piecewise_linear_at's layout
 
     def __call__(self, t):
-        """(d, v, a) at t: before t[0] the ground is at rest at 0; a = a_k + s_k tau on each interval."""
-        if np.ndim(t) == 0:  # the integrator asks one time at a time: plain floats are ~10x faster
-            t = float(t)
-            if t < self.t[0]:
-                return 0.0, 0.0, 0.0
-            k = min(bisect.bisect_right(self._t, t) - 1, len(self._t) - 1)
-            tau = t - self._t[k]
-            a0, s, v0, d0 = self._a[k], self._s[k], self._v[k], self._d[k]
-            return (d0 + v0 * tau + a0 * tau * tau / 2.0 + s * tau ** 3 / 6.0,
-                    v0 + a0 * tau + s * tau * tau / 2.0, a0 + s * tau)
-        t = np.asarray(t, dtype=float)
-        k = np.clip(np.searchsorted(self.t, t, side="right") - 1, 0, len(self.t) - 1)
-        tau = np.maximum(t - self.t[k], 0.0)
-        a0, s, v0, d0 = self.a[k], self.slope[k], self.v[k], self.d[k]
-        a = a0 + s * tau
-        v = v0 + a0 * tau + s * tau ** 2 / 2.0
-        d = d0 + v0 * tau + a0 * tau ** 2 / 2.0 + s * tau ** 3 / 6.0
-        before = t < self.t[0]
-        if np.any(before):
-            a, v, d = (np.where(before, 0.0, x) for x in (a, v, d))
-        return d, v, a
+        """(d, v, a) at t (a scalar or an array): piecewise_linear_at, the one implementation."""
+        if np.ndim(t) == 0:
+            return piecewise_linear_at(float(t), self.block, 0, len(self.t))
+        ts = np.ascontiguousarray(t, dtype=float)
+        out = np.empty((ts.size, 3))
+        _piecewise_series(ts.ravel(), self.block, len(self.t), out)
+        return tuple(out[:, j].reshape(ts.shape) for j in range(3))
 
 
 class GroundMotion:
-    """Interface: ``__call__(t) -> (d, v, a)``, each (2,) or (len(t), 2); ``duration``; ``meta``."""
+    """Interface: ``__call__(t) -> (d, v, a)``, each (2,) or (len(t), 2); ``duration``; ``meta``;
+    ``block()``: the motion as ground_values' flat block (what the compiled path reads)."""
     duration: float
     meta: dict
 
-    def __call__(self, t):
+    def block(self) -> np.ndarray:
         raise NotImplementedError
+
+    def __call__(self, t):
+        """ground_values on this motion's block: the one implementation, here and in the compiled path."""
+        ts = np.ascontiguousarray(t, dtype=float)
+        out = np.empty((ts.size, 6))
+        ground_series(ts.ravel(), self._block(), out)
+        if np.ndim(t) == 0:
+            return out[0, 0:2], out[0, 2:4], out[0, 4:6]
+        return tuple(out[:, j:j + 2].reshape(ts.shape + (2,)) for j in (0, 2, 4))
+
+    def _block(self) -> np.ndarray:
+        cached = self.__dict__.get("_cached_block")
+        if cached is None:
+            cached = np.ascontiguousarray(self.block(), dtype=float)
+            object.__setattr__(self, "_cached_block", cached)  # frozen dataclasses too
+        return cached
 
     def describe(self) -> dict:
         return dict(self.meta)
@@ -144,14 +242,9 @@ class Record(GroundMotion):
         self.duration = float(max(comp_a.t[-2], comp_b.t[-2]))  # the last sample, before the ramp
         self.meta = meta
 
-    def __call__(self, t):
-        (da, va, aa), (db, vb, ab) = self.comp[0](t), self.comp[1](t)
-        R = self.rotation
-        if np.ndim(t) == 0:
-            return tuple(np.array([R[0, 0] * p + R[0, 1] * q, R[1, 0] * p + R[1, 1] * q])
-                         for p, q in ((da, db), (va, vb), (aa, ab)))
-        return tuple(np.stack([R[0, 0] * p + R[0, 1] * q, R[1, 0] * p + R[1, 1] * q], axis=-1)
-                     for p, q in ((da, db), (va, vb), (aa, ab)))
+    def block(self) -> np.ndarray:
+        a, b = self.comp
+        return np.concatenate([[RECORD], self.rotation.ravel(), [len(a.t), len(b.t)], a.block, b.block])
 
 
 @lru_cache(maxsize=None)
@@ -272,18 +365,13 @@ class Harmonic(GroundMotion):
         self.meta.update({"kind": "harmonic", "amplitude": self.amplitude, "frequency": self.frequency,
                           "azimuth_deg": self.azimuth_deg, "duration": self.duration})
 
-    def scalar(self, t):
-        A, w = self.amplitude, 2.0 * math.pi * self.frequency
-        t = np.asarray(t, dtype=float)
-        tc = np.clip(t, 0.0, self.duration)
-        a = np.where((t >= 0) & (t <= self.duration), A * np.sin(w * tc), 0.0)
-        v = A * (1.0 - np.cos(w * tc)) / w
-        d = A * (tc / w - np.sin(w * tc) / w ** 2) + v * np.maximum(t - self.duration, 0.0)
-        return d, v, a
-
-    def __call__(self, t):
+    def block(self) -> np.ndarray:
         e = _unit(self.azimuth_deg)
-        return tuple(np.multiply.outer(x, e) for x in self.scalar(t))
+        return np.array([HARMONIC, self.amplitude, 2.0 * math.pi * self.frequency, self.duration, e[0], e[1]])
+
+    def scalar(self, t):
+        """(d, v, a) along the azimuth at a scalar t (harmonic_at)."""
+        return harmonic_at(float(t), self.amplitude, 2.0 * math.pi * self.frequency, self.duration)
 
 
 @dataclass(frozen=True)
@@ -313,25 +401,10 @@ class Pulse(GroundMotion):
     def duration(self) -> float:
         return self.gamma / self.frequency
 
-    def _terms(self):
-        W = 2.0 * math.pi * self.frequency
-        return ((W, 0.5), (W * (1 + 1 / self.gamma), 0.25), (W * (1 - 1 / self.gamma), 0.25))
-
-    def _disp(self, tau):
-        nu = math.radians(self.phase_deg)
-        return self.velocity * sum(c * np.sin(w * tau + nu) / w for w, c in self._terms())
+    def block(self) -> np.ndarray:
+        e = _unit(self.azimuth_deg)
+        return np.array([PULSE, self.velocity, self.frequency, self.gamma, math.radians(self.phase_deg), e[0], e[1]])
 
     def scalar(self, t):
-        t = np.asarray(t, dtype=float)
-        half = self.duration / 2.0
-        tau = np.clip(t - half, -half, half)
-        nu = math.radians(self.phase_deg)
-        on = (t >= 0.0) & (t <= self.duration)
-        v = np.where(on, self.velocity * sum(c * np.cos(w * tau + nu) for w, c in self._terms()), 0.0)
-        a = np.where(on, -self.velocity * sum(c * w * np.sin(w * tau + nu) for w, c in self._terms()), 0.0)
-        d = self._disp(tau) - self._disp(-half)
-        return d, v, a
-
-    def __call__(self, t):
-        e = _unit(self.azimuth_deg)
-        return tuple(np.multiply.outer(x, e) for x in self.scalar(t))
+        """(d, v, a) along the azimuth at a scalar t (pulse_at)."""
+        return pulse_at(float(t), self.velocity, self.frequency, self.gamma, math.radians(self.phase_deg))

@@ -33,11 +33,11 @@ from nsd_core.device.forces import rope_tension, wire_tension
 from nsd_core.device.geometry import device_geometry
 from nsd_core.device.ground import GroundMotion
 from nsd_core.device.isolation import Structure
-from nsd_core.device.model import (BODY, DEFAULT_SOLVER, DeviceForces, check_validity, device_mechanism,
-                                   rest_coordinates)
+from nsd_core.device.model import (BODY, COMPILED_METHODS, DEFAULT_SOLVER, DeviceForces, _check_lengths,
+                                   check_validity, device_mechanism, rest_coordinates)
 from nsd_core.device.params import ParameterError, Params
 from nsd_core.device.results import RunResult
-from nsd_core.engine.integrate import SolverError, integrate
+from nsd_core.engine.integrate import SolverError, check_tolerances, integrate
 from nsd_core.engine.kinematics import cross_rows
 from nsd_core.engine.mechanism import mechanism
 from nsd_core.engine.semirecursive import ConstraintError, SemiRecursiveSystem
@@ -187,11 +187,18 @@ def simulate_seismic(params: Params, structure: Structure, ground: GroundMotion,
                      backend: str = DEFAULT_SOLVER["backend"]) -> RunResult:
     """The seismic response from relative rest at t = 0, sampled every ``dt_out`` up to ``duration``
     (default: the ground motion's; longer: free vibration after it). Raises RodReachError (exit 4),
-    DriveError (outside the laws' validity), SolverError (exit 3). backend: "auto" and "scipy" run
-    SemiRecursiveSystem under scipy's solvers (the compiled path has no ground-record motion yet),
-    "numpy" the same on the numpy specification."""
-    if backend not in ("auto", "scipy", "numpy"):
-        raise ParameterError(f"backend = {backend!r}: the seismic mode offers auto, scipy, numpy")
+    DriveError (outside the laws' validity), SolverError (exit 3). backend: "compiled" the compiled
+    right-hand side and step loop (nsd_core.device.compiled_seismic; methods RK45, DOP853); "auto"
+    (default) that for the methods it offers, else "scipy": SemiRecursiveSystem under scipy's
+    solvers; "numpy" the same on the numpy specification. The compiled path restarts its step loop
+    every compiled_seismic.CHUNK model seconds (progress, Ctrl-C), so it follows scipy's path step for
+    step over the first chunk and within the tolerance after."""
+    if backend not in ("auto", "compiled", "scipy", "numpy"):
+        raise ParameterError(f"backend = {backend!r}: the seismic mode offers auto, compiled, scipy, numpy")
+    if backend == "auto":
+        backend = "compiled" if method in COMPILED_METHODS else "scipy"
+    if backend == "compiled" and method not in COMPILED_METHODS:
+        raise ParameterError(f"method = {method!r}: the compiled backend offers {', '.join(COMPILED_METHODS)}")
     duration = ground.duration if duration is None else float(duration)
     if not (math.isfinite(duration) and duration > 0):
         raise ParameterError(f"duration = {duration!r}: must be > 0 s")
@@ -208,6 +215,10 @@ def simulate_seismic(params: Params, structure: Structure, ground: GroundMotion,
                       np.concatenate([extra0, np.zeros(N_ENERGY)]))
     n_out = int(round(duration / dt_out))
     t_eval = np.linspace(0.0, n_out * dt_out, n_out + 1)
+    first_step = min(max_step, 1e-4, duration)  # the ground moves: start small
+    if backend == "compiled":
+        return _simulate_compiled(system, g, structure, ground, device, y0, t_eval, method, rtol, atol, max_step,
+                                  first_step, progress, start)
     rows = []
     height0 = []
 
@@ -241,7 +252,7 @@ def simulate_seismic(params: Params, structure: Structure, ground: GroundMotion,
     try:
         traj = integrate(system, ws, y0, t_eval, method=method, rtol=rtol, atol=atol, max_step=max_step,
                          min_pivot_ratio=0.0, progress=progress, outputs=record,
-                         first_step=min(max_step, 1e-4, duration))  # the ground moves: start small
+                         first_step=first_step)
     except ConstraintError as err:
         if system.last[1] > 0.95 * system.reach:
             raise system.reach_error() from None
@@ -249,9 +260,69 @@ def simulate_seismic(params: Params, structure: Structure, ground: GroundMotion,
     cols = {k: np.array([r[k] for r in rows]) for k in rows[0]}
     cols["u"] = np.hypot(cols["x"], cols["y"])  # radial relative displacement (events use it)
     stats = {"engine": "semirecursive", "mode": "seismic", "device": device, "version": __version__,
-             "method": method, "rtol": rtol, "atol": atol, "max_step": max_step, "steps": traj.steps,
+             "backend": backend, "method": method, "rtol": rtol, "atol": atol, "max_step": max_step, "steps": traj.steps,
              "nfev": traj.nfev, "wall_time": time.perf_counter() - start, "model_time": float(t_eval[-1]),
              "ground": ground.describe(), "structure": structure.to_dict()}
+    return RunResult("semirecursive", cols, seismic_units(cols), stats)
+
+
+def _simulate_compiled(system, g, structure, ground, device, y0, t_eval, method, rtol, atol, max_step, first_step,
+                       progress, start):
+    """The seismic run on the compiled path (nsd_core.device.compiled_seismic): the same columns."""
+    from nsd_core.device import compiled_seismic as cs
+    from nsd_core.engine.rk import TOO_MANY_STEPS
+    check_tolerances(rtol, atol, max_step)  # the bounds of the scipy path, the same way
+    model = cs.seismic_model(system, g, structure, ground, device)
+    res = cs.run(model, system.z_ref, y0, t_eval, method, rtol, atol, max_step, first_step, progress)
+    done = res["done"]
+    if device:
+        _check_lengths(t_eval[:done], res["lengths"][:done], system.forces.device)
+    if res["status"] != 0:
+        t_fail, z, q = res["t_fail"], res["z_fail"], res["q_fail"]
+        ix = system.forces.ix
+        system.last = (t_fail, math.hypot(z[ix["plate_x"]] - q[0], z[ix["plate_y"]] - q[1]))
+        if device and (res["status"] == cs.ROD_REACH or system.last[1] > 0.95 * system.reach):
+            raise system.reach_error()
+        if res["status"] == TOO_MANY_STEPS:
+            raise SolverError(f"exceeded {cs.STEPS_PER_SECOND} steps per model second at t = {t_fail:.6g} s of "
+                              f"{t_eval[-1]:.6g} s: a stiff or runaway input")
+        raise SolverError(f"{method} (compiled) failed at t = {t_fail:.6g} s: status {res['status']} "
+                          "(nsd_core.engine.compiled, nsd_core.engine.rk)")
+    tab = dict(zip(cs.COLUMNS, res["table"].T))
+    s = structure
+    x, y, th, vx, vy, thd = tab["x"], tab["y"], tab["theta"], tab["vx"], tab["vy"], tab["theta_rate"]
+    cols = {"t": t_eval, "x_g": tab["x_g"], "y_g": tab["y_g"], "ax_g": tab["ax_g"], "ay_g": tab["ay_g"], "x": x,
+            "y": y, "theta": th, "vx": vx, "vy": vy, "ax_abs": tab["ax_abs"], "ay_abs": tab["ay_abs"],
+            "support_Fx": s.stiffness * x + s.damping * vx, "support_Fy": s.stiffness * y + s.damping * vy,
+            "support_torque": s.support_radius ** 2 * (s.stiffness * th + s.damping * thd)}
+    E_in, E_dev, E_sup_diss = res["y"][:, -N_ENERGY:].T
+    cols["device_Fx"], cols["device_Fy"] = tab["device_Fx"], tab["device_Fy"]
+    if device:
+        dev, nw = system.forces.device, g.n_wires
+        extra = res["y"][:, -N_ENERGY - nw - 1:-N_ENERGY]
+        zeta = extra[:, nw]
+        cols.update({"cap_z": tab["cap_z"], "wall_z": tab["wall_z"], "spring_push": -res["tensions"][:, dev.spring],
+                     "spring_zeta": zeta, "closure": tab["closure"]})
+        t_rope, t_wire = res["tensions"][:, dev.ropes], res["tensions"][:, dev.wires]
+        strain = (res["lengths"][:, dev.wires] - g.wire.natural_length) / g.wire.natural_length
+        for i in range(t_rope.shape[1]):
+            cols[f"rope{i}_tension"] = t_rope[:, i]
+        for j in range(nw):
+            cols[f"wire{j}_tension"], cols[f"wire{j}_strain"], cols[f"wire{j}_stress"] = \
+                t_wire[:, j], strain[:, j], extra[:, j]
+    cols["base_shear_x"] = cols["support_Fx"] + cols["device_Fx"]
+    cols["base_shear_y"] = cols["support_Fy"] + cols["device_Fy"]
+    stored = 0.5 * s.stiffness * (x * x + y * y) + 0.5 * s.stiffness * s.support_radius ** 2 * th * th
+    gravity = tab["height"] - tab["height"][0]
+    cols.update({"E_input": E_in, "E_kinetic": tab["kinetic"], "E_gravity": gravity, "E_supports_stored": stored,
+                 "E_supports_dissipated": E_sup_diss, "E_device": E_dev})
+    cols["E_residual"] = E_in - (tab["kinetic"] + gravity + stored + E_sup_diss + E_dev)
+    cols["u"] = np.hypot(x, y)
+    cols = {k: np.array(v, dtype=float) for k, v in cols.items()}
+    stats = {"engine": "semirecursive", "mode": "seismic", "device": device, "version": __version__,
+             "backend": "compiled", "method": method, "rtol": rtol, "atol": atol, "max_step": max_step,
+             "steps": res["steps"], "nfev": res["nfev"], "wall_time": time.perf_counter() - start,
+             "model_time": float(t_eval[-1]), "ground": ground.describe(), "structure": structure.to_dict()}
     return RunResult("semirecursive", cols, seismic_units(cols), stats)
 
 

@@ -18,13 +18,13 @@ from nsd_core.engine.compiled_model import FORCE_SIG, MOTION_SIG
 
 
 @njit(FORCE_SIG, cache=True)
-def no_forces(t, z, zd, L, Ld, extra, p, T, gen, rate):
+def no_forces(t, z, zd, P, L, Ld, extra, p, T, gen, rate):
     T[:] = 0.0
     return 0
 
 
 @njit(FORCE_SIG, cache=True)
-def linear_springs(t, z, zd, L, Ld, extra, p, T, gen, rate):
+def linear_springs(t, z, zd, P, L, Ld, extra, p, T, gen, rate):
     ne = L.shape[0]
     for e in range(ne):
         T[e] = p[e] * (L[e] - p[ne + e])

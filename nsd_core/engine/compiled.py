@@ -17,7 +17,7 @@ import numpy as np
 from numba import njit
 
 from nsd_core.engine.closure import closure_kernel
-from nsd_core.engine.dynamics import body_terms_kernel, tree_kernel
+from nsd_core.engine.dynamics import body_terms_kernel, linear_momentum_kernel, tree_kernel
 from nsd_core.engine.elements import apply_tensions, element_kinematics
 from nsd_core.engine.kinematics import positions_kernel, velocities_kernel
 
@@ -300,6 +300,7 @@ def reduced_dynamics(m, w):
 def evaluate(t, y, m, w, forces, motion):
     """Everything at (t, y): w.z, w.zd, w.zdd, w.lam, w.tau, w.extra_rate, the kinematics."""
     nf = m.free.shape[0]  # y = [z_f, z'_f, extra]: the layout of compiled_model.split_state
+    w.time[0] = t
     motion(t, m.motion_params, w.q, w.qd, w.qdd)
     code = assemble(m, w, t, y[:nf])
     if code != OK:
@@ -311,7 +312,8 @@ def evaluate(t, y, m, w, forces, motion):
                        w.L, w.Ld, w.scratch)
     w.extra[:] = y[2 * nf:]
     w.gen[:] = 0.0
-    code = forces(t, w.z, w.zd, w.L, w.Ld, w.extra, m.force_params, w.T, w.gen, w.extra_rate)
+    linear_momentum_kernel(m.mass, m.com, w.A, w.r, w.Z, w.momentum)
+    code = forces(t, w.z, w.zd, w.momentum, w.L, w.Ld, w.extra, m.force_params, w.T, w.gen, w.extra_rate)
     if code != OK:
         return code
     w.wrench[:, :] = 0.0

@@ -48,6 +48,8 @@ _WORK_FIELDS = {
     "Mb": (float, 3), "Qb": (float, 2), "M": (float, 2), "Q": (float, 1), "Rz": (float, 2),
     "zdd0": (float, 1), "red": (float, 2), "red_rhs": (float, 1), "red_piv": (np.int64, 1), "res": (float, 1),
     "scratch": (float, 2), "scratch6": (float, 1),   # the recursions' 3-vectors, the tree's 6-vector
+    "momentum": (float, 1),  # the mechanism's linear momentum sum m_i v_com,i, for the force callback
+    "time": (float, 1),  # t of the last evaluation begun (where a failure happened)
     "kin_current": (np.int64, 1),  # 1: A, r, B, Phi, Phi_z in the workspace belong to z
     "counters": (np.int64, 1),  # assemblies, Newton iterations, second Newton solves (diagnostics)
 }
@@ -67,9 +69,10 @@ MODEL_TYPE = typeof(_template(SystemModel, _MODEL_FIELDS, readonly=True))
 WORK_TYPE = typeof(_template(Workspace, _WORK_FIELDS, readonly=False))
 ARRAY = types.float64[::1]
 PARAMS = types.Array(types.float64, 1, "C", readonly=True)  # the model's (immutable) parameters
-# forces(t, z, z', L, L', extra, params, T out, gen out, extra_rate out) -> 0 ok, else a failure code.
+# forces(t, z, z', P, L, L', extra, params, T out, gen out, extra_rate out) -> 0 ok, else a failure code.
+# P: the mechanism's linear momentum sum m_i v_com,i (3,) (power of frame forces in a moving frame);
 # T: element tensions (> 0 pulls the ends together); gen: generalized joint forces.
-FORCE_SIG = types.int64(types.float64, ARRAY, ARRAY, ARRAY, ARRAY, ARRAY, PARAMS, ARRAY, ARRAY, ARRAY)
+FORCE_SIG = types.int64(types.float64, ARRAY, ARRAY, ARRAY, ARRAY, ARRAY, ARRAY, PARAMS, ARRAY, ARRAY, ARRAY)
 # motion(t, params, q out, q' out, q'' out) -> 0: the prescribed coordinates at t
 MOTION_SIG = types.int64(types.float64, PARAMS, ARRAY, ARRAY, ARRAY)
 FORCE_FN = types.FunctionType(FORCE_SIG)
@@ -116,7 +119,7 @@ def make_workspace(model: SystemModel, z0: np.ndarray) -> Workspace:
         L=(ne,), Ld=(ne,), T=(ne,), N=(ne, 3), P_up=(ne, 3), P_lo=(ne, 3), gen=(n,), wrench=(n, 6),
         extra=(nx,), extra_rate=(nx,), Mb=(n, 6, 6), Qb=(n, 6), M=(n, n), Q=(n,), Rz=(n, nf), zdd0=(n,),
         red=(nf, nf), red_rhs=(nf,), red_piv=(nf,), res=(n,), scratch=(SCRATCH_ROWS, 3), scratch6=(6,),
-        kin_current=(1,), counters=(3,))
+        momentum=(3,), time=(1,), kin_current=(1,), counters=(3,))
     ws = Workspace(**{k: np.zeros(shapes[k], dtype=dt) for k, (dt, _) in _WORK_FIELDS.items()})
     ws.z[:] = z0
     return ws

@@ -18,6 +18,25 @@ from nsd_core.engine.mechanism import Mechanism
 
 
 @njit(cache=True)
+def linear_momentum_kernel(mass, com, A, r, Z, out):
+    """The mechanism's linear momentum sum m_i (s'_i + w_i x g_i), g_i = r_i + A_i c_i (global
+    centre of mass), into out (3,): what a force callback needs for the power of a moving frame's
+    inertial forces (-m_i a_frame on every body)."""
+    out[0] = out[1] = out[2] = 0.0
+    for i in range(mass.shape[0]):
+        m = mass[i]
+        if m == 0.0:
+            continue
+        g0 = r[i, 0] + A[i, 0, 0] * com[i, 0] + A[i, 0, 1] * com[i, 1] + A[i, 0, 2] * com[i, 2]
+        g1 = r[i, 1] + A[i, 1, 0] * com[i, 0] + A[i, 1, 1] * com[i, 1] + A[i, 1, 2] * com[i, 2]
+        g2 = r[i, 2] + A[i, 2, 0] * com[i, 0] + A[i, 2, 1] * com[i, 1] + A[i, 2, 2] * com[i, 2]
+        w0, w1, w2 = Z[i, 3], Z[i, 4], Z[i, 5]
+        out[0] += m * (Z[i, 0] + w1 * g2 - w2 * g1)
+        out[1] += m * (Z[i, 1] + w2 * g0 - w0 * g2)
+        out[2] += m * (Z[i, 2] + w0 * g1 - w1 * g0)
+
+
+@njit(cache=True)
 def body_terms_kernel(mass, com, inertia, gravity, A, r, Z, has_vel, Mb, Qb, scratch):
     """Per-body M_i into Mb (n,6,6) and gravity + velocity terms added into Qb (n,6).
     scratch: (>= 11, 3), so that nothing is allocated per call."""

@@ -1,0 +1,116 @@
+"""Wall and CPU seconds per model second of the in-house seismic mode, and its compile time.
+
+    python benchmarks/bench_seismic.py [--repeats 3] [--scipy] [--no-compile] [--out out/bench]
+
+- cases: a FEMA P695 record window (nearfield-pulse:1, record seconds 10-13, the pulse) and a whole
+  record (nearfield-pulse:1, full length, scaled by WHOLE_SCALE so the plate stays within the rod's
+  reach), at the default solver settings (DOP853, rtol 1e-7, max_step 1e-3, outputs every 1 ms),
+  ``repeats`` times after a warm-up, interleaved; median. ``--scipy`` adds the scipy-driven path on
+  the window (the reference the compiled one replaced).
+- compile: a fresh process with an empty numba cache (NUMBA_CACHE_DIR) runs a short seismic window;
+  a second fresh process on that now-warm cache runs it again. Their difference is compilation.
+Single-machine numbers: quote them with the machine's load (recorded in the JSON).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from nsd_core.device.ground import fema_record
+from nsd_core.device.isolation import default_structure
+from nsd_core.device.params import Params
+from nsd_core.device.seismic import seismic_summary, simulate_seismic
+
+WHOLE_SCALE = 0.2  # 0.3 reaches the rod (|u| = l_d at 2.78 s): exit 4
+CASES = {"window nearfield-pulse:1 [10, 13] s": dict(window=(10.0, 13.0)),
+         f"whole record nearfield-pulse:1, scale {WHOLE_SCALE}": dict(scale=WHOLE_SCALE)}
+FIRST_RUN = ("import time; t0 = time.perf_counter(); from nsd_core.device.seismic import simulate_seismic; "
+             "from nsd_core.device.ground import Harmonic; from nsd_core.device.isolation import default_structure; "
+             "from nsd_core.device.params import Params; "
+             "simulate_seismic(Params(), default_structure(), Harmonic(0.8, 2.0, 30.0, duration=0.05)); "
+             "print(time.perf_counter() - t0)")
+
+
+def first_run_seconds(cache_dir: str) -> tuple[float, float]:
+    """(wall, CPU) seconds of a fresh process's import and first short seismic run."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=cache_dir)
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    out = subprocess.run([sys.executable, "-c", FIRST_RUN], env=env, capture_output=True, text=True, check=True)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
+    return float(out.stdout.strip().splitlines()[-1]), cpu
+
+
+def compile_times() -> dict:
+    with tempfile.TemporaryDirectory() as cache:
+        cold, cold_cpu = first_run_seconds(cache)
+        warm, warm_cpu = first_run_seconds(cache)
+    return {"cold_cache_first_run_s": cold, "warm_cache_first_run_s": warm, "compile_s": cold - warm,
+            "cold_cache_first_run_cpu_s": cold_cpu, "warm_cache_first_run_cpu_s": warm_cpu,
+            "compile_cpu_s": cold_cpu - warm_cpu}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--scipy", action="store_true", help="also time the scipy-driven path on the window")
+    ap.add_argument("--no-compile", action="store_true", help="skip the cold-cache compile measurement")
+    ap.add_argument("--out", default="out/bench")
+    args = ap.parse_args()
+    report = {"machine": platform.platform(), "cpus": os.cpu_count(), "load_average_start": os.getloadavg()}
+    if not args.no_compile:
+        report["compile"] = compile_times()
+        print("compile [s]: " + ", ".join(f"{k} {v:.1f}" for k, v in report["compile"].items()))
+    p, s = Params(), default_structure()
+    runs = {name: fema_record("nearfield-pulse", 1, **kw) for name, kw in CASES.items()}
+    backends = {name: "auto" for name in runs}
+    if args.scipy:
+        name = next(iter(CASES))
+        runs[name + " (scipy path)"] = runs[name]
+        backends[name + " (scipy path)"] = "scipy"
+    simulate_seismic(p, s, runs[next(iter(runs))], duration=0.05)  # warm-up: load compiled code
+    wall = {k: [] for k in runs}
+    cpu = {k: [] for k in runs}
+    last = {}
+    for _ in range(max(1, args.repeats)):
+        for name, gm in runs.items():  # interleaved, so load changes hit every case alike
+            t0, c0 = time.perf_counter(), time.process_time()
+            last[name] = simulate_seismic(p, s, gm, backend=backends[name])
+            wall[name].append(time.perf_counter() - t0)
+            cpu[name].append(time.process_time() - c0)
+    rows = []
+    for name, r in last.items():
+        T = r.stats["model_time"]
+        summ = seismic_summary(r)
+        row = {"case": name, "backend": r.stats["backend"], "model_s": T, "runs": len(wall[name]),
+               "median_wall_s": statistics.median(wall[name]), "median_cpu_s": statistics.median(cpu[name]),
+               "wall_s_per_model_s": statistics.median(wall[name]) / T,
+               "cpu_s_per_model_s": statistics.median(cpu[name]) / T, "steps": r.stats["steps"],
+               "nfev": r.stats["nfev"], "peak_u_m": summ["peak_displacement"]["value"],
+               "energy_relative_residual": summ["energy"]["relative_residual"],
+               "outside_working_range": summ["outside_working_range"]}
+        rows.append(row)
+        print(f"{name}: {T:.2f} model s, median {row['median_wall_s']:.2f} s wall, {row['median_cpu_s']:.2f} s CPU: "
+              f"{row['wall_s_per_model_s']:.3f} wall s / model s, {row['cpu_s_per_model_s']:.3f} CPU s / model s; "
+              f"{row['steps']} steps, {row['nfev']} rhs, peak |u| {1e3 * row['peak_u_m']:.2f} mm, "
+              f"energy residual {row['energy_relative_residual']:.1e}")
+    report["cases"] = rows
+    report["load_average_end"] = os.getloadavg()
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    tmp = out / "bench_seismic.json.tmp"
+    tmp.write_text(json.dumps(report, indent=2))
+    tmp.replace(out / "bench_seismic.json")
+
+
+if __name__ == "__main__":
+    main()
