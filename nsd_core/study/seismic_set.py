@@ -282,7 +282,7 @@ def _row(set_: str, rid: int, group: dict, recs: dict, peers: list[str]) -> tupl
             reason = rec["metrics"].get("reason", "error")
             if worst in ("ok", "missing") or REASONS[reason] < REASONS.get(worst, 0):
                 worst = reason  # a solver failure (3) outranks a rod reach (4): the set is incomplete
-            reasons.append(f"{name}: {rec['error']}")
+            reasons.append(f"{'device' if name == 'semirecursive' else name}: {rec['error']}")
             entry["runs"][name]["error"] = rec["error"]
             if reason == "rod_reach" and name == "semirecursive":
                 row["rod_reach_t"] = rec["metrics"].get("t")
