@@ -145,3 +145,53 @@ def test_a_record_that_reaches_the_rod_is_kept_in_its_row_and_the_others_run(tmp
     s = json.loads((out / "records" / "nearfield-pulse_1" / "summary.json").read_text())
     assert s["status"] == "failed" and s["reason"] == "rod_reach"
     assert table["2"]["status"] == "ok"
+
+
+def _not_blank(png):
+    import matplotlib.image as mpimg
+    img = mpimg.imread(png)
+    return png.stat().st_size > 20_000 and float(np.std(img)) > 0.02
+
+
+def test_report_pages_of_a_set_run_exist_and_are_not_blank(set_run, tmp_path):
+    out, _ = set_run
+    rep = tmp_path / "report"
+    p = nsd("report", "--from", str(out), "--out", str(rep))
+    assert p.returncode == 0, p.stderr
+    pngs = sorted(rep.glob("*.png"))
+    names = [png.name for png in pngs]
+    assert names[0] == "01_set_table.png" and (rep / "validation.pdf").stat().st_size > 10_000
+    for rid in (2, 3):
+        for kind in ("response", "loops", "energy"):
+            assert any(n.endswith(f"{kind}_nearfield-pulse_{rid}.png") for n in names), (kind, rid, names)
+    assert all(_not_blank(png) for png in pngs)
+
+
+def test_report_of_a_single_run_with_a_peer_and_of_a_compare_folder_with_seismic_cases(set_run, tmp_path):
+    """A single run: its pages; a compare folder's seismic/<case>__<engine>.csv: the same pages added."""
+    from reports.seismic_report import compare_seismic_pages
+    out, _ = set_run
+    single = out / "records" / "nearfield-pulse_2"
+    rep = tmp_path / "single"
+    p = nsd("report", "--from", str(single), "--out", str(rep))
+    assert p.returncode == 0, p.stderr
+    assert sorted(x.name for x in rep.glob("*.png")) == [
+        "01_response_nearfield-pulse_2.png", "02_loops_nearfield-pulse_2.png", "03_energy_nearfield-pulse_2.png"]
+    cmp_dir = tmp_path / "compare"
+    (cmp_dir / "seismic").mkdir(parents=True)
+    for eng in ("semirecursive", "mujoco"):  # the format seisgate writes: nsd seismic's columns
+        (cmp_dir / "seismic" / f"pulse2__{eng}.csv").write_bytes((single / "seismic.csv").read_bytes())
+    stems = [s for s, _ in compare_seismic_pages(cmp_dir)]
+    assert stems == ["response_seismic_case_pulse2", "loops_seismic_case_pulse2", "energy_seismic_case_pulse2"]
+
+
+def test_report_bad_seismic_folder_exit_2_nothing_written(tmp_path, capsys):
+    from nsd_cli.main import main
+    src = tmp_path / "src"
+    src.mkdir()
+    (src / "seismic.csv").write_text("t [s],u [m]\n0,0\n1,1\n")
+    out = tmp_path / "rep"
+    code = main(["report", "--from", str(src), "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2 and "malformed (no column 'x')" in err and len(err.strip().splitlines()) == 1, err
+    assert not out.exists()
