@@ -47,9 +47,11 @@ def code_fingerprint() -> str:
 def job_key(case: Case, engine: str) -> str:
     """What a kept run depends on: the engine, its parameters, the drive, its settings, the code."""
     d = case.drive
-    text = json.dumps([engine, case.params_for(engine).to_dict(), [d.amplitude, d.frequency, d.direction_deg,
-                       d.cycles, d.samples_per_cycle], case.settings.get(engine, {}), code_fingerprint()],
-                      sort_keys=True, default=str)
+    drive = dict(d.describe(), samples_per_cycle=d.samples_per_cycle, minor=d.minor)
+    if d._table is not None:  # a path read from a file: its content, not its name
+        drive["table"] = hashlib.sha256(Path(d.path).read_bytes()).hexdigest()
+    text = json.dumps([engine, case.params_for(engine).to_dict(), drive, case.settings.get(engine, {}),
+                       code_fingerprint()], sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:20]
 
 

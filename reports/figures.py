@@ -147,7 +147,7 @@ def stiffness_figure(data, group: dict):
     for r, c, name in group["cells"]:
         ax = fig.add_subplot(gs[r, c])
         case = _case(data, name)
-        ks = []
+        ks, shown = [], []
         for e in data.engines:
             if (name, e) in data.results:
                 res = data.results[(name, e)]
@@ -158,6 +158,7 @@ def stiffness_figure(data, group: dict):
                 ax.plot(u[keep] * 1e3, k / 1e3, **style(e))
                 # the y-range ignores the turning point (u -> A, du -> 0), where dF/du is noise
                 ks.append(k[u[keep] < 0.97 * case["amplitude"]])
+                shown.append(k[np.isfinite(k)])
         run = data.run(name, data.reference)
         summ = run.get("summary") or next((data.run(name, e).get("summary") for e in data.engines
                                           if data.run(name, e).get("summary")), None)
@@ -169,6 +170,11 @@ def stiffness_figure(data, group: dict):
         lo, hi = np.percentile(allk, [1, 99])
         pad = 0.12 * (hi - lo or 1.0)
         ax.set_ylim(lo - pad, hi + pad)
+        every = np.concatenate(shown) / 1e3
+        if every.size and (every.max() > hi + pad or every.min() < lo - pad):  # say so, never hide it
+            ax.text(0.02, 0.03, f"axis clipped: dF/du spans {every.min():.3g} ... {every.max():.3g} kN/m "
+                    "(near u = A)", transform=ax.transAxes, fontsize=7,
+                    va="bottom", bbox=dict(fc="white", ec="none", alpha=0.8, pad=1))
         if summ:
             regs = summ.get("stiffness_regions", [])
             for i, reg in enumerate(regs):  # each region runs on to where the next one starts

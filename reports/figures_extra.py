@@ -145,9 +145,9 @@ def cost_figure(data):
             if pts:
                 sp.loglog([p["wall_time"] for p in pts], [max(p["max_dF_rel"], FLOOR) for p in pts], ":",
                           color=color(e), marker=".", lw=1.0)
-    lim = data.summary["tolerances"].get("max_dF_rel")
-    if lim:
-        sp.axhline(lim, color=RED, ls="--", lw=1.0)
+    lims = _engine_limits(data, "max_dF_rel")
+    for e, lim in lims.items():
+        sp.axhline(lim, color=color(e) if len(lims) > 1 else RED, ls="--", lw=1.0)
     if not sp.lines:
         no_data(sp, "no engine besides the reference ran: nothing to compare")
     else:
@@ -158,8 +158,9 @@ def cost_figure(data):
     handles = [Line2D([], [], ls="", marker=marks[n], color="w", mec="k", mfc=GREY, label=n) for n in names
                if len(names) <= len(MARKERS)]  # more cases than markers: one point per case, unlabelled
     handles += [Line2D([], [], ls="", marker="o", color=color(e), label=e) for e in data.engines if e != ref]
-    if lim:
-        handles.append(Line2D([], [], color=RED, ls="--", label=f"limit {fmt(lim)}"))
+    for e, lim in lims.items():
+        handles.append(Line2D([], [], color=color(e) if len(lims) > 1 else RED, ls="--",
+                              label=f"{e} limit {fmt(lim)}" if len(lims) > 1 else f"limit {fmt(lim)}"))
     if isinstance(conv, dict) and conv and "error" not in conv:
         handles.append(Line2D([], [], color=GREY, ls=":", marker=".", label="convergence study"))
     if len(handles) > 6:  # below the panel, clear of the points and the limit line
@@ -167,6 +168,17 @@ def cost_figure(data):
     else:
         sp.legend(handles=handles, fontsize=7, loc="best", ncol=2)
     return fig
+
+
+def _engine_limits(data, metric: str) -> dict:
+    """The limit each engine's points are judged by: its own default where the tolerance file gives
+    per-engine limits (results.json "tolerances_by_engine"), else the one global limit."""
+    by_engine = data.summary.get("tolerances_by_engine") or {}
+    own = {e: by_engine[e][metric] for e in data.engines if e != data.reference and metric in by_engine.get(e, {})}
+    if own:
+        return own
+    lim = data.summary["tolerances"].get(metric)
+    return {"all": lim} if lim else {}
 
 
 def benchmark_figure(data):

@@ -35,3 +35,24 @@ def test_gate_on_a_circle_passes_and_catches_a_turned_pattern(tmp_path):
     assert "region_shift_rel" not in ok  # stiffness regions belong to lines
     bad = {m["metric"]: m for m in gated if m["case"] == "circle_turned"}
     assert not bad["max_dF_rel"]["pass"]
+
+
+def test_a_kept_run_is_reused_only_for_the_same_path(tmp_path):
+    """The resume key holds the whole drive: the path's kind, its minor axis, and a table's content
+    (not only its name), so an edited case never reuses a run of another motion."""
+    from comparisons.config import Case
+    from comparisons.harness import job_key
+    from nsd_core.device.drive import Drive
+    from nsd_core.device.params import Params
+
+    def key(**drive):
+        return job_key(Case(name="c", drive=Drive(amplitude=0.015, frequency=1.0, **drive), params=Params()),
+                       "semirecursive")
+
+    assert len({key(), key(path="circle"), key(path="figure8"), key(path="figure8", minor=0.005)}) == 4
+    table = tmp_path / "path.csv"
+    table.write_text("t,x,y\n0,0,0\n0.3,0.01,0\n0.6,0.005,0.004\n2,0,0\n")
+    first = key(path=str(table))
+    assert key(path=str(table)) == first
+    table.write_text("t,x,y\n0,0,0\n0.3,0.012,0\n0.6,0.005,0.004\n2,0,0\n")
+    assert key(path=str(table)) != first
