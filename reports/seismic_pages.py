@@ -135,6 +135,11 @@ def set_table_figure(index: dict):
                                          ("peak_a_abs_ratio", "peak |a_abs| ratio", "#d95f02"))):
         vals = [r.get(key) if r.get(key) is not None else np.nan for r in rows]
         ax.bar(xs + (k - 0.5) * 0.38, vals, 0.38, color=col, label=lab)
+    for x, r in zip(xs, rows):  # a record without ratios says why where its bars would be
+        if r.get("peak_u_ratio") is None:
+            why = r.get("status", "?") + (f"\nt = {r['rod_reach_t']:.3g} s" if r.get("rod_reach_t") is not None else "")
+            ax.text(x, 0.05, why, ha="center", va="bottom", fontsize=7, color="#c0001a", rotation=90)
+    ax.set_xlim(-0.7, len(rows) - 0.3)
     ax.axhline(1.0, color=GREY, lw=0.8)
     ax.set_xticks(xs, ids)
     ax.set(xlabel="record", ylabel="with device / supports alone")
