@@ -15,13 +15,13 @@ HELP = "write the validation report (PDF and PNGs) from a results folder"
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--from", dest="source", required=True, metavar="DIR",
-                   help="results folder written by nsd compare --out DIR")
+                   help="results folder written by nsd compare --out DIR or nsd seismic --out DIR")
     p.add_argument("--out", required=True, metavar="DIR2", help="folder for validation.pdf and the PNGs")
 
 
 def run(args) -> int:
-    from reports.build import build_report, load
-    load(args.source)  # the results folder first: bad input is found before anything else
+    from reports.build import build_report, check_source
+    check_source(args.source)  # the results folder first: bad input is found before anything else
     out = check_out_dir("--out", args.out)
     paths = build_report(args.source, out)
     print(f"report: {paths['pdf']} ({len(paths['pngs'])} pages, {paths['seconds']:.1f} s); "

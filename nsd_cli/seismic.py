@@ -1,6 +1,13 @@
 """``nsd seismic``: the isolated structure on the device under a ground motion (Table 1, second row)
 -> DIR/seismic.csv (time series, header with units) and DIR/summary.json (peaks, residual
-displacement, energy balance, working-range events). Exit 4 when |u| reaches the rod's length."""
+displacement, energy balance, working-range events). Exit 4 when |u| reaches the rod's length.
+
+``--set NAME [--records 1,3,5-7]``: every record of a FEMA P695 set, each with and without the device
+(the isolation effect), resumable and parallel (``nsd_core.study.seismic_set``) -> DIR/set.csv,
+DIR/set.json, DIR/records/<set>_<id>[_nodevice]/. A record whose run fails is kept in its row with
+its reason and the others still run. Exit 0 every run ran; 3 any run failed in the solver (or
+otherwise did not finish), which outranks 4 any run reached the rod's length or left the laws'
+validity (the set's numbers are then incomplete in a way the physics explains)."""
 from __future__ import annotations
 
 import argparse
@@ -21,7 +28,9 @@ SYNTHETIC = {  # kind -> (class name, allowed keys -> constructor argument)
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    src = p.add_mutually_exclusive_group(required=True)
+    # --set SET (a record set, below) shares its option with --set NAME=VALUE (a parameter): a value
+    # with '=' overrides a parameter as in every command, one without names the record set
+    src = p.add_mutually_exclusive_group()
     src.add_argument("--record", metavar="SET:ID",
                      help="FEMA P695 record: farfield:1..22, nearfield:1..28, nearfield-pulse:1..14, "
                           "nearfield-no-pulse:15..28")
@@ -44,9 +53,17 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--structure", action="append", default=[], metavar="NAME=VALUE",
                    help="override the default isolated structure: mass, stiffness, damping, "
                         "radius_of_gyration, support_radius (SI)")
+    p.add_argument("--records", default=None, metavar="1,3,5-7", help="with --set: these records only (default all)")
+    p.add_argument("--workers", type=int, default=None, help="with --set: local processes (default: the cores)")
+    p.add_argument("--scheduler", default=None, help="with --set: address of a running Dask scheduler")
+    p.add_argument("--retry-failed", action="store_true", help="with --set: run records stored as failed again")
     add_param_arguments(p)
+    for action in p._actions:
+        if action.dest == "set":
+            action.metavar, action.help = "NAME=VALUE|SET", ("override one parameter (NAME=VALUE); or, without '=', "
+                                                             "run every record of a set (see --records)")
     add_solver_arguments(p)
-    p.add_argument("--out", required=True, help="output folder")
+    p.add_argument("--out", required=True, help="output folder (with --set SET: resumable)")
 
 
 def ground_motion(args):
@@ -88,7 +105,28 @@ def ground_motion(args):
     return getattr(ground, cls)(**values)
 
 
+def split_set_option(args) -> None:
+    """args.record_set: the --set value without '=' (a record set), args.set: the parameter overrides."""
+    sets = [v for v in args.set if "=" not in v]
+    if len(sets) > 1:
+        raise ParameterError(f"--set {sets[1]!r}: one record set per run (already --set {sets[0]!r})")
+    args.set = [v for v in args.set if "=" in v]
+    args.record_set = sets[0] if sets else None
+    given = [n for n, v in (("--record", args.record), ("--ground", args.ground), ("--set", args.record_set)) if v]
+    if len(given) != 1:
+        raise ParameterError(f"{' and '.join(given) or 'input'}: give exactly one of --record SET:ID, "
+                             "--ground KIND:K=V,... or --set SET")
+
+
 def run(args) -> int:
+    split_set_option(args)
+    if args.record_set is not None:
+        return run_set(args)
+    for name in ("records", "workers", "scheduler"):
+        if getattr(args, name) is not None:
+            raise ParameterError(f"--{name}: applies to --set only")
+    if args.retry_failed:
+        raise ParameterError("--retry-failed: applies to --set only")
     from nsd_core.device.isolation import default_structure
     from nsd_core.device.model import DEFAULT_SOLVER
     from nsd_core.device.params import parse_set
@@ -141,3 +179,72 @@ def run(args) -> int:
         print("  WARNING: the ropes went slack: part of this run lies outside the device's working range")
     print(f"wrote {out / 'seismic.csv'} and {out / 'summary.json'}")
     return 0
+
+
+def _window(text: str | None) -> list[float] | None:
+    if text is None:
+        return None
+    parts = text.split(",")
+    try:
+        if len(parts) != 2:
+            raise ValueError
+        return [float(parts[0]), float(parts[1])]
+    except ValueError:
+        raise ParameterError(f"--window {text!r}: expected T0,T1 (two numbers, record seconds)") from None
+
+
+def run_set(args) -> int:
+    """--set: the record set, with and without the device (see the module docstring for exit codes)."""
+    import os
+    from comparisons.harness import code_fingerprint
+    from comparisons.seismic import parse_seismic_engines, run_seismic, seismic_metrics
+    from nsd_cli.options import WORKERS_MAX, whole
+    from nsd_cli.sweep import check_scheduler
+    from nsd_core.device.ground import SIMILITUDE_TIME_FACTOR, fema_record, set_name
+    from nsd_core.device.isolation import default_structure
+    from nsd_core.device.model import DEFAULT_SOLVER
+    from nsd_core.device.params import parse_set
+    from nsd_core.study.seismic_set import parse_records, record_runs, run_set as run_record_set
+    set_ = set_name(args.record_set)
+    records = parse_records(args.records, set_)
+    if args.no_device:
+        raise ParameterError("--no-device: --set runs every record both with and without the device")
+    engines = parse_seismic_engines(args.engines)
+    if engines[0] != "semirecursive":
+        raise ParameterError(f"--engines {args.engines!r}: semirecursive (the reference) must come first")
+    workers = os.cpu_count() or 1 if args.workers is None else args.workers
+    whole("--workers", workers, 1, WORKERS_MAX)
+    tf = SIMILITUDE_TIME_FACTOR if args.time_factor is None else args.time_factor
+    window = _window(args.window)
+    fema_record(set_, records[0], scale=args.scale, time_factor=tf, window=window, rotate_deg=args.rotate,
+                normalised=not args.raw)  # checks scale, time factor, rotation (one line each)
+    ground = {"scale": float(args.scale), "time_factor": float(tf), "window": window,
+              "rotate_deg": float(args.rotate), "normalised": not args.raw}
+    params = base_params(args)
+    structure = default_structure(params)
+    if args.structure:
+        structure = structure.replace(**parse_set(args.structure))
+    numbers = {k: v for k, v in structure.to_dict().items() if k != "provenance"}
+    solver = {**DEFAULT_SOLVER, **solver_settings(args)}
+    for name in ("duration", "dt_out"):
+        v = getattr(args, name)
+        if v is not None and not (math.isfinite(v) and v > 0):
+            raise ParameterError(f"--{name.replace('_', '-')} = {v}: must be a finite number > 0 (s)")
+    runs = record_runs(set_, records, ground, params.to_dict(), numbers, args.duration, args.dt_out, solver,
+                       code_fingerprint(), peers=tuple(engines[1:]))  # every record's window checked here
+    check_scheduler(args.scheduler)
+    out = check_out_dir("--out", args.out)
+    index = run_record_set(runs, out, workers=workers, scheduler=args.scheduler, retry_failed=args.retry_failed,
+                           run_engine=run_seismic, compare=seismic_metrics, tally=args.tally)
+    c = index["counts"]
+    for row in index["rows"]:
+        ratio = ("" if row.get("peak_u_ratio") is None else
+                 f", peak |u| {row['peak_u'] * 1e3:.2f} / {row['peak_u_nodevice'] * 1e3:.2f} mm (ratio "
+                 f"{row['peak_u_ratio']:.3f}), peak |a_abs| ratio {row['peak_a_abs_ratio']:.3f}")
+        print(f"  {row['set']}:{row['id']} {row['earthquake']}: {row['status']}{ratio}"
+              + (f" [{row['reason']}]" if row["reason"] else ""))
+    print(f"{len(index['rows'])} records: " + ", ".join(f"{c[k]} {k}" for k in c if k == "ok" or c[k])
+          + f"; {index['elapsed_this_run_s']:.1f} s; wrote {out / 'set.csv'} and {out / 'set.json'}")
+    if c["solver_failure"] or c["error"] or c["missing"]:
+        return 3
+    return 4 if c["rod_reach"] or c["outside_validity"] else 0

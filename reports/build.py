@@ -202,27 +202,44 @@ def pages(data: ReportData) -> list[tuple[str, Callable]]:
     if data.polar:
         from reports.polar import polar_figure
         out.append(("polar", lambda: polar_figure(data.polar)))
+    if (data.root / "seismic").is_dir():
+        from reports.seismic_report import compare_seismic_pages
+        out.extend(compare_seismic_pages(data.root))
     return out
+
+
+def check_source(results_dir: str | Path) -> None:
+    """Read and check --from (an nsd compare or an nsd seismic folder) before anything is written."""
+    from reports.seismic_report import is_seismic, seismic_plan
+    if str(results_dir).strip() and is_seismic(results_dir):
+        seismic_plan(results_dir)
+    else:
+        load(results_dir)
 
 
 def build_report(results_dir: str | Path, out_dir: str | Path) -> dict[str, Any]:
     """Write ``out_dir/validation.pdf`` and ``out_dir/NN_page.png``; returns their paths."""
     import matplotlib.pyplot as plt
     from matplotlib.backends.backend_pdf import PdfPages
+    from reports.seismic_report import is_seismic, seismic_plan
     start = time.perf_counter()
-    data = load(results_dir)  # everything is checked before anything is written
+    if str(results_dir).strip() and is_seismic(results_dir):  # an nsd seismic folder (single run or --set)
+        plan, title = seismic_plan(results_dir)
+        footer = f"{title}  |  {time.strftime('%Y-%m-%d')}"
+    else:
+        data = load(results_dir)  # everything is checked before anything is written
+        plan, title = pages(data), "NSD cross-validation report"
+        footer = f"{title}  |  {data.summary.get('date', '')}  |  revision {data.summary.get('git_revision', '?')}"
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     pdf_path = out / "validation.pdf"
     tmp_pdf = out / f".validation.pdf.{os.getpid()}.tmp"
     written: list[tuple[Path, Path]] = []
     try:
-        with plt.rc_context(style.RC), PdfPages(tmp_pdf, metadata={"Title": "NSD cross-validation report"}) as pdf:
-            plan = pages(data)
+        with plt.rc_context(style.RC), PdfPages(tmp_pdf, metadata={"Title": title}) as pdf:
             for n, (stem, make) in enumerate(plan, start=1):
                 fig = make()
-                style.footer(fig, f"NSD cross-validation report  |  {data.summary.get('date', '')}  |  "
-                                  f"revision {data.summary.get('git_revision', '?')}  |  page {n} of {len(plan)}")
+                style.footer(fig, f"{footer}  |  page {n} of {len(plan)}")
                 pdf.savefig(fig)
                 png = out / f"{n:02d}_{stem}.png"
                 tmp = out / f".{png.name}.{os.getpid()}.tmp.png"

@@ -19,7 +19,7 @@ from pathlib import Path
 
 
 from nsd_core import __version__
-from nsd_core.device.results import atomic_write_json, write_columns, write_csv
+from nsd_core.device.results import RunResult, atomic_write_json, write_columns, write_csv
 from nsd_core.study.designs import Design
 
 
@@ -39,14 +39,18 @@ class Store:
             return None
 
     def save(self, d: Design, out: dict) -> dict:
+        """Store one finished job (a Design or any frozen dataclass with ``key``): its files, then result.json."""
         folder = self.folder(d.key)
         rec = {"key": d.key, "status": out["status"], "error": out["error"], "design": asdict(d),
                "metrics": out["metrics"], "wall_time": out["wall_time"], "version": __version__,
                "stored_at": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
         if out["status"] == "ok":
-            write_csv(folder / "cycle.csv", out["result"])
-            write_columns(folder / "steady.csv", out["steady"])
-            rec["files"] = {"cycle": "cycle.csv", "steady": "steady.csv"}
+            # a sweep's design: its run and steady cycle; other jobs (a record of a seismic set) name
+            # their own files, {file name: RunResult or {column: (unit, values)}}
+            files = out.get("files") or {"cycle.csv": out["result"], "steady.csv": out["steady"]}
+            for name, data in files.items():
+                (write_csv if isinstance(data, RunResult) else write_columns)(folder / name, data)
+            rec["files"] = {Path(name).stem: name for name in files}
         else:
             rec["traceback"] = out.get("traceback")
         atomic_write_json(folder / "result.json", rec)  # last: marks the design finished

@@ -56,6 +56,19 @@ def _dask(designs: list[Design], job, address) -> Iterator[tuple[Design, dict]]:
             client.close()
 
 
+def run_jobs(pending: list, job, workers: int = 1, scheduler=None) -> Iterator[tuple]:
+    """(item, job(item)) for every item as each finishes: on the Dask cluster at ``scheduler``, on
+    ``workers`` local processes, or in this process (one worker or one item). Each item needs a
+    ``key``; ``job`` must be picklable (a module-level function or a partial of one)."""
+    if not pending:
+        return iter(())
+    if scheduler is not None:
+        return _dask(pending, job, scheduler)
+    if workers > 1 and len(pending) > 1:
+        return _local(pending, job, min(workers, len(pending)))
+    return _serial(pending, job)
+
+
 def run_sweep(designs: list[Design], out: str | Path, workers: int = 1, scheduler=None,
               retry_failed: bool = False, log: Callable[[str], None] | None = None,
               run_engine: EngineRunner | None = None, tally: dict | None = None) -> dict:
@@ -80,15 +93,7 @@ def run_sweep(designs: list[Design], out: str | Path, workers: int = 1, schedule
         f"stored, {len(pending)} to run on "
         + (f"Dask at {scheduler}" if scheduler is not None else f"{workers} local worker(s)"))
     start = time.perf_counter()
-    if not pending:
-        runner = iter(())
-    elif scheduler is not None:
-        runner = _dask(pending, job, scheduler)
-    elif workers > 1 and len(pending) > 1:
-        runner = _local(pending, job, min(workers, len(pending)))
-    else:
-        runner = _serial(pending, job)
-    for n, (d, res) in enumerate(runner, 1):
+    for n, (d, res) in enumerate(run_jobs(pending, job, workers, scheduler), 1):
         rec = store.save(d, res)
         tally["kept"] += 1
         tail = f"{res['wall_time']:.1f} s" if rec["status"] == "ok" else f"FAILED: {rec['error']}"

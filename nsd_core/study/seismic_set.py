@@ -1,0 +1,312 @@
+"""Record-set runs of the seismic mode (issue 14, item 6): the isolation effect over a FEMA P695 set.
+
+Every record of a set runs twice on the in-house engine, on the device (plate, mass, supports and
+device) and on the supports alone (``device=False``): the ratio of the two peaks is what the device
+does for that record. Peer engines, when asked for, run the device case too.
+
+Each run is a job of the sweep's store (``nsd_core.study.store``, ``designs/<key>/``) keyed by all its
+inputs (set, record, scale, window, rotation, time factor, parameters, structure, output interval,
+solver settings, engine) and ``code`` (the caller's fingerprint of the source and installed
+versions), and runs through the sweep's runners (local processes or Dask): a killed set run resumes
+where it stopped, and a record's result is computed once. A run that fails (the rod cannot reach,
+a state outside the laws' validity, a solver failure) is stored as failed with its reason; the
+other records still run. Outputs (written after every job is stored, each file atomically):
+
+    set.csv, set.json                      one row per record (see SET_COLUMNS)
+    records/<set>_<id>[_nodevice]/         seismic.csv, summary.json (as ``nsd seismic`` writes them),
+                                           seismic_<engine>.csv for peers
+"""
+from __future__ import annotations
+
+import csv
+import hashlib
+import io
+import json
+import re
+import shutil
+import sys
+import time
+import traceback
+from dataclasses import asdict, dataclass, field
+from functools import partial
+from pathlib import Path
+from typing import Callable
+
+from nsd_core.device.params import ParameterError
+from nsd_core.device.results import RunResult, atomic_write_json, atomic_write_text, read_csv
+from nsd_core.study.store import Store
+from nsd_core.study.sweep import run_jobs
+
+# how a failed run is classed, and the exit code the set run gives for it (nsd_cli.seismic)
+REASONS = {"rod_reach": 4, "outside_validity": 4, "solver_failure": 3, "error": 3}
+SET_COLUMNS = [  # name, unit ("" for text)
+    ("set", ""), ("id", ""), ("earthquake", ""), ("station", ""), ("magnitude", "-"), ("pulse", ""),
+    ("pga", "m/s^2"), ("peak_u", "m"), ("peak_u_nodevice", "m"), ("peak_u_ratio", "-"),
+    ("peak_a_abs", "m/s^2"), ("peak_a_abs_nodevice", "m/s^2"), ("peak_a_abs_ratio", "-"),
+    ("residual_u", "m"), ("energy_residual", "-"), ("outside_working_range", ""), ("rod_reach_t", "s"),
+    ("status", ""), ("reason", ""),
+]
+PEER_COLUMNS = ("du", "dF", "da")  # per peer engine: max|difference| / max over the record (comparisons.seismic)
+
+
+@dataclass(frozen=True)
+class RecordRun:
+    """One engine's run of one record of a set, with or without the device."""
+    set: str
+    record: int
+    device: bool
+    ground: dict        # fema_record's options: scale, time_factor, window, rotate_deg, normalised
+    params: dict        # Params.to_dict()
+    structure: dict     # Structure's numbers (mass, radius_of_gyration, stiffness, damping, support_radius)
+    duration: float | None
+    dt_out: float
+    engine: str = "semirecursive"
+    settings: dict = field(default_factory=dict)
+    code: str = ""      # fingerprint of the code and versions: a kept run is reused by the same code only
+
+    @property
+    def key(self) -> str:
+        return hashlib.sha256(json.dumps(asdict(self), sort_keys=True).encode()).hexdigest()[:20]
+
+    @property
+    def folder(self) -> str:
+        return f"{self.set}_{self.record}" + ("" if self.device else "_nodevice")
+
+    @property
+    def label(self) -> str:
+        return self.folder + ("" if self.engine == "semirecursive" else f"@{self.engine}")
+
+
+def parse_records(text: str | None, set_: str) -> list[int]:
+    """'1,3,5-7' -> [1, 3, 5, 6, 7] within the set's IDs (None: all of them); ParameterError otherwise."""
+    from nsd_core.device.ground import SETS, set_name
+    ids = SETS[set_name(set_)][1]
+    if text is None:
+        return list(ids)
+    allowed = f"IDs {ids.start}..{ids.stop - 1} of {set_name(set_)}, as a list like 1,3,5-7"
+    out: list[int] = []
+    for item in text.split(","):
+        m = re.fullmatch(r"\s*(\d+)\s*(?:-\s*(\d+)\s*)?", item)
+        if not m:
+            raise ParameterError(f"--records {text!r}: {item.strip()!r} is not an ID or a range; allowed: {allowed}")
+        lo, hi = int(m.group(1)), int(m.group(2) or m.group(1))
+        if lo > hi or lo not in ids or hi not in ids:
+            raise ParameterError(f"--records {text!r}: {item.strip()} lies outside the set; allowed: {allowed}")
+        out.extend(i for i in range(lo, hi + 1) if i not in out)
+    return out
+
+
+def record_runs(set_: str, records: list[int], ground: dict, params: dict, structure: dict,
+                duration: float | None, dt_out: float, settings: dict, code: str,
+                peers: tuple[str, ...] = ()) -> list[RecordRun]:
+    """Per record: the device run, the supports-alone run, and a device run per peer engine.
+    Every record's ground motion is built here once, so a window outside a record is bad input
+    (ParameterError) before anything runs."""
+    from nsd_core.device.ground import fema_record, set_name
+    set_ = set_name(set_)
+    runs = []
+    for rid in records:
+        fema_record(set_, rid, **ground)
+        common = dict(set=set_, record=rid, ground=ground, params=params, structure=structure, duration=duration,
+                      dt_out=dt_out, code=code)
+        runs.append(RecordRun(device=True, settings=settings, **common))
+        runs.append(RecordRun(device=False, settings=settings, **common))
+        runs.extend(RecordRun(device=True, engine=e, **common) for e in peers)
+    return runs
+
+
+def _failure(err: Exception) -> tuple[str, float | None]:
+    """(reason, time) of a failed run: the engine's errors name the time as 't = ... s'."""
+    from nsd_core.device.drive import DriveError
+    from nsd_core.device.seismic import RodReachError
+    from nsd_core.engine.errors import SolverError
+    m = re.search(r"t = ([-+0-9.eE]+) s", str(err))
+    t = float(m.group(1)) if m else None
+    if isinstance(err, RodReachError):
+        return "rod_reach", t
+    if isinstance(err, DriveError):
+        return "outside_validity", t
+    if isinstance(err, SolverError):
+        return "solver_failure", t
+    return "error", t
+
+
+def run_record(r: RecordRun, run_engine: Callable | None = None) -> dict:
+    """Run one record on one engine (in a worker); never raises for the run's own failure.
+
+    ``run_engine(name, params, structure, ground, duration=, dt_out=, settings=) -> RunResult`` runs
+    a peer engine (comparisons.seismic.run_seismic: the study layer knows only the in-house engine)."""
+    start = time.perf_counter()
+    try:
+        from nsd_core.device.ground import fema_record
+        from nsd_core.device.isolation import Structure
+        from nsd_core.device.params import Params
+        from nsd_core.device.results import versions
+        from nsd_core.device.seismic import seismic_summary, simulate_seismic
+        params, structure = Params(**r.params), Structure(**r.structure)
+        motion = fema_record(r.set, r.record, **r.ground)
+        if r.engine == "semirecursive":
+            result = simulate_seismic(params, structure, motion, duration=r.duration, dt_out=r.dt_out,
+                                      device=r.device, **r.settings)
+        elif run_engine is None:
+            raise ParameterError(f"engine {r.engine!r}: this set run was given no runner for other engines")
+        else:
+            result = run_engine(r.engine, params, structure, motion, duration=r.duration, dt_out=r.dt_out,
+                                settings=r.settings or None)
+        summary = {"ground": motion.describe(), "structure": structure.to_dict(), "device": r.device,
+                   **seismic_summary(result), "solver": result.stats, "wall_time": result.stats.get("wall_time"),
+                   "versions": versions(), "params": params.describe()}
+        return {"status": "ok", "error": None, "metrics": summary, "files": {"seismic.csv": result},
+                "wall_time": time.perf_counter() - start}
+    except Exception as e:  # noqa: BLE001 - the run failed; record it and let the set go on
+        reason, t = _failure(e)
+        return {"status": "failed", "error": f"{type(e).__name__}: {e}".splitlines()[0],
+                "metrics": {"reason": reason, "t": t}, "traceback": traceback.format_exc(limit=6),
+                "wall_time": time.perf_counter() - start}
+
+
+def run_set(runs: list[RecordRun], out: str | Path, workers: int = 1, scheduler=None, retry_failed: bool = False,
+            log: Callable[[str], None] | None = None, run_engine: Callable | None = None,
+            compare: Callable[[RunResult, RunResult], dict] | None = None, tally: dict | None = None) -> dict:
+    """Run every record run not yet stored, store each as it finishes, then write the set's outputs.
+    ``compare(reference, peer) -> {du, dF, da, ...}`` measures a peer against the in-house run."""
+    log = log or (lambda s: print(s, file=sys.stderr, flush=True))
+    store = Store(out)
+    pending = [r for r in runs if (rec := store.load(r.key)) is None or (retry_failed and rec["status"] == "failed")]
+    tally = tally if tally is not None else {}
+    tally.update(kept=len(runs) - len(pending), total=len(runs), dir=str(store.root))
+    log(f"seismic set: {len(runs)} runs ({len({(r.set, r.record) for r in runs})} records), "
+        f"{len(runs) - len(pending)} already stored, {len(pending)} to run on "
+        + (f"Dask at {scheduler}" if scheduler is not None else f"{workers} local worker(s)"))
+    start = time.perf_counter()
+    job = partial(run_record, run_engine=run_engine)
+    for n, (r, res) in enumerate(run_jobs(pending, job, workers, scheduler), 1):
+        rec = store.save(r, res)
+        tally["kept"] += 1
+        tail = f"{res['wall_time']:.1f} s" if rec["status"] == "ok" else f"FAILED: {rec['error']}"
+        log(f"  [{n}/{len(pending)}] {r.label}: {tail}")
+    index = write_set(runs, store, compare)
+    index["elapsed_this_run_s"] = time.perf_counter() - start
+    return index
+
+
+def _copy(src: Path, dest: Path) -> None:
+    dest.parent.mkdir(parents=True, exist_ok=True)
+    tmp = dest.with_name(f".{dest.name}.tmp")
+    shutil.copyfile(src, tmp)
+    tmp.replace(dest)
+
+
+def write_set(runs: list[RecordRun], store: Store, compare=None) -> dict:
+    """records/<folder>/ per run, set.csv and set.json from what the store holds; returns set.json's
+    content. Deterministic: a resumed set run writes the same bytes as an uninterrupted one."""
+    root = store.root
+    by_record: dict[tuple[str, int], dict[str, RecordRun]] = {}
+    for r in runs:
+        by_record.setdefault((r.set, r.record), {})["nodevice" if not r.device else r.engine] = r
+    rows, entries = [], []
+    peers = sorted({r.engine for r in runs if r.engine != "semirecursive"})
+    for (set_, rid), group in by_record.items():
+        recs = {name: store.load(r.key) for name, r in group.items()}
+        for name, r in group.items():  # the per-record folders, as nsd seismic writes them
+            rec = recs[name]
+            if rec is None or r.engine != "semirecursive":
+                continue
+            folder = root / "records" / r.folder
+            summary = dict(rec["metrics"])
+            if rec["status"] == "ok":
+                _copy(store.folder(r.key) / "seismic.csv", folder / "seismic.csv")
+                for peer in peers if r.device else ():
+                    prec = recs.get(peer)
+                    if prec and prec["status"] == "ok":
+                        _copy(store.folder(group[peer].key) / "seismic.csv", folder / f"seismic_{peer}.csv")
+                        if compare is not None:
+                            summary.setdefault("engines", {})[peer] = {
+                                **compare(read_csv(folder / "seismic.csv"), read_csv(folder / f"seismic_{peer}.csv")),
+                                "wall_time": prec["metrics"].get("wall_time")}
+                    elif prec:
+                        summary.setdefault("engines", {})[peer] = {"status": "failed", "error": prec["error"]}
+            else:
+                summary = {"status": "failed", "error": rec["error"], **rec["metrics"]}
+            atomic_write_json(folder / "summary.json", summary)
+            recs[name] = {**rec, "summary": summary}
+        row, entry = _row(set_, rid, group, recs, peers)
+        rows.append(row)
+        entries.append(entry)
+    text = io.StringIO()
+    w = csv.writer(text, lineterminator="\n")
+    w.writerow([f"{n} [{u}]" if u else n for n, u in SET_COLUMNS]
+               + [f"{p}_{c} [-]" for p in peers for c in PEER_COLUMNS])
+    for row in rows:
+        w.writerow([_cell(row.get(n)) for n, _ in SET_COLUMNS] + [_cell(row.get(f"{p}_{c}")) for p in peers
+                                                                   for c in PEER_COLUMNS])
+    atomic_write_text(root / "set.csv", text.getvalue())
+    first = runs[0] if runs else None
+    counts = {s: sum(row["status"] == s for row in rows) for s in ["ok", "missing", *REASONS]}
+    index = {"set": first.set if first else None, "records": [row["id"] for row in rows],
+             "ground": first.ground if first else None, "structure": first.structure if first else None,
+             "engines": ["semirecursive", *peers], "columns": dict(SET_COLUMNS), "counts": counts,
+             "rows": rows, "entries": entries, "code": first.code if first else None,
+             "notes": "peak_*_ratio = with the device / supports alone; energy_residual = the largest "
+                      "|E_residual| / max|E_input| of the record's in-house runs; rod_reach_t: model time at "
+                      "which |u| reached the rod's length (that run stopped)"}
+    atomic_write_json(root / "set.json", index)
+    return index
+
+
+def _cell(v) -> str:
+    if v is None:
+        return ""
+    if isinstance(v, float):
+        return f"{v:.10g}"
+    return str(v)
+
+
+def _row(set_: str, rid: int, group: dict, recs: dict, peers: list[str]) -> tuple[dict, dict]:
+    """One row of set.csv and the record's entry in set.json (folders, statuses, errors)."""
+    from nsd_core.device.ground import record_metadata
+    meta = record_metadata(set_, rid)
+    row = {"set": set_, "id": rid, "earthquake": f"{meta.get('EarthquakeName', '')} ({meta.get('EarthquakeYear', '')})",
+           "station": meta.get("RecordingStationName", ""), "magnitude": float(meta.get("EarthquakeMagnitude")),
+           "pulse": "yes" if meta.get("pulse") else "no"}
+    entry = {"set": set_, "id": rid, "runs": {}}
+    worst, reasons = "ok", []
+    for name, rec in recs.items():
+        entry["runs"][name] = {"key": group[name].key, "status": rec["status"] if rec else "missing",
+                               "folder": f"records/{group[name].folder}" if group[name].engine == "semirecursive"
+                               else f"designs/{group[name].key}"}
+        if rec is None:
+            worst = worst if worst in REASONS else "missing"
+            reasons.append(f"{name}: not run")
+        elif rec["status"] != "ok":
+            reason = rec["metrics"].get("reason", "error")
+            if worst in ("ok", "missing") or REASONS[reason] < REASONS.get(worst, 0):
+                worst = reason  # a solver failure (3) outranks a rod reach (4): the set is incomplete
+            reasons.append(f"{'device' if name == 'semirecursive' else name}: {rec['error']}")
+            entry["runs"][name]["error"] = rec["error"]
+            if reason == "rod_reach" and name == "semirecursive":
+                row["rod_reach_t"] = rec["metrics"].get("t")
+    dev, nod = (recs.get(k) for k in ("semirecursive", "nodevice"))
+    s_dev = dev["summary"] if dev and dev["status"] == "ok" else None
+    s_nod = nod["summary"] if nod and nod["status"] == "ok" else None
+    for s in (s_dev, s_nod):
+        if s is not None:
+            row["pga"] = s["peak_ground_acceleration"]["value"]
+    if s_dev:
+        row.update(peak_u=s_dev["peak_displacement"]["value"], peak_a_abs=s_dev["peak_absolute_acceleration"]["value"],
+                   residual_u=s_dev["residual_displacement"]["u"],
+                   outside_working_range="yes" if s_dev["outside_working_range"] else "no")
+        for p in peers:
+            m = s_dev.get("engines", {}).get(p, {})
+            for c in PEER_COLUMNS:
+                row[f"{p}_{c}"] = m.get(c)
+    if s_nod:
+        row.update(peak_u_nodevice=s_nod["peak_displacement"]["value"],
+                   peak_a_abs_nodevice=s_nod["peak_absolute_acceleration"]["value"])
+    if s_dev and s_nod:
+        row["peak_u_ratio"] = row["peak_u"] / max(row["peak_u_nodevice"], 1e-300)
+        row["peak_a_abs_ratio"] = row["peak_a_abs"] / max(row["peak_a_abs_nodevice"], 1e-300)
+    residuals = [s["energy"]["relative_residual"] for s in (s_dev, s_nod) if s]
+    row["energy_residual"] = max(residuals) if residuals else None
+    row["status"], row["reason"] = worst, "; ".join(reasons)
+    return row, entry

@@ -1,0 +1,95 @@
+"""The seismic report from an ``nsd seismic`` folder: a single run (summary.json, seismic.csv and
+seismic_<engine>.csv) or a set run (set.json, records/<set>_<id>[_nodevice]/), and the seismic
+cases of an ``nsd compare`` folder (``seismic/<case>__<engine>.csv``). Everything is read and
+checked before anything is written (ParameterError, one line)."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Callable
+
+from nsd_core.device.params import ParameterError
+from nsd_core.device.results import read_csv
+
+from reports import seismic_pages as sp
+
+NEEDED = ("t", "x", "y", "ax_abs", "ay_abs", "device_Fx", "device_Fy")
+
+
+def is_seismic(folder) -> bool:
+    """An nsd seismic folder (not an nsd compare one)."""
+    root = Path(folder)
+    return not (root / "results.json").is_file() and ((root / "set.json").is_file()
+                                                     or (root / "seismic.csv").is_file())
+
+
+def _runs(folder: Path, ref_name: str = "seismic.csv") -> dict:
+    runs = {}
+    for path in [folder / ref_name, *sorted(folder.glob("seismic_*.csv"))]:
+        eng = "semirecursive" if path.name == ref_name else path.stem[len("seismic_"):]
+        try:
+            r = read_csv(path, eng)
+        except (OSError, ValueError, IndexError) as e:
+            raise ParameterError(f"{path}: not a readable seismic CSV ({' '.join(str(e).split())[:120]})") from None
+        missing = [c for c in NEEDED if c not in r.columns]
+        if missing:
+            raise ParameterError(f"{path}: malformed (no column {missing[0]!r})")
+        runs[eng] = r
+    return runs
+
+
+def _run_pages(label: str, runs: dict) -> list[tuple[str, Callable]]:
+    stem = label.replace(":", "_").replace(" ", "_")
+    out = [(f"response_{stem}", lambda: sp.response_figure(f"Seismic response: {label}", runs)),
+           (f"loops_{stem}", lambda: sp.loops_figure(f"Device loops during the record: {label}", runs))]
+    if any("E_input" in r.columns for r in runs.values()):
+        out.append((f"energy_{stem}", lambda: sp.energy_figure(f"Energy balance: {label}", runs)))
+    return out
+
+
+def seismic_plan(folder) -> tuple[list[tuple[str, Callable]], str]:
+    """(file stem, figure function) per page and the footer's title for an nsd seismic folder."""
+    root = Path(folder)
+    if (root / "set.json").is_file():
+        try:
+            index = json.loads((root / "set.json").read_text())
+            rows = index["rows"]
+        except (OSError, ValueError, KeyError, TypeError) as e:
+            raise ParameterError(f"{root / 'set.json'}: malformed ({' '.join(str(e).split())[:100]})") from None
+        plan = [("set_table", lambda: sp.set_table_figure(index))]
+        for row in rows:
+            folder = root / "records" / f"{row['set']}_{row['id']}"
+            if row.get("status") == "ok" and (folder / "seismic.csv").is_file():
+                runs = _runs(folder)
+                plan += _run_pages(f"{row['set']}:{row['id']}", runs)
+        return plan, f"NSD seismic report  |  record set {index.get('set')}"
+    runs = _runs(root)
+    try:
+        summary = json.loads((root / "summary.json").read_text())
+        summary = summary if isinstance(summary, dict) else {}
+        ground = summary.get("ground", {})
+        label = (f"{ground['set']}:{ground['record']}" if "record" in ground else ground.get("kind", "run"))
+    except (OSError, ValueError, AttributeError, KeyError):
+        summary, label = {}, "run"
+    if summary.get("device") is False:
+        label += " (supports alone)"
+    return _run_pages(label, runs), f"NSD seismic report  |  {label}"
+
+
+def compare_seismic_pages(root) -> list[tuple[str, Callable]]:
+    """Pages for the seismic cases of an nsd compare folder (<root>/seismic/<case>__<engine>.csv)."""
+    folder = Path(root) / "seismic"
+    cases: dict[str, dict] = {}
+    for path in sorted(folder.glob("*__*.csv")):
+        case, _, eng = path.stem.partition("__")
+        try:
+            r = read_csv(path, eng)
+        except (OSError, ValueError, IndexError):
+            continue  # an optional extra: a file that cannot be read is left out, the validation stays
+        if all(c in r.columns for c in NEEDED):
+            cases.setdefault(case, {})[eng] = r
+    plan = []
+    for case, runs in cases.items():
+        runs = dict(sorted(runs.items(), key=lambda kv: kv[0] != "semirecursive"))
+        plan += _run_pages(f"seismic case {case}", runs)
+    return plan
