@@ -243,6 +243,17 @@ class MujocoEngine:
         "step_loop": "native",       # "native": compiled loop calling mj_step; "python": one call a step
     }
 
+    @property
+    def seismic_default_settings(self) -> dict:
+        from comparisons.engines.mujoco_seismic import DEFAULTS
+        return DEFAULTS
+
+    def run_seismic(self, params: Params, structure, ground, duration=None, dt_out=1e-3,
+                    settings: dict | None = None) -> RunResult:
+        """The seismic mode (comparisons/engines/mujoco_seismic.py, imported here: it builds on this module)."""
+        from comparisons.engines.mujoco_seismic import MujocoSeismic
+        return MujocoSeismic().run(params, structure, ground, duration=duration, dt_out=dt_out, settings=settings)
+
     def run(self, params: Params, drive: Drive, settings: dict | None = None, zero_drive: bool = False) -> RunResult:
         """Run the drive; ``zero_drive`` holds u = 0 (the rest-state check) on the same time grid."""
         s = merged_settings(self.default_settings, settings, self.name)
