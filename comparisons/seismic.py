@@ -45,9 +45,9 @@ def parse_ground(text, where: str = "--ground"):
 
 def gate_metrics(ref, other) -> dict:
     """The gated seismic metrics of ``other`` against the reference ``ref`` (names of
-    comparisons.config.METRICS): max_du_rel, max_dF_rel (device force vector), peak_u_rel, peak_a_rel."""
+    comparisons.config.METRICS): max_du_rel, max_dF_device_rel (device force vector), peak_u_rel, peak_a_rel."""
     m = seismic_metrics(ref, other)
-    return {"max_du_rel": m["du"], "max_dF_rel": m["dF"], "peak_u_rel": abs(m["peak_displacement"]),
+    return {"max_du_rel": m["du"], "max_dF_device_rel": m["dF"], "peak_u_rel": abs(m["peak_displacement"]),
             "peak_a_rel": abs(m["peak_absolute_acceleration"])}
 
 
