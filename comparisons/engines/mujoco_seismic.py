@@ -36,7 +36,7 @@ from nsd_core.device.results import RunResult
 from nsd_core.device.seismic import seismic_units
 
 from comparisons.engines.base import EngineError, check_step_count, merged_settings
-from comparisons.engines.mujoco_engine import wall_rod_loop_mjcf
+from comparisons.engines.mujoco_mjcf import wall_rod_loop_mjcf
 from comparisons.engines.perturb import perturbed, perturbed_structure
 
 DEFAULTS = {"timestep": 1e-5, "solref_factor": 2.0, "solimp": [0.9999, 0.9999, 0.001, 0.5, 2.0],
