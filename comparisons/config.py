@@ -23,6 +23,12 @@ METRICS = {  # name -> (unit, description)
     "closure_max": ("m", "largest loop-closure violation"),
     "tracking_error": ("m", "largest drive tracking error"),
     "energy_balance_rel": ("-", "|drive work - (wires + spring hysteresis + stored change)| / drive work, steady cycle"),
+    # seismic cases (mode = "seismic"): on the time histories, every output time
+    "max_du_rel": ("-", "seismic: max |u - u_ref| / max |u_ref|, u the plate's plan displacement relative to the base"),
+    "max_dF_device_rel": ("-", "seismic: max |F - F_ref| / max |F_ref|, F the device's force vector on the plate"),
+    "peak_u_rel": ("-", "seismic: |peak |u| - reference| / reference"),
+    "peak_a_rel": ("-", "seismic: |peak |a_abs| - reference| / reference, a_abs the plate's absolute acceleration"),
+    "energy_residual_rel": ("-", "seismic: the engine's own max |E_residual| / max |E_input| (frame of the ground)"),
 }
 CASE_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._+-]{0,63}")
 MAX_CASES = 200
@@ -30,6 +36,51 @@ DEFAULT_KEYS = {"amplitude", "frequency", "direction_deg", "cycles", "samples_pe
                 "path", "minor"}
 CASE_KEYS = {"name", "amplitude", "frequency", "direction_deg", "cycles", "samples_per_cycle", "params",
              "settings", "engine_params", "path", "minor"}
+
+
+SEISMIC_KEYS = {"name", "mode", "record", "ground", "scale", "window", "rotate_deg", "duration", "dt_out",
+                "device", "params", "settings", "engine_params", "structure"}
+SEISMIC_DURATION_MAX = 60.0   # model seconds: bounds one case's work
+SEISMIC_OUTPUTS_MAX = 1_000_000
+
+
+@dataclass(frozen=True)
+class SeismicCase:
+    """A seismic case (Table 1, second row): the ground drives the base, the plate with the isolated
+    mass is free. ``ground`` is the GroundMotion; ``spec`` what the case file said (for job_key)."""
+    name: str
+    ground: Any
+    spec: dict
+    params: Params
+    duration: float | None = None
+    dt_out: float = 1e-3
+    device: bool = True
+    structure: dict = field(default_factory=dict)                 # overrides of the default structure
+    settings: dict[str, dict] = field(default_factory=dict)
+    engine_params: dict[str, Params] = field(default_factory=dict)
+    mode = "seismic"
+
+    def params_for(self, engine: str) -> Params:
+        return self.engine_params.get(engine, self.params)
+
+    @property
+    def model_duration(self) -> float:
+        return self.ground.duration if self.duration is None else self.duration
+
+    def isolated_structure(self):
+        """The default structure of the case's (nominal) parameters with the case's overrides: the
+        same structure for every engine (engine_params change the device, not the structure)."""
+        from nsd_core.device.isolation import default_structure
+        st = default_structure(self.params)
+        return st.replace(**self.structure) if self.structure else st
+
+    def describe(self) -> dict[str, Any]:
+        return {"name": self.name, "mode": "seismic", **self.spec, "duration": self.model_duration,
+                "dt_out": self.dt_out, "device": self.device, "structure": self.structure,
+                "params_overridden": {k: v for k, v in self.params.to_dict().items() if v != getattr(Params(), k)},
+                "settings": self.settings,
+                "engine_params": {e: {k: v for k, v in p.to_dict().items() if v != getattr(self.params, k)}
+                                  for e, p in self.engine_params.items()}}
 
 
 @dataclass(frozen=True)
@@ -171,6 +222,16 @@ def load_cases(path: str | Path | None = None, base_params: Params | None = None
     out, names = [], set()
     for i, raw in enumerate(raw_cases):
         raw = _table(f"case[{i}]", raw)
+        if raw.get("mode", "drive") != "drive":
+            if raw.get("mode") != "seismic":
+                raise ParameterError(f"case[{i}].mode = {raw.get('mode')!r}: allowed: drive, seismic")
+            case = _seismic_case(i, raw, d_params, base_params)
+            if case.name in names:
+                raise ParameterError(f"case[{i}].name = {case.name!r}: duplicate case name")
+            names.add(case.name)
+            out.append(case)
+            continue
+        raw = {k: v for k, v in raw.items() if k != "mode"}
         merged = {**{k: v for k, v in defaults.items() if k not in ("params", "settings")}, **raw}
         bad = set(merged) - CASE_KEYS
         if bad:
@@ -200,6 +261,73 @@ def load_cases(path: str | Path | None = None, base_params: Params | None = None
                          _engine_tables(f"case {name}.engine_params", raw.get("engine_params", {})).items()}
         out.append(Case(name, drive, params, settings, engine_params))
     return out
+
+
+def _seismic_case(i: int, raw: dict, d_params: dict, base_params: Params | None) -> SeismicCase:
+    """A [[case]] with mode = "seismic": every key typed and in range here (one line, exit 2). Of
+    [defaults] only params apply ([defaults] drive keys and drive settings do not)."""
+    from comparisons.seismic import parse_ground
+    from nsd_core.device import ground as gm
+    bad = set(raw) - SEISMIC_KEYS
+    if bad:
+        raise ParameterError(f"case[{i}].{sorted(bad)[0]}: unknown key for a seismic case; allowed: "
+                             f"{', '.join(sorted(SEISMIC_KEYS))}")
+    name = _case_name(f"case[{i}].name", raw.get("name", f"case{i}"))
+    w = f"case {name}"
+    if ("record" in raw) == ("ground" in raw):
+        raise ParameterError(f"{w}: give exactly one of record = \"SET:ID\" or ground = \"pulse:...\"/\"harmonic:...\"")
+    spec: dict[str, Any] = {}
+    if "record" in raw:
+        rec = raw["record"]
+        set_, sep, rid = rec.partition(":") if isinstance(rec, str) else ("", "", "")
+        if not sep or not rid.strip():
+            raise ParameterError(f"{w}.record = {rec!r}: expected \"SET:ID\", e.g. \"nearfield-pulse:1\"")
+        scale = _number(f"{w}.scale", raw.get("scale", 1.0))
+        rotate = _number(f"{w}.rotate_deg", raw.get("rotate_deg", 0.0), positive=False)
+        window = raw.get("window")
+        if window is not None:
+            if not isinstance(window, list) or len(window) != 2:
+                raise ParameterError(f"{w}.window = {window!r}: must be [t0, t1] in the record's seconds")
+            window = [_number(f"{w}.window[{j}]", v, positive=False) for j, v in enumerate(window)]
+        try:
+            motion = gm.fema_record(set_, rid.strip(), scale=scale, window=window, rotate_deg=rotate)
+        except ParameterError as e:
+            raise ParameterError(f"{w}: {e}") from None
+        spec = {"record": rec, "scale": scale, "window": window, "rotate_deg": rotate}
+    else:
+        for k in ("scale", "window", "rotate_deg"):
+            if k in raw:
+                raise ParameterError(f"{w}.{k}: applies to record = \"SET:ID\" only")
+        motion = parse_ground(raw["ground"], f"{w}.ground")
+        spec = {"ground": raw["ground"]}
+    duration = None if "duration" not in raw else _number(f"{w}.duration", raw["duration"])
+    total = motion.duration if duration is None else duration
+    if not total <= SEISMIC_DURATION_MAX:
+        raise ParameterError(f"{w}.duration = {total:g} s: at most {SEISMIC_DURATION_MAX:g} model seconds "
+                             "(a window of the record: window = [t0, t1])")
+    dt_out = _number(f"{w}.dt_out", raw.get("dt_out", 1e-3))
+    if not dt_out <= total or total / dt_out > SEISMIC_OUTPUTS_MAX:
+        raise ParameterError(f"{w}.dt_out = {dt_out!r}: must be in [duration / {SEISMIC_OUTPUTS_MAX}, duration]")
+    device = raw.get("device", True)
+    if not isinstance(device, bool):
+        raise ParameterError(f"{w}.device = {device!r}: must be true or false")
+    structure = _table(f"{w}.structure", raw.get("structure", {}))
+    for k, v in structure.items():
+        _number(f"{w}.structure.{k}", v, positive=k != "damping")
+    overrides = {**d_params, **_table(f"{w}.params", raw.get("params", {}))}
+    base = base_params.to_dict() if base_params else {}
+    params = load_params(None, {**base, **overrides})
+    settings = {e: dict(t) for e, t in _engine_tables(f"{w}.settings", raw.get("settings", {})).items()}
+    engine_params = {e: params.replace(**p) for e, p in
+                     _engine_tables(f"{w}.engine_params", raw.get("engine_params", {})).items()}
+    case = SeismicCase(name, motion, spec, params, duration, dt_out, device, dict(structure), settings, engine_params)
+    if structure:
+        from nsd_core.device.isolation import Structure
+        names_ = Structure.__dataclass_fields__.keys() - {"provenance"}
+        for k in structure:
+            if k not in names_:
+                raise ParameterError(f"{w}.structure.{k}: unknown; allowed: {', '.join(sorted(names_))}")
+    return case
 
 
 class Limits(dict):

@@ -20,8 +20,9 @@ from nsd_core.device.cycle import analyse
 from nsd_core.device.results import RunResult, atomic_write_json, read_csv, versions, write_csv
 from nsd_core.engine.workers import worker_pool
 
-from comparisons.config import METRICS, Case
-from comparisons.engines import REFERENCE, run_job
+from comparisons.config import METRICS, Case, SeismicCase
+from comparisons.engines import REFERENCE, run_job, run_seismic_job
+from comparisons.seismic import gate_metrics, own_seismic_metrics
 from comparisons.convergence import convergence_study
 from comparisons.metrics import own_metrics, pair_metrics
 from comparisons.energy import energy_balance_rel
@@ -45,7 +46,13 @@ def code_fingerprint() -> str:
 
 
 def job_key(case: Case, engine: str) -> str:
-    """What a kept run depends on: the engine, its parameters, the drive, its settings, the code."""
+    """What a kept run depends on: the engine, its parameters, the drive (a seismic case: the ground
+    input, duration, output interval, device, structure), its settings, the code."""
+    if isinstance(case, SeismicCase):
+        text = json.dumps(["seismic", engine, case.params_for(engine).to_dict(), case.params.to_dict(), case.spec,
+                           case.ground.describe(), case.model_duration, case.dt_out, case.device, case.structure,
+                           case.settings.get(engine, {}), code_fingerprint()], sort_keys=True, default=str)
+        return hashlib.sha256(text.encode()).hexdigest()[:20]
     d = case.drive
     drive = dict(d.describe(), samples_per_cycle=d.samples_per_cycle, minor=d.minor)
     if d._table is not None:  # a path read from a file: its content, not its name
@@ -57,7 +64,7 @@ def job_key(case: Case, engine: str) -> str:
 
 def load_kept(out: Path, case: Case, engine: str) -> dict | None:
     """A run an earlier call kept for exactly these inputs, or None."""
-    csv = out / "cycles" / f"{case.name}__{engine}.csv"
+    csv = run_csv(out, case, engine)
     try:
         rec = json.loads(csv.with_suffix(".json").read_text())
         if rec.get("key") != job_key(case, engine) or not csv.is_file():
@@ -67,6 +74,15 @@ def load_kept(out: Path, case: Case, engine: str) -> dict | None:
         return None
     res.stats = rec.get("stats", {})
     return {"status": "ok", "result": res, "wall_time": rec.get("wall_time", 0.0)}
+
+
+def run_csv(out: Path, case, engine: str) -> Path:
+    """cycles/CASE__ENGINE.csv for a drive case, seismic/CASE__ENGINE.csv (nsd seismic's columns) for a seismic one."""
+    return out / ("seismic" if isinstance(case, SeismicCase) else "cycles") / f"{case.name}__{engine}.csv"
+
+
+def _model_time(case) -> float:
+    return case.model_duration if isinstance(case, SeismicCase) else case.drive.cycles / case.drive.frequency
 
 
 def git_revision() -> str:
@@ -88,7 +104,8 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
     dict) is kept up to date with ``kept``, ``total`` and ``dir`` for the interrupt message."""
     out = Path(out_dir)
     jobs = [(c, e) for c in cases for e in engines]
-    jobs.sort(key=lambda j: -ENGINE_COST.get(j[1], 1.0) * j[0].drive.cycles / j[0].drive.frequency)
+    # longest first: seismic runs cost ~10x a drive run per model second (loaded 2-core machine)
+    jobs.sort(key=lambda j: -ENGINE_COST.get(j[1], 1.0) * _model_time(j[0]) * (10.0 if isinstance(j[0], SeismicCase) else 1.0))
     workers = workers or min(len(jobs), os.cpu_count() or 1)
     runs: dict[str, dict[str, dict]] = {c.name: {} for c in cases}
     results: dict[tuple[str, str], RunResult] = {}
@@ -101,7 +118,7 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
         if job["status"] == "ok":
             res: RunResult = job["result"]
             results[(case.name, engine)] = res
-            csv = out / "cycles" / f"{case.name}__{engine}.csv"
+            csv = run_csv(out, case, engine)
             if not resumed:  # the CSV first, then the record that marks it complete
                 write_csv(csv, res)
                 atomic_write_json(csv.with_suffix(".json"), {"key": job_key(case, engine), "engine": engine,
@@ -112,11 +129,16 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
                 res = read_csv(csv, engine)
                 res.stats = job["result"].stats
                 results[(case.name, engine)] = res
-            entry.update(csv=str(csv.relative_to(out)), stats=res.stats, resumed=resumed,
-                         summary=analyse(res, case.drive.amplitude, case.drive.frequency, case.drive.path),
-                         wall_time_per_cycle=res.stats.get("wall_time", job["wall_time"]) / case.drive.cycles)
-            log(f"  {case.name:16s} {engine:14s} {'kept' if resumed else 'ok':6s} "
-                f"{entry['wall_time_per_cycle']:7.2f} s/cycle")
+            wall = res.stats.get("wall_time", job["wall_time"])
+            entry.update(csv=str(csv.relative_to(out)), stats=res.stats, resumed=resumed)
+            if isinstance(case, SeismicCase):
+                entry.update(summary=_seismic_peaks(res), wall_time_per_model_second=wall / case.model_duration)
+                rate = f"{entry['wall_time_per_model_second']:7.2f} s/model s"
+            else:
+                entry.update(summary=analyse(res, case.drive.amplitude, case.drive.frequency, case.drive.path),
+                             wall_time_per_cycle=wall / case.drive.cycles)
+                rate = f"{entry['wall_time_per_cycle']:7.2f} s/cycle"
+            log(f"  {case.name:16s} {engine:14s} {'kept' if resumed else 'ok':6s} {rate}")
         else:
             entry["message"] = job["message"]
             log(f"  {case.name:16s} {engine:14s} FAILED {job['message']}")
@@ -129,10 +151,19 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
             keep(c, e, done, resumed=True)
         else:
             todo.append((c, e))
+    structures: dict[str, Any] = {}
+
+    def submit(pool, c, e):
+        if isinstance(c, SeismicCase):
+            if c.name not in structures:   # derived once per case, the same for every engine
+                structures[c.name] = c.isolated_structure()
+            return pool.submit(run_seismic_job, e, c.params_for(e), structures[c.name], c.ground, c.duration,
+                               c.dt_out, c.settings.get(e, {}))
+        return pool.submit(run_job, e, c.params_for(e), c.drive, c.settings.get(e, {}))
+
     if todo:
         with worker_pool(min(workers, len(todo))) as pool:
-            futures = {pool.submit(run_job, e, c.params_for(e), c.drive, c.settings.get(e, {})): (c, e)
-                       for c, e in todo}
+            futures = {submit(pool, c, e): (c, e) for c, e in todo}
             for fut in as_completed(futures):
                 case, engine = futures[fut]
                 keep(case, engine, fut.result())
@@ -147,7 +178,9 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
                      for m in failed_metrics] + [f"{c}: {e} failed: {runs[c][e]['message']}" for c, e in failed_engines]
         + (["nothing was gated: no metric of the tolerance file was measured"] if nothing_gated else []),
         "date": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds"), "git_revision": git_revision(),
-        "reference": REFERENCE, "engines": engines, "cases": [c.describe() for c in cases],
+        "reference": REFERENCE, "engines": engines,
+        "cases": [c.describe() for c in cases if not isinstance(c, SeismicCase)],
+        "seismic_cases": [c.describe() for c in cases if isinstance(c, SeismicCase)],
         "tolerances": dict(tolerances), "tolerances_defaulted": list(getattr(tolerances, "defaulted", ())),
         "tolerances_by_engine": getattr(tolerances, "engines", {}),
         "metric_units": {k: v[0] for k, v in METRICS.items()},
@@ -174,6 +207,9 @@ def _metrics(cases, engines, tolerances, runs, results) -> list[dict]:
     pairs = [(e, REFERENCE, True) for e in others if REFERENCE in engines]
     pairs += [(a, b, False) for i, a in enumerate(others) for b in others[i + 1:]]
     for c in cases:
+        if isinstance(c, SeismicCase):
+            rows += _seismic_rows(c, engines, pairs, tolerances, results)
+            continue
         for e in engines:
             if (c.name, e) in results:
                 own = own_metrics(results[(c.name, e)])
@@ -191,6 +227,39 @@ def _metrics(cases, engines, tolerances, runs, results) -> list[dict]:
                     if (lim := limit_for(tolerances, a, c.name, k)) is not None:
                         rows.append(_row(c.name, a, b, k, v, lim, gated))
     return rows
+
+
+def _seismic_rows(c, engines, pairs, tolerances, results) -> list[dict]:
+    """A seismic case: each engine's own energy balance and closure, every engine against the reference
+    on the time histories (comparisons.seismic.gate_metrics)."""
+    rows = []
+    for e in engines:
+        if (c.name, e) in results:
+            for k, v in own_seismic_metrics(results[(c.name, e)]).items():
+                if (lim := limit_for(tolerances, e, c.name, k)) is not None:
+                    rows.append(_row(c.name, e, None, k, v, lim, True))
+    for a, b, gated in pairs:
+        if (c.name, a) in results and (c.name, b) in results:
+            for k, v in gate_metrics(results[(c.name, b)], results[(c.name, a)]).items():
+                if (lim := limit_for(tolerances, a, c.name, k)) is not None:
+                    rows.append(_row(c.name, a, b, k, v, lim, gated))
+    return rows
+
+
+def _seismic_peaks(r: RunResult) -> dict:
+    """Peaks of a seismic run (with their times) for results.json."""
+    import numpy as np
+    t = r["t"]
+
+    def peak(v):
+        k = int(np.argmax(v))
+        return {"value": float(v[k]), "t": float(t[k])}
+
+    out = {"peak_displacement": peak(np.hypot(r["x"], r["y"])),
+           "peak_absolute_acceleration": peak(np.hypot(r["ax_abs"], r["ay_abs"])),
+           "peak_device_force": peak(np.hypot(r["device_Fx"], r["device_Fy"]))}
+    out.update(own_seismic_metrics(r))
+    return out
 
 
 def _row(case, engine, reference, metric, value, limit, gated):

@@ -1,42 +1,65 @@
-"""The seismic mode across engines: one registry and the metrics on time histories (issue 14).
+"""The seismic mode across engines: ground inputs of a case and the metrics on time histories (issue 14).
 
-Every seismic engine has ``run(params, structure, ground, duration=None, dt_out=1e-3, settings=None)
--> RunResult`` with the columns of ``nsd_core.device.seismic`` it can measure (at least t, x, y,
-theta, ax_abs, ay_abs, device_Fx, device_Fy, cap_z) on the same output times.
+The engines' seismic runs are in the one registry (``comparisons.engines``: ``run_seismic_engine``,
+``run_seismic_job``); every one returns the columns of ``nsd_core.device.seismic`` it can measure
+(at least t, x, y, theta, ax_abs, ay_abs, device_Fx, device_Fy, cap_z) on the same output times.
 """
 from __future__ import annotations
-
-import importlib
 
 import numpy as np
 
 from nsd_core.device.params import ParameterError
 
-SEISMIC_ENGINES = {
-    "semirecursive": None,  # the reference: nsd_core.device.seismic.simulate_seismic
-    "mujoco": ("comparisons.engines.mujoco_seismic", "MujocoSeismic"),
-    "exudyn": ("comparisons.engines.exudyn_seismic", "ExudynSeismic"),
+SYNTHETIC = {  # kind -> (class name in nsd_core.device.ground, allowed keys -> constructor argument)
+    "harmonic": ("Harmonic", {"amplitude": "amplitude", "frequency": "frequency", "azimuth": "azimuth_deg",
+                              "duration": "duration"}),
+    "pulse": ("Pulse", {"velocity": "velocity", "frequency": "frequency", "gamma": "gamma", "phase": "phase_deg",
+                        "azimuth": "azimuth_deg"}),
 }
+REQUIRED = {"harmonic": ("amplitude", "frequency"), "pulse": ("velocity", "frequency")}
 
 
-def parse_seismic_engines(text: str) -> list[str]:
-    names = [e.strip() for e in text.split(",") if e.strip()]
-    for e in names:
-        if e not in SEISMIC_ENGINES:
-            raise ParameterError(f"--engines {e!r}: unknown engine; allowed: {', '.join(SEISMIC_ENGINES)}")
-    if not names or len(set(names)) != len(names):
-        raise ParameterError(f"--engines {text!r}: give each engine once")
-    return names
+def parse_ground(text, where: str = "--ground"):
+    """A synthetic ground motion from ``KIND:K=V,...`` (nsd seismic --ground, a case's ground = "...")."""
+    from nsd_core.device import ground
+    if not isinstance(text, str):
+        raise ParameterError(f"{where} = {text!r}: must be a string KIND:K=V,... (kinds: {', '.join(SYNTHETIC)})")
+    kind, _, rest = text.partition(":")
+    if kind not in SYNTHETIC:
+        raise ParameterError(f"{where} {kind!r}: unknown kind; allowed: {', '.join(SYNTHETIC)}")
+    cls, keys = SYNTHETIC[kind]
+    values = {}
+    for item in filter(None, (s.strip() for s in rest.split(","))):
+        k, sep, v = item.partition("=")
+        if not sep or k.strip() not in keys:
+            raise ParameterError(f"{where} {kind}: {item!r}: expected KEY=VALUE with KEY in {', '.join(keys)}")
+        try:
+            values[keys[k.strip()]] = float(v)
+        except ValueError:
+            raise ParameterError(f"{where} {kind}: {k.strip()} = {v!r}: not a number") from None
+    missing = [k for k in REQUIRED[kind] if keys[k] not in values]
+    if missing:
+        raise ParameterError(f"{where} {kind}: {', '.join(missing)} required (KEY=VALUE)")
+    return getattr(ground, cls)(**values)
 
 
-def run_seismic(name: str, params, structure, ground, duration=None, dt_out=1e-3, settings=None, **solver):
-    """One engine's seismic run (the in-house engine takes its solver options as keywords)."""
-    if SEISMIC_ENGINES[name] is None:
-        from nsd_core.device.seismic import simulate_seismic
-        return simulate_seismic(params, structure, ground, duration=duration, dt_out=dt_out, **solver)
-    module, cls = SEISMIC_ENGINES[name]
-    return getattr(importlib.import_module(module), cls)().run(params, structure, ground, duration=duration,
-                                                                dt_out=dt_out, settings=settings)
+def gate_metrics(ref, other) -> dict:
+    """The gated seismic metrics of ``other`` against the reference ``ref`` (names of
+    comparisons.config.METRICS): max_du_rel, max_dF_device_rel (device force vector), peak_u_rel, peak_a_rel."""
+    m = seismic_metrics(ref, other)
+    return {"max_du_rel": m["du"], "max_dF_device_rel": m["dF"], "peak_u_rel": abs(m["peak_displacement"]),
+            "peak_a_rel": abs(m["peak_absolute_acceleration"])}
+
+
+def own_seismic_metrics(run) -> dict:
+    """An engine's own checks on a seismic run: the energy balance in the frame of the ground,
+    max |E_residual| / max |E_input| (every term from the engine's own state), and loop closure."""
+    out = {}
+    if "E_residual" in run.columns and "E_input" in run.columns:
+        out["energy_residual_rel"] = float(np.max(np.abs(run["E_residual"])) / max(np.max(np.abs(run["E_input"])), 1e-300))
+    if "closure" in run.columns:
+        out["closure_max"] = float(np.max(np.abs(run["closure"])))
+    return out
 
 
 def seismic_metrics(ref, other) -> dict:

@@ -41,13 +41,18 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def check_settings(cases, engines, convergence=None) -> None:
     """Every engine's settings in every case (and the convergence study), checked by the engine's
     own ``check_settings`` before anything runs or is written: a bad setting is exit 2."""
+    from comparisons.config import SeismicCase
     from comparisons.engines import get_engine
-    from comparisons.engines.base import check_settings as check
+    from comparisons.engines.base import SeismicSettings, check_settings as check
     named = set(engines) | {e for c in cases for e in c.settings}
     for e in sorted(named):
         eng = get_engine(e)
         for c in cases:
-            check(eng, c.settings.get(e), f"case {c.name}: settings.{e}")
+            seismic = isinstance(c, SeismicCase)
+            check(SeismicSettings(eng) if seismic else eng, c.settings.get(e), f"case {c.name}: settings.{e}")
+            if seismic and not c.device and e != REFERENCE and e in engines:
+                raise ParameterError(f"case {c.name}.device = false: the supports alone run on the in-house engine "
+                                     f"only; run it with --engines {REFERENCE}")
     if convergence:
         check(get_engine(REFERENCE), convergence["reference"], "convergence.reference")
         for e, spec in convergence["sweep"].items():

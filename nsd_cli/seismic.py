@@ -19,14 +19,6 @@ from nsd_core.device.params import ParameterError
 
 HELP = "seismic response of the isolated structure (in-house engine)"
 
-SYNTHETIC = {  # kind -> (class name, allowed keys -> constructor argument)
-    "harmonic": ("Harmonic", {"amplitude": "amplitude", "frequency": "frequency", "azimuth": "azimuth_deg",
-                              "duration": "duration"}),
-    "pulse": ("Pulse", {"velocity": "velocity", "frequency": "frequency", "gamma": "gamma", "phase": "phase_deg",
-                        "azimuth": "azimuth_deg"}),
-}
-
-
 def add_arguments(p: argparse.ArgumentParser) -> None:
     # --set SET (a record set, below) shares its option with --set NAME=VALUE (a parameter): a value
     # with '=' overrides a parameter as in every command, one without names the record set
@@ -85,24 +77,8 @@ def ground_motion(args):
     for name in ("window", "time_factor"):
         if getattr(args, name) is not None:
             raise ParameterError(f"--{name.replace('_', '-')}: applies to --record only")
-    kind, _, rest = args.ground.partition(":")
-    if kind not in SYNTHETIC:
-        raise ParameterError(f"--ground {kind!r}: unknown kind; allowed: {', '.join(SYNTHETIC)}")
-    cls, keys = SYNTHETIC[kind]
-    values = {}
-    for item in filter(None, (s.strip() for s in rest.split(","))):
-        k, sep, v = item.partition("=")
-        if not sep or k.strip() not in keys:
-            raise ParameterError(f"--ground {kind}: {item!r}: expected KEY=VALUE with KEY in {', '.join(keys)}")
-        try:
-            values[keys[k.strip()]] = float(v)
-        except ValueError:
-            raise ParameterError(f"--ground {kind}: {k.strip()} = {v!r}: not a number") from None
-    required = {"harmonic": ("amplitude", "frequency"), "pulse": ("velocity", "frequency")}[kind]
-    missing = [k for k in required if keys[k] not in values]
-    if missing:
-        raise ParameterError(f"--ground {kind}: {', '.join(missing)} required (KEY=VALUE)")
-    return getattr(ground, cls)(**values)
+    from comparisons.seismic import parse_ground
+    return parse_ground(args.ground, "--ground")
 
 
 def split_set_option(args) -> None:
@@ -132,9 +108,10 @@ def run(args) -> int:
     from nsd_core.device.params import parse_set
     from nsd_core.device.results import atomic_write_json, versions, write_csv
     from nsd_core.device.seismic import seismic_summary, simulate_seismic
-    from comparisons.seismic import parse_seismic_engines, run_seismic, seismic_metrics
+    from comparisons.engines import parse_engine_list, run_seismic_engine
+    from comparisons.seismic import seismic_metrics
     params = base_params(args)
-    engines = parse_seismic_engines(args.engines)
+    engines = parse_engine_list(args.engines)
     if engines[0] != "semirecursive":
         raise ParameterError(f"--engines {args.engines!r}: semirecursive (the reference) must come first")
     if args.no_device and len(engines) > 1:
@@ -156,7 +133,7 @@ def run(args) -> int:
                "versions": versions(), "params": params.describe()}
     others = {}
     for name in engines[1:]:
-        other = run_seismic(name, params, structure, motion, duration=args.duration, dt_out=args.dt_out)
+        other = run_seismic_engine(name, params, structure, motion, duration=args.duration, dt_out=args.dt_out)
         others[name] = other
         summary.setdefault("engines", {})[name] = {**seismic_metrics(result, other),
                                                    "wall_time": other.stats["wall_time"]}

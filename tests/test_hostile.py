@@ -241,6 +241,50 @@ CONVS = {
 }
 for name, (extra, frag) in CONVS.items():
     add(f"convergence-{name}", COMPARE + ["--cases", "{d}/c.toml", "--convergence"], case_file(extra), frag)
+# ---- seismic cases of nsd compare (mode = "seismic"; issue 14)
+SEIS = '[[case]]\nname = "s"\nmode = "seismic"\nrecord = "nearfield-pulse:1"\nwindow = [4.8, 4.9]\n'
+SEISMIC = {
+    "mode-bogus": (SEIS.replace('"seismic"', '"quake"'), "mode"),
+    "unknown-key": (SEIS + "cycles = 2\n", "cycles"),
+    "both-inputs": (SEIS + 'ground = "pulse:velocity=0.3,frequency=1"\n', "exactly one"),
+    "no-input": (SEIS.replace('record = "nearfield-pulse:1"\n', "").replace("window = [4.8, 4.9]\n", ""), "exactly one"),
+    "record-no-colon": (SEIS.replace("nearfield-pulse:1", "nearfield-pulse"), "record"),
+    "record-number": (SEIS.replace('"nearfield-pulse:1"', "1"), "record"),
+    "record-set": (SEIS.replace("nearfield-pulse:1", "midfield:1"), "midfield"),
+    "record-id": (SEIS.replace("nearfield-pulse:1", "nearfield-pulse:99"), "99"),
+    "scale-zero": (SEIS + "scale = 0\n", "scale"),
+    "scale-string": (SEIS + 'scale = "big"\n', "scale"),
+    "scale-nan": (SEIS + "scale = nan\n", "scale"),
+    "rotate-string": (SEIS + 'rotate_deg = "east"\n', "rotate_deg"),
+    "window-outside": (SEIS.replace("[4.8, 4.9]", "[10.0, 90.0]"), "window"),
+    "window-one": (SEIS.replace("[4.8, 4.9]", "[4.8]"), "window"),
+    "window-string": (SEIS.replace("[4.8, 4.9]", '"4.8,4.9"'), "window"),
+    "duration-negative": (SEIS + "duration = -1.0\n", "duration"),
+    "duration-huge": (SEIS + "duration = 1e6\n", "duration"),
+    "dt-out-zero": (SEIS + "dt_out = 0\n", "dt_out"),
+    "dt-out-longer": (SEIS + "dt_out = 5.0\n", "dt_out"),
+    "dt-out-tiny": (SEIS + "dt_out = 1e-12\n", "dt_out"),
+    "device-string": (SEIS + 'device = "yes"\n', "device"),
+    "device-false-with-peers": (SEIS + "device = false\n", "in-house engine only"),
+    "structure-unknown": (SEIS + "structure = { height = 3.0 }\n", "height"),
+    "structure-mass-zero": (SEIS + "structure = { mass = 0 }\n", "mass"),
+    "scale-with-ground": ('[[case]]\nname = "s"\nmode = "seismic"\nground = "pulse:velocity=0.3,frequency=1"\n'
+                          "scale = 2\n", "record"),
+    "ground-kind": ('[[case]]\nname = "s"\nmode = "seismic"\nground = "quake:velocity=1"\n', "quake"),
+    "ground-key": ('[[case]]\nname = "s"\nmode = "seismic"\nground = "pulse:speed=1,frequency=1"\n', "speed"),
+    "ground-missing": ('[[case]]\nname = "s"\nmode = "seismic"\nground = "pulse:velocity=0.3"\n', "frequency"),
+    "ground-number": ('[[case]]\nname = "s"\nmode = "seismic"\nground = 3\n', "ground"),
+    "ground-gamma": ('[[case]]\nname = "s"\nmode = "seismic"\nground = "pulse:velocity=0.3,frequency=1,gamma=0.5"\n',
+                     "gamma"),
+    "setting-drive-only": (SEIS + "settings.mujoco = { integrator = \"RK4\" }\n", "integrator"),
+    "setting-step-tiny": (SEIS + "settings.exudyn = { step_size = 1e-12 }\n", "step_size"),
+    "setting-engine": (SEIS + "settings.opensees = { dt = 1e-3 }\n", "opensees"),
+    "perturb-unknown": (SEIS + 'settings.mujoco = { perturb = { what = "plate_colour" } }\n', "plate_colour"),
+    "param-unknown": (SEIS + "params = { bogus = 1 }\n", "bogus"),
+    "duplicate-name": (SEIS + SEIS, "duplicate"),
+}
+for name, (text, frag) in SEISMIC.items():
+    add(f"seismic-case-{name}", COMPARE + ["--cases", "{d}/c.toml"], {"c.toml": text}, frag)
 # ---- nsd sweep
 for argv, frag in ((["sweep", "--out", "{out}"], "--param"), (SWEEP + ["--paper"], "exactly one"),
                    (["sweep", "--param", "bogus", "--values", "1", "--out", "{out}"], "bogus"),

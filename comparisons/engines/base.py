@@ -6,11 +6,18 @@ Like scipy's ``solve_ivp`` methods, each engine is one module exposing a class w
         name: str                       # "semirecursive", "mujoco", "exudyn"
         default_settings: dict          # solver settings, overridable per case
         def run(self, params, drive, settings=None) -> RunResult
+        # the seismic mode (Table 1, second row; issue 14): the same engine, base driven by the ground
+        seismic_default_settings: dict
+        def run_seismic(self, params, structure, ground, duration=None, dt_out=1e-3, settings=None) -> RunResult
 
 ``run`` returns the columns of ``nsd_core.results.column_units`` (built with
 ``nsd_core.outputs.device_columns``) sampled at ``drive.output_times()``, and ``stats`` with at
 least ``wall_time`` [s], ``steps`` and ``tracking_error`` [m] (max |u_engine - u_prescribed|).
 An engine that fails raises ``EngineError`` with a one-line message.
+
+``run_seismic`` returns the seismic columns of ``nsd_core.device.seismic`` (at least t, x, y, theta,
+ax_abs, ay_abs, device_Fx, device_Fy, cap_z, closure and the energy balance E_input ... E_residual,
+computed from the engine's own state with the nominal masses) every ``dt_out`` up to ``duration``.
 """
 from __future__ import annotations
 
@@ -30,6 +37,22 @@ class Engine(Protocol):
     default_settings: dict[str, Any]
 
     def run(self, params: Params, drive: Drive, settings: dict[str, Any] | None = None) -> RunResult: ...
+
+    seismic_default_settings: dict[str, Any]
+
+    def run_seismic(self, params: Params, structure, ground, duration: float | None = None, dt_out: float = 1e-3,
+                    settings: dict[str, Any] | None = None) -> RunResult: ...
+
+
+class SeismicSettings:
+    """An engine's seismic settings seen through the drive settings' checks (``check_settings``)."""
+
+    def __init__(self, engine):
+        self.name = engine.name
+        self.default_settings = engine.seismic_default_settings
+        hook = getattr(engine, "validate_seismic_settings", None)
+        if hook is not None:
+            self.validate_settings = hook
 
 
 def merged_settings(defaults: dict[str, Any], settings: dict[str, Any] | None, engine: str) -> dict[str, Any]:

@@ -239,6 +239,17 @@ class ExudynEngine:
         s = merged_settings(cls.default_settings, settings, cls.name)
         return 1.0 / (drive.frequency * drive.samples_per_cycle * cls.steps_per_output(drive, s))
 
+    @property
+    def seismic_default_settings(self) -> dict:
+        from comparisons.engines.exudyn_seismic import DEFAULTS
+        return DEFAULTS
+
+    def run_seismic(self, params: Params, structure, ground, duration=None, dt_out=1e-3,
+                    settings: dict | None = None) -> RunResult:
+        """The seismic mode (comparisons/engines/exudyn_seismic.py, imported here: it builds on this module)."""
+        from comparisons.engines.exudyn_seismic import ExudynSeismic
+        return ExudynSeismic().run(params, structure, ground, duration=duration, dt_out=dt_out, settings=settings)
+
     def run(self, params: Params, drive: Drive, settings=None) -> RunResult:
         s = merged_settings(self.default_settings, settings, self.name)
         _check_settings(s)

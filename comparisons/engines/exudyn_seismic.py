@@ -14,6 +14,10 @@ ropes, wires and spring through ``nsd_core.device.forces`` (force and moment on 
 attachment points turning with it; vertical force on the wall), the supports on the plate
 (-k_b u - c_b u', torsional pair), and -m a_g(t_end) on every body. Hysteretic states are committed
 along the strain change of every converged step and predicted to the step's end.
+Energy balance (the in-house seismic mode's, frame of the ground) from Exudyn's own state with the
+nominal masses and gravity: E_input = -int a_g . P_rel dt, the elements' absorbed power (their loads at
+the converged state times Exudyn's velocities) and the supports' dissipation integrated by trapezoids
+over every step; kinetic, gravity and support energy at the output times.
 Solver: generalized-alpha (index 3), fixed step, spectral radius 0.8, Newton tolerances 1e-12/1e-14.
 """
 from __future__ import annotations
@@ -27,7 +31,8 @@ import exudyn as exu
 from exudyn.itemInterface import LoadForceVector, LoadTorqueVector, MarkerNodePosition, MarkerNodeRigid
 from exudyn.rigidBodyUtilities import RigidBodyInertia
 
-from comparisons.engines.base import EngineError, merged_settings
+from comparisons.engines.base import EngineError, check_step_count, merged_settings
+from comparisons.engines.perturb import perturbed, perturbed_structure
 from nsd_core.device.forces import advance_spring_zeta, advance_wire_stress, rope_tension, spring_push, wire_tension
 from nsd_core.device.geometry import device_geometry
 from nsd_core.device.ground import GroundMotion
@@ -37,7 +42,7 @@ from nsd_core.device.results import RunResult
 from nsd_core.device.seismic import seismic_units
 
 DEFAULTS = {"step_size": 1e-5, "spectral_radius": 0.8, "newton_rel_tol": 1e-12, "newton_abs_tol": 1e-14,
-            "rod_axial_inertia": 1e-3}
+            "rod_axial_inertia": 1e-3, "perturb": None}  # perturb: an error in this model only (engines/perturb.py)
 
 
 class _Elements:
@@ -97,18 +102,22 @@ class ExudynSeismic:
             dt_out: float = 1e-3, settings: dict | None = None) -> RunResult:
         s = merged_settings(DEFAULTS, settings, "exudyn")
         try:
-            return self._run(device_geometry(params), structure, ground, duration, dt_out, s)
+            g0 = device_geometry(params)
+            return self._run(perturbed(g0, s["perturb"], seismic=True), perturbed_structure(structure, s["perturb"]),
+                             ground, duration, dt_out, s, g0, structure)
         except EngineError:
             raise
         except Exception as e:  # Exudyn raises RuntimeError/ValueError with multi-line text
             raise EngineError(f"exudyn: {type(e).__name__}: {' '.join(str(e).split())[:300]}") from None
 
-    def _run(self, g, st: Structure, ground, duration, dt_out, s):
+    def _run(self, g, st: Structure, ground, duration, dt_out, s, g0, st0: Structure):
+        """g, st: Exudyn's model (an injected error in them); g0, st0: the nominal ones (energy balance)."""
         duration = ground.duration if duration is None else float(duration)
         n_out = int(round(duration / dt_out))
         per_out = max(1, math.ceil(dt_out / float(s["step_size"]) - 1e-9))
         h = dt_out / per_out
         n_steps = n_out * per_out
+        check_step_count("exudyn", n_steps)
         grav = list(g.gravity_vector)
         SC = exu.SystemContainer()
         mbs = SC.AddSystem()
@@ -156,6 +165,49 @@ class ExudynSeismic:
         OV = exu.OutputVariableType
         out = []
         counter = [0]
+        # energy balance with the nominal bodies: (node, mass, inertia in the body frame)
+        J0 = st0.polar_inertia
+        rod_I0 = np.array(g0.rod.inertia, dtype=float)
+        rod_I0[2, 2] = float(s["rod_axial_inertia"]) * rod_I0[0, 0]
+        nominal = [(plate[0], st0.mass, np.diag([J0 / 2, J0 / 2, J0])), (cap[0], g0.cap.mass, np.array(g0.cap.inertia)),
+                   (wall[0], g0.wall.mass, np.array(g0.wall.inertia)), (rod[0], g0.rod.mass, rod_I0)]
+        energy = {"E": np.zeros(3), "t": None, "last": None, "h0": None}
+
+        def energy_rates(t, a_g):
+            """Accumulate E_input, E_device, E_supports_dissipated up to the converged state at t."""
+            (cq, cth), wz = pose(cap[0]), mbs.GetNodeOutput(wall[0], OV.Position)[2]
+            f, m, fw = el.loads(cq, cth, wz)
+            P = np.zeros(2)
+            for node, mass, _ in nominal:
+                P += mass * mbs.GetNodeOutput(node, OV.Velocity)[:2]
+            vc = mbs.GetNodeOutput(cap[0], OV.Velocity)
+            wc = mbs.GetNodeOutput(cap[0], OV.AngularVelocity)
+            applied = float(f @ vc + m @ wc) + fw * mbs.GetNodeOutput(wall[0], OV.Velocity)[2]
+            pv = mbs.GetNodeOutput(plate[0], OV.Velocity)
+            om = mbs.GetNodeOutput(plate[0], OV.AngularVelocity)[2]
+            diss = st0.damping * (pv[0] ** 2 + pv[1] ** 2 + st0.support_radius ** 2 * om ** 2)
+            now = np.array([-float(np.asarray(a_g)[:2] @ P), -applied, diss])
+            if energy["t"] is not None and t > energy["t"]:
+                energy["E"] += 0.5 * (t - energy["t"]) * (now + energy["last"])
+            energy["t"], energy["last"] = t, now
+
+        def energy_columns():
+            ke = height = 0.0
+            for node, mass, inertia in nominal:
+                v = mbs.GetNodeOutput(node, OV.Velocity)
+                w = mbs.GetNodeOutput(node, OV.AngularVelocity)
+                R = mbs.GetNodeOutput(node, OV.RotationMatrix).reshape(3, 3)
+                ke += 0.5 * mass * float(v @ v) + 0.5 * float(w @ (R @ inertia @ R.T) @ w)
+                height += mass * g0.params.gravity * mbs.GetNodeOutput(node, OV.Position)[2]
+            if energy["h0"] is None:
+                energy["h0"] = height
+            pq, th = pose(plate[0])
+            stored = 0.5 * st0.stiffness * (pq[0] ** 2 + pq[1] ** 2 + st0.support_radius ** 2 * th ** 2)
+            E = energy["E"]
+            row = {"E_input": E[0], "E_kinetic": ke, "E_gravity": height - energy["h0"], "E_supports_stored": stored,
+                   "E_supports_dissipated": E[2], "E_device": E[1]}
+            row["E_residual"] = E[0] - (ke + row["E_gravity"] + stored + E[2] + E[1])
+            return row
 
         def pose(node):
             q = mbs.GetNodeOutput(node, OV.Position)
@@ -181,6 +233,7 @@ class ExudynSeismic:
                    "closure": float(np.linalg.norm(rp + ax - cq)), "omega": om}
             for j, sig in enumerate(el.sigma):
                 row[f"wire{j}_stress"] = sig
+            row.update(energy_columns())
             out.append(row)
 
         def predict(node, h):
@@ -197,6 +250,7 @@ class ExudynSeismic:
             wz = mbs.GetNodeOutput(wall[0], OV.Position)[2]
             if n > 0:
                 el.commit(cq, cth, wz)
+            energy_rates(t - h, ground(t - h)[2])
             if n % per_out == 0:
                 record(t - h, ground(t - h)[2])
             a_g = ground(t)[2]
@@ -235,6 +289,7 @@ class ExudynSeismic:
             raise EngineError(f"exudyn: solver failed in step {counter[0]} of {n_steps} (t = {counter[0] * h:.6g} s)")
         cq, cth = pose(cap[0])
         el.commit(cq, cth, mbs.GetNodeOutput(wall[0], OV.Position)[2])
+        energy_rates(n_steps * h, ground(n_steps * h)[2])
         record(n_steps * h, ground(n_steps * h)[2])
         cols = {k: np.array([r[k] for r in out]) for k in out[0]}
         cols["u"] = np.hypot(cols["x"], cols["y"])

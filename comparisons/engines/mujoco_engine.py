@@ -81,6 +81,7 @@ from nsd_core.device.results import RunResult
 
 from comparisons.engines import mujoco_native
 from comparisons.engines.base import check_step_count, EngineError, merged_settings
+from comparisons.engines.mujoco_mjcf import wall_rod_loop_mjcf
 from comparisons.engines.perturb import perturbed
 
 _EULER_LIKE = ("Euler", "implicit", "implicitfast")
@@ -127,27 +128,6 @@ def build_mjcf(g: DeviceGeometry, drive: Drive, s: dict, h: float, nuserdata: in
       <joint name="cap_z" type="slide" axis="0 0 1"/>
     </body>
 {wall_rod_loop_mjcf(g, solref, s['solimp'])}</mujoco>
-"""
-
-
-def wall_rod_loop_mjcf(g: DeviceGeometry, solref: str, solimp) -> str:
-    """The wall on its slide, the rod on its ball joint and the cap-rod loop closed by a ``connect``:
-    the part of the model the drive and the seismic MJCF share (closes the worldbody)."""
-    rod_t = g.rod.inertia[0, 0]
-    return f"""    <body name="wall" pos="0 0 {_f(g.wall_rest_z)}">
-      <inertial pos="{_f(g.wall.com)}" mass="{_f(g.wall.mass)}" diaginertia="{_f(np.diag(g.wall.inertia))}"/>
-      <joint name="wall_z" type="slide" axis="0 0 1"/>
-      <body name="rod">
-        <inertial pos="{_f(g.rod.com)}" mass="{_f(g.rod.mass)}" diaginertia="{_f(rod_t)} {_f(rod_t)} {_f(1e-3 * rod_t)}"/>
-        <joint name="rod_ball" type="ball"/>
-        <site name="rod_tip" pos="0 0 {_f(g.params.rod_length)}"/>
-      </body>
-    </body>
-  </worldbody>
-  <equality>
-    <connect name="loop" body1="rod" body2="cap" anchor="0 0 {_f(g.params.rod_length)}"
-             solref="{solref}" solimp="{_f(solimp)}"/>
-  </equality>
 """
 
 
@@ -242,6 +222,17 @@ class MujocoEngine:
         "passive": "compiled",       # "compiled": C callback (mujoco_native); "python": _Device.passive
         "step_loop": "native",       # "native": compiled loop calling mj_step; "python": one call a step
     }
+
+    @property
+    def seismic_default_settings(self) -> dict:
+        from comparisons.engines.mujoco_seismic import DEFAULTS
+        return DEFAULTS
+
+    def run_seismic(self, params: Params, structure, ground, duration=None, dt_out=1e-3,
+                    settings: dict | None = None) -> RunResult:
+        """The seismic mode (comparisons/engines/mujoco_seismic.py, imported here: it builds on this module)."""
+        from comparisons.engines.mujoco_seismic import MujocoSeismic
+        return MujocoSeismic().run(params, structure, ground, duration=duration, dt_out=dt_out, settings=settings)
 
     def run(self, params: Params, drive: Drive, settings: dict | None = None, zero_drive: bool = False) -> RunResult:
         """Run the drive; ``zero_drive`` holds u = 0 (the rest-state check) on the same time grid."""

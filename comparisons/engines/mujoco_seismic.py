@@ -11,6 +11,11 @@ before each step is exactly that load (docs/model.md allows it for a translating
   attachment points turn with the plate) and the supports (-k_b u - c_b u', torsional pair).
 Hysteretic states are advanced along the actual strain change after every step (Euler: the
 callback then always sees the committed state; no prediction needed).
+Energy balance (the in-house seismic mode's, in the frame of the ground), from MuJoCo's own state with
+the nominal masses and gravity (not the model's): E_input = -int a_g . P_rel dt, E_device = int of the
+elements' absorbed power (minus their generalized forces times MuJoCo's velocities), the supports'
+dissipation, all three integrated by trapezoids over every step; kinetic, gravity and support energy
+at the output times. A mass or gravity error in MuJoCo's own model leaves a residual.
 Outputs: the in-house seismic columns that a comparison needs (relative x, y, theta, absolute
 acceleration, device and support forces, base shear, cap and wall heights, spring and wire states).
 """
@@ -30,11 +35,13 @@ from nsd_core.device.params import Params
 from nsd_core.device.results import RunResult
 from nsd_core.device.seismic import seismic_units
 
-from comparisons.engines.base import EngineError, merged_settings
-from comparisons.engines.mujoco_engine import wall_rod_loop_mjcf
+from comparisons.engines.base import EngineError, check_step_count, merged_settings
+from comparisons.engines.mujoco_mjcf import wall_rod_loop_mjcf
+from comparisons.engines.perturb import perturbed, perturbed_structure
 
 DEFAULTS = {"timestep": 1e-5, "solref_factor": 2.0, "solimp": [0.9999, 0.9999, 0.001, 0.5, 2.0],
-            "solver_tolerance": 1e-12, "solver_iterations": 20, "closure_limit": 1e-4, "hysteresis_substeps": 1}
+            "solver_tolerance": 1e-12, "solver_iterations": 20, "closure_limit": 1e-4, "hysteresis_substeps": 1,
+            "perturb": None}  # perturb: a modelling error in this model only (engines/perturb.py)
 
 
 def _f(x) -> str:
@@ -75,6 +82,7 @@ class _Forces:
         self.substeps = substeps
         self.T = np.zeros(self.nr + self.nw)
         self.eps_c, self.x_c = None, None
+        self.energy = None
 
     def geometry(self, q):
         """Cap attachment points (world), element vectors and lengths, wall height."""
@@ -123,12 +131,69 @@ class _Forces:
     def passive(self, m, d):
         f, moment, wall = self.device_on_cap(d.qpos)
         sx, sy, st = self.support(d.qpos, d.qvel)
+        if self.energy is not None:
+            v = d.qvel
+            applied = f[0] * v[self.PX] + f[1] * v[self.PY] + moment * v[self.PR] + f[2] * v[self.CZ] + wall * v[self.WZ]
+            self.energy.rates(m, d, -applied)
         qf = d.qfrc_passive
         qf[self.PX] += f[0] - sx
         qf[self.PY] += f[1] - sy
         qf[self.PR] += moment - st
         qf[self.CZ] += f[2]
         qf[self.WZ] += wall
+
+
+class _Energy:
+    """The energy balance's integrals and stored energies, from MuJoCo's state with nominal masses."""
+
+    def __init__(self, model, g0, st: Structure):
+        self.ids = [model.body(n).id for n in ("plate", "cap", "wall", "rod")]
+        J = st.polar_inertia
+        self.mass = np.array([st.mass, g0.cap.mass, g0.wall.mass, g0.rod.mass])
+        rod_I = np.array(g0.rod.inertia, dtype=float)
+        self.inertia = [np.diag([J / 2, J / 2, J]), np.array(g0.cap.inertia, dtype=float),
+                        np.array(g0.wall.inertia, dtype=float), rod_I]
+        self.gravity, self.st = g0.params.gravity, st
+        self.a_g = np.zeros(2)
+        self.E = np.zeros(3)           # E_input, E_device, E_supports_dissipated
+        self.t, self.last = None, None
+        self.height0 = None
+        self.v6 = np.zeros(6)
+
+    def _velocities(self, m, d):
+        out = []
+        for b in self.ids:   # (angular, linear) at the body's centre of mass, world axes
+            mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_BODY, b, self.v6, 0)
+            out.append(self.v6.copy())
+        return np.array(out)
+
+    def rates(self, m, d, absorbed):
+        vel = self._velocities(m, d)
+        P = self.mass @ vel[:, 3:5]
+        st, v = self.st, d.qvel
+        diss = st.damping * (v[0] ** 2 + v[1] ** 2) + st.damping * st.support_radius ** 2 * v[2] ** 2
+        now = np.array([-float(self.a_g @ P), absorbed, diss])
+        t = float(d.time)
+        if self.t is not None and t > self.t:
+            self.E += 0.5 * (t - self.t) * (now + self.last)
+        self.t, self.last = t, now
+
+    def columns(self, m, d) -> dict:
+        vel = self._velocities(m, d)
+        ke = 0.0
+        for k, b in enumerate(self.ids):
+            R = d.xmat[b].reshape(3, 3)
+            w = vel[k, :3]
+            ke += 0.5 * self.mass[k] * float(vel[k, 3:] @ vel[k, 3:]) + 0.5 * float(w @ (R @ self.inertia[k] @ R.T) @ w)
+        height = float(self.mass @ d.xipos[self.ids, 2]) * self.gravity
+        if self.height0 is None:
+            self.height0 = height
+        q, st = d.qpos, self.st
+        stored = 0.5 * st.stiffness * (q[0] ** 2 + q[1] ** 2 + st.support_radius ** 2 * q[2] ** 2)
+        row = {"E_input": self.E[0], "E_kinetic": ke, "E_gravity": height - self.height0, "E_supports_stored": stored,
+               "E_supports_dissipated": self.E[2], "E_device": self.E[1]}
+        row["E_residual"] = row["E_input"] - (ke + row["E_gravity"] + stored + self.E[2] + self.E[1])
+        return row
 
 
 class MujocoSeismic:
@@ -138,14 +203,18 @@ class MujocoSeismic:
     def run(self, params: Params, structure: Structure, ground: GroundMotion, duration: float | None = None,
             dt_out: float = 1e-3, settings: dict | None = None) -> RunResult:
         s = merged_settings(DEFAULTS, settings, "mujoco")
-        g = device_geometry(params)
+        g0 = device_geometry(params)
+        g = perturbed(g0, s["perturb"], seismic=True)   # an injected modelling error lives in MuJoCo's model only
+        model_structure = perturbed_structure(structure, s["perturb"])
         duration = ground.duration if duration is None else float(duration)
         n_out = int(round(duration / dt_out))
         n_sub = max(1, math.ceil(dt_out / float(s["timestep"]) - 1e-9))
         h = dt_out / n_sub
-        model = mujoco.MjModel.from_xml_string(build_mjcf(g, structure, s, h))
+        check_step_count("mujoco", n_out * n_sub)
+        model = mujoco.MjModel.from_xml_string(build_mjcf(g, model_structure, s, h))
         data = mujoco.MjData(model)
         dev = _Forces(g, structure, int(s["hysteresis_substeps"]))
+        dev.energy = energy = _Energy(model, g0, structure)
         dev.commit(data.qpos)
         a_g = ground(h * np.arange(n_out * n_sub + 1))[2]
         rows = []
@@ -156,9 +225,11 @@ class MujocoSeismic:
             mujoco.set_mjcb_passive(dev.passive)
             for n in range(n_out * n_sub + 1):
                 model.opt.gravity[:2] = -a_g[n]
+                energy.a_g = a_g[n]
                 if n % n_sub == 0:
                     mujoco.mj_forward(model, data)
                     rows.append(self._row(n * h, data, dev, a_g[n], tip, cap_id))
+                    rows[-1].update(energy.columns(model, data))
                     if not (np.isfinite(data.qpos).all() and rows[-1]["closure"] < s["closure_limit"]):
                         raise EngineError(f"mujoco: unstable at t = {n * h:.6g} s (loop gap {rows[-1]['closure']:.3g} m)")
                     if n == n_out * n_sub:

@@ -10,6 +10,7 @@ engine and the shared force laws are untouched. A perturbation is a small dict:
     {"what": "gravity", "by": -1.0}                            relative: -1 switches gravity off
     {"what": "rod_length", "by": 2e-4}                         absolute [m]: the model rebuilt with it
     {"what": "rest_ignores_weight"}                            ropes' natural length from F_press, not F_press - W
+    {"what": "isolated_mass", "by": 0.02}                      seismic mode: M x (1 + by) (perturbed_structure)
 
 Relative kinds change a value as it stands in the engine's model (a typo in its MJCF, say): the
 rest state is not recomputed, so a constant off by 1 % also leaves the rest state slightly out of
@@ -38,6 +39,7 @@ KINDS = {  # what -> (unit of "by", description)
     "wire_area": ("-", "every wire's area x (1 + by)"),
     "spring_zeta0": ("-", "the spring's hysteretic force at rest x (1 + by)"),
     "rest_ignores_weight": ("-", "ropes' natural length set for F_press instead of F_press - W"),
+    "isolated_mass": ("-", "seismic mode: the isolated mass M (and its polar inertia) x (1 + by)"),
 }
 AXES = {"x": 0, "y": 1, "z": 2}
 
@@ -76,12 +78,24 @@ def _scaled_body(b: RigidBody, factor: float) -> RigidBody:
     return dataclasses.replace(b, mass=b.mass * factor, inertia=b.inertia * factor)
 
 
-def perturbed(g: DeviceGeometry, spec: dict | None) -> DeviceGeometry:
+def perturbed_structure(structure, spec: dict | None):
+    """The isolated structure with an ``isolated_mass`` error (any other kind: unchanged)."""
+    spec = check(spec)
+    if spec is None or spec["what"] != "isolated_mass":
+        return structure
+    return dataclasses.replace(structure, mass=structure.mass * (1.0 + float(spec.get("by", 0.0))))
+
+
+def perturbed(g: DeviceGeometry, spec: dict | None, seismic: bool = False) -> DeviceGeometry:
     """The geometry with one modelling error injected (``spec`` as in the module docstring)."""
     spec = check(spec)
     if spec is None:
         return g
     what, by, i = spec["what"], float(spec.get("by", 0.0)), int(spec.get("index", 0))
+    if what == "isolated_mass":   # not part of the device: perturbed_structure
+        if seismic:
+            return g
+        raise ParameterError("perturb.what = 'isolated_mass': applies to seismic cases only")
     if what.endswith("_mass"):
         body = what[:-5]
         return dataclasses.replace(g, **{body: _scaled_body(getattr(g, body), 1.0 + by)})

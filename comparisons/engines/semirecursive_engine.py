@@ -29,3 +29,18 @@ class SemirecursiveEngine:
             raise EngineError(str(e)) from None
         result.stats["settings"] = s
         return result
+
+    # the seismic mode: nsd_core.device.seismic, with the same solver options (its own backends)
+    seismic_default_settings = dict(DEFAULT_SOLVER)
+    validate_seismic_settings = validate_settings
+
+    def run_seismic(self, params: Params, structure, ground, duration=None, dt_out=1e-3,
+                    settings: dict | None = None) -> RunResult:
+        from nsd_core.device.seismic import simulate_seismic
+        s = merged_settings(self.seismic_default_settings, settings, self.name)
+        try:
+            result = simulate_seismic(params, structure, ground, duration=duration, dt_out=dt_out, **s)
+        except SolverError as e:
+            raise EngineError(str(e)) from None
+        result.stats["settings"] = s
+        return result
