@@ -17,13 +17,13 @@ import argparse
 import json
 import os
 import platform
-import resource
 import statistics
-import subprocess
 import sys
-import tempfile
 import time
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from compile_time import compile_times  # noqa: E402
 
 from nsd_core.device.ground import fema_record
 from nsd_core.device.isolation import default_structure
@@ -40,25 +40,6 @@ FIRST_RUN = ("import time; t0 = time.perf_counter(); from nsd_core.device.seismi
              "print(time.perf_counter() - t0)")
 
 
-def first_run_seconds(cache_dir: str) -> tuple[float, float]:
-    """(wall, CPU) seconds of a fresh process's import and first short seismic run."""
-    env = dict(os.environ, NUMBA_CACHE_DIR=cache_dir)
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    out = subprocess.run([sys.executable, "-c", FIRST_RUN], env=env, capture_output=True, text=True, check=True)
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    cpu = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
-    return float(out.stdout.strip().splitlines()[-1]), cpu
-
-
-def compile_times() -> dict:
-    with tempfile.TemporaryDirectory() as cache:
-        cold, cold_cpu = first_run_seconds(cache)
-        warm, warm_cpu = first_run_seconds(cache)
-    return {"cold_cache_first_run_s": cold, "warm_cache_first_run_s": warm, "compile_s": cold - warm,
-            "cold_cache_first_run_cpu_s": cold_cpu, "warm_cache_first_run_cpu_s": warm_cpu,
-            "compile_cpu_s": cold_cpu - warm_cpu}
-
-
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeats", type=int, default=3)
@@ -68,7 +49,7 @@ def main() -> None:
     args = ap.parse_args()
     report = {"machine": platform.platform(), "cpus": os.cpu_count(), "load_average_start": os.getloadavg()}
     if not args.no_compile:
-        report["compile"] = compile_times()
+        report["compile"] = compile_times(FIRST_RUN)
         print("compile [s]: " + ", ".join(f"{k} {v:.1f}" for k, v in report["compile"].items()))
     p, s = Params(), default_structure()
     runs = {name: fema_record("nearfield-pulse", 1, **kw) for name, kw in CASES.items()}

@@ -174,7 +174,8 @@ def run_set(args) -> int:
     """--set: the record set, with and without the device (see the module docstring for exit codes)."""
     import os
     from comparisons.harness import code_fingerprint
-    from comparisons.seismic import parse_seismic_engines, run_seismic, seismic_metrics
+    from comparisons.engines import parse_engine_list, run_seismic_engine
+    from comparisons.seismic import seismic_metrics
     from nsd_cli.options import WORKERS_MAX, whole
     from nsd_cli.sweep import check_scheduler
     from nsd_core.device.ground import SIMILITUDE_TIME_FACTOR, fema_record, set_name
@@ -186,7 +187,7 @@ def run_set(args) -> int:
     records = parse_records(args.records, set_)
     if args.no_device:
         raise ParameterError("--no-device: --set runs every record both with and without the device")
-    engines = parse_seismic_engines(args.engines)
+    engines = parse_engine_list(args.engines)
     if engines[0] != "semirecursive":
         raise ParameterError(f"--engines {args.engines!r}: semirecursive (the reference) must come first")
     workers = os.cpu_count() or 1 if args.workers is None else args.workers
@@ -212,7 +213,7 @@ def run_set(args) -> int:
     check_scheduler(args.scheduler)
     out = check_out_dir("--out", args.out)
     index = run_record_set(runs, out, workers=workers, scheduler=args.scheduler, retry_failed=args.retry_failed,
-                           run_engine=run_seismic, compare=seismic_metrics, tally=args.tally)
+                           run_engine=run_seismic_engine, compare=seismic_metrics, tally=args.tally)
     c = index["counts"]
     for row in index["rows"]:
         ratio = ("" if row.get("peak_u_ratio") is None else

@@ -135,7 +135,7 @@ def run_record(r: RecordRun, run_engine: Callable | None = None) -> dict:
     """Run one record on one engine (in a worker); never raises for the run's own failure.
 
     ``run_engine(name, params, structure, ground, duration=, dt_out=, settings=) -> RunResult`` runs
-    a peer engine (comparisons.seismic.run_seismic: the study layer knows only the in-house engine)."""
+    a peer engine (comparisons.engines.run_seismic_engine: the study layer knows only the in-house engine)."""
     start = time.perf_counter()
     try:
         from nsd_core.device.ground import fema_record
