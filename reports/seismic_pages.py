@@ -19,16 +19,19 @@ def _norm(r, a, b):
     return np.hypot(r[a], r[b])
 
 
-def response_figure(title: str, runs: dict):
+def response_figure(title: str, runs: dict, cost: dict | None = None):
     """Orbit (x, y) per engine; x, y, |a_abs|, |device force| over time, and beneath each the
-    difference of every other engine to the in-house run."""
+    difference of every other engine to the in-house run; the engines' cost in the subtitle."""
     fig = new_figure(LANDSCAPE, title, "relative displacement of the plate (x, y), absolute acceleration, device "
                      "force; differences = engine - in-house on the same output times")
     ax = fig.add_axes([0.05, 0.1, 0.3, 0.75])
     for eng, r in runs.items():
         ax.plot(r["x"] * 1e3, r["y"] * 1e3, label=eng, **style(eng))
     ax.set_aspect("equal", "datalim")
-    ax.set(xlabel="x [mm]", ylabel="y [mm]", title="orbit of the plate relative to the base")
+    title = "orbit of the plate relative to the base"
+    if cost:  # each engine's cost on this run, where the folder recorded it
+        title += "\ncost, wall s per model s: " + ", ".join(f"{e} {v:.3g}" for e, v in cost.items())
+    ax.set(xlabel="x [mm]", ylabel="y [mm]", title=title)
     ax.legend(loc="best")
     ref = runs.get(REFERENCE)
     series = [("x", 1e3, "x [mm]", lambda r: r["x"]), ("y", 1e3, "y [mm]", lambda r: r["y"]),

@@ -38,9 +38,10 @@ def _runs(folder: Path, ref_name: str = "seismic.csv") -> dict:
     return runs
 
 
-def _run_pages(label: str, runs: dict) -> list[tuple[str, Callable]]:
+def _run_pages(label: str, runs: dict, cost: dict | None = None) -> list[tuple[str, Callable]]:
+    """cost: engine -> wall seconds per model second, shown on the response page where known."""
     stem = label.replace(":", "_").replace(" ", "_")
-    out = [(f"response_{stem}", lambda: sp.response_figure(f"Seismic response: {label}", runs)),
+    out = [(f"response_{stem}", lambda: sp.response_figure(f"Seismic response: {label}", runs, cost)),
            (f"loops_{stem}", lambda: sp.loops_figure(f"Device loops during the record: {label}", runs))]
     if any("E_input" in r.columns for r in runs.values()):
         out.append((f"energy_{stem}", lambda: sp.energy_figure(f"Energy balance: {label}", runs)))
@@ -73,7 +74,10 @@ def seismic_plan(folder) -> tuple[list[tuple[str, Callable]], str]:
         summary, label = {}, "run"
     if summary.get("device") is False:
         label += " (supports alone)"
-    return _run_pages(label, runs), f"NSD seismic report  |  {label}"
+    solver = summary.get("solver") if isinstance(summary.get("solver"), dict) else {}
+    cost = ({"semirecursive": solver["wall_time"] / solver["model_time"]}
+            if isinstance(solver.get("wall_time"), (int, float)) and solver.get("model_time") else None)
+    return _run_pages(label, runs, cost), f"NSD seismic report  |  {label}"
 
 
 def compare_seismic_pages(root) -> list[tuple[str, Callable]]:
@@ -88,8 +92,15 @@ def compare_seismic_pages(root) -> list[tuple[str, Callable]]:
             continue  # an optional extra: a file that cannot be read is left out, the validation stays
         if all(c in r.columns for c in NEEDED):
             cases.setdefault(case, {})[eng] = r
+    try:
+        recorded = json.loads((Path(root) / "results.json").read_text()).get("runs", {})
+    except (OSError, ValueError, AttributeError):
+        recorded = {}
     plan = []
     for case, runs in cases.items():
         runs = dict(sorted(runs.items(), key=lambda kv: kv[0] != "semirecursive"))
-        plan += _run_pages(f"seismic case {case}", runs)
+        entries = recorded.get(case, {}) if isinstance(recorded, dict) else {}
+        cost = {e: v["wall_time_per_model_second"] for e, v in entries.items()
+                if isinstance(v, dict) and isinstance(v.get("wall_time_per_model_second"), (int, float))}
+        plan += _run_pages(f"seismic case {case}", runs, cost or None)
     return plan
