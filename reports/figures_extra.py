@@ -2,6 +2,7 @@
 pages (closed-loop benchmarks, parametric study) when the results folder holds them."""
 from __future__ import annotations
 
+import re
 import textwrap
 
 import matplotlib
@@ -39,18 +40,17 @@ def convergence_figure(data):
         fig.text(0.5, 0.5, "\n".join(textwrap.wrap(how, 110)), ha="center", va="top", fontsize=9.5)
         return fig
     engines = [e for e in data.engines if e in conv] + [e for e in conv if e not in data.engines]
-    n = len(engines) + 1
-    cols = min(n, 3)
-    rows = int(np.ceil(n / cols))
-    gs = fig.add_gridspec(rows, cols, left=0.07, right=0.98, top=0.84, bottom=0.08, hspace=0.4, wspace=0.28)
+    cols = max(len(engines), 1)
+    # the engines side by side, the cost panel across the whole row beneath (no empty cells)
+    gs = fig.add_gridspec(2, cols, left=0.07, right=0.98, top=0.84, bottom=0.08, hspace=0.4, wspace=0.28)
     tol = data.summary["tolerances"]
     leg = [Line2D([], [], color="k", marker="o", ls="-", label="max |dF| / max |F_ref|"),
            Line2D([], [], color="k", marker="s", ls="--", mfc="none", label="|loop area - ref| / ref"),
-           Line2D([], [], color=GREY, ls=":", label="gated limits (max_dF_rel, loop_area_rel)")]
+           Line2D([], [], color=GREY, ls=":", label="the engine's gated limits (max_dF_rel, loop_area_rel)")]
     fig.legend(handles=leg, loc="upper center", bbox_to_anchor=(0.5, 0.925), ncol=3, frameon=False, fontsize=8.5)
-    speed = fig.add_subplot(gs[(n - 1) // cols, (n - 1) % cols])
+    speed = fig.add_subplot(gs[1, :])
     for i, e in enumerate(engines):
-        ax = fig.add_subplot(gs[i // cols, i % cols])
+        ax = fig.add_subplot(gs[0, i])
         entry = conv[e]
         pts = [p for p in entry.get("points", []) if "error" not in p]
         bad = [p for p in entry.get("points", []) if "error" in p]
@@ -64,29 +64,51 @@ def convergence_figure(data):
         ax.loglog(v, d1, "o-", color=c, lw=1.4)
         ax.loglog(v, d2, "s--", color=c, mfc="none", lw=1.1)
         for k in ("max_dF_rel", "loop_area_rel"):
-            if k in tol:
-                ax.axhline(tol[k], color=GREY, ls=":", lw=1.0)
+            lim = _engine_limits(data, k).get(e, tol.get(k)) if e != data.reference else None
+            if lim:
+                ax.axhline(lim, color=GREY, ls=":", lw=1.0)
         if bad:
             ax.text(0.02, 0.02, "failed at " + ", ".join(fmt(p["value"]) for p in bad), transform=ax.transAxes,
                     fontsize=7, color=RED)
         ax.set_title(f"{e}: {entry.get('setting', '?')} (case {entry.get('case', '?')})", fontsize=9, color=c)
         ax.set_xlabel(_setting_label(entry.get("setting", "?")))
         ax.set_ylabel("relative discrepancy [-]")
-        ax.xaxis.set_minor_formatter(NullFormatter())  # minor labels collide on short decades
+        _log_ticks(ax, v)
         w = np.array([p.get("wall_time", np.nan) for p in pts], float)
         ok = np.isfinite(w) & (w > 0)
-        speed.loglog(w[ok], d1[ok], "o-", color=c, lw=1.4, label=e)
+        # points, not a line: cost is not monotone in the setting, a line in setting order zig-zags
+        speed.loglog(w[ok], d1[ok], "o", color=c, ms=6, label=e)
+        for wk, dk, vk in zip(w[ok], d1[ok], v[ok]):
+            speed.annotate(fmt(vk), (wk, dk), xytext=(4, 2), textcoords="offset points", fontsize=6.5, color=c)
     ref = next((conv[e].get("reference") for e in engines if conv[e].get("reference")), "")
     speed.set_title("max |dF| against cost", fontsize=9)
     speed.set_xlabel("wall time per cycle [s]")
     speed.xaxis.set_minor_formatter(NullFormatter())
     speed.set_ylabel("max |dF| / max |F_ref| [-]")
-    if "max_dF_rel" in tol:
-        speed.axhline(tol["max_dF_rel"], color=GREY, ls=":", lw=1.0)
+    for e, lim in _engine_limits(data, "max_dF_rel").items():
+        speed.axhline(lim, color=color(e) if e in engines else GREY, ls=":", lw=1.0)
     if speed.lines:
-        speed.legend(fontsize=7.5)
-    fig.text(0.5, 0.895, f"reference run: {ref}", ha="center", va="top", fontsize=8, color=GREY)
+        speed.legend(fontsize=7.5, title="points labelled with their setting", title_fontsize=7)
+    fig.text(0.5, 0.895, f"reference run: {_plain(ref)}", ha="center", va="top", fontsize=8, color=GREY)
     return fig
+
+
+def _plain(ref) -> str:
+    """'semirecursive {'rtol': 1e-10}' -> 'semirecursive, rtol = 1e-10' (no Python syntax on a page)."""
+    text = str(ref)
+    for k, v in re.findall(r"'(\w+)': ([^,}]+)", text):
+        text = text.replace(f"'{k}': {v}", f"{k} = {v}")
+    return text.replace(" {", ", ").replace("{", "").replace("}", "")
+
+
+def _log_ticks(ax, values) -> None:
+    """Label the sampled settings themselves when they span less than two decades (a log axis
+    would otherwise show a single labelled tick)."""
+    v = np.asarray(values, float)
+    v = v[np.isfinite(v) & (v > 0)]
+    if v.size and np.log10(v.max() / v.min()) < 2:
+        ax.set_xticks(sorted(set(v)), [fmt(x) for x in sorted(set(v))], fontsize=7)
+    ax.xaxis.set_minor_formatter(NullFormatter())
 
 
 def cost_figure(data):
