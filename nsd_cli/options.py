@@ -150,13 +150,8 @@ def parse_numbers(option: str, text: str | None, context: str = "") -> list[floa
 
 def parse_engines(text: str, check_available: bool = False) -> list[str]:
     """Comma-separated engine names from the one registry (comparisons.engines), each once."""
-    from comparisons.engines import ENGINES, get_engine
-    names = [e.strip() for e in text.split(",") if e.strip()]
-    for e in names:
-        if e not in ENGINES:
-            raise ParameterError(f"--engines {e!r}: unknown engine; allowed: {', '.join(ENGINES)}")
-    if not names or len(set(names)) != len(names):
-        raise ParameterError(f"--engines {text!r}: give each engine once")
+    from comparisons.engines import get_engine, parse_engine_list
+    names = parse_engine_list(text)
     if check_available:
         for e in names:
             try:
