@@ -35,7 +35,7 @@ from typing import Callable
 from nsd_core.device.params import ParameterError
 from nsd_core.device.results import RunResult, atomic_write_json, atomic_write_text, read_csv
 from nsd_core.study.store import Store
-from nsd_core.study.sweep import run_jobs
+from nsd_core.study.sweep import run_stored
 
 # how a failed run is classed, and the exit code the set run gives for it (nsd_cli.seismic)
 REASONS = {"rod_reach": 4, "outside_validity": 4, "solver_failure": 3, "error": 3}
@@ -172,21 +172,10 @@ def run_set(runs: list[RecordRun], out: str | Path, workers: int = 1, scheduler=
     ``compare(reference, peer) -> {du, dF, da, ...}`` measures a peer against the in-house run."""
     log = log or (lambda s: print(s, file=sys.stderr, flush=True))
     store = Store(out)
-    pending = [r for r in runs if (rec := store.load(r.key)) is None or (retry_failed and rec["status"] == "failed")]
-    tally = tally if tally is not None else {}
-    tally.update(kept=len(runs) - len(pending), total=len(runs), dir=str(store.root))
-    log(f"seismic set: {len(runs)} runs ({len({(r.set, r.record) for r in runs})} records), "
-        f"{len(runs) - len(pending)} already stored, {len(pending)} to run on "
-        + (f"Dask at {scheduler}" if scheduler is not None else f"{workers} local worker(s)"))
-    start = time.perf_counter()
-    job = partial(run_record, run_engine=run_engine)
-    for n, (r, res) in enumerate(run_jobs(pending, job, workers, scheduler), 1):
-        rec = store.save(r, res)
-        tally["kept"] += 1
-        tail = f"{res['wall_time']:.1f} s" if rec["status"] == "ok" else f"FAILED: {rec['error']}"
-        log(f"  [{n}/{len(pending)}] {r.label}: {tail}")
+    elapsed = run_stored(runs, store, partial(run_record, run_engine=run_engine), workers, scheduler, retry_failed,
+                         log, tally, f"seismic set: {len(runs)} runs ({len({(r.set, r.record) for r in runs})} records)")
     index = write_set(runs, store, compare)
-    index["elapsed_this_run_s"] = time.perf_counter() - start
+    index["elapsed_this_run_s"] = elapsed
     return index
 
 

@@ -12,7 +12,7 @@ import time
 from concurrent.futures import as_completed
 from functools import partial
 from pathlib import Path
-from typing import Callable, Iterator
+from typing import Any, Callable, Iterator
 
 from nsd_core import __version__
 from nsd_core.device.params import ParameterError
@@ -79,27 +79,33 @@ def run_sweep(designs: list[Design], out: str | Path, workers: int = 1, schedule
     job = partial(run_design, run_engine=run_engine)
     log = log or (lambda s: print(s, file=sys.stderr, flush=True))
     store = Store(out)
-    unique: dict[str, Design] = {}
-    for d in designs:
-        unique.setdefault(d.key, d)
-    pending = []
-    for k, d in unique.items():
-        rec = store.load(k)
-        if rec is None or (retry_failed and rec["status"] == "failed"):
-            pending.append(d)
+    n_unique = len({d.key for d in designs})
+    elapsed = run_stored(designs, store, job, workers, scheduler, retry_failed, log, tally,
+                         f"sweep: {len(designs)} designs ({n_unique} distinct)")
+    return write_summaries(designs, store, elapsed)
+
+
+def run_stored(items: list, store: Store, job: Callable, workers: int, scheduler, retry_failed: bool,
+               log: Callable[[str], None], tally: dict | None, heading: str) -> float:
+    """Run each item (anything with ``key`` and ``label``) the store does not hold yet (or holds as
+    failed, with ``retry_failed``), store each as it finishes; returns the seconds this took.
+    ``tally`` is kept up to date with ``kept``, ``total`` and ``dir`` for an interrupt message."""
+    unique: dict[str, Any] = {}
+    for it in items:
+        unique.setdefault(it.key, it)
+    pending = [it for k, it in unique.items()
+               if (rec := store.load(k)) is None or (retry_failed and rec["status"] == "failed")]
     tally = tally if tally is not None else {}
     tally.update(kept=len(unique) - len(pending), total=len(unique), dir=str(store.root))
-    log(f"sweep: {len(designs)} designs ({len(unique)} distinct), {len(unique) - len(pending)} already "
-        f"stored, {len(pending)} to run on "
+    log(f"{heading}, {len(unique) - len(pending)} already stored, {len(pending)} to run on "
         + (f"Dask at {scheduler}" if scheduler is not None else f"{workers} local worker(s)"))
     start = time.perf_counter()
-    for n, (d, res) in enumerate(run_jobs(pending, job, workers, scheduler), 1):
-        rec = store.save(d, res)
+    for n, (it, res) in enumerate(run_jobs(pending, job, workers, scheduler), 1):
+        rec = store.save(it, res)
         tally["kept"] += 1
         tail = f"{res['wall_time']:.1f} s" if rec["status"] == "ok" else f"FAILED: {rec['error']}"
-        log(f"  [{n}/{len(pending)}] {d.label} ({d.key}): {tail}")
-    elapsed = time.perf_counter() - start
-    return write_summaries(designs, store, elapsed)
+        log(f"  [{n}/{len(pending)}] {it.label} ({it.key}): {tail}")
+    return time.perf_counter() - start
 
 
 def write_summaries(designs: list[Design], store: Store, elapsed: float) -> dict:
