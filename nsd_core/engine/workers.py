@@ -14,6 +14,9 @@ from multiprocessing import get_context
 def _worker_init() -> None:
     # Ctrl-C reaches the whole process group: the parent alone decides what to keep and stops us
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    # a parent that was stopped closes the pipes: a worker writing to one then ends quietly, the Unix
+    # way, instead of printing a BrokenPipeError traceback into the parent's one-line message
+    signal.signal(signal.SIGPIPE, signal.SIG_DFL)
     # a worker's stdout would land in the middle of the parent's table (Exudyn's allocation warnings)
     os.dup2(2, 1)
 
