@@ -16,7 +16,6 @@ Single-machine numbers: quote them with the machine's load (recorded in the JSON
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
 import resource
@@ -35,7 +34,8 @@ import numpy as np  # noqa: E402
 
 from nsd_core.device.drive import Drive  # noqa: E402
 from nsd_core.device.model import DEFAULT_SOLVER, simulate  # noqa: E402
-from nsd_core.device.params import Params  # noqa: E402
+from nsd_core.device.params import Params
+from nsd_core.device.results import atomic_write_json  # noqa: E402
 
 CASES = [(0.015, 1.0), (0.015, 10.0), (0.0255, 1.0), (0.0255, 10.0)]
 PATH_CASES = [dict(amplitude=0.015, frequency=10.0, path="circle"), dict(amplitude=0.022, frequency=10.0, path="circle"),
@@ -133,9 +133,7 @@ def main() -> None:
     report["load_average_end"] = os.getloadavg()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    tmp = out / "bench_cycle.json.tmp"
-    tmp.write_text(json.dumps(report, indent=2))
-    tmp.replace(out / "bench_cycle.json")
+    atomic_write_json(out / "bench_cycle.json", report)
 
 
 if __name__ == "__main__":

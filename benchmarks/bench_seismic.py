@@ -14,7 +14,6 @@ Single-machine numbers: quote them with the machine's load (recorded in the JSON
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
 import statistics
@@ -28,6 +27,7 @@ from compile_time import compile_times  # noqa: E402
 from nsd_core.device.ground import fema_record
 from nsd_core.device.isolation import default_structure
 from nsd_core.device.params import Params
+from nsd_core.device.results import atomic_write_json
 from nsd_core.device.seismic import seismic_summary, simulate_seismic
 
 WHOLE_SCALE = 0.2  # 0.3 reaches the rod (|u| = l_d at 2.78 s): exit 4
@@ -88,9 +88,7 @@ def main() -> None:
     report["load_average_end"] = os.getloadavg()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    tmp = out / "bench_seismic.json.tmp"
-    tmp.write_text(json.dumps(report, indent=2))
-    tmp.replace(out / "bench_seismic.json")
+    atomic_write_json(out / "bench_seismic.json", report)
 
 
 if __name__ == "__main__":
