@@ -24,7 +24,14 @@ from nsd_core.engine.kinematics import positions_kernel, velocities_kernel
 OK, NEWTON_FAILED, SINGULAR_BLOCK, SINGULAR_MASS = 0, 1, 2, 3
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
+def copy_into(dst, src):
+    """dst[:] = src for 1-D arrays, without the temporary that a slice copy may allocate (no NRT here)."""
+    for i in range(dst.shape[0]):
+        dst[i] = src[i]
+
+
+@njit(cache=True, _nrt=False)
 def lu_factor(a, piv):
     """In place, partial pivoting (LAPACK's getrf rule). False when a pivot is exactly zero."""
     n = a.shape[0]
@@ -47,7 +54,7 @@ def lu_factor(a, piv):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def lu_solve(a, piv, b):
     """Solve in place with the factors of lu_factor."""
     n = a.shape[0]
@@ -64,7 +71,7 @@ def lu_solve(a, piv, b):
         b[i] /= a[i, i]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _closure(m, w, with_rates):
     w.Phi[:] = 0.0
     w.J[:, :] = 0.0
@@ -73,7 +80,7 @@ def _closure(m, w, with_rates):
                    with_rates, w.Phi, w.J, w.c, w.scratch)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _factor_dependent_block(m, w):
     dep, rows = m.dependent, m.rows
     for i in range(dep.shape[0]):
@@ -82,7 +89,7 @@ def _factor_dependent_block(m, w):
     return lu_factor(w.Jd, w.piv)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def newton(m, w, z):
     """Newton on the independent loop equations for the dependent coordinates of z (in place)."""
     dep, rows = m.dependent, m.rows
@@ -117,7 +124,7 @@ def newton(m, w, z):
     return NEWTON_FAILED
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _maxdiff_dep(dep, a, b):
     out = 0.0
     for i in range(dep.shape[0]):
@@ -125,7 +132,7 @@ def _maxdiff_dep(dep, a, b):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def assemble(m, w, t, zf):
     """Full configuration on the loop manifold into w.z, for free coordinates zf and w.q.
 
@@ -138,12 +145,12 @@ def assemble(m, w, t, zf):
     dep, n = m.dependent, w.z.shape[0]
     nd = dep.shape[0]
     z = w.z_start
-    z[:] = w.z
+    copy_into(z, w.z)
     for a in range(m.prescribed.shape[0]):
         z[m.prescribed[a]] = w.q[a]
     for a in range(m.free.shape[0]):
         z[m.free[a]] = zf[a]
-    w.z[:] = z
+    copy_into(w.z, z)
     w.kin_current[0] = 0
     if nd == 0:
         return OK
@@ -166,13 +173,13 @@ def assemble(m, w, t, zf):
             dev = max(dev, abs(w.z[dep[j]] - w.pred[j]))
     if dev > 0.02 * move + 1e-10:  # maybe another branch: solve from the warm start too
         w.counters[2] += 1
-        w.z_alt[:] = z
+        copy_into(w.z_alt, z)
         if newton(m, w, w.z_alt) == OK:
             dev_alt = 0.0
             for j in range(nd):
                 dev_alt = max(dev_alt, abs(w.z_alt[dep[j]] - w.pred[j]))
             if code != OK or (_maxdiff_dep(dep, w.z_alt, w.z) > 1e-8 and dev_alt < dev):
-                w.z[:] = w.z_alt
+                copy_into(w.z, w.z_alt)
                 code = OK
             else:
                 w.kin_current[0] = 0  # the kinematics in w are z_alt's
@@ -181,7 +188,7 @@ def assemble(m, w, t, zf):
     return code
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def velocities_and_predictor(m, w, zfd):
     """Positions at w.z, Phi_z, z' with the dependent part from Eq. 10, Z, vp, c; store the predictor."""
     dep, rows, free, pres = m.dependent, m.rows, m.free, m.prescribed
@@ -217,20 +224,22 @@ def velocities_and_predictor(m, w, zfd):
             for k in range(n):
                 acc += w.S[j, k] * w.zd[k]
             w.zd[dep[j]] = acc
-        w.z_lin[:] = w.z
+        copy_into(w.z_lin, w.z)
         w.has_lin[0] = 1
     velocities_kernel(m.parent, m.jtype, w.B, w.r, w.zd, w.Z, w.vp, w.scratch)
     _closure(m, w, True)  # positions unchanged: only c is new
     return OK
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def reduced_dynamics(m, w):
     """Eqs. 7-8 with w.wrench, w.gen; Eq. 12 in the free coordinates; the reactions lambda, tau."""
     dep, rows, free, pres = m.dependent, m.rows, m.free, m.prescribed
     nd, nf, npr, n = dep.shape[0], free.shape[0], pres.shape[0], w.z.shape[0]
     w.Mb[:, :, :] = 0.0
-    w.Qb[:, :] = w.wrench
+    for i in range(n):
+        for a in range(6):
+            w.Qb[i, a] = w.wrench[i, a]
     body_terms_kernel(m.mass, m.com, m.inertia, m.gravity, w.A, w.r, w.Z, True, w.Mb, w.Qb, w.scratch)
     w.M[:, :] = 0.0
     tree_kernel(m.parent, w.B, w.vp, w.Mb, w.Qb, w.M, w.Q, w.scratch6)
@@ -296,7 +305,7 @@ def reduced_dynamics(m, w):
     return OK
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def evaluate(t, y, m, w, forces, motion):
     """Everything at (t, y): w.z, w.zd, w.zdd, w.lam, w.tau, w.extra_rate, the kinematics."""
     nf = m.free.shape[0]  # y = [z_f, z'_f, extra]: the layout of compiled_model.split_state
@@ -310,7 +319,8 @@ def evaluate(t, y, m, w, forces, motion):
         return code
     element_kinematics(m.elem_up, m.elem_pu, m.elem_lo, m.elem_pl, w.A, w.r, w.Z, w.P_up, w.P_lo, w.N,
                        w.L, w.Ld, w.scratch)
-    w.extra[:] = y[2 * nf:]
+    for i in range(w.extra.shape[0]):
+        w.extra[i] = y[2 * nf + i]
     w.gen[:] = 0.0
     linear_momentum_kernel(m.mass, m.com, w.A, w.r, w.Z, w.momentum)
     code = forces(t, w.z, w.zd, w.momentum, w.L, w.Ld, w.extra, m.force_params, w.T, w.gen, w.extra_rate)
@@ -321,7 +331,7 @@ def evaluate(t, y, m, w, forces, motion):
     return reduced_dynamics(m, w)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def rhs_into(t, y, m, w, forces, motion, dydt):
     """dy/dt = [z'_f, z''_f, extra rates] into dydt; returns the status code."""
     code = evaluate(t, y, m, w, forces, motion)
@@ -329,5 +339,6 @@ def rhs_into(t, y, m, w, forces, motion, dydt):
     for a in range(nf):
         dydt[a] = y[nf + a]
         dydt[nf + a] = w.zdd[m.free[a]]
-    dydt[2 * nf:] = w.extra_rate
+    for i in range(w.extra_rate.shape[0]):
+        dydt[2 * nf + i] = w.extra_rate[i]
     return code
