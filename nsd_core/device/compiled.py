@@ -25,7 +25,7 @@ from nsd_core.engine.rk import Outputs, integrate_kernel, make_outputs, tableau
 WIRE_FIELDS, SPRING_FIELDS = 11, 6
 
 
-@njit(FORCE_SIG, cache=True)
+@njit(FORCE_SIG, cache=True, _nrt=False)
 def device_forces(t, z, zd, P, L, Ld, extra, p, T, gen, rate):
     """Tensions of ropes (Eq. 16), wires (Eq. 17) and the spring (Eq. 18, pushing: T < 0)."""
     nr, nw = int(p[0]), int(p[1])
@@ -49,7 +49,7 @@ def device_forces(t, z, zd, P, L, Ld, extra, p, T, gen, rate):
     return 0
 
 
-@njit(MOTION_SIG, cache=True)
+@njit(MOTION_SIG, cache=True, _nrt=False)
 def device_motion(t, p, q, qd, qdd):
     """Plate X, Y on the drive's path (plate_motion); plate rotation and the base's planar joint at zero."""
     x, y, xd, yd, xdd, ydd = plate_motion(t, p)

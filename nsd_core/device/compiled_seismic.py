@@ -41,7 +41,7 @@ COLUMNS = ("x_g", "y_g", "vx_g", "vy_g", "ax_g", "ay_g", "x", "y", "theta", "vx"
            "ay_abs", "device_Fx", "device_Fy", "cap_z", "wall_z", "closure", "kinetic", "height")
 
 
-@njit(FORCE_SIG, cache=True)
+@njit(FORCE_SIG, cache=True, _nrt=False)
 def seismic_forces(t, z, zd, P, L, Ld, extra, p, T, gen, rate):
     has_dev, n_dev, nx_dev, og = p[0] != 0.0, int(p[1]), int(p[2]), int(p[3])
     px, py, pl, bx, by, bs = int(p[4]), int(p[5]), int(p[6]), int(p[7]), int(p[8]), int(p[9])
@@ -68,7 +68,7 @@ def seismic_forces(t, z, zd, P, L, Ld, extra, p, T, gen, rate):
     return 0
 
 
-@njit(MOTION_SIG, cache=True)
+@njit(MOTION_SIG, cache=True, _nrt=False)
 def seismic_motion(t, p, q, qd, qdd):
     """The base's planar joint (base_x, base_y, base) follows the ground; no rotation."""
     q[0], q[1], qd[0], qd[1], qdd[0], qdd[1] = ground_values(t, p, 0)

@@ -38,7 +38,7 @@ HEADER = 8  # [kind, A, B, omega, T_ramp = 1/f, cos psi, sin psi, n_intervals]; 
 #             coefficients follow (n + 1 knots, then the cubic's coefficients c[m, i, axis] as scipy's PPoly)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _cubic(p, base, n, i, axis, s):
     """Value and two derivatives of the table's cubic on interval i, s = t - x_i (Horner)."""
     c0, c1 = p[base + i * 2 + axis], p[base + (n + i) * 2 + axis]
@@ -46,7 +46,7 @@ def _cubic(p, base, n, i, axis, s):
     return ((c0 * s + c1) * s + c2) * s + c3, (3.0 * c0 * s + 2.0 * c1) * s + c2, 6.0 * c0 * s + 2.0 * c1
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def plate_motion(t, p):
     """x, y, x', y', x'', y'' of the plate at time t for the packed path p (see ``Drive.motion_params``).
 

@@ -47,19 +47,19 @@ class SpringLaw(NamedTuple):
 # The array functions below are ufuncs built from these same functions, and compiled callers (MuJoCo's
 # C passive callback, compiled engines) call them directly, so every engine evaluates the same code.
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def rope_tension_scalar(length, natural_length, stiffness):
     """Eq. 16 for one rope: T = k_r (l_r - l_r0) H(l_r - l_r0)."""
     return stiffness * max(length - natural_length, 0.0)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def wire_tension_scalar(stress, area):
     """Eq. 17a for one wire: T = sigma A_w H(sigma)."""
     return area * max(stress, 0.0)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def sma_slope_scalar(eps, d, stress, E, Y, alpha, n, fT, a, Em, eps_t, c):
     """Eq. 17b-d slope d sigma / d eps for one wire straining in direction d (sign taken)."""
     d = 1.0 if d > 0 else (-1.0 if d < 0 else 0.0)
@@ -71,7 +71,7 @@ def sma_slope_scalar(eps, d, stress, E, Y, alpha, n, fT, a, Em, eps_t, c):
     return (1.0 - s) * E * (1.0 - d * sg * abs(over / Y) ** n) + s * Em
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def bouc_wen_slope_scalar(zeta, direction, ksd, beta, gamma, n):
     """Eq. 18b slope d zeta / d x_s for compressing in ``direction`` (sign taken)."""
     sg = zeta * direction
@@ -79,13 +79,13 @@ def bouc_wen_slope_scalar(zeta, direction, ksd, beta, gamma, n):
     return ksd - (gamma + beta * sg) * abs(zeta) ** n
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def spring_push_scalar(length, zeta, kse, free_length):
     """Eq. 18a for the spring: P = max(k_se x_s + zeta, 0), x_s = L_s0 - L (push only)."""
     return max(kse * (free_length - length) + zeta, 0.0)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def advance_wire_stress_scalar(strain0, strain1, stress, E, Y, alpha, n, fT, a, Em, eps_t, c, substeps, order):
     """Eq. 17 integrated in strain from strain0 to strain1 (fixed direction): RK4 (order 4) or Heun
     (order 2) in ``substeps`` steps."""
@@ -108,7 +108,7 @@ def advance_wire_stress_scalar(strain0, strain1, stress, E, Y, alpha, n, fT, a, 
     return y
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def advance_spring_zeta_scalar(x0, x1, zeta, ksd, beta, gamma, n, substeps, order):
     """Eq. 18b integrated in the compression from x0 to x1 (fixed direction), as above."""
     d = x1 - x0

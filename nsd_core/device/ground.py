@@ -90,7 +90,7 @@ def _unit(azimuth_deg: float) -> np.ndarray:
 RECORD, HARMONIC, PULSE = 0.0, 1.0, 2.0
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def piecewise_linear_at(t, p, start, n):
     """(d, v, a) at t of a component stored at p[start:start + 5 n] (t_k, a_k, s_k, v_k, d_k):
     zero before t_0; a = a_k + s_k tau on [t_k, t_k+1), v and d its exact integrals."""
@@ -109,7 +109,7 @@ def piecewise_linear_at(t, p, start, n):
             v0 + a0 * tau + s * tau * tau / 2.0, a0 + s * tau)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def harmonic_at(t, A, w, duration):
     """a = A sin(w t) on [0, duration], zero outside; v, d its integrals from rest (closed forms)."""
     tc = min(max(t, 0.0), duration)
@@ -119,7 +119,7 @@ def harmonic_at(t, A, w, duration):
     return d, v, a
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _pulse_terms(A, f, gamma, nu, tau):
     W = 2.0 * math.pi * f
     d, v, a = 0.0, 0.0, 0.0
@@ -130,7 +130,7 @@ def _pulse_terms(A, f, gamma, nu, tau):
     return A * d, A * v, A * a
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def pulse_at(t, A, f, gamma, nu):
     """Mavroeidis-Papageorgiou velocity pulse started at 0 (t_0 = gamma/(2 f)): (d, v, a)."""
     half = gamma / (2.0 * f)
@@ -142,7 +142,7 @@ def pulse_at(t, A, f, gamma, nu):
     return d - d0, v, a
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def ground_values(t, p, o):
     """The ground motion of the block at p[o:] at time t: (d_x, d_y, v_x, v_y, a_x, a_y)."""
     kind = p[o]
@@ -162,14 +162,14 @@ def ground_values(t, p, o):
     return s * ex, s * ey, sd * ex, sd * ey, sdd * ex, sdd * ey
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def ground_series(ts, p, out):
     """ground_values at every time of ts into out (len(ts), 6)."""
     for k in range(ts.shape[0]):
         out[k, 0], out[k, 1], out[k, 2], out[k, 3], out[k, 4], out[k, 5] = ground_values(ts[k], p, 0)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _piecewise_series(ts, p, n, out):
     for k in range(ts.shape[0]):
         out[k, 0], out[k, 1], out[k, 2] = piecewise_linear_at(ts[k], p, 0, n)

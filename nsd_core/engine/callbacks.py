@@ -17,13 +17,13 @@ from numba import njit
 from nsd_core.engine.compiled_model import FORCE_SIG, MOTION_SIG
 
 
-@njit(FORCE_SIG, cache=True)
+@njit(FORCE_SIG, cache=True, _nrt=False)
 def no_forces(t, z, zd, P, L, Ld, extra, p, T, gen, rate):
     T[:] = 0.0
     return 0
 
 
-@njit(FORCE_SIG, cache=True)
+@njit(FORCE_SIG, cache=True, _nrt=False)
 def linear_springs(t, z, zd, P, L, Ld, extra, p, T, gen, rate):
     ne = L.shape[0]
     for e in range(ne):
@@ -33,12 +33,12 @@ def linear_springs(t, z, zd, P, L, Ld, extra, p, T, gen, rate):
     return 0
 
 
-@njit(MOTION_SIG, cache=True)
+@njit(MOTION_SIG, cache=True, _nrt=False)
 def no_motion(t, p, q, qd, qdd):
     return 0
 
 
-@njit(MOTION_SIG, cache=True)
+@njit(MOTION_SIG, cache=True, _nrt=False)
 def uniform_rate(t, p, q, qd, qdd):
     for i in range(q.shape[0]):
         q[i] = p[i] * t

@@ -14,7 +14,7 @@ from nsd_core.engine.kinematics import SCRATCH_ROWS, Kinematics, cross3
 from nsd_core.engine.mechanism import Mechanism
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _global(body, local, A, r, is_point, out):
     for a in range(3):
         if body < 0:
@@ -26,7 +26,7 @@ def _global(body, local, A, r, is_point, out):
             out[a] = acc
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def closure_kernel(parent, kind, ca, va, cb, vb, A, r, B, Z, vp, with_rates, Phi, J, c, scratch):
     """Adds Phi, Phi_z and (with rates) c into the given arrays. scratch: (>= 10, 3)."""
     row = 0

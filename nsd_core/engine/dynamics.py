@@ -17,7 +17,7 @@ from nsd_core.engine.kinematics import SCRATCH_ROWS, Kinematics, cross3
 from nsd_core.engine.mechanism import Mechanism
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def linear_momentum_kernel(mass, com, A, r, Z, out):
     """The mechanism's linear momentum sum m_i (s'_i + w_i x g_i), g_i = r_i + A_i c_i (global
     centre of mass), into out (3,): what a force callback needs for the power of a moving frame's
@@ -36,7 +36,7 @@ def linear_momentum_kernel(mass, com, A, r, Z, out):
         out[2] += m * (Z[i, 2] + w0 * g1 - w1 * g0)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def body_terms_kernel(mass, com, inertia, gravity, A, r, Z, has_vel, Mb, Qb, scratch):
     """Per-body M_i into Mb (n,6,6) and gravity + velocity terms added into Qb (n,6).
     scratch: (>= 11, 3), so that nothing is allocated per call."""
@@ -101,7 +101,7 @@ def body_terms_kernel(mass, com, inertia, gravity, A, r, Z, has_vel, Mb, Qb, scr
                 Qb[i, 3 + a] -= t1[a] + m * gd[a]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def tree_kernel(parent, B, vp, Mb, Fb, Mred, Qred, F):
     """Subtree sums (Eqs. 7-8) leaves to root, then R_d^T M^S R_d and R_d^T (Q^S - P^S). F: a 6-vector
     of scratch."""

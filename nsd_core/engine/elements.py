@@ -14,7 +14,7 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _point_state(body, local, A, r, Z, p, v):
     for a in range(3):
         if body < 0:
@@ -33,7 +33,7 @@ def _point_state(body, local, A, r, Z, p, v):
         v[2] = Z[body, 2] + w0 * p[1] - w1 * p[0]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def element_kinematics(body_up, pts_up, body_lo, pts_lo, A, r, Z, P_up, P_lo, N, L, Ld, scratch):
     """Points, unit vectors, lengths and length rates of every element. scratch: (>= 4, 3)."""
     pu, pl, vu, vl = scratch[0], scratch[1], scratch[2], scratch[3]
@@ -50,7 +50,7 @@ def element_kinematics(body_up, pts_up, body_lo, pts_lo, A, r, Z, P_up, P_lo, N,
             P_lo[e, a] = pl[a]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def apply_tensions(body_up, body_lo, P_up, P_lo, N, T, wrench):
     for e in range(body_up.shape[0]):
         for side in range(2):

@@ -45,7 +45,7 @@ def axis_rotation(axis: np.ndarray, angle: float) -> np.ndarray:
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _rodrigues(u, angle, R):
     x, y, z = u[0], u[1], u[2]
     c, s = math.cos(angle), math.sin(angle)
@@ -64,14 +64,14 @@ def _rodrigues(u, angle, R):
 SCRATCH_ROWS = 12  # rows of the (rows, 3) scratch array every recursion kernel takes
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def cross3(a, b, out):
     out[0] = a[1] * b[2] - a[2] * b[1]
     out[1] = a[2] * b[0] - a[0] * b[2]
     out[2] = a[0] * b[1] - a[1] * b[0]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def positions_kernel(parent, jtype, axis, offset, z, A, r, B, scratch):
     """Root to leaves: body rotations A, origins r and the columns b_i of R_d. jtype 1 = revolute.
     scratch: any (>= 6, 3) array, so that nothing is allocated per call."""
@@ -116,7 +116,7 @@ def positions_kernel(parent, jtype, axis, offset, z, A, r, B, scratch):
                 B[i, 3 + a] = 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def velocities_kernel(parent, jtype, B, r, zd, Z, vp, scratch):
     """Root to leaves: Z_i = Z_p + b_i z'_i and vp_i = vp_p + b'_i z'_i (Eqs. 4-5). scratch: (>= 4, 3)."""
     n = parent.shape[0]

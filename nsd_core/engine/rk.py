@@ -51,7 +51,7 @@ def make_outputs(n_samples: int, ny: int, n: int, nd: int, npr: int, ne: int, ke
                    np.zeros(n_samples), np.zeros((n_samples, ne)), np.zeros(keep_steps))
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _rms(v):
     acc = 0.0
     for x in v:
@@ -59,24 +59,32 @@ def _rms(v):
     return math.sqrt(acc / v.shape[0])
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
+def _row(table, k, v):
+    for i in range(v.shape[0]):
+        table[k, i] = v[i]
+
+
+@njit(cache=True, _nrt=False)
 def _record(k, t, y, m, w, forces, motion, out):
     code = evaluate(t, y, m, w, forces, motion)
-    out.y[k] = y
-    out.z[k] = w.z
-    out.zd[k] = w.zd
-    out.r[k] = w.r
-    out.lam[k] = w.lam
-    out.tau[k] = w.tau
+    _row(out.y, k, y)  # element loops: a slice copy may allocate, and this kernel runs without NRT
+    _row(out.z, k, w.z)
+    _row(out.zd, k, w.zd)
+    for i in range(w.r.shape[0]):
+        for a in range(3):
+            out.r[k, i, a] = w.r[i, a]
+    _row(out.lam, k, w.lam)
+    _row(out.tau, k, w.tau)
     c = 0.0
     for v in w.Phi:
         c = max(c, abs(v))
     out.closure[k] = c
-    out.lengths[k] = w.L
+    _row(out.lengths, k, w.L)
     return code
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _error_norm(tab, K, h, scale, err, err3):
     ny = scale.shape[0]
     ns = int(tab.info[0])
@@ -100,7 +108,7 @@ def _error_norm(tab, K, h, scale, err, err3):
     return abs(h) * e5 / math.sqrt((e5 + 0.01 * e3) * ny)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _stage_state(K, coeffs, s, h, y, out):
     for i in range(y.shape[0]):
         acc = 0.0
@@ -109,7 +117,7 @@ def _stage_state(K, coeffs, s, h, y, out):
         out[i] = y[i] + acc * h
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _dense(tab, K, F, t_old, h, y_old, y_new, f_new, tq, out):
     """Value of the step's interpolant at tq into out (F prepared by _prepare_dense for DOP853)."""
     x = (tq - t_old) / h
@@ -140,15 +148,28 @@ def _integrate(m, w, forces, motion, tab, y0, t_eval, settings, out, stats):
 
     settings: rtol, atol, max_step, first_step (0 = select), max_steps (accepted steps; more is a
     runaway: TOO_MANY_STEPS). stats: steps, nfev, status, samples done. Returns the status (0 ok)."""
-    rtol, atol, max_step = settings[0], settings[1], settings[2]
     ny, ns = y0.shape[0], int(tab.info[0])
     dop = tab.info[2] == 1.0
-    err_exp = -1.0 / (tab.info[1] + 1.0)
     nk = tab.A_extra.shape[0] + ns + 1 if dop else ns + 1
     K = np.zeros((nk, ny))
     F = np.zeros((7 if dop else 0, ny))
-    y, y_new, f, f_new = y0.copy(), np.zeros(ny), np.zeros(ny), np.zeros(ny)
-    ys, scale, err, err3, yq = np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny)
+    vectors = np.zeros((9, ny))  # y, y_new, f, f_new, ys, scale, err, err3, yq
+    vectors[0] = y0
+    return _step_loop(m, w, forces, motion, tab, t_eval, settings, out, stats, K, F, vectors)
+
+
+@njit(cache=True, _nrt=False)
+def _step_loop(m, w, forces, motion, tab, t_eval, settings, out, stats, K, F, vectors):
+    """The step loop of _integrate on preallocated arrays; compiled without reference counting (the
+    workspace's arrays are read through namedtuples in the inner loops, where NRT's atomic counts
+    cost more than the arithmetic)."""
+    y, y_new, f, f_new, ys = vectors[0], vectors[1], vectors[2], vectors[3], vectors[4]
+    scale, err, err3, yq = vectors[5], vectors[6], vectors[7], vectors[8]
+    rtol, atol, max_step = settings[0], settings[1], settings[2]
+    ny, ns = y.shape[0], int(tab.info[0])
+    dop = tab.info[2] == 1.0
+    err_exp = -1.0 / (tab.info[1] + 1.0)
+    nk = K.shape[0]
     t0, t1 = t_eval[0], t_eval[t_eval.shape[0] - 1]
     nfev, steps, k = 0, 0, 0
     t = t0
@@ -203,7 +224,8 @@ def _integrate(m, w, forces, motion, tab, y0, t_eval, settings, out, stats):
                 t_new = t1
             h = t_new - t
             h_abs = abs(h)
-            K[0] = f
+            for i in range(ny):
+                K[0, i] = f[i]
             for s in range(1, ns):
                 _stage_state(K, tab.A[s], s, h, y, ys)
                 code = rhs_into(t + tab.C[s] * h, ys, m, w, forces, motion, K[s])
@@ -217,7 +239,8 @@ def _integrate(m, w, forces, motion, tab, y0, t_eval, settings, out, stats):
             if code != OK:
                 stats[0], stats[1], stats[2] = steps, nfev, code
                 return code
-            K[ns] = f_new
+            for i in range(ny):
+                K[ns, i] = f_new[i]
             for i in range(ny):
                 scale[i] = atol + max(abs(y[i]), abs(y_new[i])) * rtol
             en = _error_norm(tab, K, h, scale, err, err3)
@@ -255,7 +278,8 @@ def _integrate(m, w, forces, motion, tab, y0, t_eval, settings, out, stats):
                     F[3 + j, i] = h * acc
         while k < t_eval.shape[0] and t_eval[k] <= t_new:
             if t_eval[k] == t_new:
-                yq[:] = y_new
+                for i in range(ny):
+                    yq[i] = y_new[i]
             else:
                 _dense(tab, K, F, t, h, y, y_new, f_new, t_eval[k], yq)
             code = _record(k, t_eval[k], yq, m, w, forces, motion, out)
@@ -268,8 +292,9 @@ def _integrate(m, w, forces, motion, tab, y0, t_eval, settings, out, stats):
                 stats[0], stats[1], stats[2] = steps, nfev, NOT_FINITE
                 return NOT_FINITE
         t = t_new
-        y[:] = y_new
-        f[:] = f_new
+        for i in range(ny):
+            y[i] = y_new[i]
+            f[i] = f_new[i]
     stats[0], stats[1], stats[2], stats[3] = steps, nfev, OK, k
     return OK
 
