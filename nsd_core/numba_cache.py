@@ -1,0 +1,49 @@
+"""Where numba keeps compiled machine code: one folder per version of the source.
+
+numba's on-disk cache checks only the file of the function it compiled, not the functions that
+one calls: after an edit to a force law or to an engine kernel, a cached step loop in another file
+would go on running the old code. So the cache folder is keyed by a hash of every source file of
+``nsd_core`` and ``comparisons`` (whose MuJoCo callbacks are compiled from the same laws): any edit,
+any upgrade, starts a fresh folder. A NUMBA_CACHE_DIR set by the user is honoured as it is.
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+import sys
+from pathlib import Path
+
+PACKAGES = ("nsd_core", "comparisons")
+
+
+def source_fingerprint(root: Path) -> str:
+    """Hash of the names and contents of every .py file of the packages under ``root``."""
+    h = hashlib.sha256()
+    for pkg in PACKAGES:
+        base = root / pkg
+        for f in sorted(base.rglob("*.py")) if base.is_dir() else ():
+            h.update(f.relative_to(root).as_posix().encode())
+            h.update(f.read_bytes())
+    return h.hexdigest()[:16]
+
+
+def cache_folder(root: Path, environ=os.environ) -> Path:
+    base = Path(environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    return base / "nsd-harness" / "numba" / source_fingerprint(root)
+
+
+def use_versioned_cache(environ=os.environ) -> str | None:
+    """Point numba's cache at this source version's folder (unless NUMBA_CACHE_DIR is set); the
+    folder, or None where the user's own setting stands or no folder can be made."""
+    if environ.get("NUMBA_CACHE_DIR"):
+        return None
+    try:
+        folder = cache_folder(Path(__file__).resolve().parents[1], environ)
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError:  # no writable home: numba's default (beside the source) still works
+        return None
+    environ["NUMBA_CACHE_DIR"] = str(folder)  # child processes compile into the same folder
+    if "numba" in sys.modules:  # numba read its configuration already: tell it too
+        from numba.core import config
+        config.CACHE_DIR = str(folder)
+    return str(folder)

@@ -1,0 +1,57 @@
+"""numba's cache is keyed by the source version (nsd_core.numba_cache): an edit anywhere in the
+model or the engines starts a fresh cache folder, so no cached kernel runs a callee's old code."""
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+from nsd_core.numba_cache import cache_folder, source_fingerprint, use_versioned_cache
+
+
+def _tree(root: Path, law: str) -> None:
+    for pkg in ("nsd_core", "comparisons"):
+        (root / pkg).mkdir(parents=True, exist_ok=True)
+    (root / "nsd_core" / "forces.py").write_text(law)
+    (root / "comparisons" / "mujoco_engine.py").write_text("x = 1\n")
+
+
+def test_an_edit_to_any_callee_changes_the_folder(tmp_path):
+    _tree(tmp_path, "def rope(L): return 2.0 * L\n")
+    before = source_fingerprint(tmp_path)
+    assert source_fingerprint(tmp_path) == before  # the same source, the same folder
+    _tree(tmp_path, "def rope(L): return 3.0 * L\n")
+    assert source_fingerprint(tmp_path) != before
+    (tmp_path / "comparisons" / "mujoco_engine.py").write_text("x = 2\n")  # the engines' callbacks count too
+    after = source_fingerprint(tmp_path)
+    _tree(tmp_path, "def rope(L): return 3.0 * L\n")
+    assert source_fingerprint(tmp_path) != after
+    env = {"XDG_CACHE_HOME": str(tmp_path / "c")}
+    assert cache_folder(tmp_path, env).parent == tmp_path / "c" / "nsd-harness" / "numba"
+
+
+def test_a_users_own_cache_setting_is_kept():
+    env = {"NUMBA_CACHE_DIR": "/somewhere/of/mine"}
+    assert use_versioned_cache(env) is None
+    assert env == {"NUMBA_CACHE_DIR": "/somewhere/of/mine"}
+
+
+def test_numba_writes_its_cache_into_the_versioned_folder(tmp_path):
+    mod = tmp_path / "tiny_kernel.py"
+    mod.write_text("from numba import njit\n\n@njit(cache=True)\ndef twice(x):\n    return 2.0 * x\n")
+    code = textwrap.dedent(f"""
+        import sys
+        sys.path.insert(0, {str(tmp_path)!r})
+        import nsd_core
+        import tiny_kernel
+        assert tiny_kernel.twice(2.0) == 4.0
+    """)
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env["XDG_CACHE_HOME"] = str(tmp_path / "cache")
+    subprocess.run([sys.executable, "-c", code], env=env, check=True, timeout=120)
+    root = tmp_path / "cache" / "nsd-harness" / "numba"
+    folders = list(root.iterdir())
+    assert len(folders) == 1 and folders[0].name == source_fingerprint(Path(__file__).resolve().parents[1])
+    assert any(p.suffix == ".nbi" for p in folders[0].rglob("*")), "numba cached nothing there"
