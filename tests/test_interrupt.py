@@ -74,7 +74,7 @@ def interrupt_after_first_kept(p, pattern, signum, to_group):
     while not glob.glob(pattern):
         assert p.poll() is None, p.communicate()
         assert time.time() - t0 < 400, "nothing was kept in 400 s"
-        time.sleep(0.01)  # runs take ~0.1 s now: signal soon after the first is kept
+        time.sleep(0.2)
     children = psutil.Process(p.pid).children(recursive=True)
     sent = time.time()
     os.killpg(p.pid, signum) if to_group else p.send_signal(signum)
@@ -116,8 +116,7 @@ def test_compare_interrupted_then_resumed(tmp_path, signum, to_group):
 
 def test_sweep_interrupted_then_resumed(tmp_path):
     out = tmp_path / "sweep"
-    args = ["sweep", "--param", "rod_length", "--values",
-            "0.026,0.0265,0.027,0.0275,0.028,0.0285,0.029,0.0295,0.03,0.0305,0.031,0.0315,0.032,0.0325,0.033",
+    args = ["sweep", "--param", "rod_length", "--values", "0.026,0.027,0.028,0.029,0.03,0.031,0.032,0.033",
             "--frequency", "1", "--cycles", "2", "--samples-per-cycle", "100", "--workers", "2", "--out", str(out)]
     p = start(args)
     _, err, seconds, children = interrupt_after_first_kept(p, str(out / "designs" / "*" / "result.json"),
