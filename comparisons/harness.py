@@ -27,6 +27,7 @@ from comparisons.convergence import convergence_study
 from comparisons.metrics import own_metrics, pair_metrics
 from comparisons.energy import energy_balance_rel
 from nsd_core.device.geometry import device_geometry
+from nsd_core.numba_cache import source_fingerprint
 
 ENGINE_COST = {"semirecursive": 1.0, "mujoco": 1.0, "exudyn": 3.0}  # rough relative cost, for scheduling
 
@@ -37,11 +38,8 @@ ENGINE_COST = {"semirecursive": 1.0, "mujoco": 1.0, "exudyn": 3.0}  # rough rela
 def code_fingerprint() -> str:
     """A hash of the model and engine source (nsd_core, comparisons) and the installed versions: a
     kept run is reused only by the code that made it, never after an edit or an upgrade."""
-    import nsd_core
     h = hashlib.sha256(json.dumps(versions(), sort_keys=True).encode())
-    for pkg in (Path(nsd_core.__file__).parent, Path(__file__).parent):
-        for f in sorted(pkg.rglob("*.py")):
-            h.update(f.read_bytes())
+    h.update(source_fingerprint(Path(__file__).resolve().parents[1]).encode())  # the numba cache's key too
     return h.hexdigest()[:16]
 
 

@@ -26,9 +26,15 @@ OK, NEWTON_FAILED, SINGULAR_BLOCK, SINGULAR_MASS = 0, 1, 2, 3
 
 @njit(cache=True, _nrt=False)
 def copy_into(dst, src):
-    """dst[:] = src for 1-D arrays, without the temporary that a slice copy may allocate (no NRT here)."""
-    for i in range(dst.shape[0]):
-        dst[i] = src[i]
+    """dst[...] = src, element by element (1-D or 2-D): a slice copy may allocate a temporary, and
+    these kernels run without numba's reference counting, so they must not allocate."""
+    if dst.ndim == 1:
+        for i in range(dst.shape[0]):
+            dst[i] = src[i]
+    else:
+        for i in range(dst.shape[0]):
+            for j in range(dst.shape[1]):
+                dst[i, j] = src[i, j]
 
 
 @njit(cache=True, _nrt=False)
@@ -237,9 +243,7 @@ def reduced_dynamics(m, w):
     dep, rows, free, pres = m.dependent, m.rows, m.free, m.prescribed
     nd, nf, npr, n = dep.shape[0], free.shape[0], pres.shape[0], w.z.shape[0]
     w.Mb[:, :, :] = 0.0
-    for i in range(n):
-        for a in range(6):
-            w.Qb[i, a] = w.wrench[i, a]
+    copy_into(w.Qb, w.wrench)
     body_terms_kernel(m.mass, m.com, m.inertia, m.gravity, w.A, w.r, w.Z, True, w.Mb, w.Qb, w.scratch)
     w.M[:, :] = 0.0
     tree_kernel(m.parent, w.B, w.vp, w.Mb, w.Qb, w.M, w.Q, w.scratch6)
@@ -319,8 +323,7 @@ def evaluate(t, y, m, w, forces, motion):
         return code
     element_kinematics(m.elem_up, m.elem_pu, m.elem_lo, m.elem_pl, w.A, w.r, w.Z, w.P_up, w.P_lo, w.N,
                        w.L, w.Ld, w.scratch)
-    for i in range(w.extra.shape[0]):
-        w.extra[i] = y[2 * nf + i]
+    copy_into(w.extra, y[2 * nf:])
     w.gen[:] = 0.0
     linear_momentum_kernel(m.mass, m.com, w.A, w.r, w.Z, w.momentum)
     code = forces(t, w.z, w.zd, w.momentum, w.L, w.Ld, w.extra, m.force_params, w.T, w.gen, w.extra_rate)
@@ -339,6 +342,5 @@ def rhs_into(t, y, m, w, forces, motion, dydt):
     for a in range(nf):
         dydt[a] = y[nf + a]
         dydt[nf + a] = w.zdd[m.free[a]]
-    for i in range(w.extra_rate.shape[0]):
-        dydt[2 * nf + i] = w.extra_rate[i]
+    copy_into(dydt[2 * nf:], w.extra_rate)
     return code

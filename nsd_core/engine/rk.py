@@ -19,7 +19,7 @@ from scipy.integrate import RK45 as _SciRK45
 
 from numba import typeof, types
 
-from nsd_core.engine.compiled import OK, evaluate, rhs_into
+from nsd_core.engine.compiled import OK, copy_into, evaluate, rhs_into
 from nsd_core.engine.compiled_model import FORCE_FN, MODEL_TYPE, MOTION_FN, WORK_TYPE
 
 Tableau = namedtuple("Tableau", "A B C E E3 E5 P D A_extra C_extra info")
@@ -60,27 +60,19 @@ def _rms(v):
 
 
 @njit(cache=True, _nrt=False)
-def _row(table, k, v):
-    for i in range(v.shape[0]):
-        table[k, i] = v[i]
-
-
-@njit(cache=True, _nrt=False)
 def _record(k, t, y, m, w, forces, motion, out):
     code = evaluate(t, y, m, w, forces, motion)
-    _row(out.y, k, y)  # element loops: a slice copy may allocate, and this kernel runs without NRT
-    _row(out.z, k, w.z)
-    _row(out.zd, k, w.zd)
-    for i in range(w.r.shape[0]):
-        for a in range(3):
-            out.r[k, i, a] = w.r[i, a]
-    _row(out.lam, k, w.lam)
-    _row(out.tau, k, w.tau)
+    copy_into(out.y[k], y)
+    copy_into(out.z[k], w.z)
+    copy_into(out.zd[k], w.zd)
+    copy_into(out.r[k], w.r)
+    copy_into(out.lam[k], w.lam)
+    copy_into(out.tau[k], w.tau)
     c = 0.0
     for v in w.Phi:
         c = max(c, abs(v))
     out.closure[k] = c
-    _row(out.lengths, k, w.L)
+    copy_into(out.lengths[k], w.L)
     return code
 
 
@@ -224,8 +216,7 @@ def _step_loop(m, w, forces, motion, tab, t_eval, settings, out, stats, K, F, ve
                 t_new = t1
             h = t_new - t
             h_abs = abs(h)
-            for i in range(ny):
-                K[0, i] = f[i]
+            copy_into(K[0], f)
             for s in range(1, ns):
                 _stage_state(K, tab.A[s], s, h, y, ys)
                 code = rhs_into(t + tab.C[s] * h, ys, m, w, forces, motion, K[s])
@@ -239,8 +230,7 @@ def _step_loop(m, w, forces, motion, tab, t_eval, settings, out, stats, K, F, ve
             if code != OK:
                 stats[0], stats[1], stats[2] = steps, nfev, code
                 return code
-            for i in range(ny):
-                K[ns, i] = f_new[i]
+            copy_into(K[ns], f_new)
             for i in range(ny):
                 scale[i] = atol + max(abs(y[i]), abs(y_new[i])) * rtol
             en = _error_norm(tab, K, h, scale, err, err3)
@@ -278,8 +268,7 @@ def _step_loop(m, w, forces, motion, tab, t_eval, settings, out, stats, K, F, ve
                     F[3 + j, i] = h * acc
         while k < t_eval.shape[0] and t_eval[k] <= t_new:
             if t_eval[k] == t_new:
-                for i in range(ny):
-                    yq[i] = y_new[i]
+                copy_into(yq, y_new)
             else:
                 _dense(tab, K, F, t, h, y, y_new, f_new, t_eval[k], yq)
             code = _record(k, t_eval[k], yq, m, w, forces, motion, out)
@@ -292,9 +281,8 @@ def _step_loop(m, w, forces, motion, tab, t_eval, settings, out, stats, K, F, ve
                 stats[0], stats[1], stats[2] = steps, nfev, NOT_FINITE
                 return NOT_FINITE
         t = t_new
-        for i in range(ny):
-            y[i] = y_new[i]
-            f[i] = f_new[i]
+        copy_into(y, y_new)
+        copy_into(f, f_new)
     stats[0], stats[1], stats[2], stats[3] = steps, nfev, OK, k
     return OK
 
