@@ -125,3 +125,45 @@ def test_sweep_interrupted_then_resumed(tmp_path):
     again = subprocess.run([sys.executable, "-m", "nsd_cli.main", *args], capture_output=True, text=True, timeout=600)
     assert again.returncode == 0, again.stdout + again.stderr
     assert f"{kept} already stored" in again.stderr
+
+
+HALF_SENT = '''
+import gc, os, struct, time
+from multiprocessing.queues import SimpleQueue
+
+def half_sent(marker):
+    """What a worker stopped while sending a large result leaves in the pipe: the length, a few bytes."""
+    results = next(o for o in gc.get_objects() if isinstance(o, SimpleQueue))
+    os.write(results._writer.fileno(), struct.pack("!i", 1 << 20) + b"x" * 10)
+    open(marker, "w").close()
+    time.sleep(60)
+'''
+
+STOP_AFTER_HALF_SENT = '''
+import os, sys, time
+from halfsent import half_sent
+from nsd_core.engine.workers import worker_pool
+marker = sys.argv[1]
+try:
+    with worker_pool(1) as pool:
+        pool.submit(half_sent, marker)
+        deadline = time.time() + 60
+        while not os.path.exists(marker) and time.time() < deadline:
+            time.sleep(0.01)
+        time.sleep(0.2)  # the pool's manager thread reads the length, then waits for the rest
+        raise KeyboardInterrupt
+except KeyboardInterrupt:
+    print("stopped", flush=True)
+'''
+
+
+def test_worker_stopped_mid_result_does_not_hang_the_exit(tmp_path):
+    """A run's result (over 64 KiB) goes down the pipe in several writes: a worker stopped in between
+    must not leave the pool's manager thread waiting for the rest, which the interpreter joins on exit
+    (nsd printed "interrupted" and then never exited)."""
+    (tmp_path / "halfsent.py").write_text(HALF_SENT)
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(tmp_path), os.environ.get("PYTHONPATH")]))}
+    r = subprocess.run([sys.executable, "-c", STOP_AFTER_HALF_SENT, str(tmp_path / "sent")], env=env,
+                       capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0 and r.stdout == "stopped\n", r.stdout + r.stderr
+    assert "Traceback" not in r.stderr, r.stderr

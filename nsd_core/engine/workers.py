@@ -19,6 +19,10 @@ def _worker_init() -> None:
     signal.signal(signal.SIGPIPE, signal.SIG_DFL)
     # a worker's stdout would land in the middle of the parent's table (Exudyn's allocation warnings)
     os.dup2(2, 1)
+    # nothing here renders; left on, MuJoCo's import loads glfw, which starts a Python subprocess to
+    # probe its library: a grandchild that stop() does not reach, and that prints a BrokenPipeError
+    # traceback when its worker is ended in the middle of the probe
+    os.environ.setdefault("MUJOCO_GL", "disable")
 
 
 @contextlib.contextmanager
@@ -35,8 +39,12 @@ def worker_pool(workers: int):
 
 
 def stop(pool: ProcessPoolExecutor, grace: float = 3.0) -> None:
-    """Cancel what is queued and end the running workers now (SIGTERM, then SIGKILL after ``grace``)."""
+    """Cancel what is queued and end the running workers now (SIGTERM, then SIGKILL after ``grace``),
+    then see the pool's manager thread out. Leave the cancelling to this: a future cancelled by the
+    caller but still in the pool's books makes Python 3.11's broken-pool path raise in that thread."""
     procs = list((getattr(pool, "_processes", None) or {}).values())
+    manager = getattr(pool, "_executor_manager_thread", None)
+    results = getattr(pool, "_result_queue", None)
     pool.shutdown(wait=False, cancel_futures=True)
     for p in procs:
         if p.is_alive():
@@ -46,6 +54,14 @@ def stop(pool: ProcessPoolExecutor, grace: float = 3.0) -> None:
         if p.is_alive():
             p.kill()
             p.join(timeout=grace)
+    # A result over 64 KiB (a run's time series) goes down the result pipe in several writes: a worker
+    # ended in the middle of one leaves the manager thread waiting for the rest for ever, and the
+    # interpreter joins that thread on exit (a hang after "interrupted"). With the workers gone, ours is
+    # the last write end: closing it gives that thread end-of-file, and it winds the pool up as broken.
+    if results is not None:
+        results._writer.close()
+    if manager is not None and manager.is_alive():
+        manager.join(timeout=grace)  # gone before exit, which would otherwise race it for the wakeup pipe
 
 
 @contextlib.contextmanager

@@ -33,12 +33,8 @@ def _local(designs: list[Design], job, workers: int) -> Iterator[tuple[Design, d
     # on Ctrl-C or SIGTERM the workers are terminated, not waited for (nsd_core.engine.workers)
     with worker_pool(workers) as ex:
         futures = {ex.submit(job, d): d for d in designs}
-        try:
-            for f in as_completed(futures):
-                yield futures[f], f.result()
-        finally:
-            for f in futures:
-                f.cancel()
+        for f in as_completed(futures):
+            yield futures[f], f.result()
 
 
 def _dask(designs: list[Design], job, address) -> Iterator[tuple[Design, dict]]:
