@@ -17,7 +17,7 @@ import numpy as np
 from numba import njit
 
 from nsd_core.engine.closure import closure_kernel
-from nsd_core.engine.dynamics import body_terms_kernel, linear_momentum_kernel, tree_kernel
+from nsd_core.engine.dynamics import body_terms_kernel, linear_momentum_kernel, tree_product
 from nsd_core.engine.elements import apply_tensions, element_kinematics
 from nsd_core.engine.kinematics import positions_kernel, velocities_kernel
 
@@ -238,17 +238,18 @@ def velocities_and_predictor(m, w, zfd):
 
 
 @njit(cache=True, _nrt=False)
-def reduced_dynamics(m, w):
-    """Eqs. 7-8 with w.wrench, w.gen; Eq. 12 in the free coordinates; the reactions lambda, tau."""
+def reduced_dynamics(m, w, reactions=True):
+    """Eqs. 7-8 with w.wrench, w.gen; Eq. 12 in the free coordinates; the reactions lambda, tau
+    (unless ``reactions`` is False: a step's stages need only z'', the outputs need the reactions).
+
+    Eq. 12 needs M only in products (R_z^T M R_z and M z''_0), so each is one O(n) pass of the
+    recursion (dynamics.tree_product) and the n x n matrix of Eq. 8 is never formed.
+    """
     dep, rows, free, pres = m.dependent, m.rows, m.free, m.prescribed
     nd, nf, npr, n = dep.shape[0], free.shape[0], pres.shape[0], w.z.shape[0]
     w.Mb[:, :, :] = 0.0
     copy_into(w.Qb, w.wrench)
     body_terms_kernel(m.mass, m.com, m.inertia, m.gravity, w.A, w.r, w.Z, True, w.Mb, w.Qb, w.scratch)
-    w.M[:, :] = 0.0
-    tree_kernel(m.parent, w.B, w.vp, w.Mb, w.Qb, w.M, w.Q, w.scratch6)
-    for i in range(n):
-        w.Q[i] += w.gen[i]
     w.Rz[:, :] = 0.0  # Eq. 10
     for a in range(nf):
         w.Rz[free[a], a] = 1.0
@@ -265,24 +266,22 @@ def reduced_dynamics(m, w):
                 rhs_i -= w.J[rows[i], pres[a]] * w.qdd[a]
             acc += w.Jd_inv[j, i] * rhs_i
         w.zdd0[dep[j]] = acc
-    for i in range(n):  # res = Q - M zdd0, then the reduced right-hand side
-        acc = w.Q[i]
-        for k in range(n):
-            acc -= w.M[i, k] * w.zdd0[k]
-        w.res[i] = acc
+    # res = M zdd0 - Q; the reduced right-hand side is -R_z^T res
+    tree_product(m.parent, w.B, w.vp, w.Mb, w.Qb, w.gen, w.zdd0, True, w.acc6, w.Fsub, w.res)
+    for b in range(nf):
+        for i in range(n):
+            w.vec[i] = w.Rz[i, b]
+        tree_product(m.parent, w.B, w.vp, w.Mb, w.Qb, w.gen, w.vec, False, w.acc6, w.Fsub, w.Mv)  # M R_z[:, b]
+        for a in range(nf):
+            acc = 0.0
+            for i in range(n):
+                acc += w.Rz[i, a] * w.Mv[i]
+            w.red[a, b] = acc
     for a in range(nf):
         acc = 0.0
         for i in range(n):
-            acc += w.Rz[i, a] * w.res[i]
+            acc -= w.Rz[i, a] * w.res[i]
         w.red_rhs[a] = acc
-        for b in range(nf):
-            acc = 0.0
-            for i in range(n):
-                mi = 0.0
-                for k in range(n):
-                    mi += w.M[i, k] * w.Rz[k, b]
-                acc += w.Rz[i, a] * mi
-            w.red[a, b] = acc
     if nf and not lu_factor(w.red, w.red_piv):
         return SINGULAR_MASS
     lu_solve(w.red, w.red_piv, w.red_rhs)
@@ -291,11 +290,10 @@ def reduced_dynamics(m, w):
         for a in range(nf):
             acc += w.Rz[i, a] * w.red_rhs[a]
         w.zdd[i] = acc
-    for i in range(n):  # M z'' - Q = Phi_z^T lambda + E^T tau
-        acc = -w.Q[i]
-        for k in range(n):
-            acc += w.M[i, k] * w.zdd[k]
-        w.res[i] = acc
+    if not reactions:
+        return OK
+    # M z'' - Q = Phi_z^T lambda + E^T tau
+    tree_product(m.parent, w.B, w.vp, w.Mb, w.Qb, w.gen, w.zdd, True, w.acc6, w.Fsub, w.res)
     for j in range(nd):
         acc = 0.0
         for i in range(nd):
@@ -310,8 +308,9 @@ def reduced_dynamics(m, w):
 
 
 @njit(cache=True, _nrt=False)
-def evaluate(t, y, m, w, forces, motion):
-    """Everything at (t, y): w.z, w.zd, w.zdd, w.lam, w.tau, w.extra_rate, the kinematics."""
+def evaluate(t, y, m, w, forces, motion, reactions=True):
+    """Everything at (t, y): w.z, w.zd, w.zdd, w.lam, w.tau (with ``reactions``), w.extra_rate, the
+    kinematics."""
     nf = m.free.shape[0]  # y = [z_f, z'_f, extra]: the layout of compiled_model.split_state
     w.time[0] = t
     motion(t, m.motion_params, w.q, w.qd, w.qdd)
@@ -331,13 +330,14 @@ def evaluate(t, y, m, w, forces, motion):
         return code
     w.wrench[:, :] = 0.0
     apply_tensions(m.elem_up, m.elem_lo, w.P_up, w.P_lo, w.N, w.T, w.wrench)
-    return reduced_dynamics(m, w)
+    return reduced_dynamics(m, w, reactions)
 
 
 @njit(cache=True, _nrt=False)
-def rhs_into(t, y, m, w, forces, motion, dydt):
-    """dy/dt = [z'_f, z''_f, extra rates] into dydt; returns the status code."""
-    code = evaluate(t, y, m, w, forces, motion)
+def rhs_into(t, y, m, w, forces, motion, dydt, reactions=True):
+    """dy/dt = [z'_f, z''_f, extra rates] into dydt; returns the status code. The reactions
+    w.lam, w.tau are computed too unless ``reactions`` is False (an integrator's stages)."""
+    code = evaluate(t, y, m, w, forces, motion, reactions)
     nf = m.free.shape[0]
     for a in range(nf):
         dydt[a] = y[nf + a]

@@ -171,7 +171,7 @@ def _step_loop(m, w, forces, motion, tab, t_eval, settings, out, stats, K, F, ve
             stats[2], stats[3] = code, k
             return code
         k += 1
-    code = rhs_into(t, y, m, w, forces, motion, f)
+    code = rhs_into(t, y, m, w, forces, motion, f, False)
     nfev += 1
     if code != OK:
         stats[2] = code
@@ -187,7 +187,7 @@ def _step_loop(m, w, forces, motion, tab, t_eval, settings, out, stats, K, F, ve
         h0 = min(h0, t1 - t0)
         for i in range(ny):
             ys[i] = y[i] + h0 * f[i]
-        code = rhs_into(t0 + h0, ys, m, w, forces, motion, f_new)
+        code = rhs_into(t0 + h0, ys, m, w, forces, motion, f_new, False)
         nfev += 1
         if code != OK:
             stats[2] = code
@@ -219,13 +219,13 @@ def _step_loop(m, w, forces, motion, tab, t_eval, settings, out, stats, K, F, ve
             copy_into(K[0], f)
             for s in range(1, ns):
                 _stage_state(K, tab.A[s], s, h, y, ys)
-                code = rhs_into(t + tab.C[s] * h, ys, m, w, forces, motion, K[s])
+                code = rhs_into(t + tab.C[s] * h, ys, m, w, forces, motion, K[s], False)
                 nfev += 1
                 if code != OK:
                     stats[0], stats[1], stats[2] = steps, nfev, code
                     return code
             _stage_state(K, tab.B, ns, h, y, y_new)
-            code = rhs_into(t + h, y_new, m, w, forces, motion, f_new)
+            code = rhs_into(t + h, y_new, m, w, forces, motion, f_new, False)
             nfev += 1
             if code != OK:
                 stats[0], stats[1], stats[2] = steps, nfev, code
@@ -251,7 +251,7 @@ def _step_loop(m, w, forces, motion, tab, t_eval, settings, out, stats, K, F, ve
         if k < t_eval.shape[0] and t_eval[k] <= t_new and t_eval[k] != t_new and dop:
             for s in range(ns + 1, nk):  # the three extra stages of DOP853's interpolant
                 _stage_state(K, tab.A_extra[s - ns - 1], s, h, y, ys)
-                code = rhs_into(t + tab.C_extra[s - ns - 1] * h, ys, m, w, forces, motion, K[s])
+                code = rhs_into(t + tab.C_extra[s - ns - 1] * h, ys, m, w, forces, motion, K[s], False)
                 nfev += 1
                 if code != OK:
                     stats[0], stats[1], stats[2] = steps, nfev, code
