@@ -27,8 +27,9 @@ def _global(body, local, A, r, is_point, out):
 
 
 @njit(cache=True, _nrt=False)
-def closure_kernel(parent, kind, ca, va, cb, vb, A, r, B, Z, vp, with_rates, Phi, J, c, scratch):
-    """Adds Phi, Phi_z and (with rates) c into the given arrays. scratch: (>= 10, 3)."""
+def closure_kernel(parent, kind, ca, va, cb, vb, A, r, B, Z, vp, with_rates, Phi, J, c, scratch,
+                   with_positions=True):
+    """Adds Phi, Phi_z (with_positions) and c (with_rates) into the given arrays. scratch: (>= 10, 3)."""
     row = 0
     p, t1, t2, vel = scratch[0], scratch[1], scratch[2], scratch[3]
     av, bv, axb = scratch[4], scratch[5], scratch[6]
@@ -38,12 +39,13 @@ def closure_kernel(parent, kind, ca, va, cb, vb, A, r, B, Z, vp, with_rates, Phi
                 body = ca[k] if side == 0 else cb[k]
                 sign = 1.0 if side == 0 else -1.0
                 _global(body, va[k] if side == 0 else vb[k], A, r, True, p)
-                for a in range(3):
-                    Phi[row + a] += sign * p[a]
+                if with_positions:
+                    for a in range(3):
+                        Phi[row + a] += sign * p[a]
                 if body < 0:
                     continue
                 j = body
-                while j >= 0:
+                while j >= 0 and with_positions:
                     cross3(B[j, 3:], p, t1)
                     for a in range(3):
                         J[row + a, j] += sign * (B[j, a] + t1[a])
@@ -60,9 +62,10 @@ def closure_kernel(parent, kind, ca, va, cb, vb, A, r, B, Z, vp, with_rates, Phi
         else:  # perpendicular body-fixed vectors: 1 row
             _global(ca[k], va[k], A, r, False, av)
             _global(cb[k], vb[k], A, r, False, bv)
-            Phi[row] = av[0] * bv[0] + av[1] * bv[1] + av[2] * bv[2]
+            if with_positions:
+                Phi[row] = av[0] * bv[0] + av[1] * bv[1] + av[2] * bv[2]
             cross3(av, bv, axb)
-            for side in range(2):
+            for side in range(2 if with_positions else 0):
                 body = ca[k] if side == 0 else cb[k]
                 sign = 1.0 if side == 0 else -1.0
                 j = body

@@ -78,12 +78,14 @@ def lu_solve(a, piv, b):
 
 
 @njit(cache=True, _nrt=False)
-def _closure(m, w, with_rates):
-    w.Phi[:] = 0.0
-    w.J[:, :] = 0.0
+def _closure(m, w, with_rates, with_positions=True):
+    """Phi and Phi_z (with_positions), c (with_rates) of the loop cuts into the workspace."""
+    if with_positions:
+        w.Phi[:] = 0.0
+        w.J[:, :] = 0.0
     w.c[:] = 0.0
     closure_kernel(m.parent, m.cut_kind, m.cut_a, m.cut_va, m.cut_b, m.cut_vb, w.A, w.r, w.B, w.Z, w.vp,
-                   with_rates, w.Phi, w.J, w.c, w.scratch)
+                   with_rates, w.Phi, w.J, w.c, w.scratch, with_positions)
 
 
 @njit(cache=True, _nrt=False)
@@ -102,9 +104,14 @@ def newton(m, w, z):
     nd = dep.shape[0]
     tol, maxit = m.settings[0], int(m.settings[1])
     w.kin_current[0] = 0
-    for _ in range(maxit):
+    first_dep = z.shape[0]
+    for i in range(nd):
+        first_dep = min(first_dep, dep[i])
+    for it in range(maxit):
         w.counters[1] += 1
-        positions_kernel(m.parent, m.jtype, m.axis, m.offset, z, w.A, w.r, w.B, w.scratch)
+        # after the first pass only dependent coordinates change: bodies before the first dependent
+        # joint (bodies are in tree order, parents first) keep their positions
+        positions_kernel(m.parent, m.jtype, m.axis, m.offset, z, w.A, w.r, w.B, w.scratch, 0 if it == 0 else first_dep)
         _closure(m, w, False)
         res, pos = 0.0, 1.0
         for i in range(nd):
@@ -233,7 +240,7 @@ def velocities_and_predictor(m, w, zfd):
         copy_into(w.z_lin, w.z)
         w.has_lin[0] = 1
     velocities_kernel(m.parent, m.jtype, w.B, w.r, w.zd, w.Z, w.vp, w.scratch)
-    _closure(m, w, True)  # positions unchanged: only c is new
+    _closure(m, w, True, False)  # positions unchanged: only c is new
     return OK
 
 

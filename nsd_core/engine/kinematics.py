@@ -72,15 +72,16 @@ def cross3(a, b, out):
 
 
 @njit(cache=True, _nrt=False)
-def positions_kernel(parent, jtype, axis, offset, z, A, r, B, scratch):
+def positions_kernel(parent, jtype, axis, offset, z, A, r, B, scratch, start=0):
     """Root to leaves: body rotations A, origins r and the columns b_i of R_d. jtype 1 = revolute.
-    scratch: any (>= 6, 3) array, so that nothing is allocated per call."""
+    scratch: any (>= 6, 3) array, so that nothing is allocated per call. ``start``: bodies before it
+    are taken as already current (their coordinates unchanged since the last call)."""
     n = parent.shape[0]
     Rj = scratch[0:3]
     u = scratch[3]
     d = scratch[4]
     tmp = scratch[5]
-    for i in range(n):
+    for i in range(start, n):
         p = parent[i]
         for a in range(3):
             ua = 0.0
