@@ -21,7 +21,7 @@ from numba import njit
 
 from nsd_core.device.compiled import compiled_model, device_forces, device_motion
 from nsd_core.device.drive import Drive
-from nsd_core.device.model import device_system, rest_coordinates
+from nsd_core.device.model import device_system, rest_state
 from nsd_core.device.params import Params
 from nsd_core.device.results import atomic_write_json
 from nsd_core.engine import compiled as C
@@ -80,11 +80,7 @@ def _reduced(N, m, w, reactions):
 def start_state(p: Params, drive: Drive):
     """(model, workspace, y): the compiled model and the rest state the drive starts from."""
     system, g = device_system(p, drive)
-    z0 = rest_coordinates(g)
-    ws0 = system.workspace()
-    z_rest = system.assemble(ws0, 0.0, z0[system.partition.free]).copy()
-    extra0 = np.concatenate([g.initial_wire_stress(), [g.spring_zeta0]])
-    y0 = system.state(z_rest, np.zeros(len(z0)), extra0)
+    z_rest, y0 = rest_state(system, g, system.workspace())
     model = compiled_model(system, g, drive, system.forces.elements)
     return model, make_workspace(model, z_rest), y0
 
@@ -99,10 +95,16 @@ def best(fn, args, loops: int, repeats: int) -> float:
     return out
 
 
+def positive_int(text: str) -> int:
+    if not text.isdigit() or int(text) < 1:
+        raise argparse.ArgumentTypeError(f"{text!r}: allowed a whole number >= 1")
+    return int(text)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("--loops", type=int, default=20000)
-    ap.add_argument("--repeats", type=int, default=25)
+    ap.add_argument("--loops", type=positive_int, default=20000)
+    ap.add_argument("--repeats", type=positive_int, default=25)
     ap.add_argument("--out", default="out/bench")
     a = ap.parse_args()
     m, w, y = start_state(Params(), Drive(0.015, 1.0))

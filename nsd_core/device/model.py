@@ -120,6 +120,15 @@ def check_validity(t: float, kin, forces: DeviceForces) -> None:
                              f"{MAX_WIRE_STRAIN}: outside the SMA law's validity")
 
 
+def rest_state(system: SemiRecursiveSystem, g: DeviceGeometry, ws) -> tuple[np.ndarray, np.ndarray]:
+    """The precompressed rest state every drive starts from (docs/model.md), assembled in ``ws``:
+    the full configuration and the state y0 = [z_f, 0, wire stresses, spring zeta]."""
+    z0 = rest_coordinates(g)
+    z_rest = system.assemble(ws, 0.0, z0[system.partition.free]).copy()
+    extra0 = np.concatenate([g.initial_wire_stress(), [g.spring_zeta0]])
+    return z_rest, system.state(z_rest, np.zeros(len(z0)), extra0)
+
+
 def device_system(params: Params, drive: Drive) -> tuple[SemiRecursiveSystem, DeviceGeometry]:
     g = device_geometry(params)
     mech = device_mechanism(g)
@@ -159,11 +168,8 @@ def simulate(params: Params, drive: Drive, method: str = DEFAULT_SOLVER["method"
     start = time.perf_counter()
     system, g = device_system(params, drive)
     system.fast = backend != "numpy"
-    z0 = rest_coordinates(g)
-    extra0 = np.concatenate([g.initial_wire_stress(), [g.spring_zeta0]])
     ws = system.workspace()
-    z_rest = system.assemble(ws, 0.0, z0[system.partition.free]).copy()
-    y0 = system.state(z_rest, np.zeros(len(z0)), extra0)
+    z_rest, y0 = rest_state(system, g, ws)
     t_eval = drive.output_times()
     if backend == "compiled":
         return _simulate_compiled(system, g, drive, z_rest, y0, t_eval, method, rtol, atol, step_cap, start)

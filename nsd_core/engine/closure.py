@@ -42,14 +42,14 @@ def closure_kernel(parent, kind, ca, va, cb, vb, A, r, B, Z, vp, with_rates, Phi
                 if with_positions:
                     for a in range(3):
                         Phi[row + a] += sign * p[a]
+                    j = body  # the ground (-1) has no column
+                    while j >= 0:
+                        cross3(B[j, 3:], p, t1)
+                        for a in range(3):
+                            J[row + a, j] += sign * (B[j, a] + t1[a])
+                        j = parent[j]
                 if body < 0:
                     continue
-                j = body
-                while j >= 0 and with_positions:
-                    cross3(B[j, 3:], p, t1)
-                    for a in range(3):
-                        J[row + a, j] += sign * (B[j, a] + t1[a])
-                    j = parent[j]
                 if with_rates:
                     cross3(Z[body, 3:], p, t1)
                     for a in range(3):
@@ -62,16 +62,15 @@ def closure_kernel(parent, kind, ca, va, cb, vb, A, r, B, Z, vp, with_rates, Phi
         else:  # perpendicular body-fixed vectors: 1 row
             _global(ca[k], va[k], A, r, False, av)
             _global(cb[k], vb[k], A, r, False, bv)
+            cross3(av, bv, axb)
             if with_positions:
                 Phi[row] = av[0] * bv[0] + av[1] * bv[1] + av[2] * bv[2]
-            cross3(av, bv, axb)
-            for side in range(2 if with_positions else 0):
-                body = ca[k] if side == 0 else cb[k]
-                sign = 1.0 if side == 0 else -1.0
-                j = body
-                while j >= 0:
-                    J[row, j] += sign * (B[j, 3] * axb[0] + B[j, 4] * axb[1] + B[j, 5] * axb[2])
-                    j = parent[j]
+                for side in range(2):
+                    j = ca[k] if side == 0 else cb[k]
+                    sign = 1.0 if side == 0 else -1.0
+                    while j >= 0:
+                        J[row, j] += sign * (B[j, 3] * axb[0] + B[j, 4] * axb[1] + B[j, 5] * axb[2])
+                        j = parent[j]
             if with_rates:
                 wa, wb, al = scratch[7], scratch[8], scratch[9]
                 wa[:] = 0.0

@@ -111,7 +111,8 @@ def newton(m, w, z):
         w.counters[1] += 1
         # after the first pass only dependent coordinates change: bodies before the first dependent
         # joint (bodies are in tree order, parents first) keep their positions
-        positions_kernel(m.parent, m.jtype, m.axis, m.offset, z, w.A, w.r, w.B, w.scratch, 0 if it == 0 else first_dep)
+        start = 0 if it == 0 else first_dep
+        positions_kernel(m.parent, m.jtype, m.axis, m.offset, z, w.A, w.r, w.B, w.scratch, start)
         _closure(m, w, False)
         res, pos = 0.0, 1.0
         for i in range(nd):
