@@ -210,8 +210,11 @@ def pages(data: ReportData) -> list[tuple[str, Callable]]:
 
 def check_source(results_dir: str | Path) -> None:
     """Read and check --from (an nsd compare or an nsd seismic folder) before anything is written."""
+    from reports.ida_pages import ida_plan, is_ida
     from reports.seismic_report import is_seismic, seismic_plan
-    if str(results_dir).strip() and is_seismic(results_dir):
+    if str(results_dir).strip() and is_ida(results_dir):  # an nsd ida folder
+        ida_plan(results_dir)
+    elif str(results_dir).strip() and is_seismic(results_dir):
         seismic_plan(results_dir)
     else:
         load(results_dir)
@@ -221,9 +224,13 @@ def build_report(results_dir: str | Path, out_dir: str | Path) -> dict[str, Any]
     """Write ``out_dir/validation.pdf`` and ``out_dir/NN_page.png``; returns their paths."""
     import matplotlib.pyplot as plt
     from matplotlib.backends.backend_pdf import PdfPages
+    from reports.ida_pages import ida_plan, is_ida
     from reports.seismic_report import is_seismic, seismic_plan
     start = time.perf_counter()
-    if str(results_dir).strip() and is_seismic(results_dir):  # an nsd seismic folder (single run or --set)
+    if str(results_dir).strip() and is_ida(results_dir):  # an nsd ida folder
+        plan, title = ida_plan(results_dir)
+        footer = f"{title}  |  {time.strftime('%Y-%m-%d')}"
+    elif str(results_dir).strip() and is_seismic(results_dir):  # an nsd seismic folder (single run or --set)
         plan, title = seismic_plan(results_dir)
         footer = f"{title}  |  {time.strftime('%Y-%m-%d')}"
     else:

@@ -1,0 +1,173 @@
+"""``nsd ida``: incremental dynamic analysis over a FEMA P695 record set, with and without the device,
+and the lognormal fragility of a limit state (docs/ida.md).
+
+Each record is scaled to intensity levels (hunt and fill, Vamvatsikos and Cornell 2002, or
+``--levels``) until it reaches the limit state; resumable and parallel on the sweep's store
+(``nsd_core.study.ida``) -> DIR/ida.csv, DIR/fragility.json, DIR/ida.json, and per configuration the
+record closest to the median re-run with MuJoCo and Exudyn (with the device) or against the exact
+linear solution (supports alone) under DIR/cross_check/. Exit 0 every trace ended (a limit reached
+or the run budget spent); 2 bad input (nothing written); 3 a trace ended undetermined (a solver
+failure: listed in fragility.json, the others are kept) or a cross-check run failed.
+"""
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import os
+
+from nsd_cli.options import (add_param_arguments, add_solver_arguments, base_params, check_out_dir,
+                             solver_settings)
+from nsd_core.device.params import ParameterError
+
+HELP = "incremental dynamic analysis and fragility over a record set, with and without the device"
+HUNT_FLAGS = ("start", "step", "max_runs", "resolution")
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--record-set", default=None, metavar="SET",
+                   help="farfield, nearfield, nearfield-pulse, nearfield-no-pulse (or --set SET, without '=')")
+    p.add_argument("--records", default=None, metavar="1,3,5-7", help="these records of the set only (default all)")
+    p.add_argument("--measure", default="sa",
+                   help="intensity measure: sa (5%%-damped Sa at the supports-alone period, geometric mean of "
+                        "the two components, model time) or pga (geometric mean); m/s^2")
+    p.add_argument("--levels", default=None, metavar="L1,L2,...",
+                   help="intensity levels [m/s^2] to run upwards, stopping at the first that reaches the limit "
+                        "(instead of hunt and fill)")
+    p.add_argument("--start", type=float, default=None, help="hunt and fill: first level [m/s^2] (default 0.25)")
+    p.add_argument("--step", type=float, default=None,
+                   help="hunt and fill: first step up [m/s^2] (default 0.25; each next step 0.5 step longer)")
+    p.add_argument("--max-runs", type=int, default=None, help="hunt and fill: runs per record and configuration "
+                                                               "(default 6)")
+    p.add_argument("--resolution", type=float, default=None,
+                   help="hunt and fill: bracket the limit until hi - lo <= resolution hi (default 0.1)")
+    p.add_argument("--limit", required=True, metavar="stroke=VALUE|restrainer|drift=VALUE",
+                   help="limit state: stroke=VALUE peak |u| >= VALUE m (the rod's length reached counts too)")
+    p.add_argument("--structure", action="append", default=[], metavar="NAME=VALUE",
+                   help="override the default isolated structure: mass, stiffness, damping, "
+                        "radius_of_gyration, support_radius (SI)")
+    p.add_argument("--engines", default="semirecursive,mujoco,exudyn",
+                   help="semirecursive first, then the engines that re-run the median record with the device "
+                        "(default both; 'semirecursive' alone skips them)")
+    p.add_argument("--workers", type=int, default=None, help="local processes (default: the cores)")
+    p.add_argument("--scheduler", default=None, help="address of a running Dask scheduler")
+    p.add_argument("--retry-failed", action="store_true", help="run levels stored as failed again")
+    add_param_arguments(p)
+    for action in p._actions:
+        if action.dest == "set":
+            action.metavar, action.help = "NAME=VALUE|SET", ("override one parameter (NAME=VALUE); or, without '=', "
+                                                             "the record set (as --record-set)")
+    add_solver_arguments(p)
+    p.add_argument("--out", required=True, help="output folder (resumable)")
+
+
+def _options(args):
+    """Everything the command line says, checked (ParameterError, one line) before anything runs."""
+    from nsd_core.device.ground import SETS, set_name
+    from nsd_core.study.hunt import Hunt, parse_levels
+    from nsd_core.study.ida import parse_limit
+    from nsd_core.study.intensity import MEASURES
+    from nsd_core.study.seismic_set import parse_records
+    sets = [v for v in args.set if "=" not in v] + ([args.record_set] if args.record_set is not None else [])
+    args.set = [v for v in args.set if "=" in v]
+    if len(sets) != 1:
+        raise ParameterError(f"--set/--record-set {', '.join(sets) or '(none)'}: give exactly one record set; "
+                             f"allowed: {', '.join(SETS)}")
+    set_ = set_name(sets[0])
+    records = parse_records(args.records, set_)
+    if args.measure not in MEASURES:
+        raise ParameterError(f"--measure {args.measure!r}: unknown; allowed: {', '.join(MEASURES)}")
+    limit = parse_limit(args.limit)
+    given = [f"--{n.replace('_', '-')}" for n in HUNT_FLAGS if getattr(args, n) is not None]
+    if args.levels is not None:
+        if given:
+            raise ParameterError(f"{given[0]}: a hunt-and-fill option; --levels gives the levels instead")
+        return set_, records, limit, None, parse_levels(args.levels)
+    defaults = Hunt()
+    hunt = Hunt(**{n: getattr(args, n) if getattr(args, n) is not None else getattr(defaults, n) for n in HUNT_FLAGS})
+    return set_, records, limit, hunt, None
+
+
+def run(args) -> int:
+    from comparisons.engines import parse_engine_list, run_seismic_engine
+    from comparisons.harness import code_fingerprint
+    from nsd_cli.options import WORKERS_MAX, whole
+    from nsd_cli.sweep import check_scheduler
+    from nsd_core.device.ground import SIMILITUDE_TIME_FACTOR, fema_record
+    from nsd_core.device.isolation import default_structure
+    from nsd_core.device.model import DEFAULT_SOLVER
+    from nsd_core.device.params import parse_set
+    from nsd_core.study.ida import make_traces, trace_all
+    from nsd_core.study.ida_outputs import write_ida
+    from nsd_core.study.intensity import record_intensity
+    from nsd_core.study.store import Store
+    set_, records, limit, hunt, levels = _options(args)
+    engines = parse_engine_list(args.engines)
+    if engines[0] != "semirecursive":
+        raise ParameterError(f"--engines {args.engines!r}: semirecursive (the reference) must come first")
+    workers = (os.cpu_count() or 1) if args.workers is None else args.workers
+    whole("--workers", workers, 1, WORKERS_MAX)
+    params = base_params(args)
+    structure = default_structure(params)
+    if args.structure:
+        structure = structure.replace(**parse_set(args.structure))
+    solver = {**DEFAULT_SOLVER, **solver_settings(args)}
+    check_scheduler(args.scheduler)
+    ground = {"scale": 1.0, "time_factor": SIMILITUDE_TIME_FACTOR, "window": None, "rotate_deg": 0.0,
+              "normalised": True}
+    period = structure.period
+    im = {rid: record_intensity(fema_record(set_, rid, **ground), args.measure, period) for rid in records}
+    out = check_out_dir("--out", args.out)
+    numbers = {k: v for k, v in structure.to_dict().items() if k != "provenance"}
+    common = dict(ground=ground, params=params.to_dict(), structure=numbers, duration=None, dt_out=1e-3,
+                  settings=solver, code=code_fingerprint())
+    traces = make_traces(set_, records, {r: im[r]["value"] for r in records}, common, limit, hunt, levels)
+    store = Store(out)
+    elapsed = trace_all(traces, store, workers=workers, scheduler=args.scheduler, retry_failed=args.retry_failed,
+                        run_engine=run_seismic_engine, tally=args.tally)
+    measure = {k: v for k, v in im[records[0]].items() if k not in ("value", "components")}
+    index = {"set": set_, "records": records, "measure": measure, "limit": limit.describe(),
+             "limit_option": args.limit, "hunt": None if hunt is None else dataclasses.asdict(hunt), "levels": levels,
+             "intensity_at_scale_1": {str(r): im[r] for r in records}, "structure": structure.to_dict(),
+             "ground": ground, "code": common["code"], "elapsed_this_run_s": elapsed,
+             "notes": "im in m/s^2, model time scale (records x time_factor); scale = im / intensity_at_scale_1; "
+                      "a trace's limit intensity is the lowest level at which it reached the limit"}
+    index = write_ida(traces, store, index)
+    bad = _cross_check(traces, store, engines, workers, args, index, run_seismic_engine)
+    _print(index, out)
+    undetermined = [t["name"] for t in index["traces"] if t["undetermined"]]
+    return 3 if undetermined or bad else 0
+
+
+def _cross_check(traces, store, engines, workers, args, index, runner) -> bool:
+    """Item 5: the median records re-run (comparisons.ida_check); ida.json gets "cross_check"."""
+    import json
+    from nsd_cli.ida_check import cross_check
+    from nsd_core.device.results import atomic_write_json
+    frag = json.loads((store.root / "fragility.json").read_text())
+    check = cross_check(traces, store, frag, engines[1:], workers, args.scheduler,
+                        lambda s: print(s, file=__import__("sys").stderr, flush=True), runner)
+    index["cross_check"] = check
+    atomic_write_json(store.root / "ida.json", index)
+    return any(e.get("status") == "failed" for c in check.values() for e in c.get("engines", {}).values()) or \
+        any("error" in c for c in check.values())
+
+
+def _print(index: dict, out) -> None:
+    for t in index["traces"]:
+        tail = (f"limit at IM {t['limit_im']:.4g} m/s^2 ({t['limit_why']})" if t["limit_im"] is not None else
+                f"never reached up to {t['censored_at']:.4g} m/s^2" if t["censored_at"] is not None else
+                f"undetermined: {t['undetermined']}")
+        print(f"  {t['name']}: {t['runs']} runs, {tail}")
+    for name, f in index["fragility"].items():
+        fit = ("median %.4g m/s^2, dispersion %.3f" % (f["median"], f["dispersion"]) if f["median"] is not None
+               else "no fit")
+        print(f"{name}: {fit} ({f['n_reached']} reached, {f['n_censored']} censored)")
+    for name, c in index.get("cross_check", {}).items():
+        if "engines" in c:
+            parts = [f"{e} du {m['du']:.2e}" if "du" in m else f"{e} {m.get('status')}" for e, m in c["engines"].items()]
+            print(f"cross-check {name}: record {c['record']} at {c['level']:.4g} m/s^2: " + ", ".join(parts))
+        else:
+            print(f"cross-check {name}: {c.get('skipped') or c.get('error')}")
+    print(f"{index['runs']} runs; {index['elapsed_this_run_s']:.1f} s; wrote {out / 'ida.csv'}, "
+          f"{out / 'fragility.json'}, {out / 'ida.json'}")
+

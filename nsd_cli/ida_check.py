@@ -1,0 +1,151 @@
+"""An IDA cross-checked where it counts (issue 23, item 5): per configuration, the record whose limit
+intensity lies closest to the fitted median (in ln IM) is run again at that intensity with its time
+series kept, and checked against other models on the same output times:
+
+- with the device: MuJoCo and Exudyn (``comparisons.engines.run_seismic_engine``), differences by
+  ``comparisons.seismic.seismic_metrics`` (max |difference| / max over the run of u, device force,
+  a_abs; the peaks' relative differences);
+- on the supports alone (which MuJoCo and Exudyn do not model): the exact solution of the linear
+  oscillator M u'' + c_b u' + k_b u = -M a_g per component by ``eqsig`` (Nigam and Jennings 1968,
+  exact for a piecewise-linear input), on the record's own samples.
+
+A limit reached by the rod's length stops the run; the check then runs at the bracket's lower end,
+the highest level below the limit, where every model runs the whole record (said in the entry).
+Written to DIR/cross_check/<config>/ (seismic.csv, seismic_<engine>.csv) and ida.json's
+"cross_check"; the runs are jobs of the IDA's store (resumable).
+"""
+from __future__ import annotations
+
+import math
+import shutil
+from functools import partial
+from pathlib import Path
+
+import numpy as np
+
+from comparisons.seismic import seismic_metrics
+from nsd_core.device.results import RunResult, read_csv, write_columns
+from nsd_core.study.ida import Trace, run_ida_point
+from nsd_core.study.store import Store
+from nsd_core.study.sweep import run_stored
+
+
+def choose(traces: list[Trace], config: dict, device: bool, store: Store) -> dict | None:
+    """The record closest to the median and the level to check it at (None: nothing to check)."""
+    median = config.get("median") or (config.get("baker2015") or {}).get("median")
+    reached = [r for r in config["records"] if r["limit_im"] is not None]
+    if not reached:
+        return None
+    median = median or reached[0]["limit_im"]
+    best = min(reached, key=lambda r: (abs(math.log(r["limit_im"] / median)), r["record"]))
+    tr = next(t for t in traces if t.record == best["record"] and t.device == device)
+    level, note = best["limit_im"], "at the record's limit intensity"
+    rec = store.load(tr.point(level).key)
+    if rec is None or rec["status"] != "ok":
+        if best["below_im"] is None:
+            return {"record": best["record"], "skipped": "the lowest level run already stopped the run "
+                    "(rod reach); no level below the limit to check"}
+        level = best["below_im"]
+        note = (f"at the highest level below the limit ({level:.6g} m/s^2): at the limit intensity "
+                f"({best['limit_im']:.6g} m/s^2) the run stops ({(rec or {}).get('error')})")
+    return {"record": best["record"], "trace": tr, "level": level, "limit_im": best["limit_im"],
+            "median": median, "note": note}
+
+
+def exact_supports_alone(run: RunResult, trace: Trace, level: float) -> tuple[dict, dict]:
+    """The supports-alone run against the exact linear oscillator on the run's output times: eqsig's
+    Nigam-Jennings recursion on each component's own samples (exact for the record, linear between
+    them; zeros after its end), u and u' there, cubic Hermite between them (the solution is smooth
+    inside a sample interval), the pair rotated as the run's input. eqsig's u is -(the displacement
+    relative to the ground) for an input ground acceleration: the sign is turned."""
+    from eqsig import sdof
+    from scipy.interpolate import CubicHermiteSpline
+    from nsd_core.device.ground import fema_record
+    from nsd_core.device.isolation import Structure
+    p = trace.point(level)
+    s = Structure(**p.structure)
+    motion = fema_record(p.set, p.record, **p.ground)
+    t_out = run["t"]
+    period = 2.0 * math.pi * math.sqrt(s.mass / s.stiffness)
+    comps = []
+    for c in motion.comp:
+        dt = float(c.t[1] - c.t[0])
+        n = max(len(c.t), int(math.ceil(t_out[-1] / dt)) + 2)
+        a = np.zeros(n)
+        a[:len(c.a)] = c.a
+        resp_u, resp_v, _ = sdof.response_series(a, dt, np.array([period]), s.damping_ratio)
+        grid = c.t[0] + dt * np.arange(n)
+        comps.append(CubicHermiteSpline(grid, -resp_u[0], -resp_v[0])(t_out))
+    ux, uy = motion.rotation @ np.vstack(comps)
+    ref = np.hypot(ux, uy)
+    diff = np.hypot(run["x"] - ux, run["y"] - uy)
+    metrics = {"engine": "exact (eqsig, Nigam-Jennings)", "du": float(np.max(diff) / max(np.max(ref), 1e-300)),
+               "peak_displacement": float((np.max(run["u"]) - np.max(ref)) / max(np.max(ref), 1e-300)),
+               "period_s": period, "damping_ratio": s.damping_ratio}
+    return metrics, {"t": ("s", t_out), "x": ("m", ux), "y": ("m", uy), "u": ("m", ref)}
+
+
+def cross_check(traces: list[Trace], store: Store, frag: dict, peers: list[str], workers: int, scheduler,
+                log, run_engine) -> dict:
+    """Run the checks (see the module docstring); returns ida.json's "cross_check"."""
+    out = {}
+    picks = {}
+    for name, device in (("device", True), ("nodevice", False)):
+        pick = choose(traces, frag["configurations"][name], device, store)
+        picks[name] = pick
+        if pick is None:
+            out[name] = {"skipped": "no record reached the limit"}
+        elif device and not peers:
+            out[name] = {"record": pick["record"], "skipped": "no other engine asked for (--engines)"}
+            picks[name] = None
+        elif "skipped" in pick:
+            out[name] = pick
+    jobs = []
+    for name, pick in picks.items():
+        if pick and "trace" in pick:
+            tr, level = pick["trace"], pick["level"]
+            jobs.append(tr.point(level, keep_series=True))
+            if tr.device:
+                jobs += [tr.point(level, keep_series=True, engine=e) for e in peers]
+    if not jobs:
+        return out
+    run_stored(jobs, store, partial(run_ida_point, run_engine=run_engine), workers, scheduler, False, log, None,
+               f"ida cross-check: {len(jobs)} runs")
+    for name, pick in picks.items():
+        if not pick or "trace" not in pick:
+            continue
+        tr, level = pick["trace"], pick["level"]
+        folder = store.root / "cross_check" / name
+        folder.mkdir(parents=True, exist_ok=True)
+        ref_key = tr.point(level, keep_series=True).key
+        ref_rec = store.load(ref_key)
+        entry = {"record": pick["record"], "level": level, "limit_im": pick["limit_im"], "median": pick["median"],
+                 "scale": tr.point(level).ground["scale"], "note": pick["note"], "engines": {}}
+        out[name] = entry
+        if ref_rec is None or ref_rec["status"] != "ok":
+            entry["error"] = f"in-house run: {(ref_rec or {}).get('error')}"
+            continue
+        _copy(store.folder(ref_key) / "seismic.csv", folder / "seismic.csv")
+        ref = read_csv(folder / "seismic.csv")
+        entry["wall_time"] = {"semirecursive": ref_rec["wall_time"]}
+        if tr.device:
+            for e in peers:
+                key = tr.point(level, keep_series=True, engine=e).key
+                rec = store.load(key)
+                if rec is None or rec["status"] != "ok":
+                    entry["engines"][e] = {"status": "failed", "error": (rec or {}).get("error")}
+                    continue
+                _copy(store.folder(key) / "seismic.csv", folder / f"seismic_{e}.csv")
+                entry["engines"][e] = {**seismic_metrics(ref, read_csv(folder / f"seismic_{e}.csv", e)),
+                                       "wall_time": rec["wall_time"]}
+        else:
+            metrics, cols = exact_supports_alone(ref, tr, level)
+            write_columns(folder / "exact.csv", cols)
+            entry["engines"]["exact"] = metrics
+    return out
+
+
+def _copy(src: Path, dest: Path) -> None:
+    tmp = dest.with_name(f".{dest.name}.tmp")
+    shutil.copyfile(src, tmp)
+    tmp.replace(dest)

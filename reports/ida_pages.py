@@ -1,0 +1,188 @@
+"""Report pages of an incremental dynamic analysis (``nsd ida --out DIR``; issue 23, items 4-5):
+
+- the IDA curves: intensity against peak |u| per record, with the device and on the supports alone,
+  the limit marked (runs stopped by the rod's length drawn at the rod's length);
+- the fragility: each record's limit intensity as an empirical distribution and the fitted lognormal
+  per configuration (median, dispersion, censored records named);
+- the cross-check: the record closest to the median re-run in MuJoCo and Exudyn (with the device,
+  the seismic response page) and against the exact linear solution (supports alone), with the
+  differences.
+
+Everything is read and checked before anything is written (ParameterError, one line).
+"""
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from nsd_core.device.params import ParameterError
+from nsd_core.device.results import read_csv
+from reports.style import GREY, LANDSCAPE, new_figure, no_data
+
+CONFIG_STYLE = {"device": ("with the device", "#1f4e9c"), "nodevice": ("supports alone", "#d95f02")}
+
+
+def is_ida(folder) -> bool:
+    return (Path(folder) / "ida.json").is_file()
+
+
+def _num(v: str):
+    return float(v) if v not in ("", None) else None
+
+
+def load_ida(folder) -> tuple[dict, dict, list[dict]]:
+    """(ida.json, fragility.json, ida.csv rows), checked."""
+    root = Path(folder)
+    try:
+        index = json.loads((root / "ida.json").read_text())
+        frag = json.loads((root / "fragility.json").read_text())
+        with open(root / "ida.csv", newline="") as f:
+            rows = list(csv.DictReader(f))
+        index["traces"], frag["configurations"]  # noqa: B018 - the keys the pages need
+        for r in rows:
+            r["im"], r["peak_u"] = _num(r["im [m/s^2]"]), _num(r["peak_u [m]"])
+    except (OSError, ValueError, KeyError, TypeError) as e:
+        raise ParameterError(f"{root}: not a readable nsd ida folder ({' '.join(str(e).split())[:120]})") from None
+    return index, frag, rows
+
+
+def ida_curves_figure(index: dict, rows: list[dict]):
+    fig = new_figure(LANDSCAPE, f"Incremental dynamic analysis: record set {index.get('set')}",
+                     f"IM = {_im_text(index)}; filled: limit reached; X at the right edge: the run stopped "
+                     "(rod's length or wire strain)")
+    limit_u = _stroke(index)
+    for k, (name, (label, _)) in enumerate(CONFIG_STYLE.items()):
+        ax = fig.add_axes([0.07 + k * 0.47, 0.1, 0.42, 0.75])
+        mine = [r for r in rows if (r["device"] == "yes") == (name == "device")]
+        if not mine:
+            no_data(ax, "no runs")
+            continue
+        finite = [r["peak_u"] for r in mine if r["peak_u"] is not None]
+        right = max(finite + [limit_u or 0.0]) * 1.15 if finite else 0.03
+        cmap = __import__("matplotlib").colormaps["tab20"]
+        for j, rid in enumerate(sorted({int(r["record"]) for r in mine})):
+            rr = sorted((r for r in mine if int(r["record"]) == rid), key=lambda r: r["im"])
+            col = cmap(j % 20)
+            ok = [r for r in rr if r["peak_u"] is not None]
+            ax.plot([0.0] + [r["peak_u"] * 1e3 for r in ok], [0.0] + [r["im"] for r in ok], "-", color=col, lw=1,
+                    label=str(rid))
+            for r in rr:
+                x = r["peak_u"] * 1e3 if r["peak_u"] is not None else right * 1e3
+                reached = r["limit_reached"] == "yes"
+                ax.plot(x, r["im"], "X" if r["peak_u"] is None else "o", color=col, ms=5,
+                        mfc=col if reached else "white")
+        if limit_u:
+            ax.axvline(limit_u * 1e3, color="#c0001a", lw=1, ls="--", label="limit")
+        ax.set(xlabel="peak |u| [mm]", ylabel=f"IM [{index.get('measure', {}).get('unit', 'm/s^2')}]",
+               title=label, xlim=(0, right * 1e3 * 1.03))
+        ax.legend(loc="lower right", ncol=2, fontsize=6, title="record")
+    return fig
+
+
+def fragility_figure(index: dict, frag: dict):
+    from nsd_core.study.fragility import fragility_curve
+    fig = new_figure(LANDSCAPE, f"Fragility: {index.get('limit')}",
+                     "steps: the records' limit intensities (empirical); curves: lognormal, maximum likelihood "
+                     "(records that never reached the limit right-censored)")
+    ax = fig.add_axes([0.07, 0.12, 0.55, 0.72])
+    top = 0.0
+    texts = []
+    for name, (label, col) in CONFIG_STYLE.items():
+        c = frag["configurations"].get(name) or {}
+        ims = sorted(r["limit_im"] for r in c.get("records", []) if r.get("limit_im") is not None)
+        n = len(c.get("records", []))
+        if ims:
+            ax.step([0.0] + ims, np.arange(len(ims) + 1) / max(n, 1), where="post", color=col, lw=1, alpha=0.7)
+            top = max(top, ims[-1])
+        if c.get("median"):
+            x = np.linspace(1e-6, max(top, c["median"] * 3), 300)
+            ax.plot(x, fragility_curve(c["median"], c["dispersion"], x), color=col, lw=2,
+                    label=f"{label}: median {c['median']:.4g}, β {c['dispersion']:.3f}")
+        texts.append(f"{label}: {c.get('n_reached', 0)} reached, {c.get('n_censored', 0)} never reached"
+                     + ("".join(f"\n  record {r['record']} censored at {r['censored_at']:.4g}"
+                                for r in c.get("never_reached", [])))
+                     + ("".join(f"\n  record {r['record']} undetermined: {str(r['why'])[:60]}"
+                                for r in c.get("undetermined", [])))
+                     + (f"\n  {c['note']}" if c.get("note") else "")
+                     + (f"\n  Baker (2015) moments: median {c['baker2015']['median']:.4g}, β "
+                        f"{c['baker2015']['dispersion']:.3f}" if (c.get("baker2015") or {}).get("median") else ""))
+    ax.set(xlabel=f"IM [{index.get('measure', {}).get('unit', 'm/s^2')}]", ylabel="P(limit reached | IM)",
+           ylim=(0, 1.02), xlim=(0, max(top, 1e-9) * 1.6))
+    ax.axhline(0.5, color=GREY, lw=0.6)
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(loc="lower right")
+    fig.text(0.65, 0.84, "\n\n".join(texts), fontsize=7.5, va="top", wrap=True)
+    return fig
+
+
+def cross_check_figure(index: dict, root: Path):
+    """The table of the cross-checks and, for the supports alone, u(t) against the exact solution."""
+    check = index.get("cross_check") or {}
+    fig = new_figure(LANDSCAPE, "IDA cross-check: the record closest to the median",
+                     "device: MuJoCo, Exudyn vs in-house; supports alone: exact linear oscillator (eqsig); "
+                     "du = max|Δu| / max|u|")
+    lines = []
+    for name, (label, _) in CONFIG_STYLE.items():
+        c = check.get(name)
+        if not c:
+            lines.append(f"{label}: not checked")
+            continue
+        if "engines" not in c:
+            lines.append(f"{label}: {c.get('skipped') or c.get('error')}")
+            continue
+        lines.append(f"{label}: record {c['record']} at IM {c['level']:.6g} (scale {c['scale']:.6g}; limit at "
+                     f"{c['limit_im']:.6g}, median {c['median']:.6g}) {c['note']}")
+        for e, m in c["engines"].items():
+            lines.append(f"    {e}: " + (f"du {m['du']:.3e}, peak u {m['peak_displacement']:+.3e}"
+                                         + (f", dF {m['dF']:.3e}, da {m['da']:.3e}" if "dF" in m else "")
+                                         + (f", {m['wall_time']:.1f} s" if m.get("wall_time") else "")
+                                         if "du" in m else f"{m.get('status')}: {m.get('error')}"))
+    fig.text(0.04, 0.86, "\n".join(lines), fontsize=7.5, va="top", family="monospace")
+    folder = root / "cross_check" / "nodevice"
+    ax = fig.add_axes([0.07, 0.1, 0.88, 0.4])
+    if (folder / "seismic.csv").is_file() and (folder / "exact.csv").is_file():
+        run, exact = read_csv(folder / "seismic.csv"), read_csv(folder / "exact.csv")
+        ax.plot(run["t"], (run["u"] - exact["u"]) * 1e3, color=CONFIG_STYLE["nodevice"][1], lw=0.8)
+        ax.set(xlabel="t [s]", ylabel="|u| in-house - exact [mm]",
+               title=f"supports alone, record {check['nodevice']['record']}: peak |u| "
+                     f"{np.max(exact['u']) * 1e3:.4f} mm (exact)")
+    else:
+        no_data(ax, "no supports-alone cross-check series")
+    return fig
+
+
+def ida_plan(folder) -> tuple[list[tuple[str, Callable]], str]:
+    """(file stem, figure function) per page and the footer's title."""
+    root = Path(folder)
+    index, frag, rows = load_ida(root)
+    plan = [("ida_curves", lambda: ida_curves_figure(index, rows)),
+            ("fragility", lambda: fragility_figure(index, frag)),
+            ("ida_cross_check", lambda: cross_check_figure(index, root))]
+    dev = root / "cross_check" / "device"
+    if (dev / "seismic.csv").is_file() and list(dev.glob("seismic_*.csv")):
+        from reports.seismic_report import _run_pages, _runs
+        c = (index.get("cross_check") or {}).get("device", {})
+        plan += _run_pages(f"IDA cross-check {index.get('set')}:{c.get('record')} at IM {c.get('level', 0):.4g}",
+                           _runs(dev))
+    return plan, f"NSD IDA report  |  record set {index.get('set')}"
+
+
+def _stroke(index: dict):
+    opt = str(index.get("limit_option", ""))
+    if opt.startswith("stroke="):
+        try:
+            return float(opt.partition("=")[2])
+        except ValueError:
+            return None
+    return None
+
+
+def _im_text(index: dict) -> str:
+    m = index.get("measure") or {}
+    if m.get("measure") == "sa":
+        return (f"Sa({m.get('period', 0):.3g} s, {m.get('damping', 0):.0%}), geometric mean, model time")
+    return "PGA, geometric mean"
