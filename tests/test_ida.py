@@ -171,6 +171,7 @@ def _csv(path):
         return list(csv.DictReader(f))
 
 
+@pytest.mark.slow
 def test_small_ida_on_one_record(tmp_path, capsys):
     """Two levels on near-field pulse record 9 (6.3 model s), with and without the device; the
     supports alone is linear, so its peaks scale with the level exactly; a second call resumes
@@ -199,6 +200,14 @@ def test_small_ida_on_one_record(tmp_path, capsys):
     assert main(argv) == 0
     assert "0 with runs to do" in capsys.readouterr().err
     assert ((out / "ida.csv").read_bytes(), (out / "fragility.json").read_bytes()) == before
+    rep = tmp_path / "report"
+    assert main(["report", "--from", str(out), "--out", str(rep)]) == 0
+    assert sorted(p.name for p in rep.glob("*.png")) == ["01_ida_curves.png", "02_fragility.png",
+                                                          "03_ida_cross_check.png"]
+    (out / "ida.csv").write_text("not,an\nida,table\n")
+    capsys.readouterr()
+    assert main(["report", "--from", str(out), "--out", str(tmp_path / "report2")]) == 2
+    assert len(capsys.readouterr().err.strip().splitlines()) == 1 and not (tmp_path / "report2").exists()
 
 
 def test_parse_levels_sorted():
