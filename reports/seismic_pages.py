@@ -89,6 +89,9 @@ def energy_figure(title: str, runs: dict):
         parts = {"E_input": r["E_input"], "E_kinetic": r["E_kinetic"],
                  "stored": r["E_supports_stored"] + r["E_gravity"],
                  "dissipated": r["E_device"] + r["E_supports_dissipated"], "E_residual": r["E_residual"]}
+        if "E_restrainer_stored" in r.columns:  # the displacement restrainer (issue 23)
+            parts["stored"] = parts["stored"] + r["E_restrainer_stored"]
+            parts["dissipated"] = parts["dissipated"] + r["E_restrainer_dissipated"]
         ls = style(eng)["linestyle"]
         for c, (name, label) in enumerate(ENERGY[:-1]):
             ax.plot(r["t"], parts[name], color=colours[c], linestyle=ls, label=f"{label} ({eng})" if k == 0 or c == 0
