@@ -159,7 +159,7 @@ def _sample_outputs(m, w, forces, motion, ts, Y, table, tensions, lengths):
         row[6], row[7], row[8] = w.z[px] - w.z[bx], w.z[py] - w.z[by], w.z[pl] - w.z[bs]
         row[9], row[10], row[11] = w.zd[px] - w.zd[bx], w.zd[py] - w.zd[by], w.zd[pl] - w.zd[bs]
         row[12], row[13] = w.zdd[px], w.zdd[py]
-        if has_dev:  # the device's force on the plate = -(rod + ropes + wires on the cap)
+        if has_dev:  # device_F: the plate's force on the device = -(rod + ropes + wires on the cap)
             on_cap[:] = 0.0
             for j in range(m.rows.shape[0]):
                 on_cap[m.rows[j]] = w.lam[j]

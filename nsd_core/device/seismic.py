@@ -410,8 +410,9 @@ def _restrainer_columns(cols: dict, r, absorbed) -> None:
 
 
 def _device_outputs(row, ev, y, g, forces, system):
-    """Element forces, the device's force on the plate, cap and wall heights (drive-mode sign:
-    device_F = -(rod + ropes + wires on the cap), horizontal)."""
+    """Element forces, device_F, cap and wall heights. device_F has the drive mode's sign: the force
+    the plate applies to the device, -(rod + ropes + wires on the cap), horizontal; the device's
+    force on the plate is its negative."""
     dev = forces.device
     check_validity(row["t"], ev.kin, dev)
     L, _ = dev.elements.state(ev.kin)
