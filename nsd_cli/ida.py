@@ -41,10 +41,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--resolution", type=float, default=None,
                    help="hunt and fill: bracket the limit until hi - lo <= resolution hi (default 0.1)")
     p.add_argument("--limit", required=True, metavar="stroke=VALUE|restrainer|drift=VALUE",
-                   help="limit state: stroke=VALUE peak |u| >= VALUE m (the rod's length reached counts too)")
+                   help="limit state: stroke=VALUE peak |u| >= VALUE m; restrainer: the displacement restrainer "
+                        "engages (runs with it); the rod's length reached counts for both; drift needs a building")
+    p.add_argument("--restrainer", action="store_true",
+                   help="run with the displacement restrainer (always with --limit restrainer); its constants by "
+                        "--structure restrainer_gap=, restrainer_stiffness=, restrainer_exponent=, restrainer_damping=")
     p.add_argument("--structure", action="append", default=[], metavar="NAME=VALUE",
                    help="override the default isolated structure: mass, stiffness, damping, "
-                        "radius_of_gyration, support_radius (SI)")
+                        "radius_of_gyration, support_radius, restrainer_* (SI)")
     p.add_argument("--engines", default="semirecursive,mujoco,exudyn",
                    help="semirecursive first, then the engines that re-run the median record with the device "
                         "(default both; 'semirecursive' alone skips them)")
@@ -93,9 +97,8 @@ def run(args) -> int:
     from nsd_cli.options import WORKERS_MAX, whole
     from nsd_cli.sweep import check_scheduler
     from nsd_core.device.ground import SIMILITUDE_TIME_FACTOR, fema_record
-    from nsd_core.device.isolation import default_structure
+    from nsd_cli.seismic_extras import isolated_structure
     from nsd_core.device.model import DEFAULT_SOLVER
-    from nsd_core.device.params import parse_set
     from nsd_core.study.ida import make_traces, trace_all
     from nsd_core.study.ida_outputs import write_ida
     from nsd_core.study.intensity import record_intensity
@@ -107,9 +110,8 @@ def run(args) -> int:
     workers = (os.cpu_count() or 1) if args.workers is None else args.workers
     whole("--workers", workers, 1, WORKERS_MAX)
     params = base_params(args)
-    structure = default_structure(params)
-    if args.structure:
-        structure = structure.replace(**parse_set(args.structure))
+    args.restrainer = args.restrainer or limit.kind == "restrainer"
+    structure = isolated_structure(args, params)
     solver = {**DEFAULT_SOLVER, **solver_settings(args)}
     check_scheduler(args.scheduler)
     ground = {"scale": 1.0, "time_factor": SIMILITUDE_TIME_FACTOR, "window": None, "rotate_deg": 0.0,

@@ -41,7 +41,12 @@ def choose(traces: list[Trace], config: dict, device: bool, store: Store) -> dic
     tr = next(t for t in traces if t.record == best["record"] and t.device == device)
     level, note = best["limit_im"], "at the record's limit intensity"
     rec = store.load(tr.point(level).key)
-    if rec is None or rec["status"] != "ok":
+    contact = not device and tr.common["structure"].get("restrainer") is not None
+    if rec is None or rec["status"] != "ok" or contact:
+        if contact and best["below_im"] is not None:
+            return {"record": best["record"], "trace": tr, "level": best["below_im"], "limit_im": best["limit_im"],
+                    "median": median, "note": "at the highest level below the limit: the exact linear solution "
+                                              "holds while the restrainer is not touched"}
         if best["below_im"] is None:
             return {"record": best["record"], "skipped": "the lowest level run already stopped the run "
                     "(rod reach); no level below the limit to check"}
@@ -79,6 +84,10 @@ def exact_supports_alone(run: RunResult, trace: Trace, level: float) -> tuple[di
     ux, uy = motion.rotation @ np.vstack(comps)
     ref = np.hypot(ux, uy)
     diff = np.hypot(run["x"] - ux, run["y"] - uy)
+    if "restrainer_F" in run.columns and np.max(run["restrainer_F"]) > 0:
+        return {"engine": "exact (eqsig, Nigam-Jennings)", "status": "not applicable",
+                "error": "the restrainer engaged: the exact linear solution holds without contact"}, \
+            {"t": ("s", t_out), "x": ("m", ux), "y": ("m", uy), "u": ("m", ref)}
     metrics = {"engine": "exact (eqsig, Nigam-Jennings)", "du": float(np.max(diff) / max(np.max(ref), 1e-300)),
                "peak_displacement": float((np.max(run["u"]) - np.max(ref)) / max(np.max(ref), 1e-300)),
                "period_s": period, "damping_ratio": s.damping_ratio}

@@ -136,7 +136,7 @@ BAD = [
     ["--measure", "sv"], ["--levels", "a,1"], ["--levels", "-1"], ["--levels", "1,1"], ["--start", "0"],
     ["--step", "-0.1"], ["--max-runs", "1"], ["--resolution", "1.5"], ["--start", "x"],
     ["--levels", "1,2", "--max-runs", "4"], ["--limit", "speed=1"], ["--limit", "stroke"],
-    ["--limit", "stroke=-0.01"], ["--limit", "drift=0.01"], ["--limit", "restrainer"], ["--records", "99"],
+    ["--limit", "stroke=-0.01"], ["--limit", "drift=0.01"], ["--limit", "restrainer=0.02"], ["--structure", "restrainer_gap=0.05"], ["--records", "99"],
     ["--records", "2-1"], ["--workers", "0"], ["--engines", "mujoco"], ["--engines", "bogus"],
     ["--scheduler", "nowhere"], ["--set", "nowhere"], ["--record-set", "farfield"],
 ]
@@ -212,3 +212,26 @@ def test_small_ida_on_one_record(tmp_path, capsys):
 
 def test_parse_levels_sorted():
     assert parse_levels("2,0.5,1") == [0.5, 1.0, 2.0]
+
+
+@pytest.mark.slow
+def test_restrainer_limit_on_one_record(tmp_path):
+    """--limit restrainer: the runs carry the restrainer; the limit is its engagement (a positive
+    restrainer force), which happens exactly when the peak |u| passes its gap."""
+    from nsd_cli.main import main
+    from nsd_core.device.isolation import default_structure
+    from nsd_core.device.params import Params
+    from nsd_core.device.restrainer import default_restrainer
+    gap = default_restrainer(Params(), default_structure()).gap
+    out = tmp_path / "ida"
+    assert main(["ida", "--set", "nearfield-pulse", "--records", "9", "--levels", "0.5,1.0", "--limit", "restrainer",
+                 "--engines", "semirecursive", "--workers", "1", "--out", str(out)]) == 0
+    rows = _csv(out / "ida.csv")
+    assert [(r["device"], r["limit_reached"], r["why"]) for r in rows] == [
+        ("yes", "no", ""), ("yes", "yes", "restrainer"), ("no", "no", ""), ("no", "yes", "restrainer")]
+    for r in rows:
+        assert (float(r["peak_u [m]"]) > gap) == (r["limit_reached"] == "yes")
+    index = json.loads((out / "ida.json").read_text())
+    assert index["structure"]["restrainer"]["gap"] == gap
+    assert index["cross_check"]["nodevice"]["level"] == 0.5  # below the contact: the exact solution holds
+    assert index["cross_check"]["nodevice"]["engines"]["exact"]["du"] < 1e-6

@@ -9,7 +9,8 @@ levels and finds them stored. The runs go to local worker processes or a Dask cl
 ask for them (a trace waits for its own last run only, so every worker stays busy).
 
 Limit states (``Limit``): ``stroke=VALUE`` peak |u| >= VALUE [m] (|u| the plate's displacement
-relative to the base); a run that stops because the rod cannot reach (|u| >= l_d) or a wire leaves
+relative to the base); ``restrainer`` the displacement restrainer engages (its force is positive at
+some output time: |u| > u_gap; nsd_core.device.restrainer, the runs carry it); a run that stops because the rod cannot reach (|u| >= l_d) or a wire leaves
 the SMA law's validity counts as reaching every limit (the device is spent). A solver failure ends
 that record's trace undetermined (listed, left out of the fit).
 """
@@ -34,12 +35,14 @@ LIMITS = ("stroke", "restrainer", "drift")
 
 @dataclass(frozen=True)
 class Limit:
-    """The limit state: kind (stroke) and its threshold (m)."""
+    """The limit state: kind (stroke, restrainer) and its threshold (m; stroke only)."""
     kind: str
     value: float | None = None
 
     def describe(self) -> str:
-        return {"stroke": f"peak |u| >= {self.value:g} m (or the rod's length reached)"}.get(self.kind, self.kind)
+        if self.kind == "stroke":
+            return f"peak |u| >= {self.value:g} m (or the rod's length reached)"
+        return "the displacement restrainer engages, |u| > u_gap (or the rod's length reached)"
 
     def evaluate(self, rec: dict) -> tuple[bool | None, str]:
         """(reached, why) of a stored run: None when the run cannot tell (a solver failure)."""
@@ -48,12 +51,15 @@ class Limit:
             if reason in SPENT:
                 return True, reason
             return None, f"{reason}: {rec.get('error')}"
+        if self.kind == "restrainer":
+            engaged = (rec["metrics"].get("peak_restrainer_force") or {}).get("value", 0.0) > 0.0
+            return engaged, "restrainer" if engaged else ""
         peak = rec["metrics"]["peak_displacement"]["value"]
         return (peak >= self.value), "stroke" if peak >= self.value else ""
 
 
 def parse_limit(text: str) -> Limit:
-    """'stroke=0.02' -> Limit; ParameterError (one line) otherwise. ``drift`` needs a building."""
+    """'stroke=0.02' or 'restrainer' -> Limit; ParameterError (one line) otherwise. ``drift`` needs a building."""
     kind, sep, value = str(text).partition("=")
     kind = kind.strip()
     allowed = "stroke=VALUE (m, 0 < VALUE), restrainer, drift=VALUE"
@@ -61,10 +67,12 @@ def parse_limit(text: str) -> Limit:
         raise ParameterError(f"--limit {text!r}: unknown limit state; allowed: {allowed}")
     if kind == "drift":
         raise ParameterError(f"--limit {text!r}: drift needs a building on the isolation (the model has none "
-                             "yet); allowed now: stroke=VALUE")
+                             "yet); allowed now: stroke=VALUE, restrainer")
     if kind == "restrainer":
-        raise ParameterError(f"--limit {text!r}: the model has no displacement restrainer yet; "
-                             "allowed now: stroke=VALUE")
+        if sep:
+            raise ParameterError(f"--limit {text!r}: restrainer takes no value (its gap is the structure's "
+                                 "restrainer_gap)")
+        return Limit(kind)
     try:
         v = float(value) if sep else math.nan
     except ValueError:
