@@ -235,3 +235,22 @@ def test_restrainer_limit_on_one_record(tmp_path):
     assert index["structure"]["restrainer"]["gap"] == gap
     assert index["cross_check"]["nodevice"]["level"] == 0.5  # below the contact: the exact solution holds
     assert index["cross_check"]["nodevice"]["engines"]["exact"]["du"] < 1e-6
+
+
+@pytest.mark.slow
+def test_ida_on_a_dask_cluster_stores_what_a_local_run_reuses(tmp_path, capsys):
+    """The traces run on a Dask cluster; a local run of the same IDA then finds every run stored."""
+    distributed = pytest.importorskip("distributed")
+    from nsd_cli.main import main
+    out = tmp_path / "ida"
+    argv = ["ida", "--set", "nearfield-pulse", "--records", "9", "--levels", "0.5", "--limit", "stroke=0.02",
+            "--engines", "semirecursive", "--out", str(out)]
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster:
+        assert main(argv + ["--scheduler", cluster.scheduler_address]) == 0
+    rows = _csv(out / "ida.csv")
+    assert [(r["device"], r["limit_reached"]) for r in rows] == [("yes", "no"), ("no", "no")]
+    capsys.readouterr()
+    assert main(argv + ["--workers", "1"]) == 0
+    assert "0 with runs to do" in capsys.readouterr().err
+    assert _csv(out / "ida.csv") == rows
