@@ -51,3 +51,14 @@ def test_seismic_help_record_ids_are_the_sets(capsys):
 def test_set_help_points_to_the_parameter_list(capsys, cmd):
     text = help_text(capsys, cmd)
     assert "--set NAME=VALUE override one parameter (every name, unit and bound: nsd params)" in text
+
+
+def test_sweep_help_gives_its_samples_default(capsys):
+    import dataclasses
+    from nsd_cli.main import build_parser
+    from nsd_core.study.designs import Design
+    m = re.search(r"output samples per cycle \(default (\d+), the parametric study's own", help_text(capsys, "sweep"))
+    sub = next(a for a in build_parser()._actions if a.dest == "command").choices["sweep"]
+    default = next(a for a in sub._actions if a.dest == "samples_per_cycle").default
+    design_default = {f.name: f.default for f in dataclasses.fields(Design)}["samples_per_cycle"]
+    assert m and int(m.group(1)) == default == design_default
