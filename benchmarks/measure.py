@@ -63,6 +63,7 @@ def measure(name: str) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "out"
         argv = [str(out) if a == "OUT" else a for a in cmd]
+        commit = _git_commit()  # the code that runs (before, not after: edits during a run are not its code)
         load0, t0 = os.getloadavg(), time.perf_counter()
         env = {**os.environ, "MPLBACKEND": "Agg"}
         p = subprocess.run(argv, cwd=ROOT, capture_output=True, text=True, env=env)
@@ -86,7 +87,7 @@ def measure(name: str) -> dict:
                          "load_average_before": [round(x, 2) for x in load0],
                          "load_average_after": [round(x, 2) for x in load1],
                          "loaded": max(load0[0], load1[0]) > cpus, "wall_s": wall,
-                         "versions": versions(), "git_commit": _git_commit()},
+                         "versions": versions(), "git_commit": commit},
             "data": data}
 
 
