@@ -96,3 +96,13 @@ def test_readme_python_example_runs(tmp_path):
     p = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=900)
     assert p.returncode == 0, p.stderr[-2000:]
     assert len(p.stdout.split()) == 4
+
+
+def test_readme_counts_the_default_cases_right():
+    from comparisons.config import SeismicCase, load_cases
+    words = {1: "one", 2: "two", 3: "three", 4: "four", 5: "five", 6: "six", 7: "seven", 8: "eight", 9: "nine"}
+    cases = load_cases()
+    n_seismic = sum(isinstance(c, SeismicCase) for c in cases)
+    text = README.lower()
+    assert f"{words[len(cases) - n_seismic]} drive cases" in text
+    assert f"{words[n_seismic]} seismic window" in text
