@@ -78,3 +78,21 @@ def test_structure_fields_listed_with_units_and_bounds():
         with pytest.raises(ParameterError):
             st.replace(**{r["name"]: -1.0})
         assert r["bounds"].endswith("inf)") and not math.isinf(r["value"])
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--set", "n_ropes=2"], "n_ropes = 2: must be >= 3"),
+    (["--set", "no_such=1"], "no_such: unknown parameter"),
+    (["--params", "missing.toml"], "not found"),
+])
+def test_bad_input_exit_2_one_line_nothing_written(tmp_path, capsys, args, words):
+    out = tmp_path / "p.toml"
+    assert run_nsd(*args, "--out", str(out)) == 2
+    err = capsys.readouterr().err
+    assert words in err and len(err.strip().splitlines()) == 1, err
+    assert not out.exists()
+
+
+def test_out_must_be_a_file(tmp_path, capsys):
+    assert run_nsd("--out", str(tmp_path)) == 2
+    assert "must name a file" in capsys.readouterr().err
