@@ -87,7 +87,7 @@ def test_readme_commands_run(tmp_path):
     assert ran >= 6
     assert (tmp_path / "out" / "nf1" / "summary.json").is_file()
     assert (tmp_path / "out" / "nf1-supports" / "summary.json").is_file()
-    assert (tmp_path / "out" / "six-wires.toml").is_file()
+    assert (tmp_path / "out" / "my-device.toml").is_file()
 
 
 @pytest.mark.slow
