@@ -165,6 +165,24 @@ def engine_benchmarks() -> str:
             + table(["problem", "error vs reference", "energy drift [J]", "CPU [s]", "goal"], rows))
 
 
+def direction_study() -> str:
+    rec = load("polar")
+    d = rec["data"]
+    fields = (("x_max", 1e3, "mm", "X_max"), ("k0", 1e-3, "kN/m", "K0"), ("k_min", 1e-3, "kN/m", "K_min"),
+              ("loop_area", 1.0, "J", "loop area"), ("peak_force", 1.0, "N", "peak \\|F\\|"))
+    rows = []
+    for n, des in d["designs"].items():
+        cells = []
+        for f, scale, unit, _ in fields:
+            mean = sum(des[f]) / len(des[f])
+            cells.append(f"{g(mean * scale)} {unit} ({g(100 * des['spread'][f], 2)} %)")
+        rows.append([n] + cells)
+    return (provenance(rec) + "\n"
+            + f"n = n_w = n_r, quasi-static, ψ every {g(d['step_deg'])}°, A = {g(d['amplitude'] * 1e3)} mm; the mean "
+              "over the turn and, in brackets, the spread (max − min) / \\|mean\\|:\n\n"
+            + table(["n"] + [h for *_, h in fields], rows))
+
+
 # ---- performance.md ----
 
 def bench_cycle() -> str:
@@ -201,7 +219,7 @@ def gate_times() -> str:
 
 
 RENDER = {"compare-gate": compare_gate, "convergence": convergence, "tables-5-6": tables_5_6,
-          "engine-benchmarks": engine_benchmarks, "bench-cycle": bench_cycle, "bench-seismic": bench_seismic,
+          "engine-benchmarks": engine_benchmarks, "direction-study": direction_study, "bench-cycle": bench_cycle, "bench-seismic": bench_seismic,
           "gate-times": gate_times}
 
 

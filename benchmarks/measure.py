@@ -32,6 +32,7 @@ MEASUREMENTS = {
     "compare": (NSD + ["compare", "--convergence", "--out", "OUT"], "results.json", "compare"),
     "tables": (NSD + ["tables", "--out", "OUT"], "tables.csv", "csv"),
     "benchmark": (NSD + ["benchmark", "--out", "OUT"], "results.json", "json"),
+    "polar": (NSD + ["polar", "--out", "OUT"], "polar.json", "json"),
     "bench_cycle": (PY + ["benchmarks/bench_cycle.py", "--no-compile", "--repeats", "3", "--out", "OUT"],
                     "bench_cycle.json", "json"),
     "bench_seismic": (PY + ["benchmarks/bench_seismic.py", "--no-compile", "--repeats", "3", "--out", "OUT"],
