@@ -32,6 +32,11 @@ def g(v, digits: int = 3) -> str:
     return f"{v:.{digits}g}"
 
 
+def plain(v, digits: int = 3) -> str:
+    """As ``g`` but without an exponent (1180, not 1.18e+03) for numbers a table reads as plain."""
+    return f"{float(f'{v:.{digits}g}'):g}"
+
+
 def load(name: str) -> dict:
     return json.loads((RESULTS / f"{name}.json").read_text())
 
@@ -175,7 +180,7 @@ def direction_study() -> str:
         cells = []
         for f, scale, unit, _ in fields:
             mean = sum(des[f]) / len(des[f])
-            cells.append(f"{g(mean * scale)} {unit} ({g(100 * des['spread'][f], 2)} %)")
+            cells.append(f"{plain(mean * scale)} {unit} ({plain(100 * des['spread'][f], 2)} %)")
         rows.append([n] + cells)
     return (provenance(rec) + "\n"
             + f"n = n_w = n_r, quasi-static, ψ every {g(d['step_deg'])}°, A = {g(d['amplitude'] * 1e3)} mm; the mean "
