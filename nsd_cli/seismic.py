@@ -162,6 +162,7 @@ def run(args) -> int:
     for name, m in summary.get("engines", {}).items():
         print(f"  {name}: max|du|/max|u| = {m['du']:.2e}, max|dF|/max|F| = {m['dF']:.2e}, "
               f"max|da|/max|a| = {m['da']:.2e}, {m['wall_time']:.1f} s")
+    seismic_extras.print_restrainer(summary)
     if summary["outside_working_range"]:
         print("  WARNING: the ropes went slack: part of this run lies outside the device's working range")
     print(f"wrote {out / 'seismic.csv'} and {out / 'summary.json'}")
