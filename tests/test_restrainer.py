@@ -104,17 +104,19 @@ def _hand_integrated(st: Structure, r: Restrainer, A: float, f: float, psi_deg: 
 
 
 def test_supports_alone_with_the_restrainer_match_a_hand_written_integrator():
-    """Independent check: near resonance the plate reaches the restrainer several times.
-    Measured: 1.5e-7 of the peak in displacement (in-house rtol 1e-7 against RK4 at 2e-5 s)."""
+    """Independent check: near resonance the plate reaches the restrainer 5 times (peak force 1.8e5 N).
+    Measured: 4.2e-7 of the peak displacement (the in-house default, rtol 1e-7, against RK4 at 4e-5 s,
+    which is converged: 2e-5 and 1e-5 s give 4.2e-7 too); the in-house run at rtol 1e-10 agrees to
+    6.8e-9; energy balance residual 1.5e-10 of the input."""
     p = Params()
     st = with_restrainer(default_structure(p), p, True)
     A, f, psi, T = 3.0, 1.0, 30.0, 1.2
     run = simulate_seismic(p, st, Harmonic(A, f, psi, duration=T), dt_out=1e-3, device=False)
-    t, s = _hand_integrated(st, st.restrainer, A, f, psi, T, 2e-5)
+    t, s = _hand_integrated(st, st.restrainer, A, f, psi, T, 4e-5)
     assert np.max(run["restrainer_F"]) > 1e4  # it engaged, hard
     summary = seismic_summary(run)
     assert summary["restrainer"]["engagements"] >= 1
-    every = int(round(1e-3 / 2e-5))
+    every = int(round(1e-3 / 4e-5))
     x, y = s[::every, 0], s[::every, 1]
     assert np.allclose(run["t"], t[::every], atol=1e-12)
     err = max(np.max(np.abs(run["x"] - x)), np.max(np.abs(run["y"] - y))) / np.max(np.hypot(x, y))

@@ -84,3 +84,23 @@ def test_a_peak_on_the_last_sample_warns_in_the_summary_and_on_stderr(tmp_path, 
     assert code == 0 and "peak_displacement" in s["peaks_at_last_sample"]
     assert len(s["warnings"]) == 1 and "peak_displacement" in s["warnings"][0]
     assert len([line for line in err.splitlines() if "warning" in line]) == 1, err
+
+
+@pytest.mark.slow
+def test_a_run_the_rod_ends_keeps_its_series_on_both_in_house_paths():
+    """RodReachError carries the samples before the event (compiled and scipy paths alike)."""
+    from nsd_core.device.ground import Pulse
+    from nsd_core.device.isolation import Structure
+    from nsd_core.device.params import Params
+    from nsd_core.device.seismic import RodReachError, simulate_seismic
+    soft = Structure(mass=3743.8, radius_of_gyration=0.40825, stiffness=2.0e5, damping=0.0, support_radius=0.5)
+    kept = {}
+    for backend in ("compiled", "scipy"):
+        with pytest.raises(RodReachError) as info:
+            simulate_seismic(Params(), soft, Pulse(1.2, 2.0, 2.0), duration=0.6, backend=backend)
+        err = info.value
+        assert err.partial["t"][-1] <= err.t_event < err.partial["t"][-1] + 1e-3
+        kept[backend] = err.partial
+    a, b = kept["compiled"], kept["scipy"]
+    assert len(a["t"]) == len(b["t"]) > 200
+    assert np.max(np.abs(a["u"] - b["u"])) < 1e-6 * np.max(a["u"])
