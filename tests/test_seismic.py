@@ -81,8 +81,8 @@ def test_a_drive_along_a_wire_does_not_turn_the_plate_and_stays_in_its_plane(wit
 
 
 def test_device_force_opposes_small_motions_with_the_device_s_initial_stiffness(with_device):
-    """Near rest device_F (the plate's force on the device) is its initial tangent stiffness (positive, ~7e4 N/m) times u:
-    from the quasi-static solution, independent of the multibody engine."""
+    """Near rest device_F (the plate's force on the device) is the device's initial tangent stiffness
+    (positive, ~7e4 N/m) times u: from the quasi-static solution, independent of the multibody engine."""
     from nsd_core.device.quasistatic import quasi_static_path
     r = with_device
     small = (np.abs(r["x"]) < 4e-4) & (r["t"] < 0.12)
