@@ -176,3 +176,26 @@ def test_mujoco_and_exudyn_with_the_restrainer_agree_with_the_in_house_engine():
         dF = np.max(np.abs(other["restrainer_F"] - ref["restrainer_F"])) / np.max(ref["restrainer_F"])
         assert dF < 10 * limit, (engine.name, dF)
         assert np.max(np.abs(other["E_residual"])) < 1e-2 * np.max(np.abs(other["E_input"])), engine.name
+
+
+@pytest.mark.parametrize("table, words", [
+    ("structure = { restrainer = \"yes\" }", "structure.restrainer = 'yes': must be true or false"),
+    ("structure = { restrainer_gap = 0.05 }", "restrainer_gap = 0.05: must be < rod_length"),
+    ("structure = { restrainer_exponent = 0.5 }", "restrainer_exponent = 0.5: must be a finite number >= 1"),
+    ("structure = { restrainer_width = 1.0 }", "structure.restrainer_width: unknown"),
+])
+def test_a_case_file_restrainer_is_checked_when_read(tmp_path, table, words):
+    from comparisons.config import load_cases
+    f = tmp_path / "c.toml"
+    f.write_text(f'[[case]]\nname = "s"\nmode = "seismic"\nground = "pulse:velocity=0.5,frequency=2"\n{table}\n')
+    with pytest.raises(ParameterError, match=words.replace("(", r"\(")):
+        load_cases(f)
+
+
+def test_a_case_file_turns_the_restrainer_on(tmp_path):
+    from comparisons.config import load_cases
+    f = tmp_path / "c.toml"
+    f.write_text('[[case]]\nname = "s"\nmode = "seismic"\nground = "pulse:velocity=0.5,frequency=2"\n'
+                 'structure = { restrainer = true, restrainer_gap = 0.02 }\n')
+    st = load_cases(f)[0].isolated_structure()
+    assert st.restrainer.gap == 0.02 and st.restrainer.stiffness == default_restrainer(Params(), st).stiffness

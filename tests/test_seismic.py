@@ -197,6 +197,8 @@ def test_nsd_seismic_exit_4_with_the_time_when_the_rod_cannot_reach(tmp_path):
     assert s["stopped"]["kind"] == "rod_reach" and 0.2 < s["stopped"]["t"] < 0.6 and s["complete"] is False
     assert r["t"][-1] <= s["stopped"]["t"] < r["t"][-1] + 1e-3 and len(r["t"]) > 100
     assert 0.95 * 0.03 < np.max(r["u"]) < 0.03  # it ran up to the rod's length
+    from reports.build import build_report  # the report draws the kept series, the stop marked
+    assert len(build_report(out, tmp_path / "rep")["pngs"]) >= 2
 
 
 def test_mujoco_seismic_agrees_with_the_in_house_engine():
