@@ -212,9 +212,12 @@ def _check_lengths(t, lengths, forces: DeviceForces) -> None:
         k = int(np.argmax(bad))
         L = lengths[k]
         if np.any(L <= 0.0):
-            raise DriveError(f"t = {t[k]:.6g} s: an element's length reached zero: outside the model's validity")
-        raise DriveError(f"t = {t[k]:.6g} s: wire strain {np.max(strain[k]):.3g} beyond "
-                         f"{MAX_WIRE_STRAIN}: outside the SMA law's validity")
+            err = DriveError(f"t = {t[k]:.6g} s: an element's length reached zero: outside the model's validity")
+        else:
+            err = DriveError(f"t = {t[k]:.6g} s: wire strain {np.max(strain[k]):.3g} beyond "
+                             f"{MAX_WIRE_STRAIN}: outside the SMA law's validity")
+        err.sample = k  # the first sample outside validity (the seismic mode keeps those before it)
+        raise err
 
 
 def _simulate_compiled(system, g, drive, z_rest, y0, t_eval, method, rtol, atol, max_step, start):
