@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from nsd_core.device.drive import Drive
+from nsd_core.device.drive import SAMPLES_PER_CYCLE, Drive
 from nsd_core.device.params import ParameterError, Params, load_params, read_toml
 
 HERE = Path(__file__).resolve().parent
@@ -25,7 +25,8 @@ METRICS = {  # name -> (unit, description)
     "energy_balance_rel": ("-", "|drive work - (wires + spring hysteresis + stored change)| / drive work, steady cycle"),
     # seismic cases (mode = "seismic"): on the time histories, every output time
     "max_du_rel": ("-", "seismic: max |u - u_ref| / max |u_ref|, u the plate's plan displacement relative to the base"),
-    "max_dF_device_rel": ("-", "seismic: max |F - F_ref| / max |F_ref|, F = device_F, the plate's force on the device (minus the device's force on the plate)"),
+    "max_dF_device_rel": ("-", "seismic: max |F - F_ref| / max |F_ref|, F = device_F, the plate's force on the "
+                               "device (minus the device's force on the plate)"),
     "peak_u_rel": ("-", "seismic: |peak |u| - reference| / reference"),
     "peak_a_rel": ("-", "seismic: |peak |a_abs| - reference| / reference, a_abs the plate's absolute acceleration"),
     "energy_residual_rel": ("-", "seismic: the engine's own max |E_residual| / max |E_input| (frame of the ground)"),
@@ -253,7 +254,7 @@ def load_cases(path: str | Path | None = None, base_params: Params | None = None
                       _number(f"case {name}.frequency", merged["frequency"]),
                       _number(f"case {name}.direction_deg", merged.get("direction_deg", 0.0), positive=False),
                       _whole(f"case {name}.cycles", merged.get("cycles", 2), 1, Drive.CYCLES_MAX),
-                      _whole(f"case {name}.samples_per_cycle", merged.get("samples_per_cycle", 2000), 16,
+                      _whole(f"case {name}.samples_per_cycle", merged.get("samples_per_cycle", SAMPLES_PER_CYCLE), 16,
                              Drive.SAMPLES_MAX),
                       path=_path(name, merged.get("path", "line"), path),
                       minor=None if merged.get("minor") is None else _number(f"case {name}.minor", merged["minor"]))

@@ -25,7 +25,8 @@ EPILOG = """exit codes: 0 ok; 1 a tolerance exceeded (compare) or a benchmark go
 130 / 143 interrupted by Ctrl-C / SIGTERM (finished cases are kept; a re-run resumes them).
 Run `nsd COMMAND --help` for each command's options."""
 
-SUBCOMMANDS = ("cycle", "seismic", "compare", "report", "sweep", "tables", "calibrate", "benchmark", "polar", "ida")
+SUBCOMMANDS = ("cycle", "seismic", "compare", "report", "sweep", "tables", "calibrate", "benchmark", "polar", "params",
+               "ida")
 
 
 class OneLineParser(argparse.ArgumentParser):

@@ -230,7 +230,7 @@ def build_report(results_dir: str | Path, out_dir: str | Path) -> dict[str, Any]
     if str(results_dir).strip() and is_ida(results_dir):  # an nsd ida folder
         plan, title = ida_plan(results_dir)
         footer = f"{title}  |  {time.strftime('%Y-%m-%d')}"
-    elif str(results_dir).strip() and is_seismic(results_dir):  # an nsd seismic folder (single run or --set)
+    elif str(results_dir).strip() and is_seismic(results_dir):  # an nsd seismic folder (single run or --record-set)
         plan, title = seismic_plan(results_dir)
         footer = f"{title}  |  {time.strftime('%Y-%m-%d')}"
     else:

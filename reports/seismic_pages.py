@@ -3,7 +3,7 @@ overlaid with their differences to the in-house run, the device's force-displace
 record, the energy balance over time, and the record-set table (with and without the device).
 
 ``runs`` is {engine: RunResult} in the columns of ``nsd seismic`` (nsd_core.device.seismic), the
-in-house engine first. The same pages serve an ``nsd seismic`` folder (single run or ``--set``) and
+in-house engine first. The same pages serve an ``nsd seismic`` folder (single run or ``--record-set``) and
 the seismic cases of an ``nsd compare`` folder (``<out>/seismic/<case>__<engine>.csv``).
 """
 from __future__ import annotations
@@ -58,7 +58,7 @@ def response_figure(title: str, runs: dict, cost: dict | None = None):
 
 
 def loops_figure(title: str, runs: dict):
-    """The device's force against the relative displacement, per direction, during the record."""
+    """device_F (the plate's force on the device) against the relative displacement, per direction."""
     fig = new_figure(LANDSCAPE, title, "device_F (the plate's force on the device) against the plate's displacement "
                      "relative to the base (the negative-stiffness loops the record drives)")
     for j, (f, u, lab) in enumerate((("device_Fx", "x", "X"), ("device_Fy", "y", "Y"))):
