@@ -155,6 +155,8 @@ def run(args) -> int:
     if summary["outside_working_range"]:
         print("  WARNING: the ropes went slack: part of this run lies outside the device's working range")
     print(f"wrote {out / 'seismic.csv'} and {out / 'summary.json'}")
+    from reports.build import draw_study  # the run's PNGs into its own folder (issue 20)
+    draw_study(out)
     return 0
 
 
@@ -223,6 +225,8 @@ def run_set(args) -> int:
               + (f" [{row['reason']}]" if row["reason"] else ""))
     print(f"{len(index['rows'])} records: " + ", ".join(f"{c[k]} {k}" for k in c if k == "ok" or c[k])
           + f"; {index['elapsed_this_run_s']:.1f} s; wrote {out / 'set.csv'} and {out / 'set.json'}")
+    from reports.build import draw_study  # the set's PNGs into its own folder (issue 20)
+    draw_study(out)
     if c["solver_failure"] or c["error"] or c["missing"]:
         return 3
     return 4 if c["rod_reach"] or c["outside_validity"] else 0

@@ -92,4 +92,6 @@ def run(args) -> int:
           f"{index['elapsed_this_run_s']:.1f} s; wrote {out / 'sweep.json'}")
     for study, path in index["studies"].items():
         print(f"  {study}: {out / path}")
+    from reports.build import draw_study  # the study's PNGs into its own folder (issue 20)
+    draw_study(out)
     return 3 if index["failed"] or index["missing"] else 0
