@@ -194,6 +194,11 @@ def cost_figure(data):
 
     sp = fig.add_subplot(gs[1])
     ref = data.reference
+    if not names:   # seismic cases only: their costs are in the table
+        for a in (ax, sp):
+            a.clear()
+            no_data(a, "no drive case in this run: the seismic cases' costs per model second are in the table")
+        return fig
     marks = {n: MARKERS[i] if len(names) <= len(MARKERS) else "o" for i, n in enumerate(names)}
     for m in data.summary["metrics"]:
         if m.get("metric") == "max_dF_rel" and m.get("reference") == ref and m["case"] in names:

@@ -89,12 +89,11 @@ def metric_table_pages(data) -> list:
         def page(chunk=chunk, cchunk=cchunk, k=k):
             f = new_figure(LANDSCAPE, "Metrics against the limits applied to them"
                            + (f" (part {k + 1} of {len(chunks)})" if len(chunks) > 1 else ""),
-                           "every metric the gate measured, the value in full and the limit it was judged by; "
-                           "'limit from': default = [limits], engine = [limits.ENGINE], case = [limits.ENGINE.case] "
-                           "of the tolerance file.\n(own check) rows are an engine's own bounds; 'not gated' rows "
-                           "compare two peers and are reported only. Definitions: the metrics page.")
-            f.text(0.5, 0.885, f"verdict {s['verdict']} (exit code {s['exit_code']})", ha="center", va="top",
-                   fontsize=8.5, color=GREEN if s["verdict"] == "PASS" else RED, weight="bold")
+                           "the value in full and the limit applied to it; limit from: default = [limits], engine = "
+                           "[limits.ENGINE], case = [limits.ENGINE.case] of the tolerance file; (own check): an "
+                           "engine's own bound; not gated: two peers compared, reported only")
+            f.text(0.985, 0.99, f"verdict {s['verdict']}\n(exit code {s['exit_code']})", ha="right", va="top",
+                   fontsize=8, color=GREEN if s["verdict"] == "PASS" else RED, weight="bold")
             if chunk:
                 table(f, 0.86, cols, chunk, cchunk, fontsize=FS)
             else:

@@ -57,7 +57,7 @@ def _cost_line(data) -> str:
     start = s.get("worker_startup_time")
     text = (f"Total wall time {fmt(s.get('total_wall_time'))} s on {s.get('workers', '?')} worker process(es); "
             f"worker start-up (spawn and imports) {fmt(start) + ' s' if start is not None else 'not recorded'}; "
-            "compilation (a tiny warm-up run per worker, timed apart): "
+            "compilation (a tiny warm-up run before the first run of its kind in each worker, summed over the runs): "
             + (", ".join(f"{e} {fmt(v)} s" for e, v in comp.items()) if comp else "not recorded in this folder")
             + ". Neither is in any per-cycle or per-model-second cost.")
     return text
@@ -159,7 +159,7 @@ def seismic_rows(data) -> tuple[list, list, list, list]:
     cols = [("case", 1, "l"), ("record set : id", 1, "l"), ("event", 1, "l"), ("station", 1, "l"),
             ("window\n[record s]", 1, "l"), ("scale", 1, "r"), ("rotation\n[deg]", 1, "r"), ("time\nfactor", 1, "r"),
             ("duration\n[model s]", 1, "r"), ("output\nstep [s]", 1, "r"), ("device", 1, "c"),
-            ("per-engine solver settings", 1, "l")]
+            ("per-engine solver\nsettings", 1, "l")]
     rows, srows = [], []
     for c in data.summary.get("seismic_cases", []):
         g = c.get("ground") or {}

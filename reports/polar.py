@@ -40,11 +40,9 @@ def polar_figure(polar: dict):
         ax.set_ylim(r0, top)
         ticks = sorted([1.0] + ([0.0] if r0 < 0 else [0.5]) + ([2.0] if top >= 2.0 else []))
         ax.set_yticks(ticks, [fmt(t) for t in ticks])   # a "0" ring: the centre lies below zero
-        if r0 < 0:
-            ax.text(0.5, -0.08, f"centre = {fmt(r0, 2)} (the ratio changes sign)", transform=ax.transAxes,
-                    ha="center", va="top", fontsize=7, color=GREY)
         ax.set_xticks(np.radians([0, 90, 180, 270]), ["0°", "90°", "180°", "270°"])
-        ax.set_title(f"{name} / its mean", fontsize=9.5, pad=16)
+        ax.set_title(f"{name} / its mean" + (f"\n(centre = {fmt(r0, 2)}: it changes sign)" if r0 < 0 else ""),
+                     fontsize=9.5 if r0 >= 0 else 8.5, pad=16)
         ax.tick_params(labelsize=6.5, pad=1)
         ax.set_rlabel_position(112)
     fig.legend(handles=[Line2D([], [], color=COLORS[j % len(COLORS)], lw=1.6, label=f"n = {n}")

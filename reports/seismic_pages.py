@@ -199,7 +199,7 @@ def set_table_figure(index: dict):
     fig = new_figure(LANDSCAPE, f"Record set {index.get('set')}: the isolation effect",
                      f"each record with the device and on the supports alone (in-house engine); ratio = with / "
                      f"without; {_ground_text(index.get('ground') or {})}")
-    ax = fig.add_axes([0.06, 0.6, 0.9, 0.28])
+    ax = fig.add_axes([0.06, 0.6, 0.8, 0.28])
     ids = [str(r["id"]) for r in rows]
     xs = np.arange(len(rows))
     for k, (key, lab, col) in enumerate((("peak_u_ratio", "peak |u| ratio", "#1f4e9c"),

@@ -155,16 +155,16 @@ def fit_columns(columns, rows, fontsize: float = 7.0, total: float = 0.88 * LAND
     """Columns sized to their content (measured, headers in bold) within ``total`` points: columns
     narrower than ``short`` keep their natural width; the wider ones share what is left in proportion
     to their natural widths (their cells then wrap, see ``wrap_rows``), never shortened."""
-    nat = []
+    nat, heads = [], []
     for j, (head, _, al) in enumerate(columns):
         cells = [str(r[j]) for r in rows]
-        nat.append(max([text_width(h, fontsize, True) for h in head.split("\n")] +
-                       [text_width(c, fontsize) for c in cells]) + 8)
+        heads.append(max(text_width(h, fontsize, True) for h in head.split("\n")) + 8)   # headers never wrap
+        nat.append(max([heads[-1]] + [text_width(c, fontsize) + 8 for c in cells]))
     if sum(nat) > total:
         long_ = [j for j, w in enumerate(nat) if w > short]
         room = total - sum(w for j, w in enumerate(nat) if j not in long_)
         want = sum(nat[j] for j in long_)
-        nat = [max(room * w / want, 60.0) if j in long_ else w for j, w in enumerate(nat)]
+        nat = [max(room * w / want, 60.0, heads[j]) if j in long_ else w for j, w in enumerate(nat)]
     return [(head, w, al) for (head, _, al), w in zip(columns, nat)]
 
 
@@ -291,5 +291,9 @@ def limit_lines(ax, limits: dict, unit: str = "", x: float = 0.99, ha: str = "ri
             label = f"{', '.join(n for _, n, _ in cl)} limit {fmt(cl[0][0], 2)}{u}"
         else:
             label = "limits: " + ", ".join(f"{n} {fmt(v, 2)}{u}" for v, n, _ in cl)
-        ax.text(x, cl[-1][0], label, transform=ax.get_yaxis_transform(), ha=ha, va="bottom", fontsize=fontsize,
-                color=col)
+        # above the highest line of the cluster, or below the lowest where that is near the panel's top
+        top = ax.transAxes.inverted().transform(ax.transData.transform((1.0, cl[-1][0])))[1]
+        y, va = (cl[0][0], "top") if top > 0.85 else (cl[-1][0], "bottom")
+        ax.annotate(label, (x, y), xycoords=ax.get_yaxis_transform(), xytext=(0, -2 if va == "top" else 2),
+                    textcoords="offset points", ha=ha, va=va, fontsize=fontsize, color=col,
+                    bbox=dict(fc="white", ec="none", alpha=0.85, pad=0.4))   # no line strikes it through

@@ -322,8 +322,9 @@ def test_the_overlap_check_sees_an_overlap():
 
 
 def test_the_in_house_cost_on_the_cost_page_is_its_warm_integration(run_dir, report):
-    """The recorded per-cycle cost (what the cost page prints) is within 3x of a warm benchmark of the
-    same case in this process; compilation is recorded apart."""
+    """The recorded per-cycle cost (what the cost page prints, wall and CPU) is within 3x of a warm
+    benchmark of the same case in this process; compilation is recorded apart. CPU seconds are
+    compared: wall seconds on a loaded 2-core machine measure the load."""
     from comparisons.config import load_cases
     from nsd_core.device.model import simulate
     from reports.style import fmt
@@ -331,14 +332,16 @@ def test_the_in_house_cost_on_the_cost_page_is_its_warm_integration(run_dir, rep
     s = json.loads((run_dir[0] / "results.json").read_text())
     run = s["runs"]["A15mm_f10Hz"]["semirecursive"]
     assert {"wall_time", "cpu_time", "compile_time", "job_wall_time"} <= set(run)
-    per_cycle = run["wall_time"] / s["cases"][0]["cycles"]
-    assert fmt(per_cycle) in _page_text(paths["pdf"], EXPECTED.index("cost"))
+    cycles = s["cases"][0]["cycles"]
+    page = _page_text(paths["pdf"], EXPECTED.index("cost"))
+    assert f"{fmt(run['wall_time'] / cycles)} / {fmt(run['cpu_time'] / cycles)}" in page
     case = next(c for c in load_cases(run_dir[0].parent / "cases.toml") if c.name == "A15mm_f10Hz")
     simulate(case.params, case.drive)   # warm
-    start = time.perf_counter()
+    start = time.process_time()
     simulate(case.params, case.drive)
-    warm = (time.perf_counter() - start) / case.drive.cycles
-    assert warm / 3 <= per_cycle <= 3 * warm, (per_cycle, warm)
+    warm = (time.process_time() - start) / case.drive.cycles
+    recorded = run["cpu_time"] / cycles
+    assert warm / 3 <= recorded <= 3 * warm, (recorded, warm)
     assert s.get("worker_startup_time") is not None
 
 
