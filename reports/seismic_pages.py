@@ -6,7 +6,8 @@ energy balance over time with the residual on the gate's relative scale, and the
 ``runs`` is {engine: RunResult} in the columns of ``nsd seismic`` (nsd_core.device.seismic), the
 in-house engine first; ``nodevice`` the in-house run on the supports alone where one exists; ``ground``
 the ground motion's description (window in record seconds, time factor). The same pages serve an
-``nsd seismic`` folder (single run or ``--set``) and the seismic cases of an ``nsd compare`` folder.
+``nsd seismic`` folder (single run or ``--record-set``) and the seismic cases of an ``nsd compare``
+folder (``<out>/seismic/<case>__<engine>.csv``).
 """
 from __future__ import annotations
 
@@ -91,6 +92,7 @@ def response_figure(title: str, runs: dict, cost: dict | None = None, ground: di
         for eng, r in runs.items():
             a1.plot(r["t"], get(r) * scale, **style(eng))
         a1.set_ylabel(label, fontsize=7.5)
+        a1._nsd_time = True   # a time axis: reports.seismic_compare.with_stop_mark marks the stop on it
         a1.tick_params(labelbottom=not peers and i == len(series) - 1)
         if peers and ref is not None:
             a2 = fig.add_axes([0.43, top - h * 0.95, 0.52, h * 0.35], sharex=a1)
@@ -98,6 +100,7 @@ def response_figure(title: str, runs: dict, cost: dict | None = None, ground: di
                 if len(runs[eng]["t"]) == len(ref["t"]):
                     a2.plot(ref["t"], (get(runs[eng]) - get(ref)) * scale, **style(eng))
             a2.set_ylabel("Δ " + label.split(" ")[-1], color=GREY, fontsize=7)
+            a2._nsd_time = True
             a2.tick_params(labelbottom=i == len(series) - 1, labelsize=6.5)
             a2.yaxis.set_major_formatter(FuncFormatter(lambda v, _: fmt(v, 2)))   # no offset text over the panel above
             a2.yaxis.set_major_locator(MaxNLocator(3))
@@ -106,10 +109,10 @@ def response_figure(title: str, runs: dict, cost: dict | None = None, ground: di
 
 
 def loops_figure(title: str, runs: dict, nodevice=None):
-    """The device's force against the plate's displacement, per direction, with the difference of
-    every other engine to the in-house run beneath."""
-    fig = new_figure(LANDSCAPE, title, "device force on the plate against the plate's displacement relative to the "
-                     "base (the negative-stiffness loops the record drives); beneath: engine - in-house")
+    """device_F (the plate's force on the device) against the relative displacement, per direction, with
+    the difference of every other engine to the in-house run beneath."""
+    fig = new_figure(LANDSCAPE, title, "device_F (the plate's force on the device) against the plate's displacement "
+                     "relative to the base (the negative-stiffness loops the record drives); beneath: engine - in-house")
     _legend(fig, runs)
     ref = runs.get(REFERENCE)
     peers = [e for e in runs if e != REFERENCE]
@@ -134,8 +137,8 @@ def loops_figure(title: str, runs: dict, nodevice=None):
     return fig
 
 
-ENERGY = [("E_input", "input"), ("E_kinetic", "kinetic (relative)"), ("stored", "stored (supports + gravity)"),
-          ("dissipated", "device (stored + dissipated)\n+ supports' damping")]
+ENERGY = [("E_input", "input"), ("E_kinetic", "kinetic (relative)"), ("stored", "stored (supports, gravity,\nrestrainer if any)"),
+          ("dissipated", "device (stored + dissipated)\n+ supports' (restrainer's) damping")]
 COLOURS = ["#1f4e9c", "#d95f02", "#1b9e77", "#7570b3"]
 
 
@@ -151,11 +154,15 @@ def energy_figure(title: str, runs: dict):
         parts = {"E_input": r["E_input"], "E_kinetic": r["E_kinetic"],
                  "stored": r["E_supports_stored"] + r["E_gravity"],
                  "dissipated": r["E_device"] + r["E_supports_dissipated"]}
+        if "E_restrainer_stored" in r.columns:  # the displacement restrainer (issue 23)
+            parts["stored"] = parts["stored"] + r["E_restrainer_stored"]
+            parts["dissipated"] = parts["dissipated"] + r["E_restrainer_dissipated"]
         ls = style(eng)["linestyle"]
         for c, (name, _) in enumerate(ENERGY):
             ax.plot(r["t"], parts[name], color=COLOURS[c], linestyle=ls)
         scale = float(np.max(np.abs(r["E_input"]))) or 1.0
         ax2.plot(r["t"], r["E_residual"] / scale, color=style(eng)["color"], linestyle=ls)
+    ax._nsd_time = ax2._nsd_time = True
     ax.set(ylabel="energy [J]", title="energy balance")
     ax.tick_params(labelbottom=False)
     ax2.set(xlabel="model time t [s]", ylabel="E_residual / max |E_input| [-]",
