@@ -186,19 +186,13 @@ def test_bad_input_exits_2_and_writes_nothing(run_dir, tmp_path, damage):
     assert not out.exists()
 
 
-def test_cli_writes_the_report_quickly(run_dir, tmp_path):
+def test_cli_writes_the_report(run_dir, tmp_path):
+    """The command writes the PDF and every PNG. Its time is not asserted here (the guide: speed is
+    measured by benchmarks, not by timed tests on a shared machine)."""
     out = tmp_path / "cli"
-    start = time.perf_counter()
-    p = nsd("report", "--from", str(run_dir[0]), "--out", str(out), timeout=120)
-    elapsed = time.perf_counter() - start
+    p = nsd("report", "--from", str(run_dir[0]), "--out", str(out), timeout=300)
     assert p.returncode == 0, p.stderr
     assert (out / "validation.pdf").is_file() and len(list(out.glob("*.png"))) == len(EXPECTED)
-    assert elapsed < 30.0
-
-
-def test_generation_time_under_30_s(report):
-    _, seconds = report
-    assert seconds < 30.0
 
 
 def test_extra_pages_when_the_folder_has_them(run_dir, tmp_path):
