@@ -120,6 +120,9 @@ def run(args) -> int:
         raise ParameterError("--convergence: the case file has no [convergence] table")
     if args.power:
         return _run_power(args, cases, tolerances)
+    for flag in ("power_cases",):
+        if getattr(args, flag) is not None:
+            raise ParameterError(f"--{flag.replace('_', '-')}: applies to --power only")
     check_settings(cases, engines, conv)
     out = check_out_dir("--out", args.out)
     check_out_file("--junit", args.junit)
@@ -141,18 +144,29 @@ def run(args) -> int:
     return summary["exit_code"]
 
 
+def _power_cases(text: str, cases) -> list:
+    """--power-cases A,B: names of the case file's cases, each once, none empty (issue 22)."""
+    from nsd_core.device.inputs import printable
+    known = {c.name: c for c in cases}
+    names = [n.strip() for n in text.split(",")]
+    for n in names:
+        if not n:
+            raise ParameterError(f"--power-cases {printable(repr(text))}: an empty name; give comma-separated case "
+                                 f"names from {', '.join(known)}")
+        if n not in known:
+            raise ParameterError(f"--power-cases {printable(repr(n))}: unknown case; allowed: {', '.join(known)}")
+        if names.count(n) > 1:
+            raise ParameterError(f"--power-cases {printable(repr(text))}: {n} given twice; give each case once")
+    return [known[n] for n in names]
+
+
 def _run_power(args, cases, tolerances) -> int:
     from comparisons.power import format_power, power_study
     engines = parse_engines(args.power_engines)
     if REFERENCE in engines:
         raise ParameterError(f"--power-engines {args.power_engines!r}: the reference {REFERENCE} cannot be perturbed")
-    if args.power_cases:
-        names = [n.strip() for n in args.power_cases.split(",") if n.strip()]
-        known = {c.name: c for c in cases}
-        for n in names:
-            if n not in known:
-                raise ParameterError(f"--power-cases {n!r}: unknown case; allowed: {', '.join(known)}")
-        cases = [known[n] for n in names]
+    if args.power_cases is not None:
+        cases = _power_cases(args.power_cases, cases)
     check_settings(cases, engines)
     folder = check_out_dir("--out", args.out)
     print(f"nsd compare --power: {len(cases)} cases x {len(engines)} engines -> {folder}")
