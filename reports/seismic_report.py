@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Callable
 
 from nsd_core.device.params import ParameterError
+from nsd_core.device.inputs import read_regular_text
 from nsd_core.device.results import read_csv
 
 from reports import seismic_pages as sp
@@ -53,7 +54,7 @@ def seismic_plan(folder) -> tuple[list[tuple[str, Callable]], str]:
     root = Path(folder)
     if (root / "set.json").is_file():
         try:
-            index = json.loads((root / "set.json").read_text())
+            index = json.loads(read_regular_text(root / "set.json"))
             rows = index["rows"]
         except (OSError, ValueError, KeyError, TypeError) as e:
             raise ParameterError(f"{root / 'set.json'}: malformed ({' '.join(str(e).split())[:100]})") from None
@@ -66,7 +67,7 @@ def seismic_plan(folder) -> tuple[list[tuple[str, Callable]], str]:
         return plan, f"NSD seismic report  |  record set {index.get('set')}"
     runs = _runs(root)
     try:
-        summary = json.loads((root / "summary.json").read_text())
+        summary = json.loads(read_regular_text(root / "summary.json"))
         summary = summary if isinstance(summary, dict) else {}
         ground = summary.get("ground", {})
         label = (f"{ground['set']}:{ground['record']}" if "record" in ground else ground.get("kind", "run"))
@@ -93,7 +94,7 @@ def compare_seismic_pages(root) -> list[tuple[str, Callable]]:
         if all(c in r.columns for c in NEEDED):
             cases.setdefault(case, {})[eng] = r
     try:
-        recorded = json.loads((Path(root) / "results.json").read_text()).get("runs", {})
+        recorded = json.loads(read_regular_text(Path(root) / "results.json")).get("runs", {})
     except (OSError, ValueError, AttributeError):
         recorded = {}
     plan = []

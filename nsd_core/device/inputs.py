@@ -101,3 +101,9 @@ def read_input_text(path: str | Path, what: str, max_bytes: int, expected: str =
         return data.decode("utf-8")
     except UnicodeDecodeError:
         raise ParameterError(f"{what} {printable(path)}: not a text file ({expected} expected)") from None
+
+
+def read_regular_text(path: str | Path, what: str = "file") -> str:
+    """Path.read_text for a file the program wrote itself (results, a store): only a regular file is
+    read, so a FIFO or a device planted in a results folder is one line (InputError), never a hang."""
+    return read_input_text(path, what, 1 << 32)

@@ -129,6 +129,8 @@ def write_csv(path: str | Path, result: RunResult) -> None:
 
 
 def read_csv(path: str | Path, engine: str = "") -> RunResult:
+    from nsd_core.device.inputs import check_regular
+    check_regular(path, "CSV")  # a FIFO or a device in a results folder: one line, never a hang
     with open(path) as f:
         header = f.readline().strip().split(",")
     names, units = [], {}
