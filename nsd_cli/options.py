@@ -173,27 +173,14 @@ def check_out_file(option: str, value: str | None) -> Path | None:
     return path
 
 
-def check_finite(data, what: str, where: str = "") -> None:
+def check_finite(data, what: str) -> None:
     """Any NaN or inf in an output is a solver failure (exit 3), never exit 0: raises SolverError
-    naming the first field that holds one (``data``: dicts, lists, numbers, arrays, RunResults)."""
-    import numpy as np
+    naming the first field that holds one (nsd_core.device.results.first_nonfinite); nothing is written."""
+    from nsd_core.device.results import first_nonfinite
     from nsd_core.engine.errors import SolverError
-    if hasattr(data, "columns") and hasattr(data, "units"):
-        data = data.columns
-    if isinstance(data, dict):
-        for k, v in data.items():
-            check_finite(v, what, f"{where}.{k}" if where else str(k))
-    elif isinstance(data, (list, tuple)):
-        for i, v in enumerate(data):
-            check_finite(v, what, f"{where}[{i}]")
-    elif isinstance(data, np.ndarray) and data.dtype.kind in "fc":
-        bad = ~np.isfinite(data)
-        if bad.any():
-            k = int(np.flatnonzero(bad.ravel())[0])
-            raise SolverError(f"{what}: {where} holds {data.ravel()[k]} at index {k} ({int(bad.sum())} non-finite "
-                              "values); nothing written")
-    elif isinstance(data, (float, np.floating)) and not math.isfinite(data):
-        raise SolverError(f"{what}: {where} = {data}; a non-finite output, nothing written")
+    bad = first_nonfinite(data)
+    if bad:
+        raise SolverError(f"{what}: a non-finite output, {bad}; nothing written")
 
 
 def positive(name: str, v, whole: bool = False) -> None:

@@ -63,9 +63,12 @@ def acquire(folder: Path, option: str, value: str) -> None:
             break
         os.close(fd)  # the holder removed the file as we opened it: take the new one
     previous = _holder(fd)
-    os.ftruncate(fd, 0)
-    os.lseek(fd, 0, os.SEEK_SET)
-    os.write(fd, f"{os.getpid()}\n{printable(' '.join(sys.argv))}\n".encode())
+    try:  # the pid is for the message of a run that finds the lock held; the flock is the lock
+        os.ftruncate(fd, 0)
+        os.lseek(fd, 0, os.SEEK_SET)
+        os.write(fd, f"{os.getpid()}\n{printable(' '.join(sys.argv))}\n".encode())
+    except OSError:
+        pass  # a full disk: the run goes on and its first result says so (exit 1, naming the file)
     _held.append((fd, lock, created))
     if previous and previous != str(os.getpid()):
         print(f"nsd: note: {printable(folder)} was locked by pid {previous}, which no longer runs; lock taken over",

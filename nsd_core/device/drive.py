@@ -20,6 +20,7 @@ Drive's packed parameters (``motion_params``): one implementation of every path.
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -109,6 +110,8 @@ def read_path_table(path: str | Path):
     from scipy.interpolate import CubicSpline
     from nsd_core.device.inputs import printable, read_input_text
     where = f"path = {printable(repr(str(path)))}"
+    if not os.path.lexists(path):
+        raise ParameterError(f"{where}: no such file; allowed: {', '.join(PATHS)} or a CSV file of t,x,y")
     try:
         lines = read_input_text(path, "path", MAX_TABLE_BYTES, "a CSV file of t,x,y").splitlines()
     except ParameterError:

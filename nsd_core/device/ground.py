@@ -432,7 +432,8 @@ GROUND_SPECS = {
 
 def ground_spec_bounds() -> str:
     """The keys and ranges of every closed-form kind, for --help."""
-    return "; ".join(f"{kind}: " + ", ".join(f"{k} in [{lo:g}, {hi:g}] {u}" for k, (_, lo, hi, u) in keys.items())
+    return "; ".join(f"{kind}: " + ", ".join(f"{k} in {'(' if k == 'gamma' else '['}{lo:g}, {hi:g}] {u}"
+                                             for k, (_, lo, hi, u) in keys.items())
                      for kind, (_, keys, _) in GROUND_SPECS.items())
 
 

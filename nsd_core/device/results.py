@@ -61,6 +61,34 @@ class RunResult:
         return np.column_stack([self.columns[n] for n in names]) if names else np.zeros((len(self["t"]), 0))
 
 
+def first_nonfinite(data, where: str = "") -> str | None:
+    """Where the first NaN or inf in ``data`` (dicts, lists, numbers, arrays, RunResults) lies, as
+    'field[index] = value (N non-finite values)'; None when every number is finite. Any non-finite
+    output is a solver failure (exit 3), never a result (issue 22)."""
+    if isinstance(data, RunResult):
+        data = data.columns
+    if isinstance(data, dict):
+        items = data.items()
+    elif isinstance(data, (list, tuple)):
+        items = ((f"[{i}]", v) for i, v in enumerate(data))
+    elif isinstance(data, np.ndarray) and data.dtype.kind in "fc":
+        bad = ~np.isfinite(data)
+        if not bad.any():
+            return None
+        k = int(np.flatnonzero(bad.ravel())[0])
+        return f"{where}[{k}] = {data.ravel()[k]} ({int(bad.sum())} non-finite values)"
+    elif isinstance(data, (float, np.floating)):
+        return None if np.isfinite(data) else f"{where} = {data}"
+    else:
+        return None
+    for k, v in items:
+        name = k if str(k).startswith("[") else (f"{where}.{k}" if where else str(k))
+        found = first_nonfinite(v, f"{where}{k}" if str(k).startswith("[") else name)
+        if found:
+            return found
+    return None
+
+
 def atomic_write_text(path: str | Path, text: str) -> None:
     """Write to a temporary file in the same folder, then rename: readers never see half a file.
     A failed write (a full disk) removes the temporary file and raises OSError naming ``path``;

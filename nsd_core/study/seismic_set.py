@@ -33,7 +33,8 @@ from pathlib import Path
 from typing import Callable
 
 from nsd_core.device.params import ParameterError
-from nsd_core.device.results import RunResult, atomic_copy, atomic_write_json, atomic_write_text, read_csv
+from nsd_core.device.results import (RunResult, atomic_copy, atomic_write_json, atomic_write_text, first_nonfinite,
+                                     read_csv)
 from nsd_core.study.store import Store
 from nsd_core.study.sweep import run_stored
 
@@ -153,6 +154,10 @@ def run_record(r: RecordRun, run_engine: Callable | None = None) -> dict:
         else:
             result = run_engine(r.engine, params, structure, motion, duration=r.duration, dt_out=r.dt_out,
                                 settings=r.settings or None)
+        bad = first_nonfinite(result.columns)
+        if bad:
+            from nsd_core.engine.errors import SolverError
+            raise SolverError(f"a non-finite output: {bad}")
         summary = {"ground": motion.describe(), "structure": structure.to_dict(), "device": r.device,
                    **seismic_summary(result), "solver": result.stats, "wall_time": result.stats.get("wall_time"),
                    "versions": versions(), "params": params.describe()}
