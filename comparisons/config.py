@@ -327,6 +327,11 @@ def _seismic_case(i: int, raw: dict, d_params: dict, base_params: Params | None)
         for k in structure:
             if k not in names_:
                 raise ParameterError(f"{w}.structure.{k}: unknown; allowed: {', '.join(sorted(names_))}")
+        from nsd_core.device.isolation import default_structure
+        try:  # the bounds of each number and of the supports' frequency (on the nominal defaults)
+            default_structure().replace(**structure)
+        except ParameterError as e:
+            raise ParameterError(f"{w}: {e}") from None
     return case
 
 

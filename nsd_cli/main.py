@@ -27,7 +27,7 @@ EPILOG = """exit codes: 0 ok; 1 a tolerance exceeded (compare) or a benchmark go
 4 a drive the mechanism cannot follow; a full disk is exit 1 with one line naming the file (what was
 kept stays valid); a second run into a folder another run is writing is exit 2 naming its pid;
 130 / 143 interrupted by Ctrl-C / SIGTERM (finished cases are kept; a re-run resumes them).
-Run `nsd COMMAND --help` for each command's options; docs/limits.md lists every bound."""
+docs/limits.md lists every bound. Run `nsd COMMAND --help` for each command's options."""
 
 # writing failed for want of room (or the medium): exit 1, one line naming the file
 DISK_ERRNOS = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EROFS, errno.EIO}

@@ -77,8 +77,9 @@ def _ground_bounds() -> str:
 
 def check_record_flags(args) -> None:
     """--scale, --rotate, --time-factor: finite numbers in their ranges (issue 22), before any record is read."""
-    lim.in_range("--scale", lim.number("--scale", args.scale), lim.SCALE)
-    lim.in_range("--rotate", lim.number("--rotate", args.rotate), lim.ROTATE, "deg")
+    from nsd_core.device.ground import _number, _positive  # the record's own checks first (their wording)
+    lim.in_range("--scale", _positive("scale", args.scale), lim.SCALE)
+    lim.in_range("--rotate", _number("rotate_deg", args.rotate), lim.ROTATE, "deg")
     if args.time_factor is not None:
         lim.in_range("--time-factor", lim.number("--time-factor", args.time_factor), lim.TIME_FACTOR)
     if args.duration is not None:

@@ -403,6 +403,13 @@ for name, (spec, frag) in GROUNDS.items():
     add(f"seismic-ground-{name}", ["seismic", "--ground", spec, "--out", "{out}"], fragment=frag)
     add(f"seismic-case-ground-{name}", COMPARE + ["--cases", "{d}/c.toml"],
         {"c.toml": f'[[case]]\nname = "s"\nmode = "seismic"\nground = "{spec}"\n'}, frag)
+for v, frag in (("mass=1e308", "mass"), ("mass=1e-9", "mass"), ("stiffness=1e12", "stiffness"),
+                ("damping=1e300", "damping"), ("radius_of_gyration=1e9", "radius_of_gyration"),
+                ("support_radius=0", "support_radius"), ("stiffness=1e10", "Hz")):
+    add(f"seismic-structure-{v}", SEIS_G + ["--structure", v], fragment=frag)
+    add(f"seismic-case-structure-{v}", COMPARE + ["--cases", "{d}/c.toml"],
+        {"c.toml": '[[case]]\nname = "s"\nmode = "seismic"\nground = "pulse:velocity=0.3,frequency=1"\n'
+                   f'structure = {{ {v.replace("=", " = ")} }}\n'}, frag)
 # nsd polar
 for flag, v, frag in (("--step", "1e-7", "step"), ("--step", "0.01", "step"), ("--step", "0", "step"),
                       ("--step", "-15", "step"), ("--step", "nan", "step"), ("--step", "7", "divide"),

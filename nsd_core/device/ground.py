@@ -464,6 +464,9 @@ def parse_ground_spec(text, where: str = "--ground") -> GroundMotion:
             raise ParameterError(f"{where} {kind}: {k} = {printable(repr(v))}: not a number; allowed "
                                  f"[{lo:g}, {hi:g}] {unit}") from None
         open_low = k == "gamma"  # Mavroeidis-Papageorgiou: gamma > 1
+        if open_low and math.isfinite(x) and x <= lo:
+            raise ParameterError(f"{where} {kind}: {k} = {printable(v)}: must be > {lo:g} (Mavroeidis-Papageorgiou) "
+                                 f"and <= {hi:g}")
         if not (math.isfinite(x) and (lo < x if open_low else lo <= x) and x <= hi):
             raise ParameterError(f"{where} {kind}: {k} = {printable(v)}: must be a finite number in "
                                  f"{'(' if open_low else '['}{lo:g}, {hi:g}] {unit}")
