@@ -107,7 +107,7 @@ def main(argv: list[str] | None = None) -> int:
         for sig in saved:  # a second Ctrl-C while we tidy up must not print a traceback
             signal.signal(sig, signal.SIG_IGN)
         t = args.tally
-        where = (f"; {t['kept']} of {t['total']} cases kept in {t['dir']}" if "total" in t
+        where = (f"; {t['kept']} of {t['total']} cases kept in {printable(t['dir'])}" if "total" in t
                  else "; nothing kept")
         print(f"nsd: interrupted{where}", file=sys.stderr, flush=True)
         return 128 + int(signum)
