@@ -7,7 +7,6 @@ from xml.sax.saxutils import escape, quoteattr
 
 from comparisons.config import load_cases, load_convergence, load_tolerances
 from comparisons.engines import REFERENCE
-from comparisons.harness import compare
 from nsd_cli.options import (WORKERS_MAX, add_param_arguments, base_params, check_out_dir, check_out_file,
                              parse_engines, whole)
 from nsd_core.device.params import ParameterError
@@ -129,6 +128,7 @@ def run(args) -> int:
     if tolerances.defaulted:
         print(f"note: {', '.join(tolerances.defaulted)} not in {args.tolerances}: default limits used "
               "(marked 'default' in the table)")
+    from comparisons.harness import compare  # here, not at import: every nsd command's start-up stays light
     print(f"nsd compare: {len(cases)} cases x {len(engines)} engines -> {out}")
     summary = compare(cases, engines, tolerances, out, workers=args.workers, convergence=conv, tally=args.tally)
     print(format_table(summary))

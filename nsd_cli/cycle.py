@@ -56,13 +56,14 @@ def drive_from_args(args):
 
 
 def run(args) -> int:
+    params = base_params(args)
+    drive = drive_from_args(args)
+    given = solver_settings(args)
+    check_drive_work(drive.duration, given.get("max_step", 1e-3), "--cycles / --frequency")  # 1e-3: the default
     from nsd_core.api import cycle
     from nsd_core.device.model import DEFAULT_SOLVER
     from nsd_core.device.results import atomic_write_json, write_csv
-    params = base_params(args)
-    drive = drive_from_args(args)
-    solver = {**DEFAULT_SOLVER, **solver_settings(args)}
-    check_drive_work(drive.duration, solver.get("max_step"), "--cycles / --frequency")
+    solver = {**DEFAULT_SOLVER, **given}
     drive.check_followable(params)
     out = check_out_dir("--out", args.out)
     result, summary = cycle(params, drive, progress=Progress("nsd cycle"), **solver)

@@ -59,9 +59,11 @@ def add_solver_arguments(p: argparse.ArgumentParser) -> None:
 def solver_settings(args) -> dict:
     """The solver options given on the command line, checked by the in-house engine's own settings
     check (types, ranges, the step-size floor, the method), by setting name."""
+    given = {k: getattr(args, k) for k in ("method", "rtol", "atol", "max_step") if getattr(args, k) is not None}
+    if not given:
+        return given  # nothing to check (and the engines' imports stay out of a refusal's start-up)
     from comparisons.engines.base import check_settings
     from comparisons.engines.semirecursive_engine import SemirecursiveEngine
-    given = {k: getattr(args, k) for k in ("method", "rtol", "atol", "max_step") if getattr(args, k) is not None}
     try:
         check_settings(SemirecursiveEngine, given, "semirecursive")
     except ParameterError as e:  # name the option the user typed

@@ -34,8 +34,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args) -> int:
-    from nsd_core.device.results import atomic_write_json, atomic_write_text
-    from nsd_core.study.polar import polar_csv, polar_study
     try:
         wires = tuple(int(w) for w in args.wires.split(","))
     except ValueError:
@@ -48,6 +46,8 @@ def run(args) -> int:
     lim.in_range("--amplitude", args.amplitude, (0.0, base.rod_length * (1 - 1e-12)), "m (0, rod_length)", low_open=True)
     for n in wires:
         base.replace(n_wires=n, n_ropes=n)  # each design's parameters checked (one line) before any work
+    from nsd_core.device.results import atomic_write_json, atomic_write_text
+    from nsd_core.study.polar import polar_csv, polar_study  # after the checks: a refusal starts light
     out = check_out_dir("--out", args.out)
     result = polar_study(wires, args.step, args.amplitude, base, args.points_per_cycle, args.workers)
     check_finite(result, "polar")
