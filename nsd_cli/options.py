@@ -83,7 +83,9 @@ def whole(name: str, v, low: int, high: int) -> None:
 WORKERS_MAX = 256
 
 
-NAME_MAX, PATH_MAX = 255, 4096  # bytes (Linux): longer names are refused before anything is made
+# bytes (Linux): longer names are refused before anything is made; PATH_MAX keeps room for what a
+# command writes inside --out (designs/<key>/result.json, a temporary file's prefix and suffix)
+NAME_MAX, PATH_MAX, TMP_AFFIX = 255, 4096 - 256, 16
 
 
 def _path_error(option: str, value: str, path: Path, e: OSError) -> ParameterError:
@@ -171,6 +173,9 @@ def check_out_file(option: str, value: str | None) -> Path | None:
     path = Path(value)
     if not value.strip() or value.endswith(("/", os.sep)) or os.path.isdir(value):
         raise ParameterError(f"{option} {printable(repr(value))}: must name a file, not a folder")
+    if len(os.fsencode(path.name)) > NAME_MAX - TMP_AFFIX:
+        raise ParameterError(f"{option} {printable(value)}: name too long (at most {NAME_MAX - TMP_AFFIX} bytes for "
+                             "a file name)")
     _writable_folder(option, value, path.parent)
     return path
 

@@ -130,6 +130,9 @@ for v in ("0", "-1", "100000", "x"):
 add("compare-junit-folder", COMPARE + ["--junit", "{d}"], fragment="--junit")
 add("compare-junit-empty", COMPARE + ["--junit", ""], fragment="--junit")
 add("compare-junit-under-file", COMPARE + ["--junit", "{d}/f.txt/j.xml"], {"f.txt": "x"}, "--junit")
+add("compare-junit-name-250", COMPARE + ["--junit", "{d}/" + "j" * 250], fragment="too long")
+add("compare-junit-name-300", COMPARE + ["--junit", "{d}/" + "j" * 300], fragment="too long")
+add("compare-junit-link-loop", COMPARE + ["--junit", "{d}/loop/j.xml"], {"loop": ("link", "loop")}, "loop")
 add("compare-out-is-file", ["compare", "--out", "{d}/f.txt"], {"f.txt": "x"}, "not a folder")
 add("compare-convergence-without-table", COMPARE + ["--cases", "{d}/c.toml", "--convergence"], case_file(), "convergence")
 add("compare-set-bad", COMPARE + ["--set", "n_ropes=2"], fragment="n_ropes")
@@ -479,6 +482,7 @@ OUTS = {
     "under-dangling-link": ({"dangle": ("link", "nowhere")}, "{d}/dangle/sub", "nothing"),
     "name-300": ({}, "{d}/" + "n" * 300, "too long"),
     "path-5000": ({}, "{d}/" + "/".join(["p" * 200] * 25), "too long"),
+    "path-4000": ({}, "{d}/" + "/".join(["p" * 200] * 19), "too long"),
     "under-file": ({"f.txt": "x"}, "{d}/f.txt/a/b", "not a folder"),
     "device": ({}, "/dev/null", "not a folder"),
 }
