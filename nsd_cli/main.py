@@ -79,6 +79,12 @@ def _handle_signals():
 
 
 def main(argv: list[str] | None = None) -> int:
+    for stream in (sys.stdout, sys.stderr):  # a name with bytes that are not UTF-8 prints escaped, not a traceback
+        if hasattr(stream, "reconfigure"):
+            try:
+                stream.reconfigure(errors="backslashreplace")
+            except (ValueError, OSError):
+                pass
     parser = build_parser()
     args = parser.parse_args(argv)
     args.tally = {}  # subcommands that keep results as they go fill in kept / total / dir
