@@ -23,9 +23,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="psi [deg] in [-360, 360], 0 = +X: the line's or major axis' azimuth (default 0; refused for "
                         "a FILE path, whose x, y are world coordinates)")
     p.add_argument("--cycles", type=int, default=2, help="cycles to run, in [1, 1000]; the last is the steady one")
-    p.add_argument("--samples-per-cycle", type=int, default=2000,
-                   help="output samples per cycle, in [16, 200000]; cycles x samples <= 2e6; the run's estimated "
-                        "solver steps (about 1100 per model second, at least duration / max-step) <= 2e6")
+    p.add_argument("--samples-per-cycle", type=int, default=None,
+                   help="output samples per cycle (default 2000, as the Python API's Drive and nsd compare's cases), "
+                        "in [16, 200000]; cycles x samples <= 2e6; the run's estimated solver steps (about 1100 per "
+                        "model second, at least duration / max-step) <= 2e6")
     add_param_arguments(p)
     add_solver_arguments(p)
     p.add_argument("--out", required=True, help="output folder")
@@ -51,8 +52,8 @@ def drive_from_args(args):
         raise ParameterError(f"--minor = {args.minor}: a table path {args.path!r} gives its own positions; "
                              "leave --minor out")
     direction = 0.0 if args.direction is None else args.direction
-    return Drive(amplitude, args.frequency, direction, args.cycles, args.samples_per_cycle,
-                 path=args.path, minor=args.minor)
+    samples = {} if args.samples_per_cycle is None else {"samples_per_cycle": args.samples_per_cycle}
+    return Drive(amplitude, args.frequency, direction, args.cycles, path=args.path, minor=args.minor, **samples)
 
 
 def run(args) -> int:

@@ -32,7 +32,7 @@ docs/limits.md lists every bound. Run `nsd COMMAND --help` for each command's op
 # writing failed for want of room (or the medium): exit 1, one line naming the file
 DISK_ERRNOS = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EROFS, errno.EIO}
 
-SUBCOMMANDS = ("cycle", "seismic", "compare", "report", "sweep", "tables", "calibrate", "benchmark", "polar")
+SUBCOMMANDS = ("cycle", "seismic", "compare", "report", "sweep", "tables", "calibrate", "benchmark", "polar", "params")
 
 
 class OneLineParser(argparse.ArgumentParser):

@@ -25,7 +25,7 @@ pytestmark = pytest.mark.slow
 
 SWEEP = ["sweep", "--param", "rod_length", "--values", "0.026,0.027,0.028,0.029,0.03,0.031", "--frequency", "1",
          "--cycles", "2", "--samples-per-cycle", "100", "--workers", "2"]
-SET = ["seismic", "--set", "farfield", "--records", "1-3", "--window", "5,6.5", "--dt-out", "0.002", "--workers", "2"]
+SET = ["seismic", "--record-set", "farfield", "--records", "1-3", "--window", "5,6.5", "--dt-out", "0.002", "--workers", "2"]
 
 
 def nsd(*args, timeout=900, **kw):

@@ -345,7 +345,7 @@ add("benchmark-out-empty", ["benchmark", "--out", ""], fragment="--out")
 # ---- round two (issue 22): the newer commands, odd files and output paths
 SEIS_G = ["seismic", "--ground", "harmonic:amplitude=1,frequency=2,duration=1", "--out", "{out}"]
 SEIS_R = ["seismic", "--record", "farfield:1", "--window", "5,6", "--out", "{out}"]
-SET_R = ["seismic", "--set", "farfield", "--records", "1", "--window", "5,6", "--out", "{out}"]
+SET_R = ["seismic", "--record-set", "farfield", "--records", "1", "--window", "5,6", "--out", "{out}"]
 for v in ("1e6", "1e-9", "0", "-1", "nan", "inf", "x", "101"):
     add(f"seismic-time-factor-{v}", SEIS_R + ["--time-factor", v], fragment="time-factor")
     add(f"seismic-set-time-factor-{v}", SET_R + ["--time-factor", v], fragment="time-factor")
@@ -360,7 +360,7 @@ add("seismic-dt-out-over-duration", SEIS_G + ["--duration", "0.5", "--dt-out", "
 add("seismic-too-many-samples", SEIS_G + ["--duration", "10", "--dt-out", "1e-6"], fragment="samples")
 add("seismic-own-duration-too-many-samples", ["seismic", "--record", "farfield:1", "--window", "5,15", "--time-factor",
                                               "10", "--dt-out", "1e-5", "--out", "{out}"], fragment="samples")
-add("seismic-set-own-duration-too-long", ["seismic", "--set", "farfield", "--records", "1", "--time-factor", "100",
+add("seismic-set-own-duration-too-long", ["seismic", "--record-set", "farfield", "--records", "1", "--time-factor", "100",
                                           "--out", "{out}"], fragment="duration")
 for v in ("1e9", "0", "-1", "nan", "x"):
     add(f"seismic-scale-{v}", SEIS_R + ["--scale", v], fragment="scale")
