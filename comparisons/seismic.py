@@ -10,6 +10,16 @@ import numpy as np
 
 from nsd_core.device.params import ParameterError
 
+def _synthetic() -> dict:
+    from nsd_core.device.ground import GROUND_SPECS
+    return {kind: (cls, {k: spec[0] for k, spec in keys.items()}) for kind, (cls, keys, _) in GROUND_SPECS.items()}
+
+
+# kind -> (class name in nsd_core.device.ground, allowed keys -> constructor argument): derived from the
+# one table of the closed-form inputs and their ranges (nsd_core.device.ground.GROUND_SPECS)
+SYNTHETIC = _synthetic()
+
+
 def parse_ground(text, where: str = "--ground"):
     """A synthetic ground motion from ``KIND:K=V,...`` (nsd seismic --ground, a case's ground = "..."):
     nsd_core.device.ground.parse_ground_spec, the one parser (keys, ranges, duplicates)."""

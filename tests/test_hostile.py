@@ -408,7 +408,7 @@ for name, (spec, frag) in GROUNDS.items():
         {"c.toml": f'[[case]]\nname = "s"\nmode = "seismic"\nground = "{spec}"\n'}, frag)
 for v, frag in (("mass=1e308", "mass"), ("mass=1e-9", "mass"), ("stiffness=1e12", "stiffness"),
                 ("damping=1e300", "damping"), ("radius_of_gyration=1e9", "radius_of_gyration"),
-                ("support_radius=0", "support_radius"), ("stiffness=1e10", "Hz")):
+                ("support_radius=0", "support_radius"), ("stiffness=1e10", "Hz"), ("mass=1e-3", "Hz")):
     add(f"seismic-structure-{v}", SEIS_G + ["--structure", v], fragment=frag)
     add(f"seismic-case-structure-{v}", COMPARE + ["--cases", "{d}/c.toml"],
         {"c.toml": '[[case]]\nname = "s"\nmode = "seismic"\nground = "pulse:velocity=0.3,frequency=1"\n'
