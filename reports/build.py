@@ -19,6 +19,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from nsd_core.device.inputs import check_regular, printable, read_regular_text
 from nsd_core.device.params import ParameterError
 from nsd_core.device.results import RunResult, read_csv
 
@@ -57,12 +58,16 @@ class ReportData:
 
 
 def _json(path: Path, what: str) -> Any:
+    if not os.path.lexists(path):
+        raise ParameterError(f"--from {printable(path.parent)}: no {path.name} ({what})")
     try:
-        return json.loads(path.read_text())
-    except FileNotFoundError:
-        raise ParameterError(f"--from {path.parent}: no {path.name} ({what})") from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
-        raise ParameterError(f"{path}: not readable JSON ({' '.join(str(e).split())})") from None
+        return json.loads(read_regular_text(path, str(path)))
+    except json.JSONDecodeError as e:
+        raise ParameterError(f"{printable(path)}: not readable JSON ({' '.join(str(e).split())})") from None
+    except ValueError as e:  # InputError: not a regular file, not text, not readable
+        raise ParameterError(str(e)) from None
+    except OSError as e:
+        raise ParameterError(f"{printable(path)}: not readable JSON ({' '.join(str(e).split())})") from None
 
 
 def load(results_dir: str | Path) -> ReportData:
@@ -136,6 +141,7 @@ def _load_tables(path: Path) -> list[dict]:
     if not path.is_file():
         return []
     try:
+        check_regular(path, "tables.csv")
         with open(path) as f:
             rows = list(csv.DictReader(f))
         return [{"table": r["table"], "parameter": r["parameter"], "value": float(r["value"]),
@@ -152,14 +158,15 @@ def _load_study(folder: Path) -> list[dict]:
     if not index.is_file():
         return []
     try:
-        studies = json.loads(index.read_text()).get("studies", {})
+        studies = json.loads(read_regular_text(index)).get("studies", {})
         out = []
         for name, rel in studies.items():
-            s = json.loads((folder / rel).read_text())
+            s = json.loads(read_regular_text(folder / rel))
             curves = []
             for d in s.get("designs", []):
                 if d.get("status") == "ok" and d.get("steady_csv") and (folder / d["steady_csv"]).is_file():
                     path = folder / d["steady_csv"]
+                    check_regular(path, "steady CSV")
                     with open(path) as f:
                         names = [h.split(" [")[0] for h in f.readline().strip().split(",")]
                     arr = np.genfromtxt(path, delimiter=",", skip_header=1, ndmin=2)  # blanks (nan) allowed
@@ -304,12 +311,21 @@ def draw_study(folder, log=print) -> list[str]:
     return pngs
 
 
+def _malformed(results_dir, e: Exception) -> ParameterError:
+    """A damaged field met while drawing (a string where a number belongs...): one line, exit 2."""
+    return ParameterError(f"--from {printable(results_dir)}: malformed data ({type(e).__name__}: "
+                          f"{printable(' '.join(str(e).split()))[:160]}); nothing written")
+
+
 def build_report(results_dir: str | Path, out_dir: str | Path) -> dict[str, Any]:
     """Write ``out_dir/validation.pdf`` and ``out_dir/NN_page.png``; returns their paths."""
     import matplotlib.pyplot as plt
     from matplotlib.backends.backend_pdf import PdfPages
     start = time.perf_counter()
-    plan, footer = source_plan(results_dir)  # everything is checked before anything is written
+    try:
+        plan, footer = source_plan(results_dir)  # everything is checked before anything is written
+    except (TypeError, KeyError, IndexError, AttributeError) as e:
+        raise _malformed(results_dir, e) from None
     title = footer.split("  |  ")[0]
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -334,11 +350,13 @@ def build_report(results_dir: str | Path, out_dir: str | Path) -> dict[str, Any]
         for old in out.glob("[0-9][0-9]_*.png"):  # pages of an earlier report that this one no longer has
             if old.name not in keep:
                 old.unlink()
-    except BaseException:
+    except BaseException as e:
         plt.close("all")
         for tmp in [tmp_pdf] + [t for t, _ in written]:
             if tmp.exists():
                 tmp.unlink()
+        if isinstance(e, (TypeError, KeyError, IndexError, AttributeError)) or type(e) is ValueError:
+            raise _malformed(results_dir, e) from None
         raise
     return {"pdf": str(pdf_path), "pngs": [str(p) for _, p in written], "pages": [s for s, _ in plan],
             "seconds": time.perf_counter() - start}

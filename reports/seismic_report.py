@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Callable
 
 from nsd_core.device.params import ParameterError
+from nsd_core.device.inputs import read_regular_text
 from nsd_core.device.results import read_csv
 
 from reports import seismic_compare as sc
@@ -53,7 +54,7 @@ def _run_pages(label: str, runs: dict, cost: dict | None = None, ground: dict | 
 
 def _summary(folder: Path) -> dict:
     try:
-        s = json.loads((folder / "summary.json").read_text())
+        s = json.loads(read_regular_text(folder / "summary.json"))
         return s if isinstance(s, dict) else {}
     except (OSError, ValueError):
         return {}
@@ -71,7 +72,7 @@ def seismic_plan(folder) -> tuple[list[tuple[str, Callable]], str]:
     root = Path(folder)
     if (root / "set.json").is_file():
         try:
-            index = json.loads((root / "set.json").read_text())
+            index = json.loads(read_regular_text(root / "set.json"))
             rows = index["rows"]
         except (OSError, ValueError, KeyError, TypeError) as e:
             raise ParameterError(f"{root / 'set.json'}: malformed ({' '.join(str(e).split())[:100]})") from None
@@ -118,7 +119,7 @@ def compare_seismic_pages(root) -> list[tuple[str, Callable]]:
         if all(c in r.columns for c in NEEDED):
             cases.setdefault(case, {})[eng] = r
     try:
-        results = json.loads((Path(root) / "results.json").read_text())
+        results = json.loads(read_regular_text(Path(root) / "results.json"))
         recorded = results.get("runs", {})
         grounds = {c["name"]: c.get("ground") for c in results.get("seismic_cases", []) if isinstance(c, dict)}
     except (OSError, ValueError, AttributeError, KeyError, TypeError):
