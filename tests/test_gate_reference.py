@@ -117,3 +117,17 @@ def test_a_one_percent_cap_mass_in_mujocos_own_model_fails_the_gate(tmp_path):
     assert "max_dF_rel" in bad and "order_deviation" in bad, bad
     assert res["order"]["mujoco"]["orders"][1] < 0.5          # a plateau, not second order
     assert all(m["pass"] for m in res["metrics"] if m["gated"] and m["engine"] == "semirecursive")
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--power-size", "0.001"], "applies to --power only"),
+    (["--power", "--power-size", "0.5"], "a size in (0, 0.1]"),
+    (["--power", "--power-profiles", "lenient"], "--power-profiles 'lenient': unknown"),
+    (["--power", "--power-cases", "A25.5mm_f1Hz"], "not a case of the strict profile"),
+])
+def test_power_options_bad_input_exit_2_and_nothing_written(tmp_path, args, words):
+    out = tmp_path / "out"
+    p = subprocess.run([sys.executable, "-m", "nsd_cli.main", "compare", *args, "--out", str(out)],
+                       capture_output=True, text=True, timeout=120)
+    assert p.returncode == 2 and words in p.stderr and len(p.stderr.strip().splitlines()) == 1, p.stderr
+    assert not out.exists()
