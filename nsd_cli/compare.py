@@ -149,6 +149,10 @@ def run(args) -> int:
     print(format_table(summary))
     if args.junit:
         atomic_write_text(args.junit, junit_xml(summary))
+    d = summary.get("limits_derived_on") or {}
+    if d:
+        print(f"limits derived on mujoco {d.get('mujoco', '?')}, exudyn {d.get('exudyn', '?')} ({d.get('date', '?')}); "
+              f"gated against the converged reference (in-house {summary['converged_reference']['settings']})")
     for line in summary["failures"]:
         print(f"FAILED {line}")
     print(f"verdict: {summary['verdict']} ({summary['total_wall_time']:.1f} s); wrote {out / 'results.json'}")
