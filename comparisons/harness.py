@@ -48,7 +48,7 @@ def job_key(case: Case, engine: str, order: dict | None = None) -> str:
     """What a kept run depends on: the engine (a run label: comparisons.reference.run_spec), its
     parameters, the drive (a seismic case: the ground input, duration, output interval, device,
     structure), its settings, the code."""
-    name, params, settings = run_spec(case, engine, order)
+    _, params, settings = run_spec(case, engine, order)
     if isinstance(case, SeismicCase):
         text = json.dumps(["seismic", engine, params.to_dict(), case.params.to_dict(), case.spec,
                            case.ground.describe(), case.model_duration, case.dt_out, case.device, case.structure,
