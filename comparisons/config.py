@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from nsd_core.device.drive import Drive
+from nsd_core.device.drive import SAMPLES_PER_CYCLE, Drive
 from nsd_core.device.params import ParameterError, Params, load_params, read_toml
 
 HERE = Path(__file__).resolve().parent
@@ -28,7 +28,8 @@ METRICS = {  # name -> (unit, description)
     "energy_balance_rel": ("-", "|drive work - (wires + spring hysteresis + stored change)| / drive work, steady cycle"),
     # seismic cases (mode = "seismic"): on the time histories, every output time
     "max_du_rel": ("-", "seismic: max |u - u_ref| / max |u_ref|, u the plate's plan displacement relative to the base"),
-    "max_dF_device_rel": ("-", "seismic: max |F - F_ref| / max |F_ref|, F the device's force vector on the plate"),
+    "max_dF_device_rel": ("-", "seismic: max |F - F_ref| / max |F_ref|, F = device_F, the plate's force on the "
+                               "device (minus the device's force on the plate)"),
     "peak_u_rel": ("-", "seismic: |peak |u| - reference| / reference"),
     "peak_a_rel": ("-", "seismic: |peak |a_abs| - reference| / reference, a_abs the plate's absolute acceleration"),
     "energy_residual_rel": ("-", "seismic: the engine's own max |E_residual| / max |E_input| (frame of the ground)"),
@@ -75,8 +76,11 @@ class SeismicCase:
         """The default structure of the case's (nominal) parameters with the case's overrides: the
         same structure for every engine (engine_params change the device, not the structure)."""
         from nsd_core.device.isolation import default_structure
+        from nsd_core.device.restrainer import split_overrides, with_restrainer
         st = default_structure(self.params)
-        return st.replace(**self.structure) if self.structure else st
+        own, restrainer = split_overrides({k: v for k, v in self.structure.items() if k != "restrainer"})
+        st = st.replace(**own) if own else st
+        return with_restrainer(st, self.params, self.structure.get("restrainer") is True, restrainer)
 
     def describe(self) -> dict[str, Any]:
         return {"name": self.name, "mode": "seismic", **self.spec, "duration": self.model_duration,
@@ -287,7 +291,7 @@ def load_cases(path: str | Path | None = None, base_params: Params | None = None
                       _number(f"case {name}.frequency", merged["frequency"]),
                       _number(f"case {name}.direction_deg", merged.get("direction_deg", 0.0), positive=False),
                       _whole(f"case {name}.cycles", merged.get("cycles", 2), 1, Drive.CYCLES_MAX),
-                      _whole(f"case {name}.samples_per_cycle", merged.get("samples_per_cycle", 2000), 16,
+                      _whole(f"case {name}.samples_per_cycle", merged.get("samples_per_cycle", SAMPLES_PER_CYCLE), 16,
                              Drive.SAMPLES_MAX),
                       path=_path(name, merged.get("path", "line"), path),
                       minor=None if merged.get("minor") is None else _number(f"case {name}.minor", merged["minor"]))
@@ -350,7 +354,11 @@ def _seismic_case(i: int, raw: dict, d_params: dict, base_params: Params | None)
         raise ParameterError(f"{w}.device = {device!r}: must be true or false")
     structure = _table(f"{w}.structure", raw.get("structure", {}))
     for k, v in structure.items():
-        _number(f"{w}.structure.{k}", v, positive=k != "damping")
+        if k == "restrainer":  # the displacement restrainer on (its constants: restrainer_* keys)
+            if not isinstance(v, bool):
+                raise ParameterError(f"{w}.structure.restrainer = {v!r}: must be true or false")
+            continue
+        _number(f"{w}.structure.{k}", v, positive=k not in ("damping", "restrainer_damping"))
     overrides = {**d_params, **_table(f"{w}.params", raw.get("params", {}))}
     base = base_params.to_dict() if base_params else {}
     params = load_params(None, {**base, **overrides})
@@ -360,10 +368,15 @@ def _seismic_case(i: int, raw: dict, d_params: dict, base_params: Params | None)
     case = SeismicCase(name, motion, spec, params, duration, dt_out, device, dict(structure), settings, engine_params)
     if structure:
         from nsd_core.device.isolation import Structure
-        names_ = Structure.__dataclass_fields__.keys() - {"provenance"}
+        from nsd_core.device.restrainer import KEYS
+        names_ = (Structure.__dataclass_fields__.keys() - {"provenance"}) | set(KEYS)
         for k in structure:
             if k not in names_:
                 raise ParameterError(f"{w}.structure.{k}: unknown; allowed: {', '.join(sorted(names_))}")
+        try:
+            case.isolated_structure()  # every value in range (restrainer_gap < rod_length ...)
+        except ParameterError as e:
+            raise ParameterError(f"{w}: {e}") from None
     return case
 
 

@@ -1,8 +1,10 @@
 """``nsd seismic``: the isolated structure on the device under a ground motion (Table 1, second row)
 -> DIR/seismic.csv (time series, header with units) and DIR/summary.json (peaks, residual
-displacement, energy balance, working-range events). Exit 4 when |u| reaches the rod's length.
+displacement, energy balance, working-range and restrainer events). Exit 4 when |u| reaches the rod's
+length: the series up to the event and the summary with the event are still written. ``--restrainer``
+and ``--compare-supports``: nsd_cli.seismic_extras (docs/seismic.md).
 
-``--set NAME [--records 1,3,5-7]``: every record of a FEMA P695 set, each with and without the device
+``--record-set SET [--records 1,3,5-7]``: every record of a FEMA P695 set, each with and without the device
 (the isolation effect), resumable and parallel (``nsd_core.study.seismic_set``) -> DIR/set.csv,
 DIR/set.json, DIR/records/<set>_<id>[_nodevice]/. A record whose run fails is kept in its row with
 its reason and the others still run. Exit 0 every run ran; 3 any run failed in the solver (or
@@ -15,13 +17,12 @@ import math
 
 from nsd_cli.options import (Progress, add_param_arguments, add_solver_arguments, base_params, check_out_dir,
                              solver_settings)
+from nsd_cli import seismic_extras
 from nsd_core.device.params import ParameterError
 
 HELP = "seismic response of the isolated structure (in-house engine)"
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    # --set SET (a record set, below) shares its option with --set NAME=VALUE (a parameter): a value
-    # with '=' overrides a parameter as in every command, one without names the record set
     src = p.add_mutually_exclusive_group()
     src.add_argument("--record", metavar="SET:ID",
                      help="FEMA P695 record: farfield:1..22, nearfield:1..28, nearfield-pulse:1..14, "
@@ -29,6 +30,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     src.add_argument("--ground", metavar="KIND:K=V,...",
                      help="synthetic input: harmonic:amplitude=A[m/s^2],frequency=f,azimuth=DEG,duration=T or "
                           "pulse:velocity=V[m/s],frequency=fp,gamma=G,phase=DEG,azimuth=DEG (Mavroeidis-Papageorgiou)")
+    src.add_argument("--record-set", metavar="SET",
+                     help="every record of a FEMA P695 set (farfield, nearfield, nearfield-pulse, nearfield-no-pulse), "
+                          "each with and without the device (see --records)")
     p.add_argument("--scale", default="1", help="factor on the record's (normalised) acceleration")
     p.add_argument("--window", metavar="T0,T1", help="part of the record, in the record's own seconds")
     p.add_argument("--rotate", default="0", metavar="DEG", help="rotation of the record pair in plan")
@@ -44,18 +48,16 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "each writes seismic_<engine>.csv; summary.json gets their differences")
     p.add_argument("--structure", action="append", default=[], metavar="NAME=VALUE",
                    help="override the default isolated structure: mass, stiffness, damping, "
-                        "radius_of_gyration, support_radius (SI)")
-    p.add_argument("--records", default=None, metavar="1,3,5-7", help="with --set: these records only (default all)")
-    p.add_argument("--workers", type=int, default=None, help="with --set: local processes (default: the cores)")
-    p.add_argument("--scheduler", default=None, help="with --set: address of a running Dask scheduler")
-    p.add_argument("--retry-failed", action="store_true", help="with --set: run records stored as failed again")
+                        "radius_of_gyration, support_radius, restrainer_gap, restrainer_stiffness, "
+                        "restrainer_exponent, restrainer_damping (SI)")
+    seismic_extras.add_arguments(p)
+    p.add_argument("--records", default=None, metavar="1,3,5-7", help="with --record-set: these records only (default all)")
+    p.add_argument("--workers", type=int, default=None, help="with --record-set: local processes (default: the cores)")
+    p.add_argument("--scheduler", default=None, help="with --record-set: address of a running Dask scheduler")
+    p.add_argument("--retry-failed", action="store_true", help="with --record-set: run records stored as failed again")
     add_param_arguments(p)
-    for action in p._actions:
-        if action.dest == "set":
-            action.metavar, action.help = "NAME=VALUE|SET", ("override one parameter (NAME=VALUE); or, without '=', "
-                                                             "run every record of a set (see --records)")
     add_solver_arguments(p)
-    p.add_argument("--out", required=True, help="output folder (with --set SET: resumable)")
+    p.add_argument("--out", required=True, help="output folder (with --record-set: resumable)")
 
 
 def ground_motion(args):
@@ -81,31 +83,28 @@ def ground_motion(args):
     return parse_ground(args.ground, "--ground")
 
 
-def split_set_option(args) -> None:
-    """args.record_set: the --set value without '=' (a record set), args.set: the parameter overrides."""
-    sets = [v for v in args.set if "=" not in v]
-    if len(sets) > 1:
-        raise ParameterError(f"--set {sets[1]!r}: one record set per run (already --set {sets[0]!r})")
-    args.set = [v for v in args.set if "=" in v]
-    args.record_set = sets[0] if sets else None
-    given = [n for n, v in (("--record", args.record), ("--ground", args.ground), ("--set", args.record_set)) if v]
-    if len(given) != 1:
-        raise ParameterError(f"{' and '.join(given) or 'input'}: give exactly one of --record SET:ID, "
-                             "--ground KIND:K=V,... or --set SET")
+def check_source(args) -> None:
+    """Exactly one input: --record, --ground or --record-set. ``--set`` is a parameter override here as
+    in every command; a value without '=' (the record set's spelling before --record-set) is pointed there."""
+    for v in args.set:
+        if "=" not in v:
+            raise ParameterError(f"--set {v!r}: expected NAME=VALUE (a parameter override); a record set is "
+                                 f"--record-set {v}")
+    if not (args.record or args.ground or args.record_set):
+        raise ParameterError("input: give exactly one of --record SET:ID, --ground KIND:K=V,... or --record-set SET")
 
 
 def run(args) -> int:
-    split_set_option(args)
+    check_source(args)
     if args.record_set is not None:
         return run_set(args)
     for name in ("records", "workers", "scheduler"):
         if getattr(args, name) is not None:
-            raise ParameterError(f"--{name}: applies to --set only")
+            raise ParameterError(f"--{name}: applies to --record-set only")
     if args.retry_failed:
-        raise ParameterError("--retry-failed: applies to --set only")
-    from nsd_core.device.isolation import default_structure
+        raise ParameterError("--retry-failed: applies to --record-set only")
+    from nsd_core.device.drive import DriveError
     from nsd_core.device.model import DEFAULT_SOLVER
-    from nsd_core.device.params import parse_set
     from nsd_core.device.results import atomic_write_json, versions, write_csv
     from nsd_core.device.seismic import seismic_summary, simulate_seismic
     from comparisons.engines import parse_engine_list, run_seismic_engine
@@ -116,21 +115,27 @@ def run(args) -> int:
         raise ParameterError(f"--engines {args.engines!r}: semirecursive (the reference) must come first")
     if args.no_device and len(engines) > 1:
         raise ParameterError("--engines: the supports alone (--no-device) run on the in-house engine only")
+    seismic_extras.check_compare(args, engines)
     motion = ground_motion(args)
-    structure = default_structure(params)
-    if args.structure:
-        structure = structure.replace(**parse_set(args.structure))
+    structure = seismic_extras.isolated_structure(args, params)
     solver = {**DEFAULT_SOLVER, **solver_settings(args)}
     for name in ("duration", "dt_out"):
         v = getattr(args, name)
         if v is not None and not (math.isfinite(v) and v > 0):
             raise ParameterError(f"--{name.replace('_', '-')} = {v}: must be a finite number > 0 (s)")
     out = check_out_dir("--out", args.out)
-    result = simulate_seismic(params, structure, motion, duration=args.duration, dt_out=args.dt_out,
-                              device=not args.no_device, progress=Progress("nsd seismic"), **solver)
-    summary = {"ground": motion.describe(), "structure": structure.to_dict(), "device": not args.no_device,
-               **seismic_summary(result), "solver": result.stats, "wall_time": result.stats["wall_time"],
+    head = {"ground": motion.describe(), "structure": structure.to_dict(), "device": not args.no_device}
+    if args.compare_supports:
+        return seismic_extras.run_compare(args, params, structure, motion, solver, out, head)
+    try:
+        result = simulate_seismic(params, structure, motion, duration=args.duration, dt_out=args.dt_out,
+                                  device=not args.no_device, progress=Progress("nsd seismic"), **solver)
+    except DriveError as err:  # exit 4 is still a result: the series up to the event, the event
+        seismic_extras.write_stopped(err, out, {**head, "versions": versions(), "params": params.describe()})
+        raise
+    summary = {**head, **seismic_summary(result), "solver": result.stats, "wall_time": result.stats["wall_time"],
                "versions": versions(), "params": params.describe()}
+    seismic_extras.peak_warning(summary)
     others = {}
     for name in engines[1:]:
         other = run_seismic_engine(name, params, structure, motion, duration=args.duration, dt_out=args.dt_out)
@@ -152,6 +157,7 @@ def run(args) -> int:
     for name, m in summary.get("engines", {}).items():
         print(f"  {name}: max|du|/max|u| = {m['du']:.2e}, max|dF|/max|F| = {m['dF']:.2e}, "
               f"max|da|/max|a| = {m['da']:.2e}, {m['wall_time']:.1f} s")
+    seismic_extras.print_restrainer(summary)
     if summary["outside_working_range"]:
         print("  WARNING: the ropes went slack: part of this run lies outside the device's working range")
     print(f"wrote {out / 'seismic.csv'} and {out / 'summary.json'}")
@@ -171,7 +177,7 @@ def _window(text: str | None) -> list[float] | None:
 
 
 def run_set(args) -> int:
-    """--set: the record set, with and without the device (see the module docstring for exit codes)."""
+    """--record-set: the record set, with and without the device (see the module docstring for exit codes)."""
     import os
     from comparisons.harness import code_fingerprint
     from comparisons.engines import parse_engine_list, run_seismic_engine
@@ -179,14 +185,14 @@ def run_set(args) -> int:
     from nsd_cli.options import WORKERS_MAX, whole
     from nsd_cli.sweep import check_scheduler
     from nsd_core.device.ground import SIMILITUDE_TIME_FACTOR, fema_record, set_name
-    from nsd_core.device.isolation import default_structure
     from nsd_core.device.model import DEFAULT_SOLVER
-    from nsd_core.device.params import parse_set
     from nsd_core.study.seismic_set import parse_records, record_runs, run_set as run_record_set
     set_ = set_name(args.record_set)
     records = parse_records(args.records, set_)
     if args.no_device:
-        raise ParameterError("--no-device: --set runs every record both with and without the device")
+        raise ParameterError("--no-device: --record-set runs every record both with and without the device")
+    if args.compare_supports:
+        raise ParameterError("--compare-supports: --record-set runs every record both with and without the device already")
     engines = parse_engine_list(args.engines)
     if engines[0] != "semirecursive":
         raise ParameterError(f"--engines {args.engines!r}: semirecursive (the reference) must come first")
@@ -199,9 +205,7 @@ def run_set(args) -> int:
     ground = {"scale": float(args.scale), "time_factor": float(tf), "window": window,
               "rotate_deg": float(args.rotate), "normalised": not args.raw}
     params = base_params(args)
-    structure = default_structure(params)
-    if args.structure:
-        structure = structure.replace(**parse_set(args.structure))
+    structure = seismic_extras.isolated_structure(args, params)
     numbers = {k: v for k, v in structure.to_dict().items() if k != "provenance"}
     solver = {**DEFAULT_SOLVER, **solver_settings(args)}
     for name in ("duration", "dt_out"):

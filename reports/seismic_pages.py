@@ -3,7 +3,7 @@ overlaid with their differences to the in-house run, the device's force-displace
 record, the energy balance over time, and the record-set table (with and without the device).
 
 ``runs`` is {engine: RunResult} in the columns of ``nsd seismic`` (nsd_core.device.seismic), the
-in-house engine first. The same pages serve an ``nsd seismic`` folder (single run or ``--set``) and
+in-house engine first. The same pages serve an ``nsd seismic`` folder (single run or ``--record-set``) and
 the seismic cases of an ``nsd compare`` folder (``<out>/seismic/<case>__<engine>.csv``).
 """
 from __future__ import annotations
@@ -58,9 +58,9 @@ def response_figure(title: str, runs: dict, cost: dict | None = None):
 
 
 def loops_figure(title: str, runs: dict):
-    """The device's force against the relative displacement, per direction, during the record."""
-    fig = new_figure(LANDSCAPE, title, "device force on the plate against the plate's displacement relative "
-                     "to the base (the negative-stiffness loops the record drives)")
+    """device_F (the plate's force on the device) against the relative displacement, per direction."""
+    fig = new_figure(LANDSCAPE, title, "device_F (the plate's force on the device) against the plate's displacement "
+                     "relative to the base (the negative-stiffness loops the record drives)")
     for j, (f, u, lab) in enumerate((("device_Fx", "x", "X"), ("device_Fy", "y", "Y"))):
         ax = fig.add_axes([0.07 + 0.47 * j, 0.1, 0.4, 0.75])
         if all(np.max(np.abs(r[f])) == 0 for r in runs.values()):
@@ -89,6 +89,9 @@ def energy_figure(title: str, runs: dict):
         parts = {"E_input": r["E_input"], "E_kinetic": r["E_kinetic"],
                  "stored": r["E_supports_stored"] + r["E_gravity"],
                  "dissipated": r["E_device"] + r["E_supports_dissipated"], "E_residual": r["E_residual"]}
+        if "E_restrainer_stored" in r.columns:  # the displacement restrainer (issue 23)
+            parts["stored"] = parts["stored"] + r["E_restrainer_stored"]
+            parts["dissipated"] = parts["dissipated"] + r["E_restrainer_dissipated"]
         ls = style(eng)["linestyle"]
         for c, (name, label) in enumerate(ENERGY[:-1]):
             ax.plot(r["t"], parts[name], color=colours[c], linestyle=ls, label=f"{label} ({eng})" if k == 0 or c == 0

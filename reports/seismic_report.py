@@ -11,6 +11,7 @@ from typing import Callable
 from nsd_core.device.params import ParameterError
 from nsd_core.device.results import read_csv
 
+from reports import seismic_compare as sc
 from reports import seismic_pages as sp
 
 NEEDED = ("t", "x", "y", "ax_abs", "ay_abs", "device_Fx", "device_Fy")
@@ -20,7 +21,7 @@ def is_seismic(folder) -> bool:
     """An nsd seismic folder (not an nsd compare one)."""
     root = Path(folder)
     return not (root / "results.json").is_file() and ((root / "set.json").is_file()
-                                                     or (root / "seismic.csv").is_file())
+                                                     or (root / "seismic.csv").is_file() or sc.is_compare(root))
 
 
 def _runs(folder: Path, ref_name: str = "seismic.csv") -> dict:
@@ -64,6 +65,8 @@ def seismic_plan(folder) -> tuple[list[tuple[str, Callable]], str]:
                 runs = _runs(folder)
                 plan += _run_pages(f"{row['set']}:{row['id']}", runs)
         return plan, f"NSD seismic report  |  record set {index.get('set')}"
+    if sc.is_compare(root):  # nsd seismic --compare-supports (reports.seismic_compare)
+        return sc.compare_plan(root, _runs)
     runs = _runs(root)
     try:
         summary = json.loads((root / "summary.json").read_text())
@@ -77,7 +80,10 @@ def seismic_plan(folder) -> tuple[list[tuple[str, Callable]], str]:
     solver = summary.get("solver") if isinstance(summary.get("solver"), dict) else {}
     cost = ({"semirecursive": solver["wall_time"] / solver["model_time"]}
             if isinstance(solver.get("wall_time"), (int, float)) and solver.get("model_time") else None)
-    return _run_pages(label, runs, cost), f"NSD seismic report  |  {label}"
+    pages = _run_pages(label, runs, cost)
+    if isinstance(summary.get("stopped"), dict):  # exit 4: the series up to the event, the event marked
+        pages = [(stem, sc.with_stop_mark(draw, summary["stopped"])) for stem, draw in pages]
+    return pages, f"NSD seismic report  |  {label}"
 
 
 def compare_seismic_pages(root) -> list[tuple[str, Callable]]:

@@ -81,8 +81,8 @@ def test_a_drive_along_a_wire_does_not_turn_the_plate_and_stays_in_its_plane(wit
 
 
 def test_device_force_opposes_small_motions_with_the_device_s_initial_stiffness(with_device):
-    """Near rest the device's force is its initial tangent stiffness (positive, ~7e4 N/m) times u:
-    from the quasi-static solution, independent of the multibody engine."""
+    """Near rest device_F (the plate's force on the device) is the device's initial tangent stiffness
+    (positive, ~7e4 N/m) times u: from the quasi-static solution, independent of the multibody engine."""
     from nsd_core.device.quasistatic import quasi_static_path
     r = with_device
     small = (np.abs(r["x"]) < 4e-4) & (r["t"] < 0.12)
@@ -101,7 +101,7 @@ def test_a_motion_beyond_the_rod_s_reach_stops_with_the_time():
 
 
 def test_the_device_force_in_the_seismic_run_is_the_quasi_static_force_along_its_path():
-    """The device's force on the plate, from the multibody run, against the independent quasi-static
+    """device_F (the plate's force on the device, drive-mode sign), from the multibody run, against the independent quasi-static
     solution (virtual work, no tree) driven along the run's own displacement history: they differ
     only by the device's own inertia and its fast vertical mode."""
     from nsd_core.device.quasistatic import quasi_static_path
@@ -189,7 +189,16 @@ def test_nsd_seismic_exit_4_with_the_time_when_the_rod_cannot_reach(tmp_path):
     p = nsd("seismic", "--ground", "pulse:velocity=1.2,frequency=2,gamma=2", "--structure", "stiffness=2e5",
             "--structure", "damping=0", "--duration", "0.6", "--out", str(out))
     assert p.returncode == 4 and "the rod cannot reach" in p.stderr and "t = 0." in p.stderr, p.stderr
-    assert not out.exists()
+    # a run that ends is still a result (issue 23): the series up to the event, the event in the summary
+    import json
+    from nsd_core.device.results import read_csv
+    s = json.loads((out / "summary.json").read_text())
+    r = read_csv(out / "seismic.csv")
+    assert s["stopped"]["kind"] == "rod_reach" and 0.2 < s["stopped"]["t"] < 0.6 and s["complete"] is False
+    assert r["t"][-1] <= s["stopped"]["t"] < r["t"][-1] + 1e-3 and len(r["t"]) > 100
+    assert 0.95 * 0.03 < np.max(r["u"]) < 0.03  # it ran up to the rod's length
+    from reports.build import build_report  # the report draws the kept series, the stop marked
+    assert len(build_report(out, tmp_path / "rep")["pngs"]) >= 2
 
 
 def test_mujoco_seismic_agrees_with_the_in_house_engine():

@@ -12,7 +12,8 @@ Loads, constant within a step and set in the pre-step function at the end-of-ste
 by a second-order Taylor step from the converged one (as the drive mode's "per_step" forces):
 ropes, wires and spring through ``nsd_core.device.forces`` (force and moment on the cap, the cap's
 attachment points turning with it; vertical force on the wall), the supports on the plate
-(-k_b u - c_b u', torsional pair), and -m a_g(t_end) on every body. Hysteretic states are committed
+(-k_b u - c_b u', torsional pair), the displacement restrainer when the structure has one
+(``restrainer_force_scalar``, the shared law, on the plate), and -m a_g(t_end) on every body. Hysteretic states are committed
 along the strain change of every converged step and predicted to the step's end.
 Energy balance (the in-house seismic mode's, frame of the ground) from Exudyn's own state with the
 nominal masses and gravity: E_input = -int a_g . P_rel dt, the elements' absorbed power (their loads at
@@ -32,14 +33,19 @@ from exudyn.itemInterface import LoadForceVector, LoadTorqueVector, MarkerNodePo
 from exudyn.rigidBodyUtilities import RigidBodyInertia
 
 from comparisons.engines.base import EngineError, check_step_count, merged_settings
+from comparisons.engines.exudyn_quiet import quiet_allocation_warning
 from comparisons.engines.perturb import perturbed, perturbed_structure
-from nsd_core.device.forces import advance_spring_zeta, advance_wire_stress, rope_tension, spring_push, wire_tension
+from nsd_core.device.forces import (advance_spring_zeta, advance_wire_stress, restrainer_force_scalar,
+                                    restrainer_forces, restrainer_stored_scalar, rope_tension, spring_push,
+                                    wire_tension)
 from nsd_core.device.geometry import device_geometry
 from nsd_core.device.ground import GroundMotion
 from nsd_core.device.isolation import Structure
 from nsd_core.device.params import Params
 from nsd_core.device.results import RunResult
-from nsd_core.device.seismic import seismic_units
+from nsd_core.device.seismic import output_times, seismic_units
+
+quiet_allocation_warning()
 
 DEFAULTS = {"step_size": 1e-5, "spectral_radius": 0.8, "newton_rel_tol": 1e-12, "newton_abs_tol": 1e-14,
             "rod_axial_inertia": 1e-3, "perturb": None}  # perturb: an error in this model only (engines/perturb.py)
@@ -113,7 +119,8 @@ class ExudynSeismic:
     def _run(self, g, st: Structure, ground, duration, dt_out, s, g0, st0: Structure):
         """g, st: Exudyn's model (an injected error in them); g0, st0: the nominal ones (energy balance)."""
         duration = ground.duration if duration is None else float(duration)
-        n_out = int(round(duration / dt_out))
+        t_out = output_times(duration, dt_out)  # the in-house run's output times: the last lands on the end
+        n_out, dt_out = len(t_out) - 1, float(t_out[1] - t_out[0])
         per_out = max(1, math.ceil(dt_out / float(s["step_size"]) - 1e-9))
         h = dt_out / per_out
         n_steps = n_out * per_out
@@ -171,7 +178,15 @@ class ExudynSeismic:
         rod_I0[2, 2] = float(s["rod_axial_inertia"]) * rod_I0[0, 0]
         nominal = [(plate[0], st0.mass, np.diag([J0 / 2, J0 / 2, J0])), (cap[0], g0.cap.mass, np.array(g0.cap.inertia)),
                    (wall[0], g0.wall.mass, np.array(g0.wall.inertia)), (rod[0], g0.rod.mass, rod_I0)]
-        energy = {"E": np.zeros(3), "t": None, "last": None, "h0": None}
+        energy = {"E": np.zeros(4), "t": None, "last": None, "h0": None}
+        res = st0.restrainer  # the displacement restrainer (None: none)
+
+        def restrainer(pq, pv):
+            """(F_x, F_y, F, delta, delta'): the plate's push on the restrainer (shared law)."""
+            if res is None:
+                return 0.0, 0.0, 0.0, 0.0, 0.0
+            return restrainer_force_scalar(pq[0], pq[1], pv[0], pv[1], res.gap, res.stiffness, res.exponent,
+                                           res.damping)
 
         def energy_rates(t, a_g):
             """Accumulate E_input, E_device, E_supports_dissipated up to the converged state at t."""
@@ -186,7 +201,8 @@ class ExudynSeismic:
             pv = mbs.GetNodeOutput(plate[0], OV.Velocity)
             om = mbs.GetNodeOutput(plate[0], OV.AngularVelocity)[2]
             diss = st0.damping * (pv[0] ** 2 + pv[1] ** 2 + st0.support_radius ** 2 * om ** 2)
-            now = np.array([-float(np.asarray(a_g)[:2] @ P), -applied, diss])
+            _, _, rF, _, rrate = restrainer(mbs.GetNodeOutput(plate[0], OV.Position), pv)
+            now = np.array([-float(np.asarray(a_g)[:2] @ P), -applied, diss, rF * rrate])
             if energy["t"] is not None and t > energy["t"]:
                 energy["E"] += 0.5 * (t - energy["t"]) * (now + energy["last"])
             energy["t"], energy["last"] = t, now
@@ -206,7 +222,11 @@ class ExudynSeismic:
             E = energy["E"]
             row = {"E_input": E[0], "E_kinetic": ke, "E_gravity": height - energy["h0"], "E_supports_stored": stored,
                    "E_supports_dissipated": E[2], "E_device": E[1]}
-            row["E_residual"] = E[0] - (ke + row["E_gravity"] + stored + E[2] + E[1])
+            row["E_residual"] = E[0] - (ke + row["E_gravity"] + stored + E[2] + E[1] + E[3])
+            if res is not None:
+                delta = max(math.hypot(pq[0], pq[1]) - res.gap, 0.0)
+                row["E_restrainer_stored"] = restrainer_stored_scalar(delta, res.stiffness, res.exponent)
+                row["E_restrainer_dissipated"] = E[3] - row["E_restrainer_stored"]
             return row
 
         def pose(node):
@@ -252,7 +272,7 @@ class ExudynSeismic:
                 el.commit(cq, cth, wz)
             energy_rates(t - h, ground(t - h)[2])
             if n % per_out == 0:
-                record(t - h, ground(t - h)[2])
+                record(t_out[n // per_out], ground(t - h)[2])
             a_g = ground(t)[2]
             for (node, _, m), ld_ in zip(bodies, inertial):
                 mbs_.SetLoadParameter(ld_, "loadVector", [-m * a_g[0], -m * a_g[1], 0.0])
@@ -264,8 +284,9 @@ class ExudynSeismic:
             mbs_.SetLoadParameter(wall_f, "loadVector", [0.0, 0.0, fw])
             pp, thp, vp, wp, _, _ = predict(plate[0], h)
             kt, ct = st.stiffness * st.support_radius ** 2, st.damping * st.support_radius ** 2
-            mbs_.SetLoadParameter(plate_f, "loadVector", [-st.stiffness * pp[0] - st.damping * vp[0],
-                                                          -st.stiffness * pp[1] - st.damping * vp[1], 0.0])
+            rx, ry, *_ = restrainer(pp, vp)
+            mbs_.SetLoadParameter(plate_f, "loadVector", [-st.stiffness * pp[0] - st.damping * vp[0] - rx,
+                                                          -st.stiffness * pp[1] - st.damping * vp[1] - ry, 0.0])
             mbs_.SetLoadParameter(plate_m, "loadVector", [0.0, 0.0, -kt * thp - ct * wp])
             return True
 
@@ -290,9 +311,14 @@ class ExudynSeismic:
         cq, cth = pose(cap[0])
         el.commit(cq, cth, mbs.GetNodeOutput(wall[0], OV.Position)[2])
         energy_rates(n_steps * h, ground(n_steps * h)[2])
-        record(n_steps * h, ground(n_steps * h)[2])
+        record(t_out[-1], ground(n_steps * h)[2])
         cols = {k: np.array([r[k] for r in out]) for k in out[0]}
         cols["u"] = np.hypot(cols["x"], cols["y"])
+        if res is not None:
+            fx, fy, F, delta, _ = restrainer_forces(cols["x"], cols["y"], cols["vx"], cols["vy"], res.gap,
+                                                    res.stiffness, res.exponent, res.damping)
+            cols.update({"restrainer_Fx": fx, "restrainer_Fy": fy, "restrainer_F": F, "restrainer_indentation": delta})
+            cols["base_shear_x"], cols["base_shear_y"] = cols["base_shear_x"] + fx, cols["base_shear_y"] + fy
         stats = {"engine": "exudyn", "mode": "seismic", "wall_time": time.perf_counter() - t0, "steps": n_steps,
                  "step_size": h, "settings": dict(s)}
         units = seismic_units(cols)

@@ -8,7 +8,8 @@ before each step is exactly that load (docs/model.md allows it for a translating
 - world -> ``wall``: slide ``wall_z``; wall -> ``rod``: ball; the loop is closed by a ``connect``
   (solref 2h, solimp 0.9999, as the drive mode);
 - an ``mjcb_passive`` callback adds ropes, wires and the spring (``nsd_core.device.forces``; the cap's
-  attachment points turn with the plate) and the supports (-k_b u - c_b u', torsional pair).
+  attachment points turn with the plate), the supports (-k_b u - c_b u', torsional pair) and, when the
+  structure has one, the displacement restrainer (``restrainer_force_scalar``, the shared law).
 Hysteretic states are advanced along the actual strain change after every step (Euler: the
 callback then always sees the committed state; no prediction needed).
 Energy balance (the in-house seismic mode's, in the frame of the ground), from MuJoCo's own state with
@@ -27,13 +28,15 @@ import time
 import mujoco
 import numpy as np
 
-from nsd_core.device.forces import advance_spring_zeta, advance_wire_stress, rope_tension, spring_push, wire_tension
+from nsd_core.device.forces import (advance_spring_zeta, advance_wire_stress, restrainer_force_scalar,
+                                    restrainer_forces, restrainer_stored_scalar, rope_tension, spring_push,
+                                    wire_tension)
 from nsd_core.device.geometry import device_geometry
 from nsd_core.device.ground import GroundMotion
 from nsd_core.device.isolation import Structure
 from nsd_core.device.params import Params
 from nsd_core.device.results import RunResult
-from nsd_core.device.seismic import seismic_units
+from nsd_core.device.seismic import output_times, seismic_units
 
 from comparisons.engines.base import EngineError, check_step_count, merged_settings
 from comparisons.engines.mujoco_mjcf import wall_rod_loop_mjcf
@@ -128,16 +131,25 @@ class _Forces:
         return (st.stiffness * q[self.PX] + st.damping * v[self.PX], st.stiffness * q[self.PY] + st.damping * v[self.PY],
                 kt * q[self.PR] + ct * v[self.PR])
 
+    def restrainer(self, q, v):
+        """(F_x, F_y, F, delta, delta'): the plate's push on the restrainer (nsd_core.device.forces)."""
+        r = self.st.restrainer
+        if r is None:
+            return 0.0, 0.0, 0.0, 0.0, 0.0
+        return restrainer_force_scalar(q[self.PX], q[self.PY], v[self.PX], v[self.PY], r.gap, r.stiffness,
+                                       r.exponent, r.damping)
+
     def passive(self, m, d):
         f, moment, wall = self.device_on_cap(d.qpos)
         sx, sy, st = self.support(d.qpos, d.qvel)
+        rx, ry, rF, _, rrate = self.restrainer(d.qpos, d.qvel)
         if self.energy is not None:
             v = d.qvel
             applied = f[0] * v[self.PX] + f[1] * v[self.PY] + moment * v[self.PR] + f[2] * v[self.CZ] + wall * v[self.WZ]
-            self.energy.rates(m, d, -applied)
+            self.energy.rates(m, d, -applied, rF * rrate)
         qf = d.qfrc_passive
-        qf[self.PX] += f[0] - sx
-        qf[self.PY] += f[1] - sy
+        qf[self.PX] += f[0] - sx - rx
+        qf[self.PY] += f[1] - sy - ry
         qf[self.PR] += moment - st
         qf[self.CZ] += f[2]
         qf[self.WZ] += wall
@@ -155,7 +167,7 @@ class _Energy:
                         np.array(g0.wall.inertia, dtype=float), rod_I]
         self.gravity, self.st = g0.params.gravity, st
         self.a_g = np.zeros(2)
-        self.E = np.zeros(3)           # E_input, E_device, E_supports_dissipated
+        self.E = np.zeros(4)           # E_input, E_device, E_supports_dissipated, E_restrainer
         self.t, self.last = None, None
         self.height0 = None
         self.v6 = np.zeros(6)
@@ -167,12 +179,12 @@ class _Energy:
             out.append(self.v6.copy())
         return np.array(out)
 
-    def rates(self, m, d, absorbed):
+    def rates(self, m, d, absorbed, restrainer=0.0):
         vel = self._velocities(m, d)
         P = self.mass @ vel[:, 3:5]
         st, v = self.st, d.qvel
         diss = st.damping * (v[0] ** 2 + v[1] ** 2) + st.damping * st.support_radius ** 2 * v[2] ** 2
-        now = np.array([-float(self.a_g @ P), absorbed, diss])
+        now = np.array([-float(self.a_g @ P), absorbed, diss, restrainer])
         t = float(d.time)
         if self.t is not None and t > self.t:
             self.E += 0.5 * (t - self.t) * (now + self.last)
@@ -192,7 +204,12 @@ class _Energy:
         stored = 0.5 * st.stiffness * (q[0] ** 2 + q[1] ** 2 + st.support_radius ** 2 * q[2] ** 2)
         row = {"E_input": self.E[0], "E_kinetic": ke, "E_gravity": height - self.height0, "E_supports_stored": stored,
                "E_supports_dissipated": self.E[2], "E_device": self.E[1]}
-        row["E_residual"] = row["E_input"] - (ke + row["E_gravity"] + stored + self.E[2] + self.E[1])
+        row["E_residual"] = row["E_input"] - (ke + row["E_gravity"] + stored + self.E[2] + self.E[1] + self.E[3])
+        if st.restrainer is not None:
+            r = st.restrainer
+            delta = max(math.hypot(q[0], q[1]) - r.gap, 0.0)
+            row["E_restrainer_stored"] = restrainer_stored_scalar(delta, r.stiffness, r.exponent)
+            row["E_restrainer_dissipated"] = self.E[3] - row["E_restrainer_stored"]
         return row
 
 
@@ -207,7 +224,8 @@ class MujocoSeismic:
         g = perturbed(g0, s["perturb"], seismic=True)   # an injected modelling error lives in MuJoCo's model only
         model_structure = perturbed_structure(structure, s["perturb"])
         duration = ground.duration if duration is None else float(duration)
-        n_out = int(round(duration / dt_out))
+        t_out = output_times(duration, dt_out)  # the in-house run's output times: the last lands on the end
+        n_out, dt_out = len(t_out) - 1, float(t_out[1] - t_out[0])
         n_sub = max(1, math.ceil(dt_out / float(s["timestep"]) - 1e-9))
         h = dt_out / n_sub
         check_step_count("mujoco", n_out * n_sub)
@@ -228,7 +246,7 @@ class MujocoSeismic:
                 energy.a_g = a_g[n]
                 if n % n_sub == 0:
                     mujoco.mj_forward(model, data)
-                    rows.append(self._row(n * h, data, dev, a_g[n], tip, cap_id))
+                    rows.append(self._row(t_out[n // n_sub], data, dev, a_g[n], tip, cap_id))
                     rows[-1].update(energy.columns(model, data))
                     if not (np.isfinite(data.qpos).all() and rows[-1]["closure"] < s["closure_limit"]):
                         raise EngineError(f"mujoco: unstable at t = {n * h:.6g} s (loop gap {rows[-1]['closure']:.3g} m)")
@@ -240,6 +258,12 @@ class MujocoSeismic:
             mujoco.set_mjcb_passive(previous)
         cols = {k: np.array([r[k] for r in rows]) for k in rows[0]}
         cols["u"] = np.hypot(cols["x"], cols["y"])
+        if structure.restrainer is not None:
+            r = structure.restrainer
+            fx, fy, F, delta, _ = restrainer_forces(cols["x"], cols["y"], cols["vx"], cols["vy"], r.gap, r.stiffness,
+                                                    r.exponent, r.damping)
+            cols.update({"restrainer_Fx": fx, "restrainer_Fy": fy, "restrainer_F": F, "restrainer_indentation": delta})
+            cols["base_shear_x"], cols["base_shear_y"] = cols["base_shear_x"] + fx, cols["base_shear_y"] + fy
         stats = {"engine": "mujoco", "mode": "seismic", "wall_time": time.perf_counter() - t0,
                  "steps": n_out * n_sub, "timestep": h, "settings": s, "mujoco_version": mujoco.__version__}
         return RunResult("mujoco", cols, seismic_units(cols), stats)

@@ -9,13 +9,14 @@ row); the generic compiled engine (nsd_core.engine.compiled, rk) integrates it w
         three energy states: E_input' = -a_g . P_rel with P_rel = P - m_total v_g (P: the
         mechanism's linear momentum, which the engine passes), E_device' = sum T L' (the power the
         elements absorb; they have no end on the ground, so it is frame-free) and
-        E_supports_dissipated' = c_b |u'|^2 + c_b r_b^2 theta'^2. It stops the run with ROD_REACH
-        where |u| >= l_d (RodReachError, exit 4).
+        E_supports_dissipated' = c_b |u'|^2 + c_b r_b^2 theta'^2; with the displacement restrainer
+        (nsd_core.device.forces.restrainer_force_scalar, the shared law) its force on the plate and
+        E_restrainer' = F delta'. It stops the run with ROD_REACH where |u| >= l_d (RodReachError, exit 4).
 
 force_params = [header (HEADER fields), device block (nsd_core.device.compiled.force_params), ground block]
 header: has_device, n_device_params, n_device_extra, ground offset, plate_x, plate_y, plate, base_x,
         base_y, base, cap, wall (indices; -1 without the device), k_b, c_b, k_b r_b^2, c_b r_b^2,
-        rod_length, total mass
+        rod_length, total mass, has_restrainer, u_gap, k_c, n_c, alpha_c
 motion_params = the ground block (GroundMotion.block()).
 """
 from __future__ import annotations
@@ -26,13 +27,14 @@ import numpy as np
 from numba import njit, types
 
 from nsd_core.device.compiled import device_forces, force_params as device_force_params
+from nsd_core.device.forces import restrainer_force_scalar
 from nsd_core.device.ground import ground_values
 from nsd_core.engine.compiled import rhs_into
 from nsd_core.engine.compiled_model import (FORCE_FN, FORCE_SIG, MODEL_TYPE, MOTION_FN, MOTION_SIG, WORK_TYPE,
                                             build_model, make_workspace)
 from nsd_core.engine.rk import integrate_kernel, make_outputs, tableau
 
-HEADER = 18
+HEADER = 23
 CHUNK = 1.0  # s of model time per compiled call: progress and Ctrl-C are seen between calls
 STEPS_PER_SECOND = 100_000  # accepted steps per model second beyond which a run is a runaway
 ROD_REACH = 10  # the force callback's failure code: |u| >= l_d
@@ -65,6 +67,12 @@ def seismic_forces(t, z, zd, P, L, Ld, extra, p, T, gen, rate):
     rate[nx_dev] = -(agx * (P[0] - m_total * vgx) + agy * (P[1] - m_total * vgy))
     rate[nx_dev + 1] = absorbed
     rate[nx_dev + 2] = c * (vx * vx + vy * vy) + ct * thd * thd
+    rate[nx_dev + 3] = 0.0
+    if p[18] != 0.0:  # the displacement restrainer: the plate pushes it with (fx, fy), it pushes back
+        fx, fy, F, _, drate = restrainer_force_scalar(ux, uy, vx, vy, p[19], p[20], p[21], p[22])
+        gen[px] -= fx
+        gen[py] -= fy
+        rate[nx_dev + 3] = F * drate
     return 0
 
 
@@ -85,6 +93,8 @@ def seismic_force_params(mech, g, structure, ground_block, device: bool) -> np.n
               *ix.values(), s.stiffness, s.damping, s.stiffness * s.support_radius ** 2,
               s.damping * s.support_radius ** 2, g.params.rod_length if device else math.inf,
               float(np.sum(mech.mass))]
+    r = s.restrainer
+    header += [1.0, *r.block()] if r is not None else [0.0, 0.0, 0.0, 1.0, 0.0]
     assert len(header) == HEADER
     return np.concatenate([header, dev, ground_block])
 
@@ -149,7 +159,7 @@ def _sample_outputs(m, w, forces, motion, ts, Y, table, tensions, lengths):
         row[6], row[7], row[8] = w.z[px] - w.z[bx], w.z[py] - w.z[by], w.z[pl] - w.z[bs]
         row[9], row[10], row[11] = w.zd[px] - w.zd[bx], w.zd[py] - w.zd[by], w.zd[pl] - w.zd[bs]
         row[12], row[13] = w.zdd[px], w.zdd[py]
-        if has_dev:  # the device's force on the plate = -(rod + ropes + wires on the cap)
+        if has_dev:  # device_F: the plate's force on the device = -(rod + ropes + wires on the cap)
             on_cap[:] = 0.0
             for j in range(m.rows.shape[0]):
                 on_cap[m.rows[j]] = w.lam[j]

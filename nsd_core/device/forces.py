@@ -240,3 +240,40 @@ def precompressed_spring(kse, ksd, beta, gamma, n, push) -> tuple[float, float]:
             break
     x = 0.5 * (lo + hi)
     return x, zeta_of(x)
+
+
+# ---- The displacement restrainer (docs/seismic.md): the ONE implementation of its contact law -------
+
+@njit(cache=True, _nrt=False)
+def restrainer_force_scalar(ux, uy, vx, vy, gap, stiffness, exponent, damping):
+    """Radial compression-only contact between plate and base (Hunt and Crossley 1975).
+
+    u = (ux, uy) the plate's displacement relative to the base, v its rate; r = |u|, the
+    indentation delta = r - u_gap and its rate delta' = u . v / r. While delta > 0:
+        F = max(k delta^n (1 + alpha delta'), 0)   [N], pushing the plate back along -u/r;
+    zero otherwise. The force is zero at first touch and at separation (no jump; a Hunt-Crossley
+    dashpot cannot pull at separation: the max clips the rare F < 0 when alpha delta' < -1).
+    Returns (F_x, F_y, F, delta, delta'): (F_x, F_y) = F u/r, the plate's push on the restrainer
+    (the restrainer's force on the plate is its negative), F >= 0 its magnitude."""
+    r = math.hypot(ux, uy)
+    delta = r - gap
+    if delta <= 0.0 or r == 0.0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0
+    rate = (ux * vx + uy * vy) / r
+    F = max(stiffness * delta ** exponent * (1.0 + damping * rate), 0.0)
+    return F * ux / r, F * uy / r, F, delta, rate
+
+
+@njit(cache=True, _nrt=False)
+def restrainer_stored_scalar(delta, stiffness, exponent):
+    """Elastic energy of the contact at indentation delta: k delta^(n+1) / (n+1) [J] (0 if delta <= 0)."""
+    return stiffness * delta ** (exponent + 1.0) / (exponent + 1.0) if delta > 0.0 else 0.0
+
+
+def restrainer_forces(ux, uy, vx, vy, gap, stiffness, exponent, damping):
+    """restrainer_force_scalar over arrays (outputs of a run): (F_x, F_y, F, delta, delta') arrays."""
+    ux, uy, vx, vy = (np.asarray(a, dtype=float).ravel() for a in (ux, uy, vx, vy))
+    out = np.zeros((5, ux.size))
+    for k in range(ux.size):
+        out[:, k] = restrainer_force_scalar(ux[k], uy[k], vx[k], vy[k], gap, stiffness, exponent, damping)
+    return tuple(out)

@@ -24,6 +24,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from nsd_core.device.params import ParameterError, Params
+from nsd_core.device.restrainer import Restrainer, restrainer_from
 
 PERIOD = 1.0          # s, supports alone (full scale ~3.2 s under the 1:10 similitude)
 DAMPING_RATIO = 0.05  # of critical
@@ -48,8 +49,10 @@ class Structure:
     damping: float              # c_b [N s/m]
     support_radius: float       # r_b [m]
     provenance: dict = field(default_factory=dict, compare=False)
+    restrainer: Restrainer | None = None  # the displacement restrainer (nsd_core.device.restrainer), off by default
 
     def __post_init__(self):
+        object.__setattr__(self, "restrainer", restrainer_from(self.restrainer))
         for name in ("mass", "radius_of_gyration", "stiffness", "support_radius"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
@@ -70,7 +73,13 @@ class Structure:
                 raise ParameterError(f"structure {name} = {value!r}: not a number") from None
         prov = dict(self.provenance)
         prov.update({n: "override" for n in changes})
-        return Structure(**values, provenance=prov)
+        return Structure(**values, provenance=prov, restrainer=self.restrainer)
+
+    def with_restrainer(self, restrainer: Restrainer | None) -> "Structure":
+        """A copy with this restrainer (None: without one)."""
+        names = ("mass", "radius_of_gyration", "stiffness", "damping", "support_radius")
+        return Structure(**{n: getattr(self, n) for n in names}, provenance=dict(self.provenance),
+                         restrainer=restrainer)
 
     @property
     def polar_inertia(self) -> float:

@@ -15,9 +15,15 @@ Energy balance in the frame that translates with the ground, where every body fe
     E_input = -int a_g . P_rel dt = E_kinetic(rel) + E_gravity + E_supports_stored
               + E_supports_dissipated + E_device,
 with P_rel the bodies' horizontal momentum relative to the base and E_device = int sum T dL/dt the
-work absorbed by ropes, wires and spring (stored and dissipated). E_input, E_device and
-E_supports_dissipated are integrated with the motion (three extra states), so the residual
-measures the mechanics, not an output quadrature.
+work absorbed by ropes, wires and spring (stored and dissipated). E_input, E_device,
+E_supports_dissipated and E_restrainer (the work the displacement restrainer absorbs, stored +
+dissipated; nsd_core.device.restrainer) are integrated with the motion (four extra states), so the
+residual measures the mechanics, not an output quadrature.
+
+Output times: ``output_times`` (every engine's): n = ceil(duration / dt_out) equal intervals, so the
+last sample lands on the window's end and the interval is at most dt_out. A run stopped by the
+device's failure (RodReachError, DriveError; exit 4) carries what it computed up to the event as
+``error.partial`` (a RunResult) and the event's time as ``error.t_event``.
 """
 from __future__ import annotations
 
@@ -29,7 +35,8 @@ import numpy as np
 
 from nsd_core import __version__
 from nsd_core.device.drive import DriveError
-from nsd_core.device.forces import rope_tension, wire_tension
+from nsd_core.device.forces import (restrainer_force_scalar, restrainer_forces, restrainer_stored_scalar, rope_tension,
+                                    wire_tension)
 from nsd_core.device.geometry import device_geometry
 from nsd_core.device.ground import GroundMotion
 from nsd_core.device.isolation import Structure
@@ -37,6 +44,7 @@ from nsd_core.device.model import (BODY, COMPILED_METHODS, DEFAULT_SOLVER, Devic
                                    check_validity, device_mechanism, rest_coordinates)
 from nsd_core.device.params import ParameterError, Params
 from nsd_core.device.results import RunResult
+from nsd_core.device.seismic_summary import peaks_at_last_sample, seismic_summary  # noqa: F401 (this module's API)
 from nsd_core.engine.integrate import SolverError, check_tolerances, integrate
 from nsd_core.engine.kinematics import cross_rows
 from nsd_core.engine.mechanism import mechanism
@@ -44,7 +52,14 @@ from nsd_core.engine.semirecursive import ConstraintError, SemiRecursiveSystem
 
 GROUND_DRIVEN = ["base_x", "base_y", "base"]
 FREE = ["plate_x", "plate_y", "plate", "cap"]
-N_ENERGY = 3  # extra states: E_input, E_device, E_supports_dissipated
+N_ENERGY = 4  # extra states: E_input, E_device, E_supports_dissipated, E_restrainer
+
+
+def output_times(duration: float, dt_out: float) -> np.ndarray:
+    """The output times of a seismic run in every engine: n = ceil(duration / dt_out) equal intervals
+    from 0 to ``duration`` (the last sample lands on the end; the interval is duration / n <= dt_out)."""
+    n = max(1, math.ceil(duration / dt_out * (1.0 - 1e-12)))
+    return np.linspace(0.0, duration, n + 1)
 
 
 class RodReachError(DriveError):
@@ -115,10 +130,18 @@ class SeismicForces:
         gen = np.zeros(n)
         gen[i["plate_x"]], gen[i["plate_y"]] = -s.stiffness * u - s.damping * ud
         gen[i["plate"]] = -kt * th - ct * thd
+        e_res = 0.0
+        if s.restrainer is not None:  # the plate pushes the restrainer with (F_x, F_y); it pushes back
+            r = s.restrainer
+            fx, fy, F, _, rate = restrainer_force_scalar(u[0], u[1], ud[0], ud[1], r.gap, r.stiffness, r.exponent,
+                                                         r.damping)
+            gen[i["plate_x"]] -= fx
+            gen[i["plate_y"]] -= fy
+            e_res = F * rate
         _, v_g, a_g = self.ground["now"]
         e_in = -float(a_g[:2] @ self.relative_momentum(kin, v_g))
         e_sup = s.damping * float(ud @ ud) + ct * thd * thd
-        return wrench, gen, np.concatenate([dev_rates, [e_in, absorbed, e_sup]])
+        return wrench, gen, np.concatenate([dev_rates, [e_in, absorbed, e_sup, e_res]])
 
 
 class SeismicSystem(SemiRecursiveSystem):
@@ -213,8 +236,7 @@ def simulate_seismic(params: Params, structure: Structure, ground: GroundMotion,
     ws = system.workspace()
     y0 = system.state(system.assemble(ws, 0.0, z0[system.partition.free]).copy(), np.zeros(mech.n),
                       np.concatenate([extra0, np.zeros(N_ENERGY)]))
-    n_out = int(round(duration / dt_out))
-    t_eval = np.linspace(0.0, n_out * dt_out, n_out + 1)
+    t_eval = output_times(duration, dt_out)
     first_step = min(max_step, 1e-4, duration)  # the ground moves: start small
     if backend == "compiled":
         return _simulate_compiled(system, g, structure, ground, device, y0, t_eval, method, rtol, atol, max_step,
@@ -233,12 +255,16 @@ def simulate_seismic(params: Params, structure: Structure, ground: GroundMotion,
                "support_Fx": s.stiffness * u[0] + s.damping * ud[0],
                "support_Fy": s.stiffness * u[1] + s.damping * ud[1],
                "support_torque": s.support_radius ** 2 * (s.stiffness * th + s.damping * thd)}
-        E_in, E_dev, E_sup_diss = y[-N_ENERGY:]
+        E_in, E_dev, E_sup_diss, E_res = y[-N_ENERGY:]
         kinetic, height = _kinetic_and_height(mech, ev.kin, v_g)
         if not height0:
             height0.append(height)
         if device:
-            _device_outputs(row, ev, y, g, forces, system)
+            try:
+                _device_outputs(row, ev, y, g, forces, system)
+            except DriveError as err:
+                err.t_event = float(t)
+                raise
         else:
             row["device_Fx"] = row["device_Fy"] = 0.0
         row["base_shear_x"] = row["support_Fx"] + row["device_Fx"]
@@ -246,24 +272,51 @@ def simulate_seismic(params: Params, structure: Structure, ground: GroundMotion,
         stored = 0.5 * s.stiffness * float(u @ u) + 0.5 * s.stiffness * s.support_radius ** 2 * th * th
         row.update({"E_input": E_in, "E_kinetic": kinetic, "E_gravity": height - height0[0],
                     "E_supports_stored": stored, "E_supports_dissipated": E_sup_diss, "E_device": E_dev})
-        row["E_residual"] = E_in - (kinetic + row["E_gravity"] + stored + E_sup_diss + E_dev)
+        res_stored = 0.0
+        if s.restrainer is not None:
+            r = s.restrainer
+            fx, fy, F, delta, _ = restrainer_force_scalar(u[0], u[1], ud[0], ud[1], r.gap, r.stiffness, r.exponent,
+                                                          r.damping)
+            res_stored = restrainer_stored_scalar(delta, r.stiffness, r.exponent)
+            row.update({"restrainer_Fx": fx, "restrainer_Fy": fy, "restrainer_F": F, "restrainer_indentation": delta,
+                        "E_restrainer_stored": res_stored, "E_restrainer_dissipated": E_res - res_stored})
+            row["base_shear_x"] += fx
+            row["base_shear_y"] += fy
+        row["E_residual"] = E_in - (kinetic + row["E_gravity"] + stored + E_sup_diss + E_dev + E_res)
         rows.append(row)
 
+    def stats(steps, nfev):
+        return {"engine": "semirecursive", "mode": "seismic", "device": device, "version": __version__,
+                "backend": backend, "method": method, "rtol": rtol, "atol": atol, "max_step": max_step,
+                "steps": steps, "nfev": nfev, "wall_time": time.perf_counter() - start,
+                "model_time": float(t_eval[-1]), "dt_out": float(t_eval[1] - t_eval[0]),
+                "ground": ground.describe(), "structure": structure.to_dict()}
+
+    def result(st):
+        cols = {k: np.array([r[k] for r in rows]) for k in rows[0]}
+        cols["u"] = np.hypot(cols["x"], cols["y"])  # radial relative displacement (events use it)
+        return RunResult("semirecursive", cols, seismic_units(cols), st)
+
     try:
-        traj = integrate(system, ws, y0, t_eval, method=method, rtol=rtol, atol=atol, max_step=max_step,
-                         min_pivot_ratio=0.0, progress=progress, outputs=record,
-                         first_step=first_step)
-    except ConstraintError as err:
-        if system.last[1] > 0.95 * system.reach:
-            raise system.reach_error() from None
-        raise SolverError(str(err)) from None
-    cols = {k: np.array([r[k] for r in rows]) for k in rows[0]}
-    cols["u"] = np.hypot(cols["x"], cols["y"])  # radial relative displacement (events use it)
-    stats = {"engine": "semirecursive", "mode": "seismic", "device": device, "version": __version__,
-             "backend": backend, "method": method, "rtol": rtol, "atol": atol, "max_step": max_step, "steps": traj.steps,
-             "nfev": traj.nfev, "wall_time": time.perf_counter() - start, "model_time": float(t_eval[-1]),
-             "ground": ground.describe(), "structure": structure.to_dict()}
-    return RunResult("semirecursive", cols, seismic_units(cols), stats)
+        try:
+            traj = integrate(system, ws, y0, t_eval, method=method, rtol=rtol, atol=atol, max_step=max_step,
+                             min_pivot_ratio=0.0, progress=progress, outputs=record,
+                             first_step=first_step)
+        except ConstraintError as err:
+            if system.last[1] > 0.95 * system.reach:
+                raise system.reach_error() from None
+            raise SolverError(str(err)) from None
+    except DriveError as err:
+        # rows holds every sample recorded before the event (a sample outside validity raised in record)
+        raise _with_partial(err, result(stats(None, None)) if rows else None,
+                            getattr(err, "t_event", system.last[0])) from None
+    return result(stats(traj.steps, traj.nfev))
+
+
+def _with_partial(err: DriveError, partial: RunResult | None, t_event: float) -> DriveError:
+    """err with what the run computed up to the event (exit 4 keeps the series)."""
+    err.partial, err.t_event = partial, float(t_event)
+    return err
 
 
 def _simulate_compiled(system, g, structure, ground, device, y0, t_eval, method, rtol, atol, max_step, first_step,
@@ -274,20 +327,41 @@ def _simulate_compiled(system, g, structure, ground, device, y0, t_eval, method,
     check_tolerances(rtol, atol, max_step)  # the bounds of the scipy path, the same way
     model = cs.seismic_model(system, g, structure, ground, device)
     res = cs.run(model, system.z_ref, y0, t_eval, method, rtol, atol, max_step, first_step, progress)
-    done = res["done"]
+    keep, error = res["done"], None
     if device:
-        _check_lengths(t_eval[:done], res["lengths"][:done], system.forces.device)
-    if res["status"] != 0:
+        try:
+            _check_lengths(t_eval[:keep], res["lengths"][:keep], system.forces.device)
+        except DriveError as err:  # the first sample outside the laws' validity ends the series
+            keep, error = err.sample, _with_partial(err, None, t_eval[err.sample])
+    if error is None and res["status"] != 0:
         t_fail, z, q = res["t_fail"], res["z_fail"], res["q_fail"]
         ix = system.forces.ix
         system.last = (t_fail, math.hypot(z[ix["plate_x"]] - q[0], z[ix["plate_y"]] - q[1]))
         if device and (res["status"] == cs.ROD_REACH or system.last[1] > 0.95 * system.reach):
-            raise system.reach_error()
-        if res["status"] == TOO_MANY_STEPS:
+            error = _with_partial(system.reach_error(), None, t_fail)
+        elif res["status"] == TOO_MANY_STEPS:
             raise SolverError(f"exceeded {cs.STEPS_PER_SECOND} steps per model second at t = {t_fail:.6g} s of "
                               f"{t_eval[-1]:.6g} s: a stiff or runaway input")
-        raise SolverError(f"{method} (compiled) failed at t = {t_fail:.6g} s: status {res['status']} "
-                          "(nsd_core.engine.compiled, nsd_core.engine.rk)")
+        else:
+            raise SolverError(f"{method} (compiled) failed at t = {t_fail:.6g} s: status {res['status']} "
+                              "(nsd_core.engine.compiled, nsd_core.engine.rk)")
+    stats = {"engine": "semirecursive", "mode": "seismic", "device": device, "version": __version__,
+             "backend": "compiled", "method": method, "rtol": rtol, "atol": atol, "max_step": max_step,
+             "steps": res["steps"], "nfev": res["nfev"], "wall_time": time.perf_counter() - start,
+             "model_time": float(t_eval[-1]), "dt_out": float(t_eval[1] - t_eval[0]), "ground": ground.describe(),
+             "structure": structure.to_dict()}
+    if error is not None:
+        error.partial = _compiled_result(res, keep, t_eval, system, g, structure, device, stats) if keep else None
+        raise error
+    return _compiled_result(res, len(t_eval), t_eval, system, g, structure, device, stats)
+
+
+def _compiled_result(res, keep, t_eval, system, g, structure, device, stats) -> RunResult:
+    """The seismic columns of the first ``keep`` samples of a compiled run (nsd_core.device.compiled_seismic)."""
+    from nsd_core.device import compiled_seismic as cs
+    res = {k: (v[:keep] if isinstance(v, np.ndarray) and v.ndim >= 1 and len(v) == len(t_eval) else v)
+           for k, v in res.items()}
+    t_eval = t_eval[:keep]
     tab = dict(zip(cs.COLUMNS, res["table"].T))
     s = structure
     x, y, th, vx, vy, thd = tab["x"], tab["y"], tab["theta"], tab["vx"], tab["vy"], tab["theta_rate"]
@@ -295,7 +369,7 @@ def _simulate_compiled(system, g, structure, ground, device, y0, t_eval, method,
             "y": y, "theta": th, "vx": vx, "vy": vy, "ax_abs": tab["ax_abs"], "ay_abs": tab["ay_abs"],
             "support_Fx": s.stiffness * x + s.damping * vx, "support_Fy": s.stiffness * y + s.damping * vy,
             "support_torque": s.support_radius ** 2 * (s.stiffness * th + s.damping * thd)}
-    E_in, E_dev, E_sup_diss = res["y"][:, -N_ENERGY:].T
+    E_in, E_dev, E_sup_diss, E_res = res["y"][:, -N_ENERGY:].T
     cols["device_Fx"], cols["device_Fy"] = tab["device_Fx"], tab["device_Fy"]
     if device:
         dev, nw = system.forces.device, g.n_wires
@@ -316,19 +390,30 @@ def _simulate_compiled(system, g, structure, ground, device, y0, t_eval, method,
     gravity = tab["height"] - tab["height"][0]
     cols.update({"E_input": E_in, "E_kinetic": tab["kinetic"], "E_gravity": gravity, "E_supports_stored": stored,
                  "E_supports_dissipated": E_sup_diss, "E_device": E_dev})
-    cols["E_residual"] = E_in - (tab["kinetic"] + gravity + stored + E_sup_diss + E_dev)
+    if s.restrainer is not None:
+        _restrainer_columns(cols, s.restrainer, E_res)
+    cols["E_residual"] = E_in - (tab["kinetic"] + gravity + stored + E_sup_diss + E_dev + E_res)
     cols["u"] = np.hypot(x, y)
     cols = {k: np.array(v, dtype=float) for k, v in cols.items()}
-    stats = {"engine": "semirecursive", "mode": "seismic", "device": device, "version": __version__,
-             "backend": "compiled", "method": method, "rtol": rtol, "atol": atol, "max_step": max_step,
-             "steps": res["steps"], "nfev": res["nfev"], "wall_time": time.perf_counter() - start,
-             "model_time": float(t_eval[-1]), "ground": ground.describe(), "structure": structure.to_dict()}
     return RunResult("semirecursive", cols, seismic_units(cols), stats)
 
 
+def _restrainer_columns(cols: dict, r, absorbed) -> None:
+    """The restrainer's columns from the sampled relative motion (the shared law) and its absorbed
+    work (the integrated state): force, indentation, stored and dissipated energy; base shear += force."""
+    fx, fy, F, delta, _ = restrainer_forces(cols["x"], cols["y"], cols["vx"], cols["vy"], r.gap, r.stiffness,
+                                            r.exponent, r.damping)
+    stored = np.array([restrainer_stored_scalar(d, r.stiffness, r.exponent) for d in delta])
+    cols.update({"restrainer_Fx": fx, "restrainer_Fy": fy, "restrainer_F": F, "restrainer_indentation": delta,
+                 "E_restrainer_stored": stored, "E_restrainer_dissipated": absorbed - stored})
+    cols["base_shear_x"] = cols["base_shear_x"] + fx
+    cols["base_shear_y"] = cols["base_shear_y"] + fy
+
+
 def _device_outputs(row, ev, y, g, forces, system):
-    """Element forces, the device's force on the plate, cap and wall heights (drive-mode sign:
-    device_F = -(rod + ropes + wires on the cap), horizontal)."""
+    """Element forces, device_F, cap and wall heights. device_F has the drive mode's sign: the force
+    the plate applies to the device, -(rod + ropes + wires on the cap), horizontal; the device's
+    force on the plate is its negative."""
     dev = forces.device
     check_validity(row["t"], ev.kin, dev)
     L, _ = dev.elements.state(ev.kin)
@@ -355,7 +440,7 @@ def _device_outputs(row, ev, y, g, forces, system):
 
 _UNITS = {"t": "s", "x_g": "m", "y_g": "m", "ax_g": "m/s^2", "ay_g": "m/s^2", "x": "m", "y": "m", "u": "m",
           "theta": "rad", "vx": "m/s", "vy": "m/s", "ax_abs": "m/s^2", "ay_abs": "m/s^2", "support_torque": "N m",
-          "cap_z": "m", "wall_z": "m", "closure": "m", "theta_": "rad"}
+          "cap_z": "m", "wall_z": "m", "closure": "m", "theta_": "rad", "restrainer_indentation": "m"}
 
 
 def seismic_units(cols: dict) -> dict:
@@ -370,41 +455,3 @@ def seismic_units(cols: dict) -> dict:
             return "Pa"
         return "N"
     return {name: unit(name) for name in cols}
-
-
-def seismic_summary(result: RunResult) -> dict:
-    """Peaks (with their times), the displacement left at the end, the energy balance and the
-    working-range events of a seismic run (what summary.json holds)."""
-    from nsd_core.device.cycle import events
-    c, t = result.columns, result["t"]
-
-    def peak(values):
-        k = int(np.argmax(values))
-        return {"value": float(values[k]), "t": float(t[k])}
-
-    E_in = c["E_input"]
-    out = {
-        "peak_displacement": peak(c["u"]),
-        "peak_x": peak(np.abs(c["x"])), "peak_y": peak(np.abs(c["y"])),
-        "peak_rotation": peak(np.abs(c["theta"])),
-        "peak_absolute_acceleration": peak(np.hypot(c["ax_abs"], c["ay_abs"])),
-        "peak_base_shear": peak(np.hypot(c["base_shear_x"], c["base_shear_y"])),
-        "peak_device_force": peak(np.hypot(c["device_Fx"], c["device_Fy"])),
-        "peak_support_force": peak(np.hypot(c["support_Fx"], c["support_Fy"])),
-        "peak_ground_acceleration": peak(np.hypot(c["ax_g"], c["ay_g"])),
-        "residual_displacement": {"x": float(c["x"][-1]), "y": float(c["y"][-1]), "u": float(c["u"][-1]),
-                                  "t": float(t[-1])},
-        "energy": {"input": float(E_in[-1]), "kinetic": float(c["E_kinetic"][-1]),
-                   "gravity": float(c["E_gravity"][-1]), "supports_stored": float(c["E_supports_stored"][-1]),
-                   "supports_dissipated": float(c["E_supports_dissipated"][-1]), "device": float(c["E_device"][-1]),
-                   "max_residual": float(np.max(np.abs(c["E_residual"]))),
-                   "relative_residual": float(np.max(np.abs(c["E_residual"])) / max(np.max(np.abs(E_in)), 1e-300))},
-    }
-    if "spring_push" in c:
-        ev = events(result)
-        out.update({"events": ev, "outside_working_range": any(e["kind"] == "ropes_slack" for e in ev),
-                    "cap_z": {"min": float(np.min(c["cap_z"])), "max": float(np.max(c["cap_z"]))},
-                    "closure_max": float(np.max(c["closure"]))})
-    else:
-        out.update({"events": [], "outside_working_range": False})
-    return out

@@ -174,7 +174,7 @@ def _step_loop(m, w, forces, motion, tab, t_eval, settings, out, stats, K, F, ve
     code = rhs_into(t, y, m, w, forces, motion, f, False)
     nfev += 1
     if code != OK:
-        stats[2] = code
+        stats[2], stats[3] = code, k
         return code
     h_abs = settings[3]
     if h_abs <= 0.0:  # scipy's select_initial_step
@@ -190,7 +190,7 @@ def _step_loop(m, w, forces, motion, tab, t_eval, settings, out, stats, K, F, ve
         code = rhs_into(t0 + h0, ys, m, w, forces, motion, f_new, False)
         nfev += 1
         if code != OK:
-            stats[2] = code
+            stats[2], stats[3] = code, k
             return code
         for i in range(ny):
             err[i] = (f_new[i] - f[i]) / scale[i]
@@ -209,7 +209,7 @@ def _step_loop(m, w, forces, motion, tab, t_eval, settings, out, stats, K, F, ve
         rejected = False
         while True:
             if h_abs < min_step:
-                stats[0], stats[1], stats[2] = steps, nfev, TOO_SMALL_STEP
+                stats[0], stats[1], stats[2], stats[3] = steps, nfev, TOO_SMALL_STEP, k
                 return TOO_SMALL_STEP
             t_new = t + h_abs
             if t_new - t1 > 0:
@@ -222,13 +222,13 @@ def _step_loop(m, w, forces, motion, tab, t_eval, settings, out, stats, K, F, ve
                 code = rhs_into(t + tab.C[s] * h, ys, m, w, forces, motion, K[s], False)
                 nfev += 1
                 if code != OK:
-                    stats[0], stats[1], stats[2] = steps, nfev, code
+                    stats[0], stats[1], stats[2], stats[3] = steps, nfev, code, k
                     return code
             _stage_state(K, tab.B, ns, h, y, y_new)
             code = rhs_into(t + h, y_new, m, w, forces, motion, f_new, False)
             nfev += 1
             if code != OK:
-                stats[0], stats[1], stats[2] = steps, nfev, code
+                stats[0], stats[1], stats[2], stats[3] = steps, nfev, code, k
                 return code
             copy_into(K[ns], f_new)
             for i in range(ny):
@@ -254,7 +254,7 @@ def _step_loop(m, w, forces, motion, tab, t_eval, settings, out, stats, K, F, ve
                 code = rhs_into(t + tab.C_extra[s - ns - 1] * h, ys, m, w, forces, motion, K[s], False)
                 nfev += 1
                 if code != OK:
-                    stats[0], stats[1], stats[2] = steps, nfev, code
+                    stats[0], stats[1], stats[2], stats[3] = steps, nfev, code, k
                     return code
             for i in range(ny):
                 dy = y_new[i] - y[i]
@@ -278,7 +278,7 @@ def _step_loop(m, w, forces, motion, tab, t_eval, settings, out, stats, K, F, ve
             k += 1
         for i in range(ny):
             if not math.isfinite(y_new[i]):
-                stats[0], stats[1], stats[2] = steps, nfev, NOT_FINITE
+                stats[0], stats[1], stats[2], stats[3] = steps, nfev, NOT_FINITE, k
                 return NOT_FINITE
         t = t_new
         copy_into(y, y_new)

@@ -1,0 +1,141 @@
+"""``nsd seismic`` (issue 23): the displacement restrainer's options, a run the device's failure ends
+(exit 4) still written, the warning when a peak falls on the last sample, and ``--compare-supports``
+(with the device and on the supports alone, both written, with their ratios). See docs/seismic.md.
+
+Layout of ``--compare-supports --out DIR``:
+    DIR/device/seismic.csv, DIR/device/summary.json      the run with the device (as nsd seismic writes it)
+    DIR/supports/seismic.csv, DIR/supports/summary.json  the supports alone (the same structure and restrainer)
+    DIR/summary.json     {"compare_supports": true, ground, structure, ratios, both runs' summaries}
+    DIR/ratios.csv       quantity, with_device, supports_alone, ratio, what
+"""
+from __future__ import annotations
+
+import sys
+
+from nsd_core.device.params import ParameterError
+
+
+def add_arguments(p) -> None:
+    p.add_argument("--restrainer", action="store_true",
+                   help="add the displacement restrainer (Hunt-Crossley contact at |u| > u_gap, defaults in "
+                        "docs/seismic.md); its constants also by --structure restrainer_gap=, restrainer_stiffness=, "
+                        "restrainer_exponent=, restrainer_damping=")
+    p.add_argument("--compare-supports", action="store_true",
+                   help="run with the device and on the supports alone; write both (DIR/device, DIR/supports) "
+                        "and their ratios (DIR/summary.json, DIR/ratios.csv)")
+
+
+def isolated_structure(args, params):
+    """The default structure with --structure overrides and the restrainer (--restrainer or any
+    restrainer_* override): ParameterError, one line, on anything wrong."""
+    from nsd_core.device.isolation import default_structure
+    from nsd_core.device.params import parse_set
+    from nsd_core.device.restrainer import split_overrides, with_restrainer
+    structure = default_structure(params)
+    own, restrainer = split_overrides(parse_set(getattr(args, "structure", None) or []))
+    if own:
+        structure = structure.replace(**own)
+    return with_restrainer(structure, params, bool(getattr(args, "restrainer", False)), restrainer)
+
+
+def check_compare(args, engines) -> None:
+    if not getattr(args, "compare_supports", False):
+        return
+    if args.no_device:
+        raise ParameterError("--compare-supports: runs the supports alone itself; leave out --no-device")
+    if len(engines) > 1:
+        raise ParameterError(f"--engines {args.engines!r}: --compare-supports runs the in-house engine only")
+
+
+def peak_warning(summary: dict, which: str = "") -> None:
+    """summary["warnings"] and one stderr line when a response peak falls on the run's last sample."""
+    at_end = summary.get("peaks_at_last_sample") or []
+    if at_end:
+        text = (f"{', '.join(at_end)} at the last sample (t = {summary['residual_displacement']['t']:.6g} s): "
+                "the true peak may lie beyond the window (lengthen --duration or the window)")
+        summary.setdefault("warnings", []).append(text)
+        print(f"nsd seismic: warning: {which}{text}", file=sys.stderr)
+
+
+def print_restrainer(summary: dict) -> None:
+    """One line on the restrainer's work, when the structure has one."""
+    r = summary.get("restrainer")
+    if r:
+        print(f"  restrainer: {r['engagements']} engagements, {r['engaged_time'] * 1e3:.1f} ms engaged, largest impact "
+              f"energy {r['impact_energy_max']:.4g} J, dissipated {r['dissipated']:.4g} J, peak force "
+              f"{summary['peak_restrainer_force']['value']:.4g} N")
+
+
+def stopped_summary(err, head: dict) -> dict | None:
+    """The summary of a run the device's failure ended, from its partial series (None: no samples)."""
+    from nsd_core.device.seismic import RodReachError, seismic_summary
+    partial = getattr(err, "partial", None)
+    if partial is None or len(partial["t"]) < 2:
+        return None
+    summary = {**head, **seismic_summary(partial), "solver": partial.stats}
+    summary["stopped"] = {"kind": "rod_reach" if isinstance(err, RodReachError) else "outside_validity",
+                          "reason": str(err), "t": getattr(err, "t_event", None),
+                          "last_sample": float(partial["t"][-1])}
+    summary["complete"] = False
+    return summary
+
+
+def write_stopped(err, out, head: dict) -> None:
+    """Exit 4 keeps its series: seismic.csv up to the event and summary.json with the event."""
+    from nsd_core.device.results import atomic_write_json, write_csv
+    summary = stopped_summary(err, head)
+    if summary is None:
+        return
+    write_csv(out / "seismic.csv", err.partial)  # (no last-sample warning: the event ends the series)
+    atomic_write_json(out / "summary.json", summary)
+    print(f"stopped at t = {summary['stopped']['t']:.6g} s ({summary['stopped']['kind']}); kept the series up to "
+          f"t = {summary['stopped']['last_sample']:.6g} s: wrote {out / 'seismic.csv'} and {out / 'summary.json'}")
+
+
+def run_compare(args, params, structure, motion, solver, out, head: dict) -> int:
+    """--compare-supports: both runs, both written, the ratios; exit 4 if the device run was ended by
+    the device's failure (both runs are still written), 0 otherwise."""
+    from nsd_cli.options import Progress
+    from nsd_core.device.results import atomic_write_json, versions, write_csv
+    from nsd_core.study.with_without import ratio_rows, run_with_and_without
+    both = run_with_and_without(params, structure, motion, duration=args.duration, dt_out=args.dt_out,
+                                solver=solver, progress=Progress("nsd seismic"))
+    summaries = {}
+    for name in ("device", "supports"):
+        run = both[name]
+        if run["summary"] is None:
+            continue
+        summary = {**head, "device": name == "device", **run["summary"], "solver": run["result"].stats,
+                   "complete": run["complete"], "versions": versions(), "params": params.describe()}
+        if run["complete"]:
+            peak_warning(summary, f"{name}: ")
+        (out / name).mkdir(parents=True, exist_ok=True)
+        write_csv(out / name / "seismic.csv", run["result"])
+        atomic_write_json(out / name / "summary.json", summary)
+        summaries[name] = summary
+    top = {**head, "compare_supports": True, "complete": both["complete"], "ratios": both["ratios"],
+           "note": both.get("note"), "runs": {n: f"{n}/summary.json" for n in summaries},
+           "stopped": both["device"]["stopped"], "versions": versions(), "params": params.describe()}
+    _write_ratios(out / "ratios.csv", ratio_rows(both["ratios"]))
+    atomic_write_json(out / "summary.json", top)
+    for row in ratio_rows(both["ratios"]):
+        print(f"  {row['quantity']}: with the device {row['with_device']:.6g}, supports alone "
+              f"{row['supports_alone']:.6g}, ratio {row['ratio'] or '-'}")
+    if both["device"]["stopped"]:
+        s = both["device"]["stopped"]
+        print(f"  the device run stopped at t = {s['t']:.6g} s ({s['kind']}): {s['reason']}")
+    print(f"wrote {out / 'device'}, {out / 'supports'}, {out / 'summary.json'} and {out / 'ratios.csv'}")
+    return 4 if both["device"]["stopped"] else 0
+
+
+def _write_ratios(path, rows) -> None:
+    import csv
+    import io
+    from nsd_core.device.results import atomic_write_text
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=["quantity", "with_device", "supports_alone", "ratio", "what"],
+                       lineterminator="\n")
+    w.writeheader()
+    for row in rows:
+        w.writerow({**row, "with_device": repr(row["with_device"]), "supports_alone": repr(row["supports_alone"])})
+    atomic_write_text(path, buf.getvalue())
