@@ -282,7 +282,20 @@ def source_plan(results_dir: str | Path) -> tuple[list[tuple[str, Callable]], st
 
 def check_source(results_dir: str | Path) -> None:
     """Read and check --from (an nsd compare, seismic, sweep or polar folder) before anything is written."""
-    source_plan(results_dir)
+    checked_plan(results_dir)
+
+
+def checked_plan(results_dir: str | Path) -> tuple[list[tuple[str, Callable]], str]:
+    """``source_plan``, a damaged field met while planning (a string where a number belongs...) made
+    one line, exit 2."""
+    try:
+        return source_plan(results_dir)
+    except (TypeError, KeyError, IndexError, AttributeError) as e:
+        raise _malformed(results_dir, e) from None
+    except ValueError as e:
+        if type(e) is not ValueError:  # ParameterError is a ValueError: already one line
+            raise
+        raise _malformed(results_dir, e) from None
 
 
 def draw_pngs(folder: str | Path) -> list[str]:
@@ -330,10 +343,7 @@ def build_report(results_dir: str | Path, out_dir: str | Path) -> dict[str, Any]
     import matplotlib.pyplot as plt
     from matplotlib.backends.backend_pdf import PdfPages
     start = time.perf_counter()
-    try:
-        plan, footer = source_plan(results_dir)  # everything is checked before anything is written
-    except (TypeError, KeyError, IndexError, AttributeError) as e:
-        raise _malformed(results_dir, e) from None
+    plan, footer = checked_plan(results_dir)  # everything is checked before anything is written
     title = footer.split("  |  ")[0]
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
