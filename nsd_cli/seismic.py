@@ -17,7 +17,7 @@ import math
 
 from nsd_cli.options import (Progress, add_param_arguments, add_solver_arguments, base_params, check_out_dir,
                              solver_settings)
-from nsd_cli import seismic_extras
+from nsd_cli import seismic_building, seismic_extras
 from nsd_core.device.params import ParameterError
 
 HELP = "seismic response of the isolated structure (in-house engine)"
@@ -50,6 +50,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "radius_of_gyration, support_radius, restrainer_gap, restrainer_stiffness, "
                         "restrainer_exponent, restrainer_damping (SI)")
     seismic_extras.add_arguments(p)
+    seismic_building.add_arguments(p)
     p.add_argument("--records", default=None, metavar="1,3,5-7", help="with --set: these records only (default all)")
     p.add_argument("--workers", type=int, default=None, help="with --set: local processes (default: the cores)")
     p.add_argument("--scheduler", default=None, help="with --set: address of a running Dask scheduler")
@@ -122,14 +123,25 @@ def run(args) -> int:
         raise ParameterError("--engines: the supports alone (--no-device) run on the in-house engine only")
     seismic_extras.check_compare(args, engines)
     motion = ground_motion(args)
-    structure = seismic_extras.isolated_structure(args, params)
+    structure = seismic_building.with_building(args, seismic_extras.isolated_structure(args, params))
+    if args.fixed_base and (not args.no_device or args.compare_supports):
+        raise ParameterError("--fixed-base: the slab is held to the ground, so the run has no device: add --no-device")
     solver = {**DEFAULT_SOLVER, **solver_settings(args)}
     for name in ("duration", "dt_out"):
         v = getattr(args, name)
         if v is not None and not (math.isfinite(v) and v > 0):
             raise ParameterError(f"--{name.replace('_', '-')} = {v}: must be a finite number > 0 (s)")
+    if args.fixed_base and len(engines) > 1:
+        raise ParameterError("--engines: the fixed base runs on the in-house engine only")
     out = check_out_dir("--out", args.out)
     head = {"ground": motion.describe(), "structure": structure.to_dict(), "device": not args.no_device}
+    if args.compare_building:
+        if len(engines) > 1:
+            raise ParameterError(f"--engines {args.engines!r}: --compare-building runs the in-house engine only")
+        return seismic_building.run_compare(args, params, structure, motion, solver, out, head)
+    if args.fixed_base:
+        solver["fixed_base"] = True
+        head["fixed_base"] = True
     if args.compare_supports:
         return seismic_extras.run_compare(args, params, structure, motion, solver, out, head)
     try:
@@ -157,6 +169,7 @@ def run(args) -> int:
           f"at t = {pa['t']:.3f} s, residual |u| = {summary['residual_displacement']['u'] * 1e3:.3f} mm, "
           f"energy in {e['input']:.4g} J (balance residual {e['relative_residual']:.1e}); "
           f"{result.stats['steps']} steps in {result.stats['wall_time']:.1f} s for {result.stats['model_time']:.2f} s")
+    seismic_building.print_building(summary)
     for ev in summary["events"]:
         print(f"  event {ev['kind']}: t = {ev['start']:.4f} s for {ev['duration'] * 1e3:.2f} ms (|u| = {ev['u_start'] * 1e3:.2f} mm)")
     for name, m in summary.get("engines", {}).items():
@@ -197,6 +210,9 @@ def run_set(args) -> int:
         raise ParameterError("--no-device: --set runs every record both with and without the device")
     if args.compare_supports:
         raise ParameterError("--compare-supports: --set runs every record both with and without the device already")
+    if seismic_building.building_overrides(args) is not None or args.fixed_base or args.compare_building:
+        raise ParameterError("--building: --set SET runs the isolated structure without a building (not yet "
+                             "implemented for record sets)")
     engines = parse_engine_list(args.engines)
     if engines[0] != "semirecursive":
         raise ParameterError(f"--engines {args.engines!r}: semirecursive (the reference) must come first")
