@@ -159,6 +159,9 @@ def run(args) -> int:
         others[name] = other
         summary.setdefault("engines", {})[name] = {**seismic_metrics(result, other),
                                                    "wall_time": other.stats["wall_time"]}
+        if "floor1_x" in result.columns:  # the building's floors and stories (docs/building.md)
+            from comparisons.seismic import building_metrics
+            summary["engines"][name]["building"] = building_metrics(result, other)
     for name, other in others.items():
         write_csv(out / f"seismic_{name}.csv", other)
     write_csv(out / "seismic.csv", result)
@@ -175,6 +178,10 @@ def run(args) -> int:
     for name, m in summary.get("engines", {}).items():
         print(f"  {name}: max|du|/max|u| = {m['du']:.2e}, max|dF|/max|F| = {m['dF']:.2e}, "
               f"max|da|/max|a| = {m['da']:.2e}, {m['wall_time']:.1f} s")
+        if "building" in m:
+            b = m["building"]
+            print(f"    building: floors {b['dfloor']:.2e}, drifts {b['ddrift']:.2e}, floor accelerations "
+                  f"{b['dfloor_a']:.2e} (worst floor, max|d - d_ref| / max|d_ref|)")
     if summary["outside_working_range"]:
         print("  WARNING: the ropes went slack: part of this run lies outside the device's working range")
     print(f"wrote {out / 'seismic.csv'} and {out / 'summary.json'}")
