@@ -80,7 +80,7 @@ def profiles_figure(label: str, summaries: dict, ratios: list):
         z = _levels(s)
         dr = [p["value"] for p in s["building"]["peak_drift_ratio"]]
         # a story's drift ratio drawn over its height (a step profile)
-        ax1.step(np.repeat(dr, 2)[:: 2].tolist() + [dr[-1]], z, where="post", label=name,
+        ax1.plot(np.repeat(dr, 2), np.column_stack([z[:-1], z[1:]]).ravel(), label=name,
                  **{k: v for k, v in style.items() if k != "marker"})
         ax1.plot(dr, 0.5 * (z[1:] + z[:-1]), linestyle="none", marker=style["marker"], color=style["color"])
         slab = s["peak_absolute_acceleration"]["value"]

@@ -8,6 +8,7 @@ hold) gives the exact response at the samples.
 """
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -153,3 +154,73 @@ def test_per_story_values():
     assert b.masses == (100.0, 200.0) and b.stiffnesses == (1e6, 2e6)
     assert b.story_damping == (50.0, 50.0) and b.slab_damping == (0.0, 0.0) and b.heights == (0.25, 0.25)
     assert b.damping_ratio is None
+
+
+def nsd(*args):
+    import subprocess
+    import sys
+    return subprocess.run([sys.executable, "-m", "nsd_cli.main", *args], capture_output=True, text=True, timeout=600)
+
+
+GROUND = ["--ground", "harmonic:amplitude=1.5,frequency=3,azimuth=30,duration=0.1", "--dt-out", "0.002"]
+
+
+@pytest.mark.parametrize("bad, field", [(["--building", "stories=0"], "building stories"),
+                                        (["--building", "mass=1,2"], "building mass"),
+                                        (["--building", "height=-0.3"], "building height"),
+                                        (["--building", "floors=3"], "building floors"),
+                                        (["--building", "stories"], "--building 'stories'"),
+                                        (["--fixed-base"], "--fixed-base"),
+                                        (["--building", "stories=2", "--fixed-base"], "--fixed-base")])
+def test_cli_bad_building_is_one_line_exit_2_nothing_written(tmp_path, bad, field):
+    out = tmp_path / "out"
+    p = nsd("seismic", *GROUND, *bad, "--out", str(out))
+    assert p.returncode == 2, p.stderr
+    lines = p.stderr.strip().splitlines()
+    assert len(lines) == 1 and field in lines[0], p.stderr
+    assert not out.exists()
+
+
+def test_cli_building_in_every_engine(tmp_path):
+    """nsd seismic --building stories=3 with MuJoCo and Exudyn: every floor column in every engine's
+    CSV, and their floors, drifts and floor accelerations within 1e-3 of the in-house engine's."""
+    from nsd_core.device.results import read_csv
+    out = tmp_path / "run"
+    p = nsd("seismic", *GROUND, "--building", "stories=3", "--engines", "semirecursive,mujoco,exudyn",
+            "--out", str(out))
+    assert p.returncode == 0, p.stderr
+    s = json.loads((out / "summary.json").read_text())
+    assert len(s["building"]["peak_drift_ratio"]) == 3 and s["structure"]["building"]["stories"] == 3
+    assert s["energy"]["relative_residual"] < 1e-4 and s["energy"]["building_dissipated"] > 0
+    cols = [f"{k}{i}_{a}" for i in (1, 2, 3) for k, a in (("floor", "x"), ("floor", "y"), ("floor", "ax_abs"),
+                                                            ("floor", "ay_abs"), ("drift", "x"), ("drift", "y"),
+                                                            ("story_shear", "x"), ("story_shear", "y"))]
+    for name in ("seismic.csv", "seismic_mujoco.csv", "seismic_exudyn.csv"):
+        r = read_csv(out / name, "x")
+        assert all(c in r.columns for c in cols), name
+    for eng in ("mujoco", "exudyn"):
+        b = s["engines"][eng]["building"]
+        assert b["dfloor"] < 1e-3 and b["ddrift"] < 1e-3 and b["dfloor_a"] < 1e-3, (eng, b)
+
+
+def test_cli_compare_building_writes_three_configurations_and_the_report(tmp_path):
+    from nsd_core.device.results import read_csv
+    out = tmp_path / "cmp"
+    p = nsd("seismic", *GROUND, "--building", "stories=2", "--compare-building", "--out", str(out))
+    assert p.returncode == 0, p.stderr
+    top = json.loads((out / "summary.json").read_text())
+    assert top["compare_building"] and top["complete"]
+    rows = {(r["quantity"], r["index"]): r for r in top["ratios"]}
+    assert {("peak_drift_ratio", 1), ("peak_drift_ratio", 2), ("peak_floor_acceleration", 2), ("base_shear", 0)} <= set(rows)
+    fixed = read_csv(out / "fixed_base" / "seismic.csv", "x")
+    assert np.max(np.abs(fixed["x"])) == 0.0  # the slab moves with the ground
+    for name in ("fixed_base", "supports", "device"):
+        s = json.loads((out / name / "summary.json").read_text())
+        r = rows[("peak_drift_ratio", 1)]
+        assert math.isclose(r[name], s["building"]["peak_drift_ratio"][0]["value"], rel_tol=1e-12)
+    r = rows[("peak_drift_ratio", 1)]
+    assert math.isclose(r["device_over_fixed"], r["device"] / r["fixed_base"], rel_tol=1e-12)
+    assert (out / "building_ratios.csv").read_text().startswith("quantity,index,fixed_base")
+    rep = nsd("report", "--from", str(out), "--out", str(tmp_path / "report"))
+    assert rep.returncode == 0, rep.stderr
+    assert any("building_profiles" in f.name for f in (tmp_path / "report").rglob("*.png"))
