@@ -25,7 +25,8 @@ METRICS = {  # name -> (unit, description)
     "energy_balance_rel": ("-", "|drive work - (wires + spring hysteresis + stored change)| / drive work, steady cycle"),
     # seismic cases (mode = "seismic"): on the time histories, every output time
     "max_du_rel": ("-", "seismic: max |u - u_ref| / max |u_ref|, u the plate's plan displacement relative to the base"),
-    "max_dF_device_rel": ("-", "seismic: max |F - F_ref| / max |F_ref|, F = device_F, the plate's force on the device (minus the device's force on the plate)"),
+    "max_dF_device_rel": ("-", "seismic: max |F - F_ref| / max |F_ref|, F = device_F, the plate's force on the "
+                               "device (minus the device's force on the plate)"),
     "peak_u_rel": ("-", "seismic: |peak |u| - reference| / reference"),
     "peak_a_rel": ("-", "seismic: |peak |a_abs| - reference| / reference, a_abs the plate's absolute acceleration"),
     "energy_residual_rel": ("-", "seismic: the engine's own max |E_residual| / max |E_input| (frame of the ground)"),

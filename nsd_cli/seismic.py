@@ -182,6 +182,7 @@ def run(args) -> int:
             b = m["building"]
             print(f"    building: floors {b['dfloor']:.2e}, drifts {b['ddrift']:.2e}, floor accelerations "
                   f"{b['dfloor_a']:.2e} (worst floor, max|d - d_ref| / max|d_ref|)")
+    seismic_extras.print_restrainer(summary)
     if summary["outside_working_range"]:
         print("  WARNING: the ropes went slack: part of this run lies outside the device's working range")
     print(f"wrote {out / 'seismic.csv'} and {out / 'summary.json'}")

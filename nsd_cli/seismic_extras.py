@@ -57,6 +57,15 @@ def peak_warning(summary: dict, which: str = "") -> None:
         print(f"nsd seismic: warning: {which}{text}", file=sys.stderr)
 
 
+def print_restrainer(summary: dict) -> None:
+    """One line on the restrainer's work, when the structure has one."""
+    r = summary.get("restrainer")
+    if r:
+        print(f"  restrainer: {r['engagements']} engagements, {r['engaged_time'] * 1e3:.1f} ms engaged, largest impact "
+              f"energy {r['impact_energy_max']:.4g} J, dissipated {r['dissipated']:.4g} J, peak force "
+              f"{summary['peak_restrainer_force']['value']:.4g} N")
+
+
 def stopped_summary(err, head: dict) -> dict | None:
     """The summary of a run the device's failure ended, from its partial series (None: no samples)."""
     from nsd_core.device.seismic import RodReachError, seismic_summary

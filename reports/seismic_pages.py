@@ -58,7 +58,7 @@ def response_figure(title: str, runs: dict, cost: dict | None = None):
 
 
 def loops_figure(title: str, runs: dict):
-    """The device's force against the relative displacement, per direction, during the record."""
+    """device_F (the plate's force on the device) against the relative displacement, per direction."""
     fig = new_figure(LANDSCAPE, title, "device_F (the plate's force on the device) against the plate's displacement "
                      "relative to the base (the negative-stiffness loops the record drives)")
     for j, (f, u, lab) in enumerate((("device_Fx", "x", "X"), ("device_Fy", "y", "Y"))):

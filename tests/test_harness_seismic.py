@@ -120,7 +120,7 @@ def test_a_wrong_isolated_mass_in_one_engine_fails_the_default_seismic_case(tmp_
     named, among them MuJoCo's own energy balance (nominal masses against MuJoCo's motion)."""
     from comparisons.config import DEFAULT_CASES
     text = DEFAULT_CASES.read_text()
-    case = text[text.index('name = "seismic_nf1_pulse"'):]
+    case = text[text.index('name = "seismic_nf1_pulse"'):].split("\n\n")[0]  # this case's block only
     case = case.replace("settings.mujoco = { timestep = 2e-5 }",
                         'settings.mujoco = { timestep = 2e-5, perturb = { what = "isolated_mass", by = 0.02 } }')
     (tmp_path / "c.toml").write_text("[[case]]\n" + case)

@@ -81,8 +81,8 @@ def test_a_drive_along_a_wire_does_not_turn_the_plate_and_stays_in_its_plane(wit
 
 
 def test_device_force_opposes_small_motions_with_the_device_s_initial_stiffness(with_device):
-    """Near rest the device's force is its initial tangent stiffness (positive, ~7e4 N/m) times u:
-    from the quasi-static solution, independent of the multibody engine."""
+    """Near rest device_F (the plate's force on the device) is the device's initial tangent stiffness
+    (positive, ~7e4 N/m) times u: from the quasi-static solution, independent of the multibody engine."""
     from nsd_core.device.quasistatic import quasi_static_path
     r = with_device
     small = (np.abs(r["x"]) < 4e-4) & (r["t"] < 0.12)
@@ -197,6 +197,8 @@ def test_nsd_seismic_exit_4_with_the_time_when_the_rod_cannot_reach(tmp_path):
     assert s["stopped"]["kind"] == "rod_reach" and 0.2 < s["stopped"]["t"] < 0.6 and s["complete"] is False
     assert r["t"][-1] <= s["stopped"]["t"] < r["t"][-1] + 1e-3 and len(r["t"]) > 100
     assert 0.95 * 0.03 < np.max(r["u"]) < 0.03  # it ran up to the rod's length
+    from reports.build import build_report  # the report draws the kept series, the stop marked
+    assert len(build_report(out, tmp_path / "rep")["pngs"]) >= 2
 
 
 def test_mujoco_seismic_agrees_with_the_in_house_engine():

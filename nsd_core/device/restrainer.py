@@ -154,6 +154,7 @@ def engagement_events(t, u, F, delta_rate, mass: float, absorbed=None, stored=No
               "impact_velocity": v, "impact_energy": 0.5 * mass * v * v, "resolution": res}
         if absorbed is not None and stored is not None:
             after = min(b + 1, len(t) - 1)
-            ev["dissipated"] = float((absorbed[after] - stored[after]) - (absorbed[a - 1] - stored[a - 1] if a else 0.0))
+            before = (absorbed[a - 1] - stored[a - 1]) if a else 0.0
+            ev["dissipated"] = float(absorbed[after] - stored[after] - before)
         out.append(ev)
     return out
