@@ -218,9 +218,10 @@ def run_set(args) -> int:
         raise ParameterError("--no-device: --set runs every record both with and without the device")
     if args.compare_supports:
         raise ParameterError("--compare-supports: --set runs every record both with and without the device already")
-    if seismic_building.building_overrides(args) is not None or args.fixed_base or args.compare_building:
-        raise ParameterError("--building: --set SET runs the isolated structure without a building (not yet "
-                             "implemented for record sets)")
+    if args.fixed_base or args.compare_building:
+        flag = "--fixed-base" if args.fixed_base else "--compare-building"
+        raise ParameterError(f"{flag}: --set SET runs every record with and without the device (a building: "
+                             "--building)")
     engines = parse_engine_list(args.engines)
     if engines[0] != "semirecursive":
         raise ParameterError(f"--engines {args.engines!r}: semirecursive (the reference) must come first")
@@ -233,7 +234,7 @@ def run_set(args) -> int:
     ground = {"scale": float(args.scale), "time_factor": float(tf), "window": window,
               "rotate_deg": float(args.rotate), "normalised": not args.raw}
     params = base_params(args)
-    structure = seismic_extras.isolated_structure(args, params)
+    structure = seismic_building.with_building(args, seismic_extras.isolated_structure(args, params))
     numbers = {k: v for k, v in structure.to_dict().items() if k != "provenance"}
     solver = {**DEFAULT_SOLVER, **solver_settings(args)}
     for name in ("duration", "dt_out"):

@@ -224,3 +224,27 @@ def test_cli_compare_building_writes_three_configurations_and_the_report(tmp_pat
     rep = nsd("report", "--from", str(out), "--out", str(tmp_path / "report"))
     assert rep.returncode == 0, rep.stderr
     assert any("building_profiles" in f.name for f in (tmp_path / "report").rglob("*.png"))
+
+
+def test_cli_record_set_takes_a_building(tmp_path):
+    """nsd seismic --set with --building: every record with and without the device, each with the
+    building; set.csv gains the worst story's peak drift ratio (with, without, ratio) and the worst
+    floor's peak acceleration, equal to the records' own summaries."""
+    import csv
+    out = tmp_path / "set"
+    p = nsd("seismic", "--set", "farfield", "--records", "1", "--window", "3,3.3", "--dt-out", "0.002",
+            "--building", "stories=2", "--workers", "1", "--out", str(out))
+    assert p.returncode == 0, p.stderr
+    rows = list(csv.DictReader((out / "set.csv").open()))
+    assert len(rows) == 1
+    row = rows[0]
+    dev = json.loads((out / "records" / "farfield_1" / "summary.json").read_text())
+    nod = json.loads((out / "records" / "farfield_1_nodevice" / "summary.json").read_text())
+    assert dev["structure"]["building"]["stories"] == 2 and nod["structure"]["building"]["stories"] == 2
+    worst = max(v["value"] for v in dev["building"]["peak_drift_ratio"])
+    worst_nod = max(v["value"] for v in nod["building"]["peak_drift_ratio"])
+    assert math.isclose(float(row["peak_drift_ratio [-]"]), worst, rel_tol=1e-9)  # set.csv: 10 digits
+    assert math.isclose(float(row["peak_drift_ratio_nodevice [-]"]), worst_nod, rel_tol=1e-9)
+    assert math.isclose(float(row["peak_drift_ratio_ratio [-]"]), worst / worst_nod, rel_tol=1e-9)
+    index = json.loads((out / "set.json").read_text())
+    assert index["rows"][0]["peak_drift_ratio"] == worst and index["rows"][0]["peak_drift_ratio_nodevice"] == worst_nod
