@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from nsd_core.device.drive import Drive
+from nsd_core.device.drive import SAMPLES_PER_CYCLE, Drive
 from nsd_core.device.params import ParameterError, Params, load_params, read_toml
 
 HERE = Path(__file__).resolve().parent
@@ -263,7 +263,7 @@ def load_cases(path: str | Path | None = None, base_params: Params | None = None
                       _number(f"case {name}.frequency", merged["frequency"]),
                       _number(f"case {name}.direction_deg", merged.get("direction_deg", 0.0), positive=False),
                       _whole(f"case {name}.cycles", merged.get("cycles", 2), 1, Drive.CYCLES_MAX),
-                      _whole(f"case {name}.samples_per_cycle", merged.get("samples_per_cycle", 2000), 16,
+                      _whole(f"case {name}.samples_per_cycle", merged.get("samples_per_cycle", SAMPLES_PER_CYCLE), 16,
                              Drive.SAMPLES_MAX),
                       path=_path(name, merged.get("path", "line"), path),
                       minor=None if merged.get("minor") is None else _number(f"case {name}.minor", merged["minor"]))

@@ -16,9 +16,26 @@ from nsd_core.device.results import atomic_write_text
 HELP = "run engines side by side against tolerances"
 
 
+DEFAULT_CASES = Path(__file__).resolve().parents[1] / "comparisons" / "cases.toml"
+
+
+def default_cases_text() -> str:
+    """What the default case file holds, read from the file itself (the help text follows the file)."""
+    import tomllib
+    try:
+        cases = tomllib.loads(DEFAULT_CASES.read_text(encoding="utf-8")).get("case", [])
+    except (OSError, tomllib.TOMLDecodeError):
+        return "comparisons/cases.toml"
+    seismic = [c.get("name", "?") for c in cases if c.get("mode") == "seismic"]
+    drives = [c.get("name", "?") for c in cases if c.get("mode", "drive") != "seismic"]
+    return (f"comparisons/cases.toml: {len(drives)} drive cases ({', '.join(drives)}) and {len(seismic)} seismic "
+            f"({', '.join(seismic)}); format: docs/cases.md")
+
+
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--cases", help="case file (TOML); default: the four Figure 6 cases")
-    p.add_argument("--tolerances", help="tolerance file (TOML); default: comparisons/tolerances.toml")
+    p.add_argument("--cases", help=f"case file (TOML); default: {default_cases_text()}")
+    p.add_argument("--tolerances", help="tolerance file (TOML); default: comparisons/tolerances.toml "
+                                        "(format: docs/cases.md)")
     p.add_argument("--engines", default="semirecursive,mujoco,exudyn",
                    help="comma-separated engines; must include the reference, semirecursive")
     add_param_arguments(p, "parameter overrides applied to every case")

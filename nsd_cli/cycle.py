@@ -18,7 +18,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--frequency", type=float, required=True, help="f [Hz]")
     p.add_argument("--direction", type=float, default=0.0, help="psi [deg], 0 = +X: the line's or major axis' azimuth")
     p.add_argument("--cycles", type=int, default=2, help="cycles to run; the last is the steady one")
-    p.add_argument("--samples-per-cycle", type=int, default=2000, help="output samples per cycle")
+    p.add_argument("--samples-per-cycle", type=int, default=None,
+                   help="output samples per cycle (default 2000, as the Python API's Drive and nsd compare's cases)")
     add_param_arguments(p)
     add_solver_arguments(p)
     p.add_argument("--out", required=True, help="output folder")
@@ -37,8 +38,8 @@ def drive_from_args(args):
             raise ParameterError(f"--amplitude = {args.amplitude}: a table path {args.path!r} gives its own "
                                  "positions; leave --amplitude out")
         amplitude = 0.0
-    return Drive(amplitude, args.frequency, args.direction, args.cycles, args.samples_per_cycle,
-                 path=args.path, minor=args.minor)
+    samples = {} if args.samples_per_cycle is None else {"samples_per_cycle": args.samples_per_cycle}
+    return Drive(amplitude, args.frequency, args.direction, args.cycles, path=args.path, minor=args.minor, **samples)
 
 
 def run(args) -> int:

@@ -25,7 +25,7 @@ EPILOG = """exit codes: 0 ok; 1 a tolerance exceeded (compare) or a benchmark go
 130 / 143 interrupted by Ctrl-C / SIGTERM (finished cases are kept; a re-run resumes them).
 Run `nsd COMMAND --help` for each command's options."""
 
-SUBCOMMANDS = ("cycle", "seismic", "compare", "report", "sweep", "tables", "calibrate", "benchmark", "polar")
+SUBCOMMANDS = ("cycle", "seismic", "compare", "report", "sweep", "tables", "calibrate", "benchmark", "polar", "params")
 
 
 class OneLineParser(argparse.ArgumentParser):

@@ -37,7 +37,7 @@ class Progress:
 def add_param_arguments(p: argparse.ArgumentParser, what: str = "parameter overrides") -> None:
     """--params FILE and --set NAME=VALUE (repeatable): the device's parameters."""
     p.add_argument("--params", help=f"TOML file of {what}")
-    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="override one parameter")
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="override one parameter (every name, unit and bound: nsd params)")
 
 
 def base_params(args) -> Params:

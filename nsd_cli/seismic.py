@@ -4,7 +4,7 @@ displacement, energy balance, working-range and restrainer events). Exit 4 when 
 length: the series up to the event and the summary with the event are still written. ``--restrainer``
 and ``--compare-supports``: nsd_cli.seismic_extras (docs/seismic.md).
 
-``--set NAME [--records 1,3,5-7]``: every record of a FEMA P695 set, each with and without the device
+``--record-set SET [--records 1,3,5-7]``: every record of a FEMA P695 set, each with and without the device
 (the isolation effect), resumable and parallel (``nsd_core.study.seismic_set``) -> DIR/set.csv,
 DIR/set.json, DIR/records/<set>_<id>[_nodevice]/. A record whose run fails is kept in its row with
 its reason and the others still run. Exit 0 every run ran; 3 any run failed in the solver (or
@@ -23,8 +23,6 @@ from nsd_core.device.params import ParameterError
 HELP = "seismic response of the isolated structure (in-house engine)"
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    # --set SET (a record set, below) shares its option with --set NAME=VALUE (a parameter): a value
-    # with '=' overrides a parameter as in every command, one without names the record set
     src = p.add_mutually_exclusive_group()
     src.add_argument("--record", metavar="SET:ID",
                      help="FEMA P695 record: farfield:1..22, nearfield:1..28, nearfield-pulse:1..14, "
@@ -32,6 +30,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     src.add_argument("--ground", metavar="KIND:K=V,...",
                      help="synthetic input: harmonic:amplitude=A[m/s^2],frequency=f,azimuth=DEG,duration=T or "
                           "pulse:velocity=V[m/s],frequency=fp,gamma=G,phase=DEG,azimuth=DEG (Mavroeidis-Papageorgiou)")
+    src.add_argument("--record-set", metavar="SET",
+                     help="every record of a FEMA P695 set (farfield, nearfield, nearfield-pulse, nearfield-no-pulse), "
+                          "each with and without the device (see --records)")
     p.add_argument("--scale", default="1", help="factor on the record's (normalised) acceleration")
     p.add_argument("--window", metavar="T0,T1", help="part of the record, in the record's own seconds")
     p.add_argument("--rotate", default="0", metavar="DEG", help="rotation of the record pair in plan")
@@ -51,17 +52,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "restrainer_exponent, restrainer_damping (SI)")
     seismic_extras.add_arguments(p)
     seismic_building.add_arguments(p)
-    p.add_argument("--records", default=None, metavar="1,3,5-7", help="with --set: these records only (default all)")
-    p.add_argument("--workers", type=int, default=None, help="with --set: local processes (default: the cores)")
-    p.add_argument("--scheduler", default=None, help="with --set: address of a running Dask scheduler")
-    p.add_argument("--retry-failed", action="store_true", help="with --set: run records stored as failed again")
+    p.add_argument("--records", default=None, metavar="1,3,5-7", help="with --record-set: these records only (default all)")
+    p.add_argument("--workers", type=int, default=None, help="with --record-set: local processes (default: the cores)")
+    p.add_argument("--scheduler", default=None, help="with --record-set: address of a running Dask scheduler")
+    p.add_argument("--retry-failed", action="store_true", help="with --record-set: run records stored as failed again")
     add_param_arguments(p)
-    for action in p._actions:
-        if action.dest == "set":
-            action.metavar, action.help = "NAME=VALUE|SET", ("override one parameter (NAME=VALUE); or, without '=', "
-                                                             "run every record of a set (see --records)")
     add_solver_arguments(p)
-    p.add_argument("--out", required=True, help="output folder (with --set SET: resumable)")
+    p.add_argument("--out", required=True, help="output folder (with --record-set: resumable)")
 
 
 def ground_motion(args):
@@ -87,28 +84,26 @@ def ground_motion(args):
     return parse_ground(args.ground, "--ground")
 
 
-def split_set_option(args) -> None:
-    """args.record_set: the --set value without '=' (a record set), args.set: the parameter overrides."""
-    sets = [v for v in args.set if "=" not in v]
-    if len(sets) > 1:
-        raise ParameterError(f"--set {sets[1]!r}: one record set per run (already --set {sets[0]!r})")
-    args.set = [v for v in args.set if "=" in v]
-    args.record_set = sets[0] if sets else None
-    given = [n for n, v in (("--record", args.record), ("--ground", args.ground), ("--set", args.record_set)) if v]
-    if len(given) != 1:
-        raise ParameterError(f"{' and '.join(given) or 'input'}: give exactly one of --record SET:ID, "
-                             "--ground KIND:K=V,... or --set SET")
+def check_source(args) -> None:
+    """Exactly one input: --record, --ground or --record-set. ``--set`` is a parameter override here as
+    in every command; a value without '=' (the record set's spelling before --record-set) is pointed there."""
+    for v in args.set:
+        if "=" not in v:
+            raise ParameterError(f"--set {v!r}: expected NAME=VALUE (a parameter override); a record set is "
+                                 f"--record-set {v}")
+    if not (args.record or args.ground or args.record_set):
+        raise ParameterError("input: give exactly one of --record SET:ID, --ground KIND:K=V,... or --record-set SET")
 
 
 def run(args) -> int:
-    split_set_option(args)
+    check_source(args)
     if args.record_set is not None:
         return run_set(args)
     for name in ("records", "workers", "scheduler"):
         if getattr(args, name) is not None:
-            raise ParameterError(f"--{name}: applies to --set only")
+            raise ParameterError(f"--{name}: applies to --record-set only")
     if args.retry_failed:
-        raise ParameterError("--retry-failed: applies to --set only")
+        raise ParameterError("--retry-failed: applies to --record-set only")
     from nsd_core.device.drive import DriveError
     from nsd_core.device.model import DEFAULT_SOLVER
     from nsd_core.device.results import atomic_write_json, versions, write_csv
@@ -202,7 +197,7 @@ def _window(text: str | None) -> list[float] | None:
 
 
 def run_set(args) -> int:
-    """--set: the record set, with and without the device (see the module docstring for exit codes)."""
+    """--record-set: the record set, with and without the device (see the module docstring for exit codes)."""
     import os
     from comparisons.harness import code_fingerprint
     from comparisons.engines import parse_engine_list, run_seismic_engine
@@ -215,12 +210,12 @@ def run_set(args) -> int:
     set_ = set_name(args.record_set)
     records = parse_records(args.records, set_)
     if args.no_device:
-        raise ParameterError("--no-device: --set runs every record both with and without the device")
+        raise ParameterError("--no-device: --record-set runs every record both with and without the device")
     if args.compare_supports:
-        raise ParameterError("--compare-supports: --set runs every record both with and without the device already")
+        raise ParameterError("--compare-supports: --record-set runs every record both with and without the device already")
     if args.fixed_base or args.compare_building:
         flag = "--fixed-base" if args.fixed_base else "--compare-building"
-        raise ParameterError(f"{flag}: --set SET runs every record with and without the device (a building: "
+        raise ParameterError(f"{flag}: --record-set runs every record with and without the device (a building: "
                              "--building)")
     engines = parse_engine_list(args.engines)
     if engines[0] != "semirecursive":

@@ -25,7 +25,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--frequency", type=float, default=10.0, help="f [Hz] (default 10, Section 4.3)")
     parser.add_argument("--direction", type=float, default=0.0, help="psi [deg], 0 = +X")
     parser.add_argument("--cycles", type=int, default=2, help="cycles per run; the last is analysed")
-    parser.add_argument("--samples-per-cycle", type=int, default=500)
+    parser.add_argument("--samples-per-cycle", type=int, default=500,
+                        help="output samples per cycle (default 500, the parametric study's own; one drive's default "
+                             "in nsd cycle, nsd compare and the Python API is 2000)")
     parser.add_argument("--engines", default="semirecursive", help="comma-separated: semirecursive, mujoco, exudyn")
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="local processes")
     parser.add_argument("--scheduler", default=None, help="address of a running Dask scheduler")

@@ -5,6 +5,8 @@
     from nsd_core.device.params import Params
     result, summary = cycle(Params().replace(rope_stiffness=7e5), Drive(0.015, 1.0))
     result["F"], summary["loop_area"], summary["stiffness_regions"]
+    steady = result.steady()            # the last (steady) cycle, the one the summary describes
+    steady["u"], steady["F"]
     result, summary = cycle(Params(), Drive(0.015, 1.0, cycles=3, path="circle"))
     result["F_x"], result["F_y"], summary["peak_force_magnitude"], summary["work_per_cycle"]
 """

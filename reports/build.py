@@ -223,7 +223,7 @@ def build_report(results_dir: str | Path, out_dir: str | Path) -> dict[str, Any]
     from matplotlib.backends.backend_pdf import PdfPages
     from reports.seismic_report import is_seismic, seismic_plan
     start = time.perf_counter()
-    if str(results_dir).strip() and is_seismic(results_dir):  # an nsd seismic folder (single run or --set)
+    if str(results_dir).strip() and is_seismic(results_dir):  # an nsd seismic folder (single run or --record-set)
         plan, title = seismic_plan(results_dir)
         footer = f"{title}  |  {time.strftime('%Y-%m-%d')}"
     else:

@@ -3,7 +3,7 @@ overlaid with their differences to the in-house run, the device's force-displace
 record, the energy balance over time, and the record-set table (with and without the device).
 
 ``runs`` is {engine: RunResult} in the columns of ``nsd seismic`` (nsd_core.device.seismic), the
-in-house engine first. The same pages serve an ``nsd seismic`` folder (single run or ``--set``) and
+in-house engine first. The same pages serve an ``nsd seismic`` folder (single run or ``--record-set``) and
 the seismic cases of an ``nsd compare`` folder (``<out>/seismic/<case>__<engine>.csv``).
 """
 from __future__ import annotations

@@ -227,12 +227,12 @@ def test_cli_compare_building_writes_three_configurations_and_the_report(tmp_pat
 
 
 def test_cli_record_set_takes_a_building(tmp_path):
-    """nsd seismic --set with --building: every record with and without the device, each with the
+    """nsd seismic --record-set with --building: every record with and without the device, each with the
     building; set.csv gains the worst story's peak drift ratio (with, without, ratio) and the worst
     floor's peak acceleration, equal to the records' own summaries."""
     import csv
     out = tmp_path / "set"
-    p = nsd("seismic", "--set", "farfield", "--records", "1", "--window", "3,3.3", "--dt-out", "0.002",
+    p = nsd("seismic", "--record-set", "farfield", "--records", "1", "--window", "3,3.3", "--dt-out", "0.002",
             "--building", "stories=2", "--workers", "1", "--out", str(out))
     assert p.returncode == 0, p.stderr
     rows = list(csv.DictReader((out / "set.csv").open()))

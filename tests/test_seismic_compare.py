@@ -19,7 +19,7 @@ from tests.test_seismic import STRUCTURE, sdof_harmonic_from_rest
      "--compare-supports"),
     (["--ground", "harmonic:amplitude=1,frequency=1,duration=0.2", "--compare-supports", "--engines",
       "semirecursive,mujoco"], "--compare-supports runs the in-house engine only"),
-    (["--set", "nearfield-pulse", "--records", "1", "--compare-supports"], "--compare-supports"),
+    (["--record-set", "nearfield-pulse", "--records", "1", "--compare-supports"], "--compare-supports"),
     (["--ground", "harmonic:amplitude=1,frequency=1,duration=0.2", "--structure", "restrainer_gap=0.031"],
      "restrainer_gap = 0.031: must be < rod_length"),
     (["--ground", "harmonic:amplitude=1,frequency=1,duration=0.2", "--restrainer", "--structure",

@@ -1,4 +1,4 @@
-"""``nsd seismic --set``: record-set runs with and without the device (issue 14, item 6)."""
+"""``nsd seismic --record-set``: record-set runs with and without the device (issue 14, item 6)."""
 from __future__ import annotations
 
 import csv
@@ -14,7 +14,7 @@ import pytest
 from nsd_core.device.params import ParameterError
 from nsd_core.study.seismic_set import parse_records
 
-SHORT = ["--set", "nearfield-pulse", "--records", "2,3", "--window", "2,2.6", "--dt-out", "0.002"]
+SHORT = ["--record-set", "nearfield-pulse", "--records", "2,3", "--window", "2,2.6", "--dt-out", "0.002"]
 
 
 def nsd(*args, **kw):
@@ -37,17 +37,17 @@ def test_record_lists():
 
 
 @pytest.mark.parametrize("args, words", [
-    (["--set", "midfield"], "record set = 'midfield': unknown"),
-    (["--set", "nearfield-pulse", "--records", "1,20"], "--records '1,20': 20 lies outside the set"),
-    (["--set", "farfield", "--records", "x"], "--records 'x': 'x' is not an ID"),
-    (["--set", "farfield", "--records", "1", "--scale", "0"], "scale = 0: must be > 0"),
-    (["--set", "farfield", "--records", "1", "--window", "10,90"], "window = 10,90: must satisfy"),
-    (["--set", "farfield", "--records", "1", "--window", "ten,20"], "--window 'ten,20': expected T0,T1"),
-    (["--set", "farfield", "--records", "1", "--no-device"], "--no-device: --set runs every record both"),
-    (["--set", "farfield", "--set", "nearfield"], "one record set per run"),
-    (["--set", "farfield", "--record", "farfield:1"], "give exactly one of"),
-    (["--set", "farfield", "--workers", "0"], "--workers = 0"),
-    (["--record", "farfield:1", "--records", "1"], "--records: applies to --set only"),
+    (["--record-set", "midfield"], "record set = 'midfield': unknown"),
+    (["--record-set", "nearfield-pulse", "--records", "1,20"], "--records '1,20': 20 lies outside the set"),
+    (["--record-set", "farfield", "--records", "x"], "--records 'x': 'x' is not an ID"),
+    (["--record-set", "farfield", "--records", "1", "--scale", "0"], "scale = 0: must be > 0"),
+    (["--record-set", "farfield", "--records", "1", "--window", "10,90"], "window = 10,90: must satisfy"),
+    (["--record-set", "farfield", "--records", "1", "--window", "ten,20"], "--window 'ten,20': expected T0,T1"),
+    (["--record-set", "farfield", "--records", "1", "--no-device"], "--no-device: --record-set runs every record both"),
+    (["--set", "farfield"], "--set 'farfield': expected NAME=VALUE (a parameter override); a record set is --record-set farfield"),
+    (["--scale", "2"], "give exactly one of --record SET:ID, --ground KIND:K=V,... or --record-set SET"),
+    (["--record-set", "farfield", "--workers", "0"], "--workers = 0"),
+    (["--record", "farfield:1", "--records", "1"], "--records: applies to --record-set only"),
 ])
 def test_set_bad_input_exit_2_one_line_nothing_written(tmp_path, capsys, args, words):
     from nsd_cli.main import main
@@ -59,11 +59,21 @@ def test_set_bad_input_exit_2_one_line_nothing_written(tmp_path, capsys, args, w
     assert not out.exists()
 
 
+def test_record_set_excludes_record(tmp_path, capsys):
+    from nsd_cli.main import main
+    out = tmp_path / "x"
+    with pytest.raises(SystemExit) as e:
+        main(["seismic", "--record-set", "farfield", "--record", "farfield:1", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert e.value.code == 2 and "not allowed with argument --record" in err and len(err.strip().splitlines()) == 1
+    assert not out.exists()
+
+
 def test_a_window_outside_one_record_of_the_set_is_bad_input(tmp_path, capsys):
     """Far-field 1 lasts 29.98 s, far-field 2 19.99 s: 25,29 fits the first, not the second."""
     from nsd_cli.main import main
     out = tmp_path / "x"
-    code = main(["seismic", "--set", "farfield", "--records", "1,2", "--window", "25,29", "--out", str(out)])
+    code = main(["seismic", "--record-set", "farfield", "--records", "1,2", "--window", "25,29", "--out", str(out)])
     err = capsys.readouterr().err
     assert code == 2 and "window = 25,29" in err and len(err.strip().splitlines()) == 1, err
     assert not out.exists()
@@ -111,7 +121,7 @@ def test_a_finished_set_run_again_runs_nothing_and_writes_the_same_bytes(set_run
 
 
 # enough runs that a SIGTERM sent once the first is stored lands mid-set (one run takes ~0.2 s)
-KILLED = ["--set", "nearfield-pulse", "--records", "1-10", "--window", "2,2.6", "--dt-out", "0.002"]
+KILLED = ["--record-set", "nearfield-pulse", "--records", "1-10", "--window", "2,2.6", "--dt-out", "0.002"]
 
 
 @pytest.mark.slow
@@ -141,7 +151,7 @@ def test_a_killed_set_run_resumes_to_the_same_bytes(tmp_path):
 @pytest.mark.slow
 def test_a_record_that_reaches_the_rod_is_kept_in_its_row_and_the_others_run(tmp_path):
     out = tmp_path / "run"
-    p = nsd("seismic", "--set", "nearfield-pulse", "--records", "1,2", "--window", "2,3", "--scale", "16",
+    p = nsd("seismic", "--record-set", "nearfield-pulse", "--records", "1,2", "--window", "2,3", "--scale", "16",
             "--dt-out", "0.002", "--workers", "2", "--out", str(out))
     table = {r["id"]: r for r in rows(out / "set.csv")}
     assert p.returncode == 4, p.stderr

@@ -76,6 +76,7 @@ from exudyn.itemInterface import (LoadForceVector, MarkerNodePosition, ObjectGen
 from exudyn.rigidBodyUtilities import RigidBodyInertia
 
 from comparisons.engines import exudyn_native
+from comparisons.engines.exudyn_quiet import quiet_allocation_warning
 from comparisons.engines.base import check_step_count, EngineError, merged_settings
 from nsd_core.device.drive import Drive
 from nsd_core.device.forces import advance_spring_zeta, advance_wire_stress, rope_tension, spring_push, wire_tension
@@ -84,6 +85,8 @@ from nsd_core.device.outputs import device_columns
 from nsd_core.device.params import ParameterError, Params
 from nsd_core.device.results import RunResult
 from comparisons.engines.perturb import perturbed
+
+quiet_allocation_warning()
 
 
 class _Elements:

@@ -34,6 +34,7 @@ from exudyn.rigidBodyUtilities import RigidBodyInertia
 
 from comparisons.engines.base import EngineError, check_step_count, merged_settings
 from comparisons.engines.exudyn_building import ExudynFloors
+from comparisons.engines.exudyn_quiet import quiet_allocation_warning
 from comparisons.engines.perturb import perturbed, perturbed_structure
 from nsd_core.device.forces import (advance_spring_zeta, advance_wire_stress, restrainer_force_scalar,
                                     restrainer_forces, restrainer_stored_scalar, rope_tension, spring_push,
@@ -44,6 +45,8 @@ from nsd_core.device.isolation import Structure
 from nsd_core.device.params import Params
 from nsd_core.device.results import RunResult
 from nsd_core.device.seismic import output_times, seismic_units
+
+quiet_allocation_warning()
 
 DEFAULTS = {"step_size": 1e-5, "spectral_radius": 0.8, "newton_rel_tol": 1e-12, "newton_abs_tol": 1e-14,
             "rod_axial_inertia": 1e-3, "perturb": None}  # perturb: an error in this model only (engines/perturb.py)

@@ -87,6 +87,17 @@ from comparisons.engines.perturb import perturbed
 _EULER_LIKE = ("Euler", "implicit", "implicitfast")
 
 
+def mirror_symmetric(params: Params, direction_deg: float) -> bool:
+    """True when the wire and rope patterns are mirror images of themselves about the drive's line at
+    psi, so that a line drive meets no force across it: psi - delta_0 a multiple of 180/n deg for the
+    wires and for the ropes (4 wires and ropes: 0 and 45 deg; 6 wires: 0 and 30 deg, not 45)."""
+    d = direction_deg - params.wire_first_azimuth_deg
+    for n in (params.n_wires, params.n_ropes):
+        if n and abs(d * n / 180.0 - round(d * n / 180.0)) > 1e-9:
+            return False
+    return True
+
+
 def _check_settings(s: dict) -> None:
     """MuJoCo's own constraints on its settings (types and ranges are checked in base.check_settings)."""
     from nsd_core.device.params import ParameterError
@@ -316,8 +327,11 @@ class MujocoEngine:
             mujoco.mj_forward(model, data)
             f_prev = qpas[0] + qcon[0] - qbias[0]
             l_prev = qpas[1] + qcon[1] - qbias[1]
-            # the native loop drives the ``drive`` slide only: lines; any other path takes the Python loop
-            native = s["step_loop"] == "native" and drive.is_line and not zero_drive
+            # the native loop drives the ``drive`` slide only and measures the force along it: lines on
+            # which the device is mirror-symmetric (no force across the line); any other path or
+            # direction takes the Python loop, which measures both components
+            native = (s["step_loop"] == "native" and drive.is_line and not zero_drive
+                      and mirror_symmetric(params, drive.direction_deg))
             if native:
                 F1 = np.zeros(n_out)
                 track, failed = mujoco_native.step_loop(

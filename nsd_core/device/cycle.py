@@ -5,13 +5,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from nsd_core.device.results import RunResult
+from nsd_core.device.results import RunResult, last_cycle
 
 
 def steady_cycle(result: RunResult, frequency: float) -> np.ndarray:
     """Boolean mask of the last full cycle (both end points included, so the loop closes)."""
-    t = result["t"]
-    return t >= t[-1] - 1.0 / frequency - 1e-9 / frequency
+    return last_cycle(result["t"], frequency)
 
 
 def loop_area(u: np.ndarray, F: np.ndarray) -> float:

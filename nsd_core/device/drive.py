@@ -29,6 +29,12 @@ from numba import njit
 from nsd_core.device.params import ParameterError, Params
 
 PATHS = ("line", "circle", "ellipse", "figure8")
+# Output samples per cycle, the one default of the API (Drive), `nsd cycle` and the case files of
+# `nsd compare`: the gate's limits were derived at 2000, and the energy balance's quadrature error on
+# the output grid falls as 1/samples^2 (~2e-6 of the drive work at 2000, ~8e-6 at 1000, ~7e-4 at 100;
+# comparisons/tolerances.toml), so 2000 keeps it 50x below its 1e-4 limit. Each sample costs one
+# model evaluation (~3.6 us in-house: ~7 ms per cycle). `nsd sweep` keeps its own 500 (the study).
+SAMPLES_PER_CYCLE = 2000
 MAX_TABLE_BYTES = 50_000_000  # ~1e6 rows of t,x,y: far beyond any record a run could follow
 
 
@@ -150,7 +156,7 @@ class Drive:
     frequency: float          # f [Hz]
     direction_deg: float = 0.0  # psi [deg], 0 = +X (the first wire's direction)
     cycles: int = 2           # the last one is the steady cycle that is compared
-    samples_per_cycle: int = 1000
+    samples_per_cycle: int = SAMPLES_PER_CYCLE
     path: str = "line"        # line | circle | ellipse | figure8 | a CSV file of t,x,y
     minor: float | None = None  # B [m]: ellipse (required), figure8 (default A/2)
     _table: object = field(default=None, init=False, repr=False, compare=False)

@@ -43,7 +43,7 @@ MAX_WIRE_STRAIN = 0.2  # beyond it the SMA law (Eq. 17, fitted up to ~8 %) says 
 # lightly damped ~255 Hz vertical mode (h omega ~ 4.8 at 3 ms): a cap of 1e-3 s below that limit
 # costs fewer right-hand sides than none (39k instead of 48k per two 1 Hz cycles: no rejected
 # steps). max_step None: no limit.
-# The default cases need at most ~1800 accepted steps per cycle (README); about 55x that is a runaway
+# The default cases need at most ~1800 accepted steps per cycle (docs/performance.md); about 55x that is a runaway
 MAX_STEPS_PER_CYCLE = 100_000
 DEFAULT_SOLVER = {"method": "DOP853", "rtol": 1e-7, "atol": 1e-12, "max_step": 1e-3, "backend": "auto"}
 BACKENDS = ("auto", "compiled", "scipy", "numpy")  # auto: compiled where it offers the method

@@ -83,4 +83,4 @@ def device_columns(engine: str, g: DeviceGeometry, drive: Drive, t, cap_pos, wal
     for j in range(g.n_wires):
         cols[f"wire{j}_tension"], cols[f"wire{j}_F"] = wire_t[:, j], wire_f[:, j]
         cols[f"wire{j}_strain"], cols[f"wire{j}_stress"] = strain[:, j], wire_stress[:, j]
-    return RunResult(engine, cols, column_units(g.n_ropes, g.n_wires), dict(stats or {}))
+    return RunResult(engine, cols, column_units(g.n_ropes, g.n_wires), dict(stats or {}), drive.frequency)

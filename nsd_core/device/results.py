@@ -45,19 +45,38 @@ def column_units(n_ropes: int, n_wires: int) -> dict[str, str]:
 
 @dataclass
 class RunResult:
-    """One engine's run of one drive: columns (name -> array) and what it took."""
+    """One engine's run of one drive: columns (name -> array) and what it took. ``frequency`` [Hz] is
+    the drive's (set by every engine's drive run; None for a seismic run or a result read from CSV)."""
     engine: str
     columns: dict[str, np.ndarray]
     units: dict[str, str]
     stats: dict[str, Any] = field(default_factory=dict)
+    frequency: float | None = None
 
     def __getitem__(self, name: str) -> np.ndarray:
         return self.columns[name]
+
+    def steady(self, frequency: float | None = None) -> "RunResult":
+        """The steady (last) cycle as a result of its own: every column on t >= t_end - 1/f, both end
+        points included so that the loop closes (the cycle ``nsd compare`` and the summary use).
+        ``frequency`` [Hz] is needed only for a result that does not carry its drive's."""
+        f = self.frequency if frequency is None else frequency
+        if f is None:
+            raise ValueError("steady(): this result has no drive frequency (a seismic run, or read from CSV); "
+                             "pass frequency=f [Hz]")
+        mask = last_cycle(self["t"], f)
+        return RunResult(self.engine, {n: c[mask] for n, c in self.columns.items()}, dict(self.units),
+                         dict(self.stats), f)
 
     def stack(self, prefix: str) -> np.ndarray:
         """All per-element columns of one kind, e.g. stack('rope') -> (n_t, n_ropes) tensions."""
         names = [n for n in self.columns if n.startswith(prefix) and n.endswith("_tension")]
         return np.column_stack([self.columns[n] for n in names]) if names else np.zeros((len(self["t"]), 0))
+
+
+def last_cycle(t: np.ndarray, frequency: float) -> np.ndarray:
+    """Boolean mask of the last full cycle of period 1/frequency (both end points included)."""
+    return t >= t[-1] - 1.0 / frequency - 1e-9 / frequency
 
 
 def atomic_write_text(path: str | Path, text: str) -> None:

@@ -1,0 +1,265 @@
+"""The tables of docs/validation.md and docs/performance.md, generated from benchmarks/results/*.json.
+
+    python -m benchmarks.docs            rewrite every generated block from the JSON
+    python -m benchmarks.docs --check    exit 1 if a block differs from what the JSON gives
+
+A generated block sits between ``<!-- generated: NAME -->`` and ``<!-- end generated: NAME -->``;
+everything outside the blocks is hand-written and left alone. Each block starts with where its
+numbers come from (command, date, machine, load, versions, commit: ``benchmarks/measure.py``
+records them). Numbers are shown to 3 significant digits; the JSON holds them whole.
+"""
+from __future__ import annotations
+
+import json
+import re
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / "benchmarks" / "results"
+DOCS = (ROOT / "docs" / "validation.md", ROOT / "docs" / "performance.md")
+BLOCK = re.compile(r"(<!-- generated: (?P<name>[a-z0-9_-]+) -->\n)(?P<body>.*?)(<!-- end generated: (?P=name) -->)", re.S)
+
+
+def g(v, digits: int = 3) -> str:
+    """A number to ``digits`` significant digits (the JSON keeps every digit)."""
+    if v is None:
+        return "–"
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    if isinstance(v, int):
+        return str(v)
+    return f"{v:.{digits}g}"
+
+
+def plain(v, digits: int = 3) -> str:
+    """As ``g`` but without an exponent (1180, not 1.18e+03) for numbers a table reads as plain."""
+    return f"{float(f'{v:.{digits}g}'):g}"
+
+
+def load(name: str) -> dict:
+    return json.loads((RESULTS / f"{name}.json").read_text())
+
+
+def provenance(rec: dict) -> str:
+    m = rec["measured"]
+    v = m["versions"]
+    vers = ", ".join(f"{k} {v[k]}" for k in ("python", "numpy", "scipy", "numba", "mujoco", "exudyn") if k in v)
+    load_text = (f"load average {m['load_average_before'][0]:g} before, {m['load_average_after'][0]:g} after"
+                 + (" (**loaded**: other jobs shared the CPUs, so times are longer than on a quiet machine)"
+                    if m["loaded"] else ""))
+    return (f"*Measured {m['date_utc']} UTC by `{rec['command']}` (exit {rec['exit_code']}, {m['wall_s']:.0f} s), "
+            f"`python -m benchmarks.measure {rec['name']}`; {m['machine']}, {m['cpus']} CPUs, {load_text}; "
+            f"{vers}; commit {m['git_commit'][:12]}{m['git_commit'][40:]}.*\n")
+
+
+def table(head: list[str], rows: list[list[str]]) -> str:
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    lines += ["| " + " | ".join(r) + " |" for r in rows]
+    return "\n".join(lines) + "\n"
+
+
+# ---- validation.md ----
+
+def _metric(data: dict, case: str, engine: str, metric: str) -> dict | None:
+    return next((m for m in data["metrics"] if m["case"] == case and m["engine"] == engine and m["metric"] == metric),
+                None)
+
+
+def _value_limit(m: dict | None) -> str:
+    if m is None:
+        return "–"
+    mark = "" if m["pass"] else " **FAIL**"
+    return f"{g(m['value'])} ({g(m['limit'])}){mark}"
+
+
+def compare_gate() -> str:
+    rec = load("compare")
+    d = rec["data"]
+    seismic_cases = {m["case"] for m in d["metrics"] if m["metric"] == "max_du_rel"}
+    drive_metrics = ("max_dF_rel", "rms_dF_rel", "loop_area_rel", "peak_force_rel")
+    seismic_metrics = ("max_du_rel", "max_dF_device_rel", "peak_u_rel", "peak_a_rel")
+    drive_rows, seismic_rows = [], []
+    for case, per in d["runs"].items():
+        seismic = case in seismic_cases
+        for e in ("mujoco", "exudyn"):
+            if e not in per:
+                continue
+            rows = seismic_rows if seismic else drive_rows
+            if per[e]["status"] != "ok":
+                rows.append([case, e, f"ERROR: {per[e]['message']}"] + [""] * 3)
+                continue
+            rows.append([case, e] + [_value_limit(_metric(d, case, e, m))
+                                     for m in (seismic_metrics if seismic else drive_metrics)])
+    gated = [m for m in d["metrics"] if m["gated"]]
+    failed = [m for m in gated if not m["pass"]]
+    worst = {}
+    for m in d["metrics"]:
+        if m["metric"] in ("energy_balance_rel", "energy_residual_rel", "closure_max", "tracking_error"):
+            key = (m["engine"], m["metric"])
+            if key not in worst or m["value"] > worst[key]["value"]:
+                worst[key] = m
+    own_rows = [[e, metric, g(m["value"]), m["case"], g(m["limit"]), "pass" if m["pass"] else "**FAIL**"]
+                for (e, metric), m in sorted(worst.items())]
+    return (provenance(rec) + "\n"
+            + f"Verdict **{d['verdict']}**: {len(gated) - len(failed)} of {len(gated)} gated metrics within their limits "
+              f"({len(d['runs'])} cases). Value (limit) of each peer against the in-house reference; drive cases on "
+              "the steady cycle (force vector, loop work, peak |F|):\n\n"
+            + table(["case", "engine", "max\\|ΔF\\|/max\\|F\\|", "rms\\|ΔF\\|/max\\|F\\|", "loop area",
+                     "peak force"], drive_rows)
+            + "\nSeismic cases, at every output time (plate displacement, device force, peak displacement, peak "
+              "absolute acceleration):\n\n"
+            + table(["case", "engine", "max\\|Δu\\|/max\\|u\\|", "max\\|ΔF_device\\|/max\\|F_device\\|",
+                     "peak \\|u\\|", "peak \\|a_abs\\|"], seismic_rows)
+            + "\nEach engine's own checks, its worst case (energy balance of a drive cycle, energy residual of a "
+              "seismic run, loop closure [m], drive tracking [m]):\n\n"
+            + table(["engine", "metric", "worst value", "on case", "limit", "verdict"], own_rows))
+
+
+def convergence() -> str:
+    rec = load("compare")
+    c = rec["data"].get("convergence")
+    if not c:
+        return provenance(rec) + "\n(no convergence study in this run)\n"
+    return provenance(rec) + "\n" + _convergence_table(c)
+
+
+def _convergence_table(c: dict) -> str:
+    if "error" in c:
+        return f"The convergence study failed: {c['error']}\n"
+    first = next(iter(c.values()))
+    out = [f"Case {first['case']}, against {first['reference']}; max\\|ΔF\\|/max\\|F\\| and loop area (relative) on "
+           "the last cycle, wall seconds per cycle:\n"]
+    for engine, sweep in c.items():
+        pts = sweep["points"]
+        head = [f"{engine}: {sweep['setting']}"] + [g(p["value"]) for p in pts]
+        rows = [["max\\|ΔF\\|/max\\|F\\|"] + [g(p.get("max_dF_rel")) if "error" not in p else "failed" for p in pts],
+                ["loop area"] + [g(p.get("loop_area_rel")) if "error" not in p else "" for p in pts],
+                ["wall s per cycle"] + [g(p.get("wall_time")) if "error" not in p else "" for p in pts]]
+        out.append(table(head, rows))
+    return "\n".join(out)
+
+
+def tables_5_6() -> str:
+    rec = load("tables")
+    rows = rec["data"]
+    keys = list(rows[0]) if rows else []
+    diffs = [abs(float(r["difference [mm]"])) for r in rows]
+    return (provenance(rec) + "\n"
+            + f"{len(rows)} entries; largest \\|X_max model − paper\\| = {g(max(diffs))} mm (columns as in "
+              "`tables.csv`, the model's values to 4 significant digits):\n\n"
+            + table(keys, [[r[k] if not _isfloat(r[k]) else g(float(r[k]), 4) for k in keys] for r in rows]))
+
+
+def _isfloat(s) -> bool:
+    try:
+        float(s)
+        return True
+    except (TypeError, ValueError):
+        return False
+
+
+def engine_benchmarks() -> str:
+    rec = load("benchmark")
+    d = rec["data"]
+    rows = []
+    for name, r in d["problems"].items():
+        rows.append([name, g(r.get("error")), g(r.get("energy_drift")), g(r.get("cpu_time")),
+                     "pass" if r.get("passed") else "**not met**"])
+    return (provenance(rec) + "\n"
+            + table(["problem", "error vs reference", "energy drift [J]", "CPU [s]", "goal"], rows))
+
+
+def direction_study() -> str:
+    rec = load("polar")
+    d = rec["data"]
+    fields = (("x_max", 1e3, "mm", "X_max"), ("k0", 1e-3, "kN/m", "K0"), ("k_min", 1e-3, "kN/m", "K_min"),
+              ("loop_area", 1.0, "J", "loop area"), ("peak_force", 1.0, "N", "peak \\|F\\|"))
+    rows = []
+    for n, des in d["designs"].items():
+        cells = []
+        for f, scale, unit, _ in fields:
+            mean = sum(des[f]) / len(des[f])
+            cells.append(f"{plain(mean * scale)} {unit} ({plain(100 * des['spread'][f], 2)} %)")
+        rows.append([n] + cells)
+    return (provenance(rec) + "\n"
+            + f"n = n_w = n_r, quasi-static, ψ every {g(d['step_deg'])}°, A = {g(d['amplitude'] * 1e3)} mm; the mean "
+              "over the turn and, in brackets, the spread (max − min) / \\|mean\\|:\n\n"
+            + table(["n"] + [h for *_, h in fields], rows))
+
+
+# ---- performance.md ----
+
+def bench_cycle() -> str:
+    rec = load("bench_cycle")
+    d = rec["data"]
+    rows = [[f"line, A = {g(c['amplitude'] * 1e3)} mm, {g(c['frequency'])} Hz", g(1e3 * c["median_s_per_cycle"]),
+             g(1e3 * c["median_cpu_s_per_cycle"]), str(c["steps"]), str(c["nfev"]), g(c["dF"])] for c in d["cases"]]
+    return (provenance(rec) + "\n"
+            + f"In-house engine, {d['solver'].get('method')} rtol {g(d['solver'].get('rtol'))}, 2 cycles of 2000 samples, "
+              f"median of {d['cases'][0]['runs']} runs after a warm-up (compilation excluded):\n\n"
+            + table(["case", "ms per cycle, wall", "ms per cycle, CPU", "steps / 2 cycles", "rhs / 2 cycles",
+                     "max\\|ΔF\\|/max\\|F\\| vs rtol 1e-10"], rows))
+
+
+def bench_seismic() -> str:
+    rec = load("bench_seismic")
+    d = rec["data"]
+    rows = [[c["case"], g(c["model_s"]), g(c["wall_s_per_model_s"]), g(c["cpu_s_per_model_s"]), str(c["steps"]),
+             str(c["nfev"]), g(1e3 * c["peak_u_m"]), g(c["energy_relative_residual"])] for c in d["cases"]]
+    return (provenance(rec) + "\n"
+            + table(["run", "model s", "wall s per model s", "CPU s per model s", "steps", "rhs", "peak \\|u\\| [mm]",
+                     "energy residual"], rows))
+
+
+def gate_times() -> str:
+    rec = load("compare")
+    d = rec["data"]
+    engines = sorted({e for per in d["runs"].values() for e in per}, key=["semirecursive", "mujoco", "exudyn"].index)
+    rows = [[case] + [g(per[e].get("wall_time")) if e in per else "–" for e in engines] for case, per in d["runs"].items()]
+    return (provenance(rec) + "\n"
+            + "Wall seconds of each engine's run of each default case in the gate (the run alone: start-up and "
+              "imports excluded; the cases run in parallel on the workers):\n\n"
+            + table(["case"] + engines, rows))
+
+
+RENDER = {"compare-gate": compare_gate, "convergence": convergence, "tables-5-6": tables_5_6,
+          "engine-benchmarks": engine_benchmarks, "direction-study": direction_study, "bench-cycle": bench_cycle, "bench-seismic": bench_seismic,
+          "gate-times": gate_times}
+
+
+def regenerate(text: str) -> str:
+    def sub(m: re.Match) -> str:
+        name = m.group("name")
+        if name not in RENDER:
+            raise SystemExit(f"benchmarks.docs: unknown generated block {name!r}; known: {', '.join(RENDER)}")
+        return m.group(1) + RENDER[name]() + m.group(4)
+    return BLOCK.sub(sub, text)
+
+
+def stale() -> list[str]:
+    """The documents whose generated blocks differ from what the JSON gives."""
+    return [str(p.relative_to(ROOT)) for p in DOCS if p.is_file() and regenerate(p.read_text()) != p.read_text()]
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    if argv == ["--check"]:
+        bad = stale()
+        for p in bad:
+            print(f"{p}: generated tables differ from benchmarks/results/*.json (run python -m benchmarks.docs)",
+                  file=sys.stderr)
+        return 1 if bad else 0
+    if argv:
+        print(__doc__.strip(), file=sys.stderr)
+        return 2
+    from nsd_core.device.results import atomic_write_text
+    for p in DOCS:
+        if p.is_file():
+            atomic_write_text(p, regenerate(p.read_text()))
+            print(f"wrote {p.relative_to(ROOT)}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

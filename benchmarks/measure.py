@@ -1,0 +1,119 @@
+"""Run one measurement behind docs/validation.md or docs/performance.md and commit its JSON.
+
+    python -m benchmarks.measure NAME [NAME ...]      (NAME: see MEASUREMENTS; `all` for every one)
+
+Each measurement is a project command run as a user runs it, in a fresh process, into a temporary
+folder; what the documents need is kept in ``benchmarks/results/NAME.json`` together with the
+command, the date (UTC), the machine, its CPU count and load average before and after, the installed
+versions and the git commit. ``python -m benchmarks.docs`` then regenerates the documents' tables
+from these files. A run on a machine whose load average exceeded its CPU count is marked "loaded"
+(its times are then longer than on a quiet machine; its accuracy figures are not affected).
+"""
+from __future__ import annotations
+
+import csv
+import datetime as dt
+import json
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / "benchmarks" / "results"
+NSD = [sys.executable, "-m", "nsd_cli.main"]
+PY = [sys.executable]
+
+# name -> (command with OUT for the temporary folder, the file it writes, what to keep)
+MEASUREMENTS = {
+    "compare": (NSD + ["compare", "--convergence", "--out", "OUT"], "results.json", "compare"),
+    "tables": (NSD + ["tables", "--out", "OUT"], "tables.csv", "csv"),
+    "benchmark": (NSD + ["benchmark", "--out", "OUT"], "results.json", "json"),
+    "polar": (NSD + ["polar", "--out", "OUT"], "polar.json", "json"),
+    "bench_cycle": (PY + ["benchmarks/bench_cycle.py", "--no-compile", "--repeats", "3", "--out", "OUT"],
+                    "bench_cycle.json", "json"),
+    "bench_seismic": (PY + ["benchmarks/bench_seismic.py", "--no-compile", "--repeats", "3", "--out", "OUT"],
+                      "bench_seismic.json", "json"),
+}
+
+
+def _git_commit() -> str:
+    p = subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True)
+    dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=ROOT,
+                           capture_output=True, text=True).stdout.strip()
+    return p.stdout.strip() + (" (with uncommitted changes)" if dirty else "")
+
+
+def _keep_compare(data: dict) -> dict:
+    """The gate's verdict, every metric with its limit, each run's status and time, the convergence."""
+    runs = {c: {e: {k: r.get(k) for k in ("status", "message", "wall_time", "cpu_time")} for e, r in per.items()}
+            for c, per in data["runs"].items()}
+    keep = {"verdict": data.get("verdict"), "exit_code": data.get("exit_code"),
+            "total_wall_time": data.get("total_wall_time"), "metrics": data["metrics"], "runs": runs,
+            "cases": data.get("cases")}
+    if "convergence" in data:
+        keep["convergence"] = data["convergence"]
+    return keep
+
+
+def measure(name: str) -> dict:
+    cmd, produced, kind = MEASUREMENTS[name]
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "out"
+        argv = [str(out) if a == "OUT" else a for a in cmd]
+        commit = _git_commit()  # the code that runs (before, not after: edits during a run are not its code)
+        load0, t0 = os.getloadavg(), time.perf_counter()
+        env = {**os.environ, "MPLBACKEND": "Agg"}
+        p = subprocess.run(argv, cwd=ROOT, capture_output=True, text=True, env=env)
+        wall, load1 = time.perf_counter() - t0, os.getloadavg()
+        if not (out / produced).is_file():
+            raise SystemExit(f"{name}: {' '.join(argv)} exited {p.returncode} without {produced}:\n{p.stderr[-2000:]}")
+        if kind == "csv":
+            with open(out / produced, newline="") as f:
+                data = list(csv.DictReader(f))
+        else:
+            data = json.loads((out / produced).read_text())
+            if kind == "compare":
+                data = _keep_compare(data)
+    from nsd_core.device.results import versions
+    cpus = os.cpu_count() or 1
+    shown = " ".join("python" if a == sys.executable else a for a in cmd[:1]) + " " + " ".join(cmd[1:])
+    return {"name": name, "command": shown.replace("python -m nsd_cli.main", "nsd").replace("OUT", "DIR"),
+            "exit_code": p.returncode,
+            "measured": {"date_utc": dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%d %H:%M"),
+                         "machine": platform.platform(), "processor": platform.machine(), "cpus": cpus,
+                         "load_average_before": [round(x, 2) for x in load0],
+                         "load_average_after": [round(x, 2) for x in load1],
+                         "loaded": max(load0[0], load1[0]) > cpus, "wall_s": wall,
+                         "versions": versions(), "git_commit": commit},
+            "data": data}
+
+
+def main(argv: list[str] | None = None) -> int:
+    names = (argv if argv is not None else sys.argv[1:]) or ["--help"]
+    if names[0] in ("-h", "--help"):
+        print(__doc__.strip() + "\n\nmeasurements: " + ", ".join(MEASUREMENTS))
+        return 0
+    if names == ["all"]:
+        names = list(MEASUREMENTS)
+    for n in names:
+        if n not in MEASUREMENTS:
+            print(f"measure: {n!r}: unknown; allowed: {', '.join(MEASUREMENTS)}, all", file=sys.stderr)
+            return 2
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    from nsd_core.device.results import atomic_write_json
+    for n in names:
+        print(f"measuring {n} ...", file=sys.stderr, flush=True)
+        rec = measure(n)
+        atomic_write_json(RESULTS / f"{n}.json", rec)
+        m = rec["measured"]
+        print(f"{n}: exit {rec['exit_code']}, {m['wall_s']:.1f} s, load {m['load_average_before'][0]} -> "
+              f"{m['load_average_after'][0]} on {m['cpus']} CPUs{' (loaded)' if m['loaded'] else ''}", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

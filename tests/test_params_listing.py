@@ -1,0 +1,98 @@
+"""``nsd params`` lists every field a parameter file accepts, with bounds that are validate()'s own."""
+import dataclasses
+import math
+import tomllib
+
+import pytest
+
+from nsd_core.device.isolation import Structure, default_structure
+from nsd_core.device.listing import bounds, param_rows, structure_fields, structure_rows
+from nsd_core.device.params import FIELDS, ParameterError, Params, load_params
+
+
+def run_nsd(*args):
+    from nsd_cli.main import main
+    return main(["params", *args])
+
+
+def test_every_parameter_is_listed_and_the_written_file_reads_back(tmp_path, capsys):
+    assert [r["name"] for r in param_rows()] == list(FIELDS)
+    f = tmp_path / "p.toml"
+    assert run_nsd("--out", str(f)) == 0
+    data = tomllib.loads(f.read_text())
+    assert list(data["params"]) == list(FIELDS)  # every field a parameter file accepts
+    assert load_params(f) == Params()
+    # a variant: the file holds the variant's values exactly
+    assert run_nsd("--set", "n_wires=6", "--set", "rope_stiffness=612345.678", "--out", str(f)) == 0
+    assert load_params(f) == Params().replace(n_wires=6, rope_stiffness=612345.678)
+
+
+def test_table_names_every_parameter_and_structure_field(capsys):
+    assert run_nsd() == 0
+    text = capsys.readouterr().out
+    for name in [*FIELDS, *structure_fields()]:
+        assert f"\n{name} " in text, name
+    assert "Table 2" in text and "assumed: docs/model.md" in text
+
+
+def _probe(name, value):
+    """validate() on Params with one field set (and room for the weight when masses are large)."""
+    base = Params().to_dict()
+    if name != "precompression_force":
+        base["precompression_force"] = 1e8
+    base[name] = value
+    Params(**base)
+
+
+@pytest.mark.parametrize("name", list(FIELDS))
+def test_stated_bounds_are_the_ones_validate_enforces(name):
+    p = Params() if name == "precompression_force" else Params().replace(precompression_force=1e8)
+    b = bounds(name, p)
+    is_int = FIELDS[name].metadata["kind"] is int
+    for edge, is_open, outward in ((b["min"], b["min_open"], -1), (b["max"], b["max_open"], +1)):
+        step = 1 if is_int else max(abs(edge), 1.0) * 1e-9
+        inside = edge + (-outward * step if is_open else 0)
+        outside = edge + (outward * step if not is_open else 0)
+        if is_int:
+            inside, outside = int(inside), int(outside)
+        _probe(name, inside)
+        with pytest.raises(ParameterError, match=name if name != "spring_gamma" else "spring_"):
+            _probe(name, outside)
+
+
+def test_structure_fields_listed_with_units_and_bounds():
+    names = [f.name for f in dataclasses.fields(Structure) if f.name != "provenance"]
+    rows = structure_rows()
+    assert [r["name"] for r in rows] == names == structure_fields()
+    st = default_structure()
+    for r in rows:
+        assert r["unit"] != "?" and r["doc"] and r["provenance"], r
+        assert r["value"] == getattr(st, r["name"])
+        st.replace(**{r["name"]: 1.0})  # accepted by --structure NAME=VALUE
+        lowest_ok = r["bounds"].startswith("[")
+        if lowest_ok:
+            st.replace(**{r["name"]: 0.0})
+        else:
+            with pytest.raises(ParameterError):
+                st.replace(**{r["name"]: 0.0})
+        with pytest.raises(ParameterError):
+            st.replace(**{r["name"]: -1.0})
+        assert r["bounds"].endswith("inf)") and not math.isinf(r["value"])
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--set", "n_ropes=2"], "n_ropes = 2: must be >= 3"),
+    (["--set", "no_such=1"], "no_such: unknown parameter"),
+    (["--params", "missing.toml"], "not found"),
+])
+def test_bad_input_exit_2_one_line_nothing_written(tmp_path, capsys, args, words):
+    out = tmp_path / "p.toml"
+    assert run_nsd(*args, "--out", str(out)) == 2
+    err = capsys.readouterr().err
+    assert words in err and len(err.strip().splitlines()) == 1, err
+    assert not out.exists()
+
+
+def test_out_must_be_a_file(tmp_path, capsys):
+    assert run_nsd("--out", str(tmp_path)) == 2
+    assert "must name a file" in capsys.readouterr().err

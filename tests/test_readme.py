@@ -1,0 +1,108 @@
+"""Every command in README.md runs as written (issue 25): the quick start is the CI's own, every
+``nsd`` command parses, the short ones run to exit 0 in a fresh folder (the long ones: their --help),
+and the Python example runs."""
+from __future__ import annotations
+
+import os
+import re
+import shlex
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+README = (ROOT / "README.md").read_text(encoding="utf-8")
+CI = (ROOT / ".ci" / "run").read_text()
+NSD = Path(sys.executable).with_name("nsd")
+# long runs (minutes on 2 cores): checked by parsing their options and running their --help
+LONG = ("nsd compare", "nsd sweep --paper", "nsd seismic --record-set", "nsd report")
+
+
+def blocks(lang: str) -> list[str]:
+    return re.findall(rf"```{lang}\n(.*?)```", README, re.S)
+
+
+def shell_commands() -> list[str]:
+    """Every command of the README's sh blocks, in order, split at '&&'."""
+    out = []
+    for block in blocks("sh"):
+        for line in block.splitlines():
+            if line.strip() and not line.lstrip().startswith("#"):
+                out += [c.strip() for c in line.split("&&")]
+    return out
+
+
+def nsd_commands() -> list[list[str]]:
+    return [shlex.split(c)[1:] for c in shell_commands() if c.startswith(".venv/bin/nsd ")]
+
+
+def test_readme_is_short():
+    assert len(README.encode()) <= 12 * 1024
+
+
+def test_every_command_is_known():
+    allowed = re.compile(r"(python3 -m venv \.venv|\.venv/bin/pip install -q -c constraints\.txt -e (\.|'\.\[test\]')"
+                         r"|\.venv/bin/python -m pytest -q|\.venv/bin/nsd .+)")
+    cmds = shell_commands()
+    assert len(cmds) >= 12
+    for c in cmds:
+        assert allowed.fullmatch(c), c
+
+
+def test_quick_start_is_what_ci_runs():
+    """.ci/run runs the README's test command verbatim, in a fresh clone (set -e: any failure fails CI)."""
+    test_line = next(line for b in blocks("sh") for line in b.splitlines() if "pytest" in line)
+    assert test_line.strip() in CI
+    install = next(line for b in blocks("sh") for line in b.splitlines() if "nsd compare --convergence" in line)
+    assert install.replace("-e . &&", "-e '.[test]' &&").split(" && .venv/bin/nsd")[0] in CI
+
+
+@pytest.mark.parametrize("argv", nsd_commands(), ids=" ".join)
+def test_every_nsd_command_parses(argv):
+    from nsd_cli.main import build_parser
+    args = build_parser().parse_args(argv)  # an unknown option or a bad type exits 2 here
+    assert args.handler is not None
+
+
+def _run(argv, cwd, timeout=900):
+    env = {**os.environ, "MPLBACKEND": "Agg"}
+    return subprocess.run([str(NSD), *argv], cwd=cwd, capture_output=True, text=True, timeout=timeout, env=env)
+
+
+@pytest.mark.slow
+def test_readme_commands_run(tmp_path):
+    """In a fresh folder, in the README's order: the short ones to exit 0, the long ones' --help."""
+    ran = 0
+    for argv in nsd_commands():
+        line = "nsd " + " ".join(argv)
+        if line.startswith(LONG):
+            p = _run([argv[0], "--help"], tmp_path)
+            assert p.returncode == 0 and "usage: nsd" in p.stdout, (line, p.stderr)
+            continue
+        p = _run(argv, tmp_path)
+        assert p.returncode == 0, (line, p.stdout[-1500:], p.stderr[-1500:])
+        ran += 1
+    assert ran >= 6
+    assert (tmp_path / "out" / "nf1" / "summary.json").is_file()
+    assert (tmp_path / "out" / "nf1-supports" / "summary.json").is_file()
+    assert (tmp_path / "out" / "my-device.toml").is_file()
+
+
+@pytest.mark.slow
+def test_readme_python_example_runs(tmp_path):
+    (code,) = blocks("python")
+    p = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=900)
+    assert p.returncode == 0, p.stderr[-2000:]
+    assert len(p.stdout.split()) == 4
+
+
+def test_readme_counts_the_default_cases_right():
+    from comparisons.config import SeismicCase, load_cases
+    words = {1: "one", 2: "two", 3: "three", 4: "four", 5: "five", 6: "six", 7: "seven", 8: "eight", 9: "nine"}
+    cases = load_cases()
+    n_seismic = sum(isinstance(c, SeismicCase) for c in cases)
+    text = README.lower()
+    assert f"{words[len(cases) - n_seismic]} drive cases" in text
+    assert f"{words[n_seismic]} seismic window" in text
