@@ -112,7 +112,8 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
     tally.update(kept=0, total=len(jobs), dir=str(out))
 
     def keep(case: Case, engine: str, job: dict, resumed: bool = False) -> None:
-        entry: dict[str, Any] = {"status": job["status"], "wall_time": job["wall_time"]}
+        entry: dict[str, Any] = {"status": job["status"], "wall_time": job["wall_time"],
+                                 "job_wall_time": job["wall_time"]}
         if job["status"] == "ok":
             res: RunResult = job["result"]
             results[(case.name, engine)] = res
@@ -128,7 +129,9 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
                 res.stats = job["result"].stats
                 results[(case.name, engine)] = res
             wall = res.stats.get("wall_time", job["wall_time"])
-            entry.update(csv=str(csv.relative_to(out)), stats=res.stats, resumed=resumed)
+            # the integration alone; compilation (compile_time) and the job's start-up stay apart (issue 20)
+            entry.update(csv=str(csv.relative_to(out)), stats=res.stats, resumed=resumed, wall_time=wall,
+                         cpu_time=res.stats.get("cpu_time"), compile_time=res.stats.get("compile_time"))
             if isinstance(case, SeismicCase):
                 entry.update(summary=_seismic_peaks(res), wall_time_per_model_second=wall / case.model_duration)
                 rate = f"{entry['wall_time_per_model_second']:7.2f} s/model s"
@@ -159,12 +162,17 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
                                c.dt_out, c.settings.get(e, {}))
         return pool.submit(run_job, e, c.params_for(e), c.drive, c.settings.get(e, {}))
 
+    startup = None
     if todo:
+        pool_start = time.time()
         with worker_pool(min(workers, len(todo))) as pool:
             futures = {submit(pool, c, e): (c, e) for c, e in todo}
             for fut in as_completed(futures):
                 case, engine = futures[fut]
-                keep(case, engine, fut.result())
+                job = fut.result()
+                if job.get("started") is not None:   # spawning the workers and their imports (issue 20)
+                    startup = min(startup if startup is not None else float("inf"), job["started"] - pool_start)
+                keep(case, engine, job)
     metrics = _metrics(cases, engines, tolerances, runs, results)
     failed_engines = [(c, e) for c in runs for e, r in runs[c].items() if r["status"] != "ok"]
     failed_metrics = [m for m in metrics if m["gated"] and not m["pass"]]
@@ -178,12 +186,13 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
         "date": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds"), "git_revision": git_revision(),
         "reference": REFERENCE, "engines": engines,
         "cases": [c.describe() for c in cases if not isinstance(c, SeismicCase)],
-        "seismic_cases": [c.describe() for c in cases if isinstance(c, SeismicCase)],
+        "seismic_cases": [_seismic_describe(c, structures) for c in cases if isinstance(c, SeismicCase)],
         "tolerances": dict(tolerances), "tolerances_defaulted": list(getattr(tolerances, "defaulted", ())),
         "tolerances_by_engine": getattr(tolerances, "engines", {}),
         "metric_units": {k: v[0] for k, v in METRICS.items()},
         "params": cases[0].params.describe() if cases else [], "runs": runs, "metrics": metrics,
         "total_wall_time": time.perf_counter() - started, "workers": workers,
+        "worker_startup_time": startup, "metric_definitions": {k: v[1] for k, v in METRICS.items()},
     }
     summary["versions"] = versions()
     if convergence:
@@ -193,9 +202,34 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
     return summary
 
 
+class AppliedLimit(float):
+    """A limit that knows where it came from: "default" ([limits]), "engine" ([limits.ENGINE]) or
+    "case" ([limits.ENGINE.case."CASE"]); ``_row`` writes both into results.json (issue 20)."""
+    source = "default"
+
+    def __new__(cls, value: float, source: str):
+        obj = super().__new__(cls, value)
+        obj.source = source
+        return obj
+
+
 def limit_for(tolerances, engine, case, metric):
-    """Per-engine-and-case limits when the tolerances have them (config.Tolerances), else the flat one."""
-    return tolerances.limit(engine, case, metric) if hasattr(tolerances, "limit") else tolerances.get(metric)
+    """Per-engine-and-case limits when the tolerances have them (config.Limits), else the flat one;
+    the most specific wins, returned as an AppliedLimit that names its source (None: no limit)."""
+    own = getattr(tolerances, "engines", {}).get(engine, {})
+    for source, table in (("case", own.get("case", {}).get(case, {})), ("engine", own), ("default", tolerances)):
+        if metric in table and table[metric] is not None:
+            return AppliedLimit(table[metric], source)
+    return None
+
+
+def _seismic_describe(c, structures: dict) -> dict:
+    """A seismic case as run: its file entry, the ground motion's record metadata (set, id, event,
+    station, window in record seconds, scale, rotation, time factor) and the structure used, with
+    every value's provenance."""
+    st = structures.get(c.name) or c.isolated_structure()
+    return {**c.describe(), "ground": c.ground.describe(), "structure_used": st.to_dict(),
+            "model_duration": c.model_duration}
 
 
 def _metrics(cases, engines, tolerances, runs, results) -> list[dict]:
@@ -262,4 +296,5 @@ def _seismic_peaks(r: RunResult) -> dict:
 
 def _row(case, engine, reference, metric, value, limit, gated):
     return {"case": case, "engine": engine, "reference": reference, "metric": metric, "value": value,
-            "limit": limit, "pass": bool(value <= limit), "gated": gated}
+            "limit": float(limit), "limit_source": getattr(limit, "source", "default"),
+            "pass": bool(value <= limit), "gated": gated}

@@ -9,16 +9,15 @@ the report can say the smallest error of that kind the gate sees.
 """
 from __future__ import annotations
 
-import multiprocessing
 import os
 import time
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any, Callable
 
 from nsd_core.device.cycle import analyse
 from nsd_core.device.geometry import device_geometry
 from nsd_core.device.results import atomic_write_json
+from nsd_core.engine.workers import worker_pool
 
 from comparisons.config import Case
 from comparisons.energy import energy_balance_rel
@@ -65,11 +64,10 @@ def power_study(cases: list[Case], engines: list[str], tolerances, out_dir: str 
     """Run every injection on every engine and case; write ``out_dir/power.json``; return the summary."""
     injections = INJECTIONS if injections is None else injections
     started = time.perf_counter()
-    ctx = multiprocessing.get_context("spawn")
     workers = workers or os.cpu_count() or 1
     refs: dict[str, tuple] = {}
     rows: list[dict] = []
-    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+    with worker_pool(workers) as pool:  # spawn; workers end with their parent (nsd_core.engine.workers)
         ref_jobs = {c.name: pool.submit(run_job, REFERENCE, c.params, c.drive, c.settings.get(REFERENCE, {}))
                     for c in cases}
 

@@ -10,37 +10,21 @@ import numpy as np
 
 from nsd_core.device.params import ParameterError
 
-SYNTHETIC = {  # kind -> (class name in nsd_core.device.ground, allowed keys -> constructor argument)
-    "harmonic": ("Harmonic", {"amplitude": "amplitude", "frequency": "frequency", "azimuth": "azimuth_deg",
-                              "duration": "duration"}),
-    "pulse": ("Pulse", {"velocity": "velocity", "frequency": "frequency", "gamma": "gamma", "phase": "phase_deg",
-                        "azimuth": "azimuth_deg"}),
-}
-REQUIRED = {"harmonic": ("amplitude", "frequency"), "pulse": ("velocity", "frequency")}
+def _synthetic() -> dict:
+    from nsd_core.device.ground import GROUND_SPECS
+    return {kind: (cls, {k: spec[0] for k, spec in keys.items()}) for kind, (cls, keys, _) in GROUND_SPECS.items()}
+
+
+# kind -> (class name in nsd_core.device.ground, allowed keys -> constructor argument): derived from the
+# one table of the closed-form inputs and their ranges (nsd_core.device.ground.GROUND_SPECS)
+SYNTHETIC = _synthetic()
 
 
 def parse_ground(text, where: str = "--ground"):
-    """A synthetic ground motion from ``KIND:K=V,...`` (nsd seismic --ground, a case's ground = "...")."""
-    from nsd_core.device import ground
-    if not isinstance(text, str):
-        raise ParameterError(f"{where} = {text!r}: must be a string KIND:K=V,... (kinds: {', '.join(SYNTHETIC)})")
-    kind, _, rest = text.partition(":")
-    if kind not in SYNTHETIC:
-        raise ParameterError(f"{where} {kind!r}: unknown kind; allowed: {', '.join(SYNTHETIC)}")
-    cls, keys = SYNTHETIC[kind]
-    values = {}
-    for item in filter(None, (s.strip() for s in rest.split(","))):
-        k, sep, v = item.partition("=")
-        if not sep or k.strip() not in keys:
-            raise ParameterError(f"{where} {kind}: {item!r}: expected KEY=VALUE with KEY in {', '.join(keys)}")
-        try:
-            values[keys[k.strip()]] = float(v)
-        except ValueError:
-            raise ParameterError(f"{where} {kind}: {k.strip()} = {v!r}: not a number") from None
-    missing = [k for k in REQUIRED[kind] if keys[k] not in values]
-    if missing:
-        raise ParameterError(f"{where} {kind}: {', '.join(missing)} required (KEY=VALUE)")
-    return getattr(ground, cls)(**values)
+    """A synthetic ground motion from ``KIND:K=V,...`` (nsd seismic --ground, a case's ground = "..."):
+    nsd_core.device.ground.parse_ground_spec, the one parser (keys, ranges, duplicates)."""
+    from nsd_core.device.ground import parse_ground_spec
+    return parse_ground_spec(text, where)
 
 
 def gate_metrics(ref, other) -> dict:

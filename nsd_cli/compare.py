@@ -7,7 +7,6 @@ from xml.sax.saxutils import escape, quoteattr
 
 from comparisons.config import load_cases, load_convergence, load_tolerances
 from comparisons.engines import REFERENCE
-from comparisons.harness import compare
 from nsd_cli.options import (WORKERS_MAX, add_param_arguments, base_params, check_out_dir, check_out_file,
                              parse_engines, whole)
 from nsd_core.device.params import ParameterError
@@ -137,12 +136,16 @@ def run(args) -> int:
         raise ParameterError("--convergence: the case file has no [convergence] table")
     if args.power:
         return _run_power(args, cases, tolerances)
+    for flag in ("power_cases",):
+        if getattr(args, flag) is not None:
+            raise ParameterError(f"--{flag.replace('_', '-')}: applies to --power only")
     check_settings(cases, engines, conv)
     out = check_out_dir("--out", args.out)
     check_out_file("--junit", args.junit)
     if tolerances.defaulted:
         print(f"note: {', '.join(tolerances.defaulted)} not in {args.tolerances}: default limits used "
               "(marked 'default' in the table)")
+    from comparisons.harness import compare  # here, not at import: every nsd command's start-up stays light
     print(f"nsd compare: {len(cases)} cases x {len(engines)} engines -> {out}")
     summary = compare(cases, engines, tolerances, out, workers=args.workers, convergence=conv, tally=args.tally)
     print(format_table(summary))
@@ -158,18 +161,29 @@ def run(args) -> int:
     return summary["exit_code"]
 
 
+def _power_cases(text: str, cases) -> list:
+    """--power-cases A,B: names of the case file's cases, each once, none empty (issue 22)."""
+    from nsd_core.device.inputs import printable
+    known = {c.name: c for c in cases}
+    names = [n.strip() for n in text.split(",")]
+    for n in names:
+        if not n:
+            raise ParameterError(f"--power-cases {printable(repr(text))}: an empty name; give comma-separated case "
+                                 f"names from {', '.join(known)}")
+        if n not in known:
+            raise ParameterError(f"--power-cases {printable(repr(n))}: unknown case; allowed: {', '.join(known)}")
+        if names.count(n) > 1:
+            raise ParameterError(f"--power-cases {printable(repr(text))}: {n} given twice; give each case once")
+    return [known[n] for n in names]
+
+
 def _run_power(args, cases, tolerances) -> int:
     from comparisons.power import format_power, power_study
     engines = parse_engines(args.power_engines)
     if REFERENCE in engines:
         raise ParameterError(f"--power-engines {args.power_engines!r}: the reference {REFERENCE} cannot be perturbed")
-    if args.power_cases:
-        names = [n.strip() for n in args.power_cases.split(",") if n.strip()]
-        known = {c.name: c for c in cases}
-        for n in names:
-            if n not in known:
-                raise ParameterError(f"--power-cases {n!r}: unknown case; allowed: {', '.join(known)}")
-        cases = [known[n] for n in names]
+    if args.power_cases is not None:
+        cases = _power_cases(args.power_cases, cases)
     check_settings(cases, engines)
     folder = check_out_dir("--out", args.out)
     print(f"nsd compare --power: {len(cases)} cases x {len(engines)} engines -> {folder}")

@@ -8,12 +8,14 @@ One module per subcommand in this package, each with ``HELP``, ``add_arguments(p
 from __future__ import annotations
 
 import argparse
+import errno
 import importlib
 import signal
 import sys
 import threading
 
 from nsd_core.device.drive import DriveError
+from nsd_core.device.inputs import printable
 from nsd_core.engine.errors import InputError, SolverError
 
 DESCRIPTION = """Cross-validation harness for a negative-stiffness seismic isolation device: an in-house
@@ -21,9 +23,14 @@ two-step semirecursive multibody model checked against MuJoCo and Exudyn models 
 same force laws (Dai et al. 2024)."""
 EPILOG = """exit codes: 0 ok; 1 a tolerance exceeded (compare) or a benchmark goal missed;
 2 bad input (one line naming the field, the value and what is allowed; nothing written);
-3 a solver or engine failed (including "exceeded N steps"); 4 a drive the mechanism cannot follow;
+3 a solver or engine failed (including "exceeded N steps", and any NaN or inf in an output);
+4 a drive the mechanism cannot follow; a full disk is exit 1 with one line naming the file (what was
+kept stays valid); a second run into a folder another run is writing is exit 2 naming its pid;
 130 / 143 interrupted by Ctrl-C / SIGTERM (finished cases are kept; a re-run resumes them).
-Run `nsd COMMAND --help` for each command's options."""
+docs/limits.md lists every bound. Run `nsd COMMAND --help` for each command's options."""
+
+# writing failed for want of room (or the medium): exit 1, one line naming the file
+DISK_ERRNOS = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EROFS, errno.EIO}
 
 SUBCOMMANDS = ("cycle", "seismic", "compare", "report", "sweep", "tables", "calibrate", "benchmark", "polar", "params")
 
@@ -33,7 +40,8 @@ class OneLineParser(argparse.ArgumentParser):
     like every other bad input; ``nsd CMD --help`` shows the usage."""
 
     def error(self, message: str):
-        self.exit(2, f"{self.prog}: error: {' '.join(message.split())} (see {self.prog} --help)\n")
+        from nsd_core.device.inputs import printable
+        self.exit(2, f"{self.prog}: error: {printable(message)} (see {self.prog} --help)\n")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -71,6 +79,12 @@ def _handle_signals():
 
 
 def main(argv: list[str] | None = None) -> int:
+    for stream in (sys.stdout, sys.stderr):  # a name with bytes that are not UTF-8 prints escaped, not a traceback
+        if hasattr(stream, "reconfigure"):
+            try:
+                stream.reconfigure(errors="backslashreplace")
+            except (ValueError, OSError):
+                pass
     parser = build_parser()
     args = parser.parse_args(argv)
     args.tally = {}  # subcommands that keep results as they go fill in kept / total / dir
@@ -78,24 +92,34 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return int(args.handler(args) or 0)
     except InputError as e:
-        print(f"nsd: error: {e}", file=sys.stderr)
+        print(f"nsd: error: {printable(e)}", file=sys.stderr)
         return 2
     except DriveError as e:
-        print(f"nsd: error: {e}", file=sys.stderr)
+        print(f"nsd: error: {printable(e)}", file=sys.stderr)
         return 4
     except SolverError as e:
-        print(f"nsd: solver failure: {e}", file=sys.stderr)
+        print(f"nsd: solver failure: {printable(e)}", file=sys.stderr)
         return 3
+    except OSError as e:
+        if e.errno not in DISK_ERRNOS:
+            raise
+        t = args.tally
+        kept = f"; {t['kept']} of {t['total']} cases kept in {printable(t['dir'])}" if "total" in t else ""
+        print(f"nsd: error: cannot write {printable(e.filename or 'the output')}: {e.strerror or e}{kept} "
+              "(files written before are intact)", file=sys.stderr)
+        return 1
     except (Interrupted, KeyboardInterrupt) as e:
         signum = e.signum if isinstance(e, Interrupted) else signal.SIGINT
         for sig in saved:  # a second Ctrl-C while we tidy up must not print a traceback
             signal.signal(sig, signal.SIG_IGN)
         t = args.tally
-        where = (f"; {t['kept']} of {t['total']} cases kept in {t['dir']}" if "total" in t
+        where = (f"; {t['kept']} of {t['total']} cases kept in {printable(t['dir'])}" if "total" in t
                  else "; nothing kept")
         print(f"nsd: interrupted{where}", file=sys.stderr, flush=True)
         return 128 + int(signum)
     finally:
+        from nsd_cli.outlock import release_all
+        release_all()
         for sig, handler in saved.items():
             signal.signal(sig, handler)
 

@@ -2,13 +2,16 @@
 from __future__ import annotations
 
 import argparse
+import errno
 import math
 import os
+import stat
 import sys
 import tempfile
 import time
 from pathlib import Path
 
+from nsd_core.device.inputs import printable
 from nsd_core.device.params import ParameterError, Params, load_params, parse_set
 
 
@@ -56,9 +59,11 @@ def add_solver_arguments(p: argparse.ArgumentParser) -> None:
 def solver_settings(args) -> dict:
     """The solver options given on the command line, checked by the in-house engine's own settings
     check (types, ranges, the step-size floor, the method), by setting name."""
+    given = {k: getattr(args, k) for k in ("method", "rtol", "atol", "max_step") if getattr(args, k) is not None}
+    if not given:
+        return given  # nothing to check (and the engines' imports stay out of a refusal's start-up)
     from comparisons.engines.base import check_settings
     from comparisons.engines.semirecursive_engine import SemirecursiveEngine
-    given = {k: getattr(args, k) for k in ("method", "rtol", "atol", "max_step") if getattr(args, k) is not None}
     try:
         check_settings(SemirecursiveEngine, given, "semirecursive")
     except ParameterError as e:  # name the option the user typed
@@ -78,38 +83,86 @@ def whole(name: str, v, low: int, high: int) -> None:
 WORKERS_MAX = 256
 
 
-def _nearest_existing(path: Path) -> Path:
+# bytes (Linux): longer names are refused before anything is made; PATH_MAX keeps room for what a
+# command writes inside --out (designs/<key>/result.json, a temporary file's prefix and suffix)
+NAME_MAX, PATH_MAX, TMP_AFFIX = 255, 4096 - 256, 16
+
+
+def _path_error(option: str, value: str, path: Path, e: OSError) -> ParameterError:
+    """One line for an OSError met while resolving an output path."""
+    shown = f"{option} {printable(value)}"
+    if e.errno == errno.ELOOP:
+        return ParameterError(f"{shown}: {printable(path)} is a symbolic link loop")
+    if e.errno == errno.ENAMETOOLONG:
+        return ParameterError(f"{shown}: name too long (at most {NAME_MAX} bytes a name, {PATH_MAX} in all)")
+    if e.errno == errno.ENOTDIR:
+        return ParameterError(f"{shown}: a part of it is a file, not a folder")
+    if e.errno in (errno.EACCES, errno.EPERM):
+        return ParameterError(f"{shown}: {printable(path)} is not accessible (permission denied)")
+    return ParameterError(f"{shown}: {printable(path)} cannot be used ({e.strerror or e})")
+
+
+def _nearest_existing(option: str, value: str, path: Path) -> Path:
+    """The deepest existing folder on the way to ``path``; every part checked once: a symbolic link
+    loop, a dangling link, a name too long, a file where a folder is needed are bad input."""
+    raw = os.fsencode(str(path.absolute()))
+    if len(raw) >= PATH_MAX or any(len(part) > NAME_MAX for part in raw.split(b"/")):
+        raise ParameterError(f"{option} {printable(value)}: name too long (at most {NAME_MAX} bytes a name, "
+                             f"{PATH_MAX} in all)")
     p = path.absolute()
-    while not p.exists() and p != p.parent:
-        p = p.parent
-    return p
+    while True:
+        try:
+            st = os.stat(p)
+        except FileNotFoundError:
+            try:
+                os.lstat(p)
+            except FileNotFoundError:
+                if p == p.parent:
+                    raise ParameterError(f"{option} {printable(value)}: no folder on the way exists") from None
+                p = p.parent
+                continue
+            except OSError as e:
+                raise _path_error(option, value, p, e) from None
+            raise ParameterError(f"{option} {printable(value)}: {printable(p)} is a symbolic link to nothing") from None
+        except OSError as e:
+            raise _path_error(option, value, p, e) from None
+        if not stat.S_ISDIR(st.st_mode):
+            raise ParameterError(f"{option} {printable(value)}: {printable(p)} "
+                                 + ("exists and is not a folder" if p == path.absolute() else "is a file, not a folder"))
+        return p
 
 
 def _writable_folder(option: str, value: str, folder: Path) -> None:
     """The folder exists or can be made, and a file can be created in it (probed, then removed)."""
-    base = _nearest_existing(folder)
-    if not base.is_dir():
-        raise ParameterError(f"{option} {value}: {base} is a file, not a folder")
+    base = _nearest_existing(option, value, folder)
     if not os.access(base, os.W_OK | os.X_OK):
-        raise ParameterError(f"{option} {value}: {base} is not writable")
+        raise ParameterError(f"{option} {printable(value)}: {printable(base)} is not writable")
     try:
         with tempfile.TemporaryFile(dir=base):
             pass
     except OSError as e:
-        raise ParameterError(f"{option} {value}: {base} is not writable ({e.strerror or e})") from None
+        raise ParameterError(f"{option} {printable(value)}: {printable(base)} is not writable "
+                             f"({e.strerror or e})") from None
 
 
-def check_out_dir(option: str, value: str | None) -> Path | None:
+def check_out_dir(option: str, value: str | None, lock: bool = True) -> Path | None:
     """--out must name a folder (existing or to be made) that can be written, checked before any
-    computation so that a run never fails at the end for want of a place to put its results."""
+    computation so that a run never fails at the end for want of a place to put its results; then
+    the folder is locked for this run (nsd_cli.outlock: a second run into it is exit 2)."""
     if value is None:
         return None
     if not value.strip():
         raise ParameterError(f"{option} '': name an output folder")
     path = Path(value)
-    if path.exists() and not path.is_dir():
-        raise ParameterError(f"{option} {value}: exists and is not a folder")
     _writable_folder(option, value, path)
+    if lock:
+        from nsd_cli.outlock import acquire
+        try:
+            acquire(path, option, value)
+        except ParameterError:
+            raise
+        except OSError as e:
+            raise _path_error(option, value, path, e) from None
     return path
 
 
@@ -118,10 +171,23 @@ def check_out_file(option: str, value: str | None) -> Path | None:
     if value is None:
         return None
     path = Path(value)
-    if not value.strip() or value.endswith(("/", os.sep)) or path.is_dir():
-        raise ParameterError(f"{option} {value!r}: must name a file, not a folder")
+    if not value.strip() or value.endswith(("/", os.sep)) or os.path.isdir(value):
+        raise ParameterError(f"{option} {printable(repr(value))}: must name a file, not a folder")
+    if len(os.fsencode(path.name)) > NAME_MAX - TMP_AFFIX:
+        raise ParameterError(f"{option} {printable(value)}: name too long (at most {NAME_MAX - TMP_AFFIX} bytes for "
+                             "a file name)")
     _writable_folder(option, value, path.parent)
     return path
+
+
+def check_finite(data, what: str) -> None:
+    """Any NaN or inf in an output is a solver failure (exit 3), never exit 0: raises SolverError
+    naming the first field that holds one (nsd_core.device.results.first_nonfinite); nothing is written."""
+    from nsd_core.device.results import first_nonfinite
+    from nsd_core.engine.errors import SolverError
+    bad = first_nonfinite(data)
+    if bad:
+        raise SolverError(f"{what}: a non-finite output, {bad}; nothing written")
 
 
 def positive(name: str, v, whole: bool = False) -> None:

@@ -10,40 +10,47 @@ import argparse
 import os
 from pathlib import Path
 
-from nsd_cli.options import add_param_arguments, base_params, check_out_dir
+from nsd_cli import limits as lim
+from nsd_cli.options import add_param_arguments, base_params, check_finite, check_out_dir
 from nsd_core.device.params import ParameterError
 
 HELP = "the device's response versus drive direction, per number of wires"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--wires", default="3,4,6,8", help="comma-separated n = n_w = n_r (each >= 3; default 3,4,6,8)")
-    p.add_argument("--step", type=float, default=15.0, help="azimuth step [deg], dividing 360 (default 15)")
-    p.add_argument("--amplitude", type=float, default=0.015, help="A [m] for the loop area and K_min (default 0.015)")
-    p.add_argument("--points-per-cycle", type=int, default=100, help="quasi-static points per cycle (default 100)")
+    p.add_argument("--wires", default="3,4,6,8",
+                   help=f"comma-separated n = n_w = n_r, each once, each in [{lim.POLAR_WIRES[0]}, {lim.POLAR_WIRES[1]}], "
+                        f"at most {lim.POLAR_DESIGNS_MAX} (default 3,4,6,8)")
+    p.add_argument("--step", type=float, default=15.0,
+                   help=f"azimuth step [deg], dividing 360, in [{lim.POLAR_STEP[0]:g}, {lim.POLAR_STEP[1]:g}] (default 15)")
+    p.add_argument("--amplitude", type=float, default=0.015,
+                   help="A [m] for the loop area and K_min, in (0, rod_length) (default 0.015)")
+    p.add_argument("--points-per-cycle", type=int, default=100,
+                   help=f"quasi-static points per cycle, in [{lim.POLAR_POINTS[0]}, {lim.POLAR_POINTS[1]}] (default 100); "
+                        f"designs x 360/step x points <= {lim.POLAR_WORK_MAX}")
     add_param_arguments(p)
-    p.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="local processes")
+    p.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="local processes, in [1, 64]")
     p.add_argument("--out", required=True, help="output folder (put it under a compare folder as DIR/polar for the report)")
 
 
 def run(args) -> int:
-    from nsd_core.device.results import atomic_write_json, atomic_write_text
-    from nsd_core.study.polar import polar_csv, polar_study
     try:
-        wires = tuple(int(w) for w in args.wires.split(",") if w.strip())
+        wires = tuple(int(w) for w in args.wires.split(","))
     except ValueError:
-        raise ParameterError(f"--wires {args.wires!r}: must be comma-separated whole numbers >= 3") from None
-    if args.points_per_cycle < 16:
-        raise ParameterError(f"--points-per-cycle = {args.points_per_cycle}: must be >= 16")
-    if args.workers < 1:
-        raise ParameterError(f"--workers = {args.workers}: must be >= 1")
-    if args.workers > 64:
+        raise ParameterError(f"--wires {args.wires!r}: must be comma-separated whole numbers in "
+                             f"[{lim.POLAR_WIRES[0]}, {lim.POLAR_WIRES[1]}]") from None
+    lim.check_polar_work(wires, args.step, args.points_per_cycle)
+    if not 1 <= args.workers <= 64:
         raise ParameterError(f"--workers = {args.workers}: must be in [1, 64]")
-    if args.points_per_cycle > 10000:
-        raise ParameterError(f"--points-per-cycle = {args.points_per_cycle}: must be in [16, 10000]")
     base = base_params(args)
+    lim.in_range("--amplitude", args.amplitude, (0.0, base.rod_length * (1 - 1e-12)), "m (0, rod_length)", low_open=True)
+    for n in wires:
+        base.replace(n_wires=n, n_ropes=n)  # each design's parameters checked (one line) before any work
+    from nsd_core.device.results import atomic_write_json, atomic_write_text
+    from nsd_core.study.polar import polar_csv, polar_study  # after the checks: a refusal starts light
     out = check_out_dir("--out", args.out)
     result = polar_study(wires, args.step, args.amplitude, base, args.points_per_cycle, args.workers)
+    check_finite(result, "polar")
     atomic_write_json(out / "polar.json", result)
     atomic_write_text(out / "polar.csv", polar_csv(result))
     _png(result, out / "polar.png")
@@ -59,9 +66,13 @@ def _png(result: dict, path: Path) -> None:
     import matplotlib.pyplot as plt
     from reports import style
     from reports.polar import polar_figure
-    with plt.rc_context(style.RC):
-        fig = polar_figure(result)
-        tmp = path.parent / f".{path.name}.{os.getpid()}.tmp.png"
-        fig.savefig(tmp)
-        plt.close(fig)
-    os.replace(tmp, path)
+    tmp = path.parent / f".{path.name}.{os.getpid()}.tmp.png"
+    try:
+        with plt.rc_context(style.RC):
+            fig = polar_figure(result)
+            fig.savefig(tmp)
+            plt.close(fig)
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)  # a full disk leaves no half-written figure behind
+        raise

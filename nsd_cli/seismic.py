@@ -15,9 +15,10 @@ from __future__ import annotations
 import argparse
 import math
 
-from nsd_cli.options import (Progress, add_param_arguments, add_solver_arguments, base_params, check_out_dir,
-                             solver_settings)
+from nsd_cli import limits as lim
 from nsd_cli import seismic_building, seismic_extras
+from nsd_cli.options import (Progress, add_param_arguments, add_solver_arguments, base_params, check_finite,
+                             check_out_dir, solver_settings)
 from nsd_core.device.params import ParameterError
 
 HELP = "seismic response of the isolated structure (in-house engine)"
@@ -29,19 +30,26 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                           "nearfield-no-pulse:15..28")
     src.add_argument("--ground", metavar="KIND:K=V,...",
                      help="synthetic input: harmonic:amplitude=A[m/s^2],frequency=f,azimuth=DEG,duration=T or "
-                          "pulse:velocity=V[m/s],frequency=fp,gamma=G,phase=DEG,azimuth=DEG (Mavroeidis-Papageorgiou)")
+                          "pulse:velocity=V[m/s],frequency=fp,gamma=G,phase=DEG,azimuth=DEG (Mavroeidis-Papageorgiou); "
+                          "each key once, bounds: " + _ground_bounds())
     src.add_argument("--record-set", metavar="SET",
                      help="every record of a FEMA P695 set (farfield, nearfield, nearfield-pulse, nearfield-no-pulse), "
                           "each with and without the device (see --records)")
-    p.add_argument("--scale", default="1", help="factor on the record's (normalised) acceleration")
+    p.add_argument("--scale", default="1", help="factor on the record's (normalised) acceleration, "
+                                                 f"in [{lim.SCALE[0]:g}, {lim.SCALE[1]:g}]")
     p.add_argument("--window", metavar="T0,T1", help="part of the record, in the record's own seconds")
-    p.add_argument("--rotate", default="0", metavar="DEG", help="rotation of the record pair in plan")
+    p.add_argument("--rotate", default="0", metavar="DEG", help="rotation of the record pair in plan, "
+                                                                  f"in [{lim.ROTATE[0]:g}, {lim.ROTATE[1]:g}]")
     p.add_argument("--time-factor", default=None,
-                   help="model seconds per record second (default sqrt(0.1): Froude 1:10 similitude)")
+                   help="model seconds per record second (default sqrt(0.1): Froude 1:10 similitude), "
+                        f"in [{lim.TIME_FACTOR[0]:g}, {lim.TIME_FACTOR[1]:g}]")
     p.add_argument("--raw", action="store_true", help="the recorded acceleration, not FEMA P695's normalised one")
     p.add_argument("--duration", type=float, default=None,
-                   help="model time to run [s] (default: the input's; longer adds free vibration)")
-    p.add_argument("--dt-out", type=float, default=1e-3, help="output interval [s]")
+                   help="model time to run [s] (default: the input's; longer adds free vibration), "
+                        f"at most {lim.SEISMIC_DURATION_MAX:g} s (about {lim.SEISMIC_STEPS_PER_SECOND} steps per s)")
+    p.add_argument("--dt-out", type=float, default=1e-3,
+                   help=f"output interval [s], in [{lim.DT_OUT[0]:g}, {lim.DT_OUT[1]:g}] and <= the duration; "
+                        f"duration / dt-out <= {lim.SEISMIC_SAMPLES_MAX:.0e} samples")
     p.add_argument("--no-device", action="store_true", help="the supports alone (the isolation effect's reference)")
     p.add_argument("--engines", default="semirecursive",
                    help="semirecursive (the reference, always first) and any of mujoco, exudyn to cross-check: "
@@ -55,10 +63,32 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--records", default=None, metavar="1,3,5-7", help="with --record-set: these records only (default all)")
     p.add_argument("--workers", type=int, default=None, help="with --record-set: local processes (default: the cores)")
     p.add_argument("--scheduler", default=None, help="with --record-set: address of a running Dask scheduler")
+    p.add_argument("--scheduler-timeout", type=float, default=None, metavar="S",
+                   help=f"with --scheduler: seconds to wait for the connection and for the scheduler's answer, each "
+                        f"(default {lim.SCHEDULER_TIMEOUT_DEFAULT:g}, in [{lim.SCHEDULER_TIMEOUT[0]:g}, "
+                        f"{lim.SCHEDULER_TIMEOUT[1]:g}])")
     p.add_argument("--retry-failed", action="store_true", help="with --record-set: run records stored as failed again")
     add_param_arguments(p)
     add_solver_arguments(p)
     p.add_argument("--out", required=True, help="output folder (with --record-set: resumable)")
+
+
+def _ground_bounds() -> str:
+    from nsd_core.device.ground import ground_spec_bounds
+    return ground_spec_bounds()
+
+
+def check_record_flags(args) -> None:
+    """--scale, --rotate, --time-factor: finite numbers in their ranges (issue 22), before any record is read."""
+    from nsd_core.device.ground import _number, _positive  # the record's own checks first (their wording)
+    lim.in_range("--scale", _positive("scale", args.scale), lim.SCALE)
+    lim.in_range("--rotate", _number("rotate_deg", args.rotate), lim.ROTATE, "deg")
+    if args.time_factor is not None:
+        lim.in_range("--time-factor", lim.number("--time-factor", args.time_factor), lim.TIME_FACTOR)
+    if args.duration is not None:
+        lim.check_seismic_request(args.duration, args.dt_out)
+    else:
+        lim.in_range("--dt-out", args.dt_out, lim.DT_OUT, "s")
 
 
 def ground_motion(args):
@@ -104,6 +134,9 @@ def run(args) -> int:
             raise ParameterError(f"--{name}: applies to --record-set only")
     if args.retry_failed:
         raise ParameterError("--retry-failed: applies to --record-set only")
+    if args.scheduler_timeout is not None:
+        raise ParameterError("--scheduler-timeout: applies to --record-set --scheduler only")
+    check_record_flags(args)
     from nsd_core.device.drive import DriveError
     from nsd_core.device.model import DEFAULT_SOLVER
     from nsd_core.device.results import atomic_write_json, versions, write_csv
@@ -118,6 +151,8 @@ def run(args) -> int:
         raise ParameterError("--engines: the supports alone (--no-device) run on the in-house engine only")
     seismic_extras.check_compare(args, engines)
     motion = ground_motion(args)
+    lim.check_seismic_request(motion.duration if args.duration is None else args.duration, args.dt_out,
+                              "" if args.duration is not None else "the input's own duration")
     structure = seismic_building.with_building(args, seismic_extras.isolated_structure(args, params))
     if args.fixed_base and (not args.no_device or args.compare_supports):
         raise ParameterError("--fixed-base: the slab is held to the ground, so the run has no device: add --no-device")
@@ -138,7 +173,10 @@ def run(args) -> int:
         solver["fixed_base"] = True
         head["fixed_base"] = True
     if args.compare_supports:
-        return seismic_extras.run_compare(args, params, structure, motion, solver, out, head)
+        code = seismic_extras.run_compare(args, params, structure, motion, solver, out, head)
+        from reports.build import draw_study  # the pair's PNGs into its own folder (issue 20)
+        draw_study(out)
+        return code
     try:
         result = simulate_seismic(params, structure, motion, duration=args.duration, dt_out=args.dt_out,
                                   device=not args.no_device, progress=Progress("nsd seismic"), **solver)
@@ -157,6 +195,8 @@ def run(args) -> int:
         if "floor1_x" in result.columns:  # the building's floors and stories (docs/building.md)
             from comparisons.seismic import building_metrics
             summary["engines"][name]["building"] = building_metrics(result, other)
+    check_finite({"seismic.csv": result, **{f"seismic_{n}.csv": o for n, o in others.items()},
+                  "summary.json": summary}, "nsd seismic")
     for name, other in others.items():
         write_csv(out / f"seismic_{name}.csv", other)
     write_csv(out / "seismic.csv", result)
@@ -181,6 +221,8 @@ def run(args) -> int:
     if summary["outside_working_range"]:
         print("  WARNING: the ropes went slack: part of this run lies outside the device's working range")
     print(f"wrote {out / 'seismic.csv'} and {out / 'summary.json'}")
+    from reports.build import draw_study  # the run's PNGs into its own folder (issue 20)
+    draw_study(out)
     return 0
 
 
@@ -203,12 +245,13 @@ def run_set(args) -> int:
     from comparisons.engines import parse_engine_list, run_seismic_engine
     from comparisons.seismic import seismic_metrics
     from nsd_cli.options import WORKERS_MAX, whole
-    from nsd_cli.sweep import check_scheduler
+    from nsd_cli.sweep import check_scheduler, scheduler_timeout
     from nsd_core.device.ground import SIMILITUDE_TIME_FACTOR, fema_record, set_name
     from nsd_core.device.model import DEFAULT_SOLVER
     from nsd_core.study.seismic_set import parse_records, record_runs, run_set as run_record_set
     set_ = set_name(args.record_set)
     records = parse_records(args.records, set_)
+    check_record_flags(args)
     if args.no_device:
         raise ParameterError("--no-device: --record-set runs every record both with and without the device")
     if args.compare_supports:
@@ -238,9 +281,14 @@ def run_set(args) -> int:
             raise ParameterError(f"--{name.replace('_', '-')} = {v}: must be a finite number > 0 (s)")
     runs = record_runs(set_, records, ground, params.to_dict(), numbers, args.duration, args.dt_out, solver,
                        code_fingerprint(), peers=tuple(engines[1:]))  # every record's window checked here
-    check_scheduler(args.scheduler)
+    for r in runs if args.duration is None else ():
+        lim.check_seismic_request(fema_record(r.set, r.record, **r.ground).duration, args.dt_out,
+                                  f"record {r.set}:{r.record}'s own duration")
+    timeout = scheduler_timeout(args)
+    check_scheduler(args.scheduler, timeout)
     out = check_out_dir("--out", args.out)
-    index = run_record_set(runs, out, workers=workers, scheduler=args.scheduler, retry_failed=args.retry_failed,
+    index = run_record_set(runs, out, workers=workers, scheduler=args.scheduler, scheduler_timeout=timeout,
+                           retry_failed=args.retry_failed,
                            run_engine=run_seismic_engine, compare=seismic_metrics, tally=args.tally)
     c = index["counts"]
     for row in index["rows"]:
@@ -251,6 +299,8 @@ def run_set(args) -> int:
               + (f" [{row['reason']}]" if row["reason"] else ""))
     print(f"{len(index['rows'])} records: " + ", ".join(f"{c[k]} {k}" for k in c if k == "ok" or c[k])
           + f"; {index['elapsed_this_run_s']:.1f} s; wrote {out / 'set.csv'} and {out / 'set.json'}")
+    from reports.build import draw_study  # the set's PNGs into its own folder (issue 20)
+    draw_study(out)
     if c["solver_failure"] or c["error"] or c["missing"]:
         return 3
     return 4 if c["rod_reach"] or c["outside_validity"] else 0

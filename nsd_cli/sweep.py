@@ -9,6 +9,7 @@ import socket
 
 from nsd_cli.options import (WORKERS_MAX, add_param_arguments, add_solver_arguments, base_params, check_out_dir,
                              parse_engines, parse_numbers, positive, solver_settings, whole)
+from nsd_cli.limits import SWEEP_STEPS_MAX, check_drive_work
 from nsd_core.device.params import FIELDS, ParameterError
 
 MAX_VALUES = 200
@@ -31,25 +32,56 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--engines", default="semirecursive", help="comma-separated: semirecursive, mujoco, exudyn")
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="local processes")
     parser.add_argument("--scheduler", default=None, help="address of a running Dask scheduler")
+    parser.add_argument("--scheduler-timeout", type=float, default=None, metavar="S",
+                        help="with --scheduler: seconds to wait for the connection and for the scheduler's answer, "
+                             "each (default 10, in [0.1, 600])")
     parser.add_argument("--retry-failed", action="store_true", help="run designs stored as failed again")
     add_solver_arguments(parser)
     parser.add_argument("--out", required=True, help="output folder (resumable)")
 
 
-def check_scheduler(address: str | None) -> None:
-    """--scheduler: tcp://HOST:PORT (or HOST:PORT) where a Dask scheduler answers, checked in seconds
-    before anything is written, rather than a traceback after a 20 s timeout."""
+def scheduler_timeout(args) -> float:
+    """--scheduler-timeout (seconds for the connection and for the handshake, each), checked."""
+    from nsd_cli import limits as lim
+    t = getattr(args, "scheduler_timeout", None)
+    if t is None:
+        return lim.SCHEDULER_TIMEOUT_DEFAULT
+    if getattr(args, "scheduler", None) is None:
+        raise ParameterError("--scheduler-timeout: applies to --scheduler only")
+    return lim.in_range("--scheduler-timeout", t, lim.SCHEDULER_TIMEOUT, "s")
+
+
+def check_scheduler(address: str | None, timeout: float = 10.0) -> None:
+    """--scheduler: tcp://HOST:PORT (or HOST:PORT) where a Dask scheduler answers, checked in at most
+    2 x ``timeout`` seconds before anything is written: the connection, then the scheduler's own
+    handshake (a Dask scheduler speaks first), so a listener that accepts and never speaks is exit 2
+    naming the address rather than a run that never answers."""
     if address is None:
         return
+    from nsd_core.device.inputs import printable
     m = re.fullmatch(r"(?:tcp://)?([A-Za-z0-9.\-]+|\[[0-9a-fA-F:]+\]):([0-9]{1,5})", address.strip())
     if not m or not 0 < int(m.group(2)) < 65536:
-        raise ParameterError(f"--scheduler {address!r}: must be tcp://HOST:PORT of a running Dask scheduler")
+        raise ParameterError(f"--scheduler {printable(repr(address))}: must be tcp://HOST:PORT of a running Dask "
+                             "scheduler")
     host = m.group(1).strip("[]")
     try:
-        socket.create_connection((host, int(m.group(2))), timeout=3).close()
-    except OSError as e:
-        raise ParameterError(f"--scheduler {address}: nothing answers there ({e.strerror or e}); start "
+        sock = socket.create_connection((host, int(m.group(2))), timeout=timeout)
+    except (OSError, UnicodeError) as e:
+        why = "no answer" if isinstance(e, socket.timeout) else (getattr(e, "strerror", None) or e)
+        raise ParameterError(f"--scheduler {address}: nothing answers there within {timeout:g} s ({why}); start "
                              "`dask scheduler` first or leave --scheduler out for local workers") from None
+    try:
+        sock.settimeout(timeout)
+        first = sock.recv(1, socket.MSG_PEEK)
+    except OSError:
+        first = None
+    finally:
+        sock.close()
+    if not first:
+        raise ParameterError(f"--scheduler {address}: accepts connections but "
+                             + ("closed without a handshake" if first == b"" else
+                                f"sent no Dask handshake within {timeout:g} s")
+                             + "; not a Dask scheduler, or it is hung (see --scheduler-timeout)")
 
 
 def run(args) -> int:
@@ -86,12 +118,20 @@ def run(args) -> int:
             raise ParameterError(f"--amplitude = {d.amplitude}: must be < rod_length = {d.params['rod_length']} "
                                  f"(design {d.label})")
         check_settings(get_engine(d.engine), d.settings, d.engine)
-    check_scheduler(args.scheduler)
+    total = sum(check_drive_work(d.cycles / d.frequency, (d.settings or {}).get("max_step") or 1e-3,
+                                 f"design {d.label}") for d in {d.key: d for d in designs}.values())
+    if total > SWEEP_STEPS_MAX:
+        raise ParameterError(f"--values: {len(designs)} designs would take about {total:.3g} solver steps together; "
+                             f"at most {SWEEP_STEPS_MAX:.0e} per sweep")
+    timeout = scheduler_timeout(args)
+    check_scheduler(args.scheduler, timeout)
     out = check_out_dir("--out", args.out)
-    index = run_sweep(designs, out, workers=args.workers, scheduler=args.scheduler,
+    index = run_sweep(designs, out, workers=args.workers, scheduler=args.scheduler, scheduler_timeout=timeout,
                       retry_failed=args.retry_failed, run_engine=run_engine, tally=args.tally)
     print(f"{index['ok']} design entries ok, {len(index['failed'])} failed, {len(index['missing'])} missing; "
           f"{index['elapsed_this_run_s']:.1f} s; wrote {out / 'sweep.json'}")
     for study, path in index["studies"].items():
         print(f"  {study}: {out / path}")
+    from reports.build import draw_study  # the study's PNGs into its own folder (issue 20)
+    draw_study(out)
     return 3 if index["failed"] or index["missing"] else 0

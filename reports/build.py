@@ -19,6 +19,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from nsd_core.device.inputs import check_regular, printable, read_regular_text
 from nsd_core.device.params import ParameterError
 from nsd_core.device.results import RunResult, read_csv
 
@@ -57,12 +58,16 @@ class ReportData:
 
 
 def _json(path: Path, what: str) -> Any:
+    if not os.path.lexists(path):
+        raise ParameterError(f"--from {printable(path.parent)}: no {path.name} ({what})")
     try:
-        return json.loads(path.read_text())
-    except FileNotFoundError:
-        raise ParameterError(f"--from {path.parent}: no {path.name} ({what})") from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
-        raise ParameterError(f"{path}: not readable JSON ({' '.join(str(e).split())})") from None
+        return json.loads(read_regular_text(path, str(path)))
+    except json.JSONDecodeError as e:
+        raise ParameterError(f"{printable(path)}: not readable JSON ({' '.join(str(e).split())})") from None
+    except ValueError as e:  # InputError: not a regular file, not text, not readable
+        raise ParameterError(str(e)) from None
+    except OSError as e:
+        raise ParameterError(f"{printable(path)}: not readable JSON ({' '.join(str(e).split())})") from None
 
 
 def load(results_dir: str | Path) -> ReportData:
@@ -107,7 +112,9 @@ def load(results_dir: str | Path) -> ReportData:
             for col in ("t", "u", "F", "closure"):
                 if col not in data.results[(case, engine)].columns:
                     raise ParameterError(f"{csv}: malformed (no column {col!r})")
-    if not data.results:
+    seismic_ok = any(isinstance(r, dict) and r.get("status") == "ok" for c in summary.get("seismic_cases") or []
+                     if isinstance(c, dict) for r in (summary["runs"].get(c.get("name")) or {}).values())
+    if not data.results and not seismic_ok:
         raise ParameterError(f"--from {root}: no engine run succeeded there; there is nothing to report "
                              "(see the errors in results.json)")
     bench = root / "benchmark" / "results.json"
@@ -134,6 +141,7 @@ def _load_tables(path: Path) -> list[dict]:
     if not path.is_file():
         return []
     try:
+        check_regular(path, "tables.csv")
         with open(path) as f:
             rows = list(csv.DictReader(f))
         return [{"table": r["table"], "parameter": r["parameter"], "value": float(r["value"]),
@@ -150,14 +158,15 @@ def _load_study(folder: Path) -> list[dict]:
     if not index.is_file():
         return []
     try:
-        studies = json.loads(index.read_text()).get("studies", {})
+        studies = json.loads(read_regular_text(index)).get("studies", {})
         out = []
         for name, rel in studies.items():
-            s = json.loads((folder / rel).read_text())
+            s = json.loads(read_regular_text(folder / rel))
             curves = []
             for d in s.get("designs", []):
                 if d.get("status") == "ok" and d.get("steady_csv") and (folder / d["steady_csv"]).is_file():
                     path = folder / d["steady_csv"]
+                    check_regular(path, "steady CSV")
                     with open(path) as f:
                         names = [h.split(" [")[0] for h in f.readline().strip().split(",")]
                     arr = np.genfromtxt(path, delimiter=",", skip_header=1, ndmin=2)  # blanks (nan) allowed
@@ -174,22 +183,27 @@ def pages(data: ReportData) -> list[tuple[str, Callable]]:
     """(file stem, figure function) per page, in order. Each function returns one Figure."""
     from reports import figures, figures_extra, figures_wp, pages as text_pages
     out: list[tuple[str, Callable]] = []
-    for i, fn in enumerate(text_pages.summary_pages(data)):
-        out.append((f"summary{'' if i == 0 else f'_{i + 1}'}", fn))
-    for i, fn in enumerate(text_pages.parameter_pages(data)):
-        out.append((f"parameters{'' if i == 0 else f'_{i + 1}'}", fn))
+    def numbered(stem: str, fns) -> None:
+        out.extend((f"{stem}{'' if i == 0 else f'_{i + 1}'}", fn) for i, fn in enumerate(fns))
+    out.append(("summary", lambda: text_pages.page_one(data)))
+    numbered("what_was_run", text_pages.run_pages(data))
+    numbered("metric_definitions", text_pages.definitions_pages(data))
+    numbered("metric_table", text_pages.metric_table_pages(data))
+    numbered("parameters", text_pages.parameter_pages(data))
     for i, group in enumerate(figures.case_groups(data)):
         tag = "" if i == 0 else f"_{i + 1}"
         out.append((f"cycles{tag}", lambda g=group: figures.cycles_figure(data, g)))
-        out.append((f"stiffness{tag}", lambda g=group: figures.stiffness_figure(data, g)))
-    for i, chunk in enumerate(figures.chunks([c["name"] for c in data.cases], 4)):
+        if not group.get("planar"):   # stiffness regions and X_max are quantities of a line drive
+            out.append((f"stiffness{tag}", lambda g=group: figures.stiffness_figure(data, g)))
+    line = [c["name"] for c in data.cases if figures.is_line(c)]
+    for i, chunk in enumerate(figures.chunks(line, 2) if line else []):
         out.append((f"breakdown{'' if i == 0 else f'_{i + 1}'}", lambda c=chunk: figures.breakdown_figure(data, c)))
     if data.power:
         from .power_page import power_figure
         out.append(("power", lambda: power_figure(data)))
     out.append(("convergence", lambda: figures_extra.convergence_figure(data)))
     out.append(("cost", lambda: figures_extra.cost_figure(data)))
-    for i, chunk in enumerate(figures.chunks([c["name"] for c in data.cases], 4)):
+    for i, chunk in enumerate(figures.chunks([c["name"] for c in data.cases], 4) if data.cases else []):
         out.append((f"closure{'' if i == 0 else f'_{i + 1}'}", lambda c=chunk: figures.closure_figure(data, c)))
     if data.benchmark:
         out.append(("benchmark", lambda: figures_extra.benchmark_figure(data)))
@@ -208,28 +222,111 @@ def pages(data: ReportData) -> list[tuple[str, Callable]]:
     return out
 
 
+def _study_plan(root: Path) -> tuple[list[tuple[str, Callable]], str]:
+    """An nsd sweep folder (sweep.json) or an nsd polar folder (polar.json): its own pages."""
+    from types import SimpleNamespace
+    from nsd_core.device.params import Params
+    from reports import figures_extra
+    if (root / "polar.json").is_file():
+        from reports.polar import polar_figure
+        p = _json(root / "polar.json", "written by nsd polar")
+        if not isinstance(p, dict) or not isinstance(p.get("designs"), dict):
+            raise ParameterError(f"{root / 'polar.json'}: malformed (no 'designs')")
+        return [("polar", lambda: polar_figure(p))], "NSD direction study (nsd polar)"
+    studies = _load_study(root)
+    if not studies:
+        raise ParameterError(f"{root / 'sweep.json'}: malformed or without a finished study")
+    stub = SimpleNamespace(summary={"params": Params().describe()})
+    return ([(f"study_{st['name']}", lambda st=st: figures_extra.study_figure(stub, st)) for st in studies],
+            "NSD parametric study (nsd sweep)")
+
+
+def source_kind(results_dir: str | Path) -> str:
+    """compare (results.json), seismic (nsd seismic, single or --set), sweep (sweep.json), polar (polar.json)."""
+    from reports.seismic_report import is_seismic
+    root = Path(results_dir)
+    if not str(results_dir).strip() or (root / "results.json").is_file():
+        return "compare"
+    if is_seismic(root):
+        return "seismic"
+    if (root / "polar.json").is_file():
+        return "polar"
+    if (root / "sweep.json").is_file():
+        return "sweep"
+    return "compare"  # load() says what is missing
+
+
+def source_plan(results_dir: str | Path) -> tuple[list[tuple[str, Callable]], str]:
+    """(file stem, figure function) per page and the footer of any results folder; everything is read
+    and checked here, before anything is written (ParameterError, one line)."""
+    from reports.seismic_report import seismic_plan
+    kind = source_kind(results_dir)
+    if kind == "seismic":
+        plan, title = seismic_plan(results_dir)
+        return plan, f"{title}  |  {time.strftime('%Y-%m-%d')}"
+    if kind in ("sweep", "polar"):
+        plan, title = _study_plan(Path(results_dir))
+        return plan, f"{title}  |  {time.strftime('%Y-%m-%d')}"
+    data = load(results_dir)
+    title = "NSD cross-validation report"
+    return pages(data), f"{title}  |  {data.summary.get('date', '')}  |  revision {data.summary.get('git_revision', '?')}"
+
+
 def check_source(results_dir: str | Path) -> None:
-    """Read and check --from (an nsd compare or an nsd seismic folder) before anything is written."""
-    from reports.seismic_report import is_seismic, seismic_plan
-    if str(results_dir).strip() and is_seismic(results_dir):
-        seismic_plan(results_dir)
-    else:
-        load(results_dir)
+    """Read and check --from (an nsd compare, seismic, sweep or polar folder) before anything is written."""
+    source_plan(results_dir)
+
+
+def draw_pngs(folder: str | Path) -> list[str]:
+    """The study's own figures, one PNG per page, into its own folder (nsd sweep, nsd seismic): the
+    pages ``nsd report --from FOLDER`` would draw. Returns the paths written."""
+    import matplotlib.pyplot as plt
+    try:
+        plan, footer = source_plan(folder)
+    except ParameterError:   # nothing finished to draw (every design failed): the numbers say why
+        return []
+    out = Path(folder)
+    written = []
+    with plt.rc_context(style.RC):
+        for n, (stem, make) in enumerate(plan, start=1):
+            fig = make()
+            style.footer(fig, f"{footer}  |  figure {n} of {len(plan)}")
+            png = out / f"{n:02d}_{stem}.png"
+            tmp = out / f".{png.name}.{os.getpid()}.tmp.png"
+            try:
+                fig.savefig(tmp)
+                os.replace(tmp, png)
+            finally:
+                plt.close(fig)
+                if tmp.exists():
+                    tmp.unlink()
+            written.append(str(png))
+    return written
+
+
+def draw_study(folder, log=print) -> list[str]:
+    """``draw_pngs`` for a study command: says where its figures went."""
+    pngs = draw_pngs(folder)
+    log(f"figures: {len(pngs)} PNG(s) in {folder}" if pngs else "figures: none (nothing finished to draw)")
+    return pngs
+
+
+def _malformed(results_dir, e: Exception) -> ParameterError:
+    """A damaged field met while drawing (a string where a number belongs...): one line, exit 2."""
+    return ParameterError(f"--from {printable(results_dir)}: malformed data ({type(e).__name__}: "
+                          f"{printable(' '.join(str(e).split()))[:160]}); nothing written")
 
 
 def build_report(results_dir: str | Path, out_dir: str | Path) -> dict[str, Any]:
     """Write ``out_dir/validation.pdf`` and ``out_dir/NN_page.png``; returns their paths."""
     import matplotlib.pyplot as plt
     from matplotlib.backends.backend_pdf import PdfPages
-    from reports.seismic_report import is_seismic, seismic_plan
     start = time.perf_counter()
-    if str(results_dir).strip() and is_seismic(results_dir):  # an nsd seismic folder (single run or --record-set)
-        plan, title = seismic_plan(results_dir)
-        footer = f"{title}  |  {time.strftime('%Y-%m-%d')}"
-    else:
-        data = load(results_dir)  # everything is checked before anything is written
-        plan, title = pages(data), "NSD cross-validation report"
-        footer = f"{title}  |  {data.summary.get('date', '')}  |  revision {data.summary.get('git_revision', '?')}"
+    try:
+        plan, footer = source_plan(results_dir)  # everything is checked before anything is written
+    except (TypeError, KeyError, IndexError, AttributeError) as e:
+        raise _malformed(results_dir, e) from None
+    title = footer.split("  |  ")[0]
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     pdf_path = out / "validation.pdf"
@@ -253,11 +350,13 @@ def build_report(results_dir: str | Path, out_dir: str | Path) -> dict[str, Any]
         for old in out.glob("[0-9][0-9]_*.png"):  # pages of an earlier report that this one no longer has
             if old.name not in keep:
                 old.unlink()
-    except BaseException:
+    except BaseException as e:
         plt.close("all")
         for tmp in [tmp_pdf] + [t for t, _ in written]:
             if tmp.exists():
                 tmp.unlink()
+        if isinstance(e, (TypeError, KeyError, IndexError, AttributeError)) or type(e) is ValueError:
+            raise _malformed(results_dir, e) from None
         raise
     return {"pdf": str(pdf_path), "pngs": [str(p) for _, p in written], "pages": [s for s, _ in plan],
             "seconds": time.perf_counter() - start}

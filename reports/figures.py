@@ -8,11 +8,11 @@ import numpy as np
 from matplotlib.gridspec import GridSpecFromSubplotSpec
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
-from matplotlib.ticker import FuncFormatter
+from matplotlib.ticker import FuncFormatter, MaxNLocator
 
 from nsd_core.device.cycle import loading_quarter, phase_resample, steady_cycle, tangent_stiffness
 
-from reports.style import GREY, LANDSCAPE, RED, SHADE, color, fmt, new_figure, no_data, style
+from reports.style import GREY, LANDSCAPE, RED, SHADE, color, fmt, limit_lines, new_figure, no_data, style
 
 CLOSURE_FLOOR = 1e-18  # [m]; exact zeros are drawn here on the log axis
 
@@ -21,22 +21,33 @@ def chunks(items: list, n: int) -> list[list]:
     return [items[i:i + n] for i in range(0, len(items), n)] or [[]]
 
 
+def is_line(c: dict) -> bool:
+    return c.get("path", "line") == "line"
+
+
 def case_groups(data) -> list[dict]:
-    """Pages of case panels. Cases forming a full amplitude x frequency grid (at most 3 x 3, one
-    direction) get the paper's Figure 6 layout: rows = amplitude, columns = frequency."""
-    cases = data.cases
+    """Pages of case panels. Line cases forming a full amplitude x frequency grid (at most 3 x 3, one
+    direction) get the paper's Figure 6 layout: rows = amplitude, columns = frequency; other line
+    cases four to a page; 2-D paths (circle, ellipse, figure eight, tables) two to a page, each as its
+    components F_x(x) and F_y(y) ("planar")."""
+    cases = [c for c in data.cases if is_line(c)]
     amps = sorted({c["amplitude"] for c in cases})
     freqs = sorted({c["frequency"] for c in cases})
     pairs = {(c["amplitude"], c["frequency"]) for c in cases}
+    out = []
     if (len(cases) > 1 and len(pairs) == len(cases) == len(amps) * len(freqs) and len(amps) <= 3
             and len(freqs) <= 3 and len({c.get("direction_deg", 0.0) for c in cases}) == 1):
         cells = [(amps.index(c["amplitude"]), freqs.index(c["frequency"]), c["name"]) for c in cases]
-        return [{"shape": (len(amps), len(freqs)), "cells": sorted(cells), "grid": True}]
-    out = []
-    for chunk in chunks([c["name"] for c in cases], 4):
-        shape = {0: (1, 1), 1: (1, 1), 2: (1, 2)}.get(len(chunk), (2, 2))
-        out.append({"shape": shape, "cells": [(i // shape[1], i % shape[1], n) for i, n in enumerate(chunk)],
-                    "grid": False})
+        out.append({"shape": (len(amps), len(freqs)), "cells": sorted(cells), "grid": True, "planar": False})
+    elif cases:
+        for chunk in chunks([c["name"] for c in cases], 4):
+            shape = {0: (1, 1), 1: (1, 1), 2: (1, 2)}.get(len(chunk), (2, 2))
+            out.append({"shape": shape, "cells": [(i // shape[1], i % shape[1], n) for i, n in enumerate(chunk)],
+                        "grid": False, "planar": False})
+    planar = [c["name"] for c in data.cases if not is_line(c)]
+    for chunk in (chunks(planar, 2) if planar else []):
+        out.append({"shape": (len(chunk), 1), "cells": [(i, 0, n) for i, n in enumerate(chunk)], "grid": False,
+                    "planar": True})
     return out
 
 
@@ -50,7 +61,13 @@ def _title(c: dict) -> str:
             + (f", psi = {fmt(psi)} deg" if psi else ""))
 
 
+def _top(fig, room: float = 0.07) -> float:
+    """Top of the panels: below the headings and the engines' legend, with ``room`` for titles."""
+    return min(0.86, getattr(fig, "_nsd_top", 0.95) - room)
+
+
 def _engines_legend(fig, data, y: float = 0.935, extra: list | None = None) -> None:
+    y = min(y, getattr(fig, "_nsd_top", y))   # below a subtitle of two lines
     handles = [Line2D([], [], **style(e), label=e + (" (reference)" if e == data.reference else ""))
                for e in data.engines] + (extra or [])
     fig.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, y), ncol=len(handles), frameon=False,
@@ -69,67 +86,71 @@ def _steady(data, case: str, engine: str):
     return res, m
 
 
+def _overlay(ax, axd, data, name: str, xcol: str, fcol: str) -> bool:
+    """``fcol`` against ``xcol`` of every engine on ``ax``; beneath on ``axd`` the difference to the
+    reference on a common phase grid, the largest |difference| per engine in its legend."""
+    f = _case(data, name)["frequency"]
+    drawn = False
+    for e in data.engines:
+        if (name, e) in data.results and fcol in data.results[(name, e)].columns:
+            res, m = _steady(data, name, e)
+            ax.plot(res[xcol][m] * 1e3, res[fcol][m], **style(e))
+            drawn = True
+    ref = data.reference
+    if (name, ref) in data.results:
+        Fr = phase_resample(data.results[(name, ref)], f, fcol)
+        xr = phase_resample(data.results[(name, ref)], f, xcol)
+        for e in data.engines:
+            if e != ref and (name, e) in data.results:
+                dF = phase_resample(data.results[(name, e)], f, fcol) - Fr
+                axd.plot(xr * 1e3, dF, **style(e), label=f"max {fmt(np.max(np.abs(dF)), 2)} N")
+        if axd.lines:
+            axd.legend(loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize=6.5, frameon=False, handlelength=1.5,
+                       borderaxespad=0.2)
+        axd.axhline(0.0, color=GREY, lw=0.6)
+    else:
+        axd.text(0.5, 0.5, f"reference {ref} did not run: no \u0394F", transform=axd.transAxes, ha="center",
+                 va="center", fontsize=7.5, color=RED)
+    axd.sharex(ax)
+    axd.yaxis.set_major_formatter(FuncFormatter(lambda v, _: fmt(v, 2)))
+    ax.tick_params(labelbottom=False)
+    return drawn
+
+
 def cycles_figure(data, group: dict):
-    """F(u) of every engine overlaid per case, Delta F(u) against the reference beneath."""
-    fig = new_figure(LANDSCAPE, "Force-displacement cycles (steady cycle)" + (
-        " - Figure 6 layout: rows amplitude, columns frequency" if group["grid"] else ""),
-        f"beneath each panel: \u0394F = F(engine) - F({data.reference}) on a common phase grid, "
-        f"plotted against the reference's displacement")
+    """F(u) of every engine overlaid per case, Delta F against the reference beneath; 2-D paths as
+    their components F_x(x) and F_y(y)."""
+    planar = group.get("planar")
+    title = ("Force-displacement cycles of the 2-D paths, by component (steady cycle)" if planar else
+             "Force-displacement cycles (steady cycle)" + (" - Figure 6 layout: rows amplitude, columns frequency"
+                                                           if group["grid"] else ""))
+    fig = new_figure(LANDSCAPE, title,
+                     f"beneath each panel: \u0394F = F(engine) - F({data.reference}) on a common phase grid, "
+                     f"against the reference's displacement; its legend: the largest |\u0394F|")
     _engines_legend(fig, data)
     rows, cols = group["shape"]
-    outer = fig.add_gridspec(rows, cols, left=0.07, right=0.98, top=0.86, bottom=0.09, hspace=0.32, wspace=0.2)
+    outer = fig.add_gridspec(rows, cols, left=0.07, right=0.9, top=_top(fig), bottom=0.09, hspace=0.4, wspace=0.45)
     for r, c, name in group["cells"]:
-        inner = GridSpecFromSubplotSpec(2, 1, subplot_spec=outer[r, c], height_ratios=[3, 1.25], hspace=0.06)
-        ax, axd = fig.add_subplot(inner[0]), fig.add_subplot(inner[1])
         case = _case(data, name)
-        f = case["frequency"]
-        drawn = False
-        for e in data.engines:
-            if (name, e) in data.results:
-                res, m = _steady(data, name, e)
-                ax.plot(res["u"][m] * 1e3, res["F"][m], **style(e))
-                drawn = True
-        if not drawn:
-            no_data(ax, f"no engine ran this case: {_failed_note(data, name)}")
+        parts = [("x", "F_x", "x"), ("y", "F_y", "y")] if planar else [("u", "F", "u")]
+        inner = GridSpecFromSubplotSpec(2, len(parts), subplot_spec=outer[r, c], height_ratios=[3, 1.25],
+                                        hspace=0.08, wspace=0.42)
         bad = sorted({m["metric"] for m in data.summary["metrics"]
                       if m["case"] == name and m.get("gated") and not m.get("pass")})
-        ax.set_title(_title(case) + ("  - FAIL" if bad else ""), fontsize=9, color=RED if bad else "black")
-        own = "; ".join(f"{e}: " + ", ".join(f"{k} = {fmt(v)}" for k, v in p.items())
-                        for e, p in (case.get("engine_params") or {}).items() if p)
-        box = ([textwrap.fill("outside limits: " + ", ".join(bad), 48)] if bad else []) + \
-            (["engine-specific parameters:", textwrap.fill(own, 48)] if own else [])
-        if box:
-            ax.text(0.98, 0.97, "\n".join(box), transform=ax.transAxes, ha="right", va="top", fontsize=7, color=RED,
-                    multialignment="left",
-                    bbox=dict(fc="white", ec=RED, lw=0.6, alpha=0.9))
-        ax.set_ylabel("force F [N]")
-        ax.tick_params(labelbottom=False)
-        note = _failed_note(data, name)
-        if note and drawn:   # wrapped to the panel, so a long engine message stays on the page
-            ax.text(0.02, 0.12, "\n".join(textwrap.wrap("failed: " + note, 60)[:4]), transform=ax.transAxes,
-                    fontsize=7, color=RED, va="bottom")
-        ref = data.reference
-        if (name, ref) in data.results:
-            Fr = phase_resample(data.results[(name, ref)], f, "F")
-            ur = phase_resample(data.results[(name, ref)], f, "u")
-            peaks = []
-            for e in data.engines:
-                if e != ref and (name, e) in data.results:
-                    dF = phase_resample(data.results[(name, e)], f, "F") - Fr
-                    axd.plot(ur * 1e3, dF, **style(e))
-                    peaks.append(f"{e} {fmt(np.max(np.abs(dF)), 2)} N")
-            if peaks:   # in the cycle panel's empty lower-left quadrant (F > 0 for u < 0), not over the
-                # Delta F traces, where a legend box hid the largest excursion
-                ax.text(0.02, 0.03, "max |\u0394F| below: " + ", ".join(peaks), transform=ax.transAxes,
-                        fontsize=7, va="bottom", ha="left")
-            axd.axhline(0.0, color=GREY, lw=0.6)
-        else:
-            axd.text(0.5, 0.5, f"reference {ref} did not run: no \u0394F", transform=axd.transAxes, ha="center",
-                     va="center", fontsize=7.5, color=RED)
-        axd.sharex(ax)
-        axd.set_xlabel("displacement u [mm]")
-        axd.set_ylabel("\u0394F [N]")
-        axd.yaxis.set_major_formatter(FuncFormatter(lambda v, _: fmt(v, 2)))
+        for k, (xcol, fcol, lab) in enumerate(parts):
+            ax, axd = fig.add_subplot(inner[0, k]), fig.add_subplot(inner[1, k])
+            if not _overlay(ax, axd, data, name, xcol, fcol):
+                no_data(ax, f"no engine ran this case: {_failed_note(data, name)}")
+            head = _title(case) if not planar else f"{name}: {fcol} against {lab}"
+            ax.set_title(head + ("  - FAIL" if bad else ""), fontsize=8.5, color=RED if bad else "black")
+            ax.set_ylabel(f"force {fcol} [N]")
+            axd.set_xlabel(f"displacement {lab} [mm]")
+            axd.set_ylabel(f"\u0394{fcol} [N]")
+        note = "; ".join(([("outside limits: " + ", ".join(bad))] if bad else []) +
+                         ([f"failed: {_failed_note(data, name)}"] if _failed_note(data, name) else []))
+        if note:
+            ax.text(0.02, 0.03, "\n".join(textwrap.wrap(note, 50)[:4]), transform=ax.transAxes, fontsize=7,
+                    color=RED, va="bottom")
     return fig
 
 
@@ -141,13 +162,13 @@ def stiffness_figure(data, group: dict):
     reference shaded (Figure 7), X_max marked where the ropes went slack."""
     fig = new_figure(LANDSCAPE, "Tangent stiffness on the loading branch (Figure 7 working regions)",
                      "dF/du along u = 0 -> +A of the steady cycle; shaded: the reference's regions of positive "
-                     "and negative stiffness; X_max: displacement at which every rope is slack; curves end at "
-                     f"{TURNING:g} A, where du/dt -> 0 makes dF/du noise")
+                     "and negative stiffness; X_max: displacement at which every rope is slack;\ncurves end at "
+                     f"{TURNING:g} A, where du/dt -> 0 makes dF/du noise (line drives only)")
     extra = [Patch(facecolor=SHADE["+"], label="k > 0 region"), Patch(facecolor=SHADE["-"], label="k < 0 region"),
              Line2D([], [], color="k", ls="-.", lw=1.0, label="X_max (reference)")]
     _engines_legend(fig, data, extra=extra)
     rows, cols = group["shape"]
-    gs = fig.add_gridspec(rows, cols, left=0.08, right=0.98, top=0.86, bottom=0.09, hspace=0.35, wspace=0.22)
+    gs = fig.add_gridspec(rows, cols, left=0.08, right=0.98, top=_top(fig), bottom=0.09, hspace=0.35, wspace=0.22)
     for r, c, name in group["cells"]:
         ax = fig.add_subplot(gs[r, c])
         case = _case(data, name)
@@ -179,8 +200,8 @@ def stiffness_figure(data, group: dict):
         ax.set_ylim(lo - pad, hi + pad)
         every = np.concatenate(shown) / 1e3
         if every.size and (every.max() > hi + pad or every.min() < lo - pad):  # say so, never hide it
-            ax.text(0.02, 0.03, f"axis clipped: dF/du spans {every.min():.3g} ... {every.max():.3g} kN/m "
-                    "(X_max region)", transform=ax.transAxes, fontsize=7,
+            ax.text(0.02, 0.03, f"axis clipped to the central 98 % of the values: dF/du spans {every.min():.4g} "
+                    f"to {every.max():.4g} kN/m", transform=ax.transAxes, fontsize=7,
                     va="bottom", bbox=dict(fc="white", ec="none", alpha=0.8, pad=1))
         if summ:
             regs = summ.get("stiffness_regions", [])
@@ -205,31 +226,46 @@ PARTS = [("F_rod", "rod (F_rod)"), ("F_ropes", "ropes (F_ropes)"), ("F_wires", "
 
 
 def breakdown_figure(data, names: list[str]):
-    """Per case (rows) the parts' contributions to F (columns), every engine overlaid."""
-    fig = new_figure(LANDSCAPE, "Force breakdown over the steady cycle",
+    """Per case (rows) the parts' contributions to F (columns), every engine overlaid, and beneath each
+    the difference to the reference on a common phase grid (the curves overlap to the line width)."""
+    fig = new_figure(LANDSCAPE, "Force breakdown over the steady cycle (line drives)",
                      "F_rod + F_ropes + F_wires = F_device (the drive force less the cap's inertia); the spring "
-                     "column is the spring's push on the movable wall, not a part of F")
+                     "column is the spring's push on the movable wall, not a part of F; beneath each: engine - "
+                     f"{data.reference}")
     _engines_legend(fig, data)
     n = max(len(names), 1)
-    if n == 1:  # one case: the four parts in a 2 x 2 grid rather than four tall strips
-        gs = fig.add_gridspec(2, 2, left=0.07, right=0.985, top=0.86, bottom=0.09, hspace=0.35, wspace=0.2)
-    else:
-        gs = fig.add_gridspec(n, len(PARTS), left=0.07, right=0.985, top=0.86, bottom=0.09, hspace=0.75, wspace=0.32)
+    outer = fig.add_gridspec(n, len(PARTS), left=0.07, right=0.985, top=_top(fig, 0.085), bottom=0.08, hspace=0.45, wspace=0.42)
+    ref = data.reference
     for i, name in enumerate(names):
         case = _case(data, name)
+        f = case["frequency"]
         for j, (col, label) in enumerate(PARTS):
-            ax = fig.add_subplot(gs[j // 2, j % 2] if n == 1 else gs[i, j])
+            inner = GridSpecFromSubplotSpec(2, 1, subplot_spec=outer[i, j], height_ratios=[2.2, 1], hspace=0.08)
+            ax, axd = fig.add_subplot(inner[0]), fig.add_subplot(inner[1])
             for e in data.engines:
                 if (name, e) in data.results and col in data.results[(name, e)].columns:
                     res, m = _steady(data, name, e)
                     ax.plot(res["u"][m] * 1e3, res[col][m], **style(e))
             if not ax.lines:
                 no_data(ax, "no engine output")
-            ax.set_title(f"{name}: {label}", fontsize=8)
+            else:
+                lo, hi = ax.get_ylim()
+                ax.set_title(f"{name}: {label}\naxis spans {fmt(hi - lo, 3)} N", fontsize=7.5)
+            if (name, ref) in data.results and col in data.results[(name, ref)].columns:
+                base = phase_resample(data.results[(name, ref)], f, col)
+                ur = phase_resample(data.results[(name, ref)], f, "u")
+                for e in data.engines:
+                    if e != ref and (name, e) in data.results and col in data.results[(name, e)].columns:
+                        axd.plot(ur * 1e3, phase_resample(data.results[(name, e)], f, col) - base, **style(e))
+                axd.axhline(0.0, color=GREY, lw=0.6)
+            axd.sharex(ax)
+            ax.tick_params(labelbottom=False)
             ax.set_ylabel(f"{col} [N]", fontsize=7.5)
-            ax.set_xlabel("displacement u [mm]", fontsize=7.5, labelpad=1)
-            ax.ticklabel_format(axis="y", style="sci", scilimits=(-3, 4))
-            ax.yaxis.get_offset_text().set_fontsize(7)
+            axd.set_ylabel("\u0394 [N]", fontsize=7.5)
+            axd.set_xlabel("displacement u [mm]", fontsize=7.5, labelpad=1)
+            for a in (ax, axd):
+                a.yaxis.set_major_formatter(FuncFormatter(lambda v, _: fmt(v, 3)))
+                a.yaxis.set_major_locator(MaxNLocator(4))
             ax.set_xlim(-case["amplitude"] * 1.05e3, case["amplitude"] * 1.05e3)
     return fig
 
@@ -246,18 +282,19 @@ def _envelope(t, v, bins: int = CLOSURE_BINS):
 
 def closure_figure(data, names: list[str]):
     """|loop-closure violation| against time per engine, log scale, with the gated limit."""
-    limit = data.summary["tolerances"].get("closure_max")
-    by_engine = data.summary.get("tolerances_by_engine") or {}
-    limits = {e: by_engine.get(e, {}).get("closure_max", limit) for e in data.engines}
+    applied = {(m["case"], m["engine"]): m["limit"] for m in data.summary["metrics"]
+               if m["metric"] == "closure_max" and m.get("reference") is None}
     fig = new_figure(LANDSCAPE, "Loop-closure violation over time",
                      f"envelope (largest value in each of {CLOSURE_BINS} time bins) of the closed loops' constraint "
-                     f"residual, whole run; exact zeros drawn at {CLOSURE_FLOOR:g} m; dashed: each engine's limit")
+                     f"residual, whole run; exact zeros drawn at {CLOSURE_FLOOR:g} m; dotted, named: the limit "
+                     "applied to each engine on the case")
     _engines_legend(fig, data)
     shape = {0: (1, 1), 1: (1, 1), 2: (1, 2)}.get(len(names), (2, 2))
-    gs = fig.add_gridspec(*shape, left=0.08, right=0.98, top=0.86, bottom=0.09, hspace=0.35, wspace=0.2)
+    gs = fig.add_gridspec(*shape, left=0.08, right=0.98, top=_top(fig), bottom=0.09, hspace=0.35, wspace=0.2)
     for i, name in enumerate(names):
         ax = fig.add_subplot(gs[i // shape[1], i % shape[1]])
         case = _case(data, name)
+        limits = {e: applied.get((name, e)) for e in data.engines}
         for e in data.engines:
             if (name, e) in data.results:
                 res = data.results[(name, e)]
@@ -269,9 +306,7 @@ def closure_figure(data, names: list[str]):
             no_data(ax, f"no engine ran this case: {_failed_note(data, name)}")
         else:
             shown = [lim for e, lim in limits.items() if lim and (name, e) in data.results]
-            for e, lim in limits.items():
-                if lim and (name, e) in data.results:
-                    ax.axhline(lim, color=color(e), ls="--", lw=0.9)
+            limit_lines(ax, {e: (lim, color(e)) for e, lim in limits.items() if lim and (name, e) in data.results}, "m")
             ax.set_ylim(CLOSURE_FLOOR / 3, max(shown + [max(np.nanmax(ln.get_ydata()) for ln in ax.lines)]) * 30)
         ax.set_title(_title(case), fontsize=9)
         ax.set_xlabel("time t [s]")

@@ -10,7 +10,7 @@ import numpy as np
 from matplotlib.lines import Line2D
 from matplotlib.ticker import NullFormatter
 
-from reports.style import GREEN, GREY, LANDSCAPE, RED, color, fmt, new_figure, no_data, style, table
+from reports.style import GREEN, GREY, LANDSCAPE, RED, color, fmt, limit_lines, new_figure, no_data, style, table
 
 SETTING_UNITS = {"rtol": "-", "atol": "-", "timestep": "s", "step_size": "s", "max_step": "s",
                  "solver_tolerance": "-", "newton_rel_tol": "-"}
@@ -42,12 +42,12 @@ def convergence_figure(data):
     engines = [e for e in data.engines if e in conv] + [e for e in conv if e not in data.engines]
     cols = max(len(engines), 1)
     # the engines side by side, the cost panel across the whole row beneath (no empty cells)
-    gs = fig.add_gridspec(2, cols, left=0.07, right=0.98, top=0.84, bottom=0.08, hspace=0.4, wspace=0.28)
+    gs = fig.add_gridspec(2, cols, left=0.07, right=0.78, top=0.84, bottom=0.08, hspace=0.4, wspace=0.28)
     tol = data.summary["tolerances"]
     leg = [Line2D([], [], color="k", marker="o", ls="-", label="max |dF| / max |F_ref|"),
            Line2D([], [], color="k", marker="s", ls="--", mfc="none", label="|loop area - ref| / ref"),
-           Line2D([], [], color=GREY, ls=":", label="the engine's gated limits (max_dF_rel, loop_area_rel)")]
-    fig.legend(handles=leg, loc="upper center", bbox_to_anchor=(0.5, 0.925), ncol=3, frameon=False, fontsize=8.5)
+]
+    fig.legend(handles=leg, loc="upper center", bbox_to_anchor=(0.5, 0.925), ncol=2, frameon=False, fontsize=8.5)
     speed = fig.add_subplot(gs[1, :])
     for i, e in enumerate(engines):
         ax = fig.add_subplot(gs[0, i])
@@ -63,10 +63,9 @@ def convergence_figure(data):
         c = color(e)
         ax.loglog(v, d1, "o-", color=c, lw=1.4)
         ax.loglog(v, d2, "s--", color=c, mfc="none", lw=1.1)
-        for k in ("max_dF_rel", "loop_area_rel"):
-            lim = _engine_limits(data, k).get(e, tol.get(k)) if e != data.reference else None
-            if lim:
-                ax.axhline(lim, color=GREY, ls=":", lw=1.0)
+        if e != data.reference:   # each limit line named in its panel
+            limit_lines(ax, {k: (_engine_limits(data, k).get(e, tol.get(k)), GREY)
+                             for k in ("max_dF_rel", "loop_area_rel")}, x=0.02, ha="left")
         if bad:
             ax.text(0.02, 0.02, "failed at " + ", ".join(fmt(p["value"]) for p in bad), transform=ax.transAxes,
                     fontsize=7, color=RED)
@@ -74,21 +73,27 @@ def convergence_figure(data):
         ax.set_xlabel(_setting_label(entry.get("setting", "?")))
         ax.set_ylabel("relative discrepancy [-]")
         _log_ticks(ax, v)
+        ax.yaxis.set_minor_formatter(NullFormatter())   # minor labels crowd a short decade
         w = np.array([p.get("wall_time", np.nan) for p in pts], float)
         ok = np.isfinite(w) & (w > 0)
         # points, not a line: cost is not monotone in the setting, a line in setting order zig-zags
-        speed.loglog(w[ok], d1[ok], "o", color=c, ms=6, label=e)
-        for wk, dk, vk in zip(w[ok], d1[ok], v[ok]):
-            speed.annotate(fmt(vk), (wk, dk), xytext=(4, 2), textcoords="offset points", fontsize=6.5, color=c)
+        # in setting order, joined by a thin line; the coarsest setting ringed (labels would pile up)
+        order = np.argsort(v[ok])[::-1]
+        speed.loglog(w[ok][order], d1[ok][order], "o-", color=c, ms=5, lw=0.7,
+                     label=f"{e}: {entry.get('setting', '?')} {fmt(v[ok].max())} to {fmt(v[ok].min())}")
+        if ok.any():
+            speed.loglog([w[ok][order][0]], [d1[ok][order][0]], "o", ms=11, mfc="none", mec=c, mew=1.0)
     ref = next((conv[e].get("reference") for e in engines if conv[e].get("reference")), "")
-    speed.set_title("max |dF| against cost", fontsize=9)
-    speed.set_xlabel("wall time per cycle [s]")
+    speed.set_title("max |dF| against cost (warm: compilation timed apart)", fontsize=9)
+    speed.set_xlabel("warm wall time per cycle [s]")
     speed.xaxis.set_minor_formatter(NullFormatter())
     speed.set_ylabel("max |dF| / max |F_ref| [-]")
-    for e, lim in _engine_limits(data, "max_dF_rel").items():
-        speed.axhline(lim, color=color(e) if e in engines else GREY, ls=":", lw=1.0)
+    speed.set_yscale("log")
+    limit_lines(speed, {e: (lim, color(e) if e in engines else GREY)
+                        for e, lim in _engine_limits(data, "max_dF_rel").items()}, x=1.005, ha="left")
     if speed.lines:
-        speed.legend(fontsize=7.5, title="points labelled with their setting", title_fontsize=7)
+        speed.legend(fontsize=7, title="ringed: the coarsest setting", title_fontsize=7, loc="upper left",
+                     bbox_to_anchor=(1.01, 0.75), frameon=False)
     fig.text(0.5, 0.895, f"reference run: {_plain(ref)}", ha="center", va="top", fontsize=8, color=GREY)
     return fig
 
@@ -107,35 +112,70 @@ def _log_ticks(ax, values) -> None:
     v = np.asarray(values, float)
     v = v[np.isfinite(v) & (v > 0)]
     if v.size and np.log10(v.max() / v.min()) < 2:
-        ax.set_xticks(sorted(set(v)), [fmt(x) for x in sorted(set(v))], fontsize=7)
+        ax.set_xticks(sorted(set(v)), [fmt(x) for x in sorted(set(v))], fontsize=6.5, rotation=40, ha="right",
+                      rotation_mode="anchor")
     ax.xaxis.set_minor_formatter(NullFormatter())
 
 
+def _per_unit(run: dict, key: str, model_time: float | None) -> float | None:
+    """A run's warm cost per cycle or per model second: wall (``wall_time``) or CPU (``cpu_time``)."""
+    if run.get("status") != "ok" or not model_time:
+        return None
+    v = run.get(key) if key == "cpu_time" else run.get("wall_time", None)
+    if key == "wall_time" and isinstance((run.get("stats") or {}).get("wall_time"), (int, float)):
+        v = run["stats"]["wall_time"]
+    if key == "cpu_time" and v is None:
+        v = (run.get("stats") or {}).get("cpu_time")
+    return v / model_time if isinstance(v, (int, float)) else None
+
+
+def cost_rows(data) -> list[list[str]]:
+    """Per case: each engine's wall and CPU seconds per cycle (drive) or per model second (seismic),
+    and its compilation, recorded apart."""
+    rows = []
+    cases = [(c["name"], c.get("cycles"), "cycle") for c in data.cases]
+    cases += [(c["name"], c.get("model_duration", c.get("duration")), "model s")
+              for c in data.summary.get("seismic_cases", [])]
+    for name, per, unit in cases:
+        row = [name, f"per {unit}"]
+        for e in data.engines:
+            run = data.run(name, e)
+            w, c = _per_unit(run, "wall_time", per), _per_unit(run, "cpu_time", per)
+            comp = run.get("compile_time", (run.get("stats") or {}).get("compile_time"))
+            row.append("failed" if run.get("status") != "ok" else
+                       f"{fmt(w)} / {fmt(c) if c is not None else 'n/a'}  (compile {fmt(comp) if comp is not None else 'n/a'})")
+        rows.append(row)
+    return rows
+
+
 def cost_figure(data):
-    fig = new_figure(LANDSCAPE, "Cost: wall time per cycle, and accuracy against cost",
-                     "wall time of each engine's run divided by its cycles (engines ran in parallel worker "
-                     "processes on a shared machine); the reference has no discrepancy against itself")
+    fig = new_figure(LANDSCAPE, "Cost: warm wall and CPU time per cycle, and accuracy against cost",
+                     "integration only: compilation (a tiny warm-up run in each worker) and the workers' start-up are "
+                     "timed apart and never counted; engines ran in parallel worker processes on a shared machine")
     many = len(data.cases) > 6
-    gs = fig.add_gridspec(1, 2, left=0.07, right=0.98, top=0.87, bottom=0.25 if many else 0.16, wspace=0.25,
+    gs = fig.add_gridspec(1, 2, left=0.07, right=0.88, top=0.86, bottom=0.5 if many else 0.42, wspace=0.25,
                           width_ratios=[1.15, 1])
     ax = fig.add_subplot(gs[0])
     names = [c["name"] for c in data.cases]
     ne = len(data.engines)
     width = 0.8 / max(ne, 1)
     x = np.arange(len(names))
-    vals = []
+    vals, cpu_shown = [], False
     for j, e in enumerate(data.engines):
-        w = [data.run(n, e).get("wall_time_per_cycle") if data.run(n, e).get("status") == "ok" else None for n in names]
+        w = [_per_unit(data.run(n, e), "wall_time", c.get("cycles")) for n, c in zip(names, data.cases)]
+        cpu = [_per_unit(data.run(n, e), "cpu_time", c.get("cycles")) for n, c in zip(names, data.cases)]
         h = [v if v else 0.0 for v in w]
-        ax.bar(x + (j - (ne - 1) / 2) * width, h, width * 0.92, color=color(e), label=e)
-        vals += [v for v in w if v]
-        for xi, v in zip(x, w):
-            xx = xi + (j - (ne - 1) / 2) * width
-            if v:
-                ax.text(xx, v * 1.04, fmt(v, 2), ha="center", va="bottom", fontsize=6.5,
-                        rotation=90 if len(names) * ne > 8 else 0)
-            else:
-                ax.text(xx, 0.0, "failed", ha="center", va="bottom", fontsize=6.5, rotation=90, color=RED)
+        xx = x + (j - (ne - 1) / 2) * width
+        ax.bar(xx, h, width * 0.92, color=color(e), label=f"{e}: wall")
+        ok = [k for k, v in enumerate(cpu) if v]
+        if ok:
+            ax.plot(xx[ok], [cpu[k] for k in ok], "_", color="k", ms=9, mew=1.6,
+                    label=None if cpu_shown else "CPU time (each engine)")
+            cpu_shown = True
+        vals += [v for v in w if v] + [v for v in cpu if v]
+        for xi, v in zip(xx, w):
+            if not v:
+                ax.text(xi, 0.0, "failed", ha="center", va="bottom", fontsize=6.5, rotation=90, color=RED)
     if vals and max(vals) / max(min(vals), 1e-12) > 30:
         ax.set_yscale("log")
         ax.set_ylim(min(vals) / 3, max(vals) * 6)
@@ -143,20 +183,27 @@ def cost_figure(data):
         ax.set_ylim(0, max(vals) * 1.3)
     if len(names) <= 2:
         ax.set_xlim(-1.0, len(names))  # keep single bars from filling the panel
-    ax.set_xticks(x, names, rotation=(45 if many else 20) if len(names) > 2 else 0,
-                  ha="right" if len(names) > 2 else "center", fontsize=7 if many else 7.5)
-    ax.set_xlabel("case")
-    ax.set_ylabel("wall time per cycle [s]")
-    ax.set_title("wall time per cycle per engine", fontsize=9)
-    ax.legend(fontsize=7.5, loc="upper left")
+    ax.set_xticks(x, names, rotation=90 if len(names) > 2 else 0, fontsize=6.5)
+    ax.set_ylabel("seconds per cycle [s]")
+    ax.set_title("warm wall time per cycle (bars) and CPU time (black ticks)", fontsize=9)
+    ax.legend(fontsize=7, loc="upper left", ncol=2)
     ax.grid(axis="x", visible=False)
+    rows = cost_rows(data)
+    cols = [("case", 16, "l"), ("cost", 7, "l")] + [(f"{e}: wall / CPU [s]", 25, "l") for e in data.engines]
+    table(fig, 0.33 if many else 0.27, cols, rows, None, fontsize=7)
 
     sp = fig.add_subplot(gs[1])
     ref = data.reference
+    if not names:   # seismic cases only: their costs are in the table
+        for a in (ax, sp):
+            a.clear()
+            no_data(a, "no drive case in this run: the seismic cases' costs per model second are in the table")
+        return fig
     marks = {n: MARKERS[i] if len(names) <= len(MARKERS) else "o" for i, n in enumerate(names)}
     for m in data.summary["metrics"]:
-        if m.get("metric") == "max_dF_rel" and m.get("reference") == ref:
-            w = data.run(m["case"], m["engine"]).get("wall_time_per_cycle")
+        if m.get("metric") == "max_dF_rel" and m.get("reference") == ref and m["case"] in names:
+            w = _per_unit(data.run(m["case"], m["engine"]), "wall_time", next(
+                c.get("cycles") for c in data.cases if c["name"] == m["case"]))
             if w:
                 sp.loglog([w], [max(m["value"], FLOOR)], marks.get(m["case"], "o"), color=color(m["engine"]), ms=7,
                           mec="k", mew=0.5)
@@ -168,27 +215,23 @@ def cost_figure(data):
                 sp.loglog([p["wall_time"] for p in pts], [max(p["max_dF_rel"], FLOOR) for p in pts], ":",
                           color=color(e), marker=".", lw=1.0)
     lims = _engine_limits(data, "max_dF_rel")
-    for e, lim in lims.items():
-        sp.axhline(lim, color=color(e) if len(lims) > 1 else RED, ls="--", lw=1.0)
+    sp.set_yscale("log")
+    limit_lines(sp, {(e if e in data.engines else "the"): (lim, color(e) if e in data.engines else RED)
+                     for e, lim in lims.items()}, x=0.02, ha="left")
     if not sp.lines:
         no_data(sp, "no engine besides the reference ran: nothing to compare")
     else:
         sp.margins(x=0.15, y=0.15)
-    sp.set_xlabel("wall time per cycle [s]")
+    sp.set_xlabel("warm wall time per cycle [s]")
     sp.set_ylabel(f"max |F - F_ref| / max |F_ref| [-] (vs {ref})")
     sp.set_title("speed-accuracy", fontsize=9)
     handles = [Line2D([], [], ls="", marker=marks[n], color="w", mec="k", mfc=GREY, label=n) for n in names
                if len(names) <= len(MARKERS)]  # more cases than markers: one point per case, unlabelled
     handles += [Line2D([], [], ls="", marker="o", color=color(e), label=e) for e in data.engines if e != ref]
-    for e, lim in lims.items():
-        handles.append(Line2D([], [], color=color(e) if len(lims) > 1 else RED, ls="--",
-                              label=f"{e} limit {fmt(lim)}" if len(lims) > 1 else f"limit {fmt(lim)}"))
     if isinstance(conv, dict) and conv and "error" not in conv:
         handles.append(Line2D([], [], color=GREY, ls=":", marker=".", label="convergence study"))
-    if len(handles) > 6:  # below the panel, clear of the points and the limit line
-        sp.legend(handles=handles, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=3)
-    else:
-        sp.legend(handles=handles, fontsize=7, loc="best", ncol=2)
+    # below the panel, clear of the points and the limit lines
+    sp.legend(handles=handles, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.15), ncol=4, frameon=False)
     return fig
 
 

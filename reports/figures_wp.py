@@ -39,7 +39,7 @@ def work_precision_figure(data):
                      f"rtol 1e-10")
     n = max(len(cases), 1)
     cols = min(n, 4)
-    gs = fig.add_gridspec(1, cols, left=0.06, right=0.98, top=0.87, bottom=0.40, wspace=0.28)
+    gs = fig.add_gridspec(1, cols, left=0.08, right=0.98, top=0.87, bottom=0.40, wspace=0.28)
     if not cases:
         no_data(fig.add_subplot(gs[0]), "work_precision.json holds no cases")
         return fig
@@ -106,7 +106,8 @@ def load_work_precision(path) -> dict | None:
     """The benchmark's JSON when present and shaped like one; None otherwise (an optional page)."""
     import json
     try:
-        wp = json.loads(path.read_text())
+        from nsd_core.device.inputs import read_regular_text
+        wp = json.loads(read_regular_text(path))
     except (OSError, ValueError):
         return None
     if not isinstance(wp, dict) or not isinstance(wp.get("cases"), list):

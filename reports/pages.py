@@ -1,246 +1,313 @@
-"""Text pages of the report: the summary (verdict and failures first, what was run, tolerances,
-metrics against their limits, continued over as many pages as needed) and the parameter set."""
+"""Text pages of the report, all landscape: page 1 (verdict, what failed, the case x engine matrix of
+worst value / limit, the run's software and cost), what was run (every case with its path and every
+seismic case with its record, window, scale and structure), the metrics' definitions and limits, the
+complete metric tables (reports.metric_tables) and the parameter set. No cell is ever shortened:
+columns are sized to their content and long cells wrap (issue 20)."""
 from __future__ import annotations
 
 import json
 
-from reports.style import (GREEN, GREY, ORANGE, PORTRAIT, RED, fmt, natural, new_figure, rows_per_page, table, text_width,
-                    wrap_rows, wrap_width)
+from reports.metric_tables import SOURCES, draw_matrix, metric_rows, metric_table_pages  # noqa: F401
+from reports.style import (GREEN, GREY, LANDSCAPE, RED, fit_columns, fmt, fmt_full, new_figure, rows_per_page, table,
+                           wrap_rows, wrap_width)
 
 FS = 7.0           # table font size [pt]
-LINE = 1.55 * FS / 72 / PORTRAIT[1]  # one table row, figure fraction
 BOTTOM = 0.05
-WIDTH_PT = 0.88 * PORTRAIT[0] * 72  # usable text width [pt]
-METRIC_DESC = {"max_dF_rel": "max |F - F_ref| / max |F_ref|", "rms_dF_rel": "RMS(F - F_ref) / max |F_ref|",
-               "loop_area_rel": "|loop area - ref| / |ref|", "peak_force_rel": "|peak |F| - ref| / ref",
-               "region_shift_rel": "largest stiffness-region boundary shift / A",
-               "closure_max": "largest loop-closure violation", "tracking_error": "largest drive tracking error",
-               "energy_balance_rel": "|drive work - dissipated - stored change| / drive work"}
+WIDTH_PT = 0.88 * LANDSCAPE[0] * 72  # usable text width [pt]
 
 
-def _wrap(text: str, size: float, bold: bool = False) -> str:
-    """Wrap to the page's text width at font ``size`` (measured)."""
-    return "\n".join(wrap_width(text, WIDTH_PT, size, bold, indent="   "))
+def _line(size: float) -> float:
+    return 1.45 * size / 72 / LANDSCAPE[1]
 
 
 def _text(fig, y: float, text: str, size: float = 8.0, color: str = "black", weight: str = "normal",
           x: float = 0.06) -> float:
-    text = _wrap(text, size, weight == "bold")
+    text = "\n".join(wrap_width(text, WIDTH_PT, size, weight == "bold", indent="   "))
     fig.text(x, y, text, ha="left", va="top", fontsize=size, color=color, weight=weight)
-    return y - (text.count("\n") + 1) * 1.45 * size / 72 / PORTRAIT[1]
+    return y - (text.count("\n") + 1) * _line(size)
 
 
 def _heading(fig, y: float, text: str) -> float:
     return _text(fig, y - 0.006, text, size=10, weight="bold") - 0.004
 
 
-def _overrides(c: dict) -> str:
-    parts = [f"{k}={fmt(v)}" for k, v in (c.get("params_overridden") or {}).items()]
-    parts += [f"{e}: {k}={fmt(v)}" for e, p in (c.get("engine_params") or {}).items() for k, v in p.items()]
-    parts += [f"{e} settings: " + ", ".join(f"{k}={fmt(v)}" for k, v in s.items())
-              for e, s in (c.get("settings") or {}).items() if s]
-    return "; ".join(parts) or "-"
-
-
-def _split_name(name: str, unit: str, width: float) -> str:
-    """A metric name over as many header lines as its column needs, broken before underscores."""
-    tokens = name.split("_")
-    parts = [tokens[0]] + ["_" + t for t in tokens[1:]] + ([f" [{unit}]"] if unit and unit != "-" else [])
-    lines = [""]
-    for p in parts:
-        if lines[-1] and text_width(lines[-1] + p, FS, True) > width:
-            lines.append(p.strip())
-        else:
-            lines[-1] += p
-    return "\n".join(lines)
-
-
-def metric_rows(data) -> tuple[list[tuple[str, float, str]], list[list[str]], list[list]]:
-    """Pivot of the metrics: one row per (case, engine, compared with), one column per metric."""
-    s = data.summary
-    names = [m for m in s["tolerances"] if any(r.get("metric") == m for r in s["metrics"])]
-    units = s.get("metric_units", {})
-    texts = [[r["case"] for r in s["metrics"]] + ["case"], [r["engine"] for r in s["metrics"]] + ["engine"],
-             [r.get("reference") or "(own)" for r in s["metrics"]] + ["vs"], ["result", "over*", "ERROR"]]
-    fixed = [max(text_width(str(t), FS, True) for t in col) + 6 for col in texts]  # natural widths [pt]
-    share = max((WIDTH_PT - sum(fixed)) / max(len(names), 1), 30.0)
-    cols = [("case", fixed[0], "l"), ("engine", fixed[1], "l"), ("vs", fixed[2], "l")] + \
-        [(_split_name(m, units.get(m, "-"), share - 6), share, "r") for m in names] + [("result", fixed[3], "c")]
-    rows, colors = [], []
-    short = [fmt(s["tolerances"][m], 2) for m in names]
-    short = [f"{s['tolerances'][m]:.0e}" if "e" in t else t for m, t in zip(names, short)]
-    per_engine = bool(s.get("tolerances_by_engine"))   # then the rows have their own (tighter) limits
-    limit_row = ["default limit" if per_engine else "limit", "", ""] + [f"\u2264 {t}" for t in short] + [""]
-    rows.append(limit_row)
-    colors.append([GREY] * len(limit_row))
-    keyed: dict[tuple, dict] = {}
-    for r in s["metrics"]:
-        keyed.setdefault((r["case"], r["engine"], r.get("reference") or "own"), {})[r["metric"]] = r
-    for (case, engine, vs), ms in keyed.items():
-        row, col = [case, engine, vs if vs != "own" else "(own)"], [None, None, None]
-        bad_gated = bad_free = False
-        for m in names:
-            r = ms.get(m)
-            row.append(fmt(r["value"], 2) if r else "")
-            if r and not r["pass"]:
-                col.append(RED if r["gated"] else ORANGE)
-                bad_gated |= bool(r["gated"])
-                bad_free |= not r["gated"]
-            else:
-                col.append(None)
-        gated = any(r["gated"] for r in ms.values())
-        row.append("FAIL" if bad_gated else ("over*" if bad_free else ("PASS" if gated else "ok*")))
-        col.append(RED if bad_gated else (ORANGE if bad_free else (GREEN if gated else None)))
-        rows.append(row)
-        colors.append(col)
-    for case, per in s["runs"].items():
-        for engine, run in per.items():
-            if run.get("status") != "ok":
-                rows.append([case, engine, "-", "ERROR: " + str(run.get("message", "?"))] + [""] * (len(names) - 1)
-                            + ["ERROR"])
-                colors.append([RED] * len(rows[-1]))
-    return cols, rows, colors
-
-
 def summary_pages(data) -> list:
-    """Page 1 (verdict, failures, what was run, tolerances, metrics) and the metrics' continuation."""
+    """Page 1, what was run, the metrics' definitions, then the complete metric tables."""
+    return [lambda: page_one(data)] + run_pages(data) + definitions_pages(data) + metric_table_pages(data)
+
+
+def _versions(data) -> list[str]:
     s = data.summary
-    cols, rows, colors = metric_rows(data)
-    fig = _page_one(data)
-    y = fig._nsd_y - 0.004
-    y = _heading(fig, y, "Metrics against their limits")
-    fit_rows = rows_per_page(y - 0.045, BOTTOM, FS)
-    note = ("Gated rows compare an engine with the reference; (own) rows are an engine's own checks. Red: "
-            "outside its limit. Rows marked * are engine pairs reported but not gated (orange: over the limit).")
-    y = _text(fig, y, note, size=7, color=GREY) - 0.006
-    first = rows[:max(fit_rows, 0)]
-    if first:
-        table(fig, y, cols, first, colors[:len(first)], fontsize=FS)
-    else:
-        _text(fig, y, "(continued on the next page)", size=8, color=GREY)
-    figs = [lambda: fig]
-    rest, rest_c = rows[len(first):], colors[len(first):]
-    per_page = rows_per_page(0.90, BOTTOM, FS)
-    for i in range(0, len(rest), per_page):
-        chunk, cchunk = [rows[0]] + rest[i:i + per_page], [colors[0]] + rest_c[i:i + per_page]
-
-        def cont(chunk=chunk, cchunk=cchunk):
-            f = new_figure(PORTRAIT, "Metrics against their limits (continued)",
-                           f"verdict {s['verdict']} (exit code {s['exit_code']})")
-            table(f, 0.92, cols, chunk, cchunk, fontsize=FS)
-            return f
-        figs.append(cont)
-    return figs
-
-
-def _page_one(data):
-    s = data.summary
-    verdict, code = s["verdict"], s["exit_code"]
-    fig = new_figure(PORTRAIT)
-    good = verdict == "PASS"
-    y = 0.975
-    fig.text(0.06, y, "NSD cross-validation report", ha="left", va="top", fontsize=14, weight="bold")
-    fig.text(0.94, y, f"VERDICT: {verdict}", ha="right", va="top", fontsize=15, weight="bold",
-             color=GREEN if good else RED)
-    y = 0.952
-    y = _text(fig, y, f"exit code {code}  |  {len(data.cases)} case(s) x {len(data.engines)} engine(s), reference "
-                      f"{data.reference}  |  date {s.get('date', '?')}  |  git revision {s.get('git_revision', '?')}",
-              size=8, color=GREY)
-    if s["failures"] or not good:
-        y = _text(fig, y - 0.006, "WHAT FAILED", size=11, color=RED, weight="bold")
-        lines = []
-        for f in s["failures"] or [f"verdict {verdict} without a listed failure"]:
-            lines += wrap_width("\u2022 " + str(f), WIDTH_PT, 8.5, indent="   ")
-        if len(lines) > 14:
-            lines = lines[:13] + [f"   ... {len(lines) - 13} more line(s): see the metrics table below"]
-        y = _text(fig, y, "\n".join(lines), size=8.5, color=RED)
-    else:
-        y = _text(fig, y - 0.006, "Every gated metric is within its limit and every engine ran.", size=9,
-                  color=GREEN, weight="bold")
-    y = _heading(fig, y - 0.004, "What was run")
     vers = s.get("versions") or {}
     engine_v = []
     for e in data.engines:
         v = vers.get(e) or vers.get("nsd-harness" if e == "semirecursive" else e, "?")
         engine_v.append(f"{e} {v}" + (" (reference)" if e == data.reference else ""))
-    other = ", ".join(f"{k} {v}" for k, v in vers.items() if k not in data.engines and k not in ("nsd-harness",))
-    info = [f"Engines: {', '.join(engine_v)}", f"Software: {other or '-'}",
-            f"Total wall time {fmt(s.get('total_wall_time'))} s on {s.get('workers', '?')} worker process(es); "
-            f"parameters: {len(s.get('params', []))} rows (next page)"]
-    y = _text(fig, y, "\n".join(info), size=7.5)
-    crow = [[c["name"], fmt(c["amplitude"] * 1e3), fmt(c["frequency"]), fmt(c.get("direction_deg", 0.0)),
-             str(c.get("cycles", "?")), str(c.get("samples_per_cycle", "?")), _overrides(c)] for c in data.cases]
-    # engine-specific: another parameter set or other solver settings for one engine (issue 11: a
-    # fresh run's per-case Exudyn step was shown in black)
-    ccol = [[None] * 6 + [RED if (c.get("engine_params") or any((c.get("settings") or {}).values())) else None]
-            for c in data.cases]
-    ccols = [("case", 15, "l"), ("A [mm]", 7, "r"), ("f [Hz]", 6, "r"), ("psi [deg]", 8, "r"), ("cycles", 6, "r"),
-             ("samples\nper cycle", 8, "r"), ("overrides (engine-specific ones in red)", 50, "l")]
-    ccols = natural(ccols, crow, flex=-1, fontsize=FS)
-    crow, ccol, stripe = wrap_rows(ccols, crow, ccol, FS)
-    y = table(fig, y - 0.006, ccols, crow, ccol, fontsize=FS, stripe=stripe)
-    y = _heading(fig, y - 0.006, "Tolerances")
-    units = s.get("metric_units", {})
-    by_engine = s.get("tolerances_by_engine") or {}
-    trow = [[m, fmt(v, 2)] + [fmt(by_engine[e].get(m), 2) if m in by_engine[e] else "" for e in by_engine]
-            + [units.get(m, "-"), METRIC_DESC.get(m, "")] for m, v in s["tolerances"].items()]
-    tcols = [("metric", 16, "l"), ("default" if by_engine else "limit", 8, "r")] + \
-        [(e, 8, "r") for e in by_engine] + [("unit", 5, "c"), ("definition", 50, "l")]
-    y = table(fig, y, natural(tcols, trow, flex=-1, fontsize=FS), trow, fontsize=FS)
-    if by_engine:
-        y = _text(fig, y - 0.004, "Engine columns override the default for any case; on the default cases each "
-                  "engine also has its own per-case limits (3x its measured error there, never looser than the engine "
-                  "column: comparisons/tolerances.toml), so every row below is judged against its own limit.",
-                  size=7.0, color=GREY)
-    fig._nsd_y = y
+    other = ", ".join(f"{k} {v}" for k, v in vers.items() if k not in data.engines and k != "nsd-harness")
+    return [f"Engines: {', '.join(engine_v)}", f"Software: {other or '-'}"]
+
+
+def _cost_line(data) -> str:
+    s = data.summary
+    comp: dict[str, float] = {}
+    for per in s["runs"].values():
+        for e, r in per.items():
+            if isinstance(r.get("compile_time"), (int, float)):
+                comp[e] = comp.get(e, 0.0) + r["compile_time"]
+    start = s.get("worker_startup_time")
+    text = (f"Total wall time {fmt(s.get('total_wall_time'))} s on {s.get('workers', '?')} worker process(es); "
+            f"worker start-up (spawn and imports) {fmt(start) + ' s' if start is not None else 'not recorded'}; "
+            "compilation (a tiny warm-up run before the first run of its kind in each worker, summed over the runs): "
+            + (", ".join(f"{e} {fmt(v)} s" for e, v in comp.items()) if comp else "not recorded in this folder")
+            + ". Neither is in any per-cycle or per-model-second cost.")
+    return text
+
+
+def page_one(data):
+    s = data.summary
+    verdict, code = s["verdict"], s["exit_code"]
+    fig = new_figure(LANDSCAPE)
+    good = verdict == "PASS"
+    fig.text(0.06, 0.965, "NSD cross-validation report", ha="left", va="top", fontsize=14, weight="bold")
+    fig.text(0.94, 0.965, f"VERDICT: {verdict}", ha="right", va="top", fontsize=15, weight="bold",
+             color=GREEN if good else RED)
+    n_seis = len(s.get("seismic_cases", []))
+    y = _text(fig, 0.935, f"exit code {code}  |  {len(data.cases)} drive case(s) and {n_seis} seismic case(s) x "
+              f"{len(data.engines)} engine(s), reference {data.reference}  |  date {s.get('date', '?')}  |  git revision "
+              f"{s.get('git_revision', '?')}", size=8, color=GREY)
+    if s["failures"] or not good:
+        y = _text(fig, y - 0.004, "WHAT FAILED", size=11, color=RED, weight="bold")
+        lines = []
+        for f in s["failures"] or [f"verdict {verdict} without a listed failure"]:
+            lines += wrap_width("\u2022 " + str(f), WIDTH_PT, 8.0, indent="   ")
+        if len(lines) > 10:
+            lines = lines[:9] + [f"   (and {len(lines) - 9} more line(s): every failure is in the metric tables)"]
+        y = _text(fig, y, "\n".join(lines), size=8.0, color=RED)
+    else:
+        y = _text(fig, y - 0.004, "Every gated metric is within the limit applied to it, and every engine ran.",
+                  size=9, color=GREEN, weight="bold")
+    y = _heading(fig, y - 0.004, "What passed, against which limit: the worst value / limit per case and engine")
+    y = _text(fig, y, "Each cell: the largest ratio of a gated metric's value to the limit applied to it, and that "
+              "metric (a ratio below 1 passes). Green: far within; yellow: near the limit; red: over it. Every "
+              "value, limit and where the limit came from: the metric tables; the definitions: the metrics page.",
+              size=7.5, color=GREY)
+    y = draw_matrix(fig, y - 0.004, data)
+    seis = [_seismic_line(c) for c in s.get("seismic_cases", [])]
+    if seis:
+        y = _heading(fig, y - 0.008, "Seismic input (details: what was run)")
+        y = _text(fig, y, "\n".join(seis), size=7.5)
+    y = _heading(fig, y - 0.008, "Software and cost")
+    _text(fig, y, "\n".join(_versions(data) + [_cost_line(data)]), size=7.5)
     return fig
 
 
-def parameter_pages(data) -> list:
-    """The parameter set with its provenance (every row), then each engine's solver settings."""
-    params = data.summary.get("params") or []
-    rows = [[p.get("name", ""), fmt(p.get("value")), p.get("unit", ""), p.get("source", ""), p.get("doc", "")]
-            for p in params]
-    cols = natural([("parameter", 21, "l"), ("value", 9, "r"), ("unit", 6, "c"), ("source", 34, "l"),
-                    ("meaning", 48, "l")], rows, flex=-1, fontsize=FS)
-    rows, _, stripe = wrap_rows(cols, rows, None, FS)
-    settings = _settings_rows(data)
-    per_page = rows_per_page(0.90, BOTTOM, FS)
-    chunks, i = [], 0
-    while i < len(rows):  # a page break never splits a wrapped parameter
-        j = min(i + per_page, len(rows))
-        while j < len(rows) and j > i + 1 and stripe[j] == stripe[j - 1]:
-            j -= 1
-        chunks.append((rows[i:j], stripe[i:j]))
-        i = j
-    chunks = chunks or [([], [])]
+def _closed_form(g: dict) -> str:
+    """A closed-form ground motion (harmonic, pulse) as its kind and parameters."""
+    return f"{g.get('kind', '?')}: " + ", ".join(f"{k} = {_val(v)}" for k, v in g.items() if k not in ("kind", "source"))
+
+
+def _seismic_line(c: dict) -> str:
+    g = c.get("ground") or {}
+    w = g.get("window") or c.get("window")
+    what = (f"FEMA P695 record {g['set']} : {g['record']}, {g.get('EarthquakeName', '?')}, "
+            f"{g.get('RecordingStationName', '?')}" if "set" in g else _closed_form(g))
+    return (f"{c['name']}: {what}; window " + (f"{fmt_full(w[0])} to {fmt_full(w[1])} record s" if w else "whole record")
+            + f", scale {fmt_full(g.get('scale', c.get('scale', 1.0)))}, rotation "
+            f"{fmt_full(g.get('rotate_deg', c.get('rotate_deg', 0.0)))} deg, time factor {fmt_full(g.get('time_factor'))}, "
+            f"{fmt_full(c.get('model_duration', c.get('duration')))} model s"
+            + ("" if c.get("device", True) else ", supports alone"))
+
+
+def _settings_text(settings: dict | None) -> str:
+    parts = []
+    for e, st in (settings or {}).items():
+        if st:
+            parts.append(f"{e}: " + ", ".join(f"{k} = {_val(v)}" for k, v in st.items()))
+    return "; ".join(parts) or "engine defaults"
+
+
+def _val(v) -> str:
+    if isinstance(v, (dict, list)):
+        return json.dumps(v)
+    return fmt_full(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else str(v)
+
+
+def _overrides(c: dict) -> str:
+    parts = [f"{k} = {_val(v)}" for k, v in (c.get("params_overridden") or {}).items()]
+    parts += [f"{e}: {k} = {_val(v)}" for e, p in (c.get("engine_params") or {}).items() for k, v in p.items()]
+    return "; ".join(parts) or "none"
+
+
+def _mm(v) -> str:
+    return "none" if v is None else fmt_full(round(v * 1e3, 12))
+
+
+def case_rows(data) -> tuple[list, list]:
+    rows = [[c["name"], c.get("path", "line"), _mm(c["amplitude"]),
+             _mm(c.get("minor", c["amplitude"] if c.get("path") == "circle" else None)),
+             fmt_full(c.get("direction_deg", 0.0)), fmt_full(c["frequency"]), str(c.get("cycles", "?")),
+             str(c.get("samples_per_cycle", "?")), _overrides(c), _settings_text(c.get("settings"))]
+            for c in data.cases]
+    cols = [("case", 1, "l"), ("path", 1, "l"), ("A [mm]", 1, "r"), ("minor axis\nB [mm]", 1, "r"),
+            ("direction\npsi [deg]", 1, "r"), ("f [Hz]", 1, "r"), ("cycles", 1, "r"), ("samples\nper cycle", 1, "r"),
+            ("parameters overridden", 1, "l"), ("per-engine solver settings (else the defaults)", 1, "l")]
+    return cols, rows
+
+
+def seismic_rows(data) -> tuple[list, list, list, list]:
+    """(columns, rows) of the seismic cases' ground input, and of the structure each one carried."""
+    cols = [("case", 1, "l"), ("record set : id", 1, "l"), ("event", 1, "l"), ("station", 1, "l"),
+            ("window\n[record s]", 1, "l"), ("scale", 1, "r"), ("rotation\n[deg]", 1, "r"), ("time\nfactor", 1, "r"),
+            ("duration\n[model s]", 1, "r"), ("output\nstep [s]", 1, "r"), ("device", 1, "c"),
+            ("per-engine solver\nsettings", 1, "l")]
+    rows, srows = [], []
+    for c in data.summary.get("seismic_cases", []):
+        g = c.get("ground") or {}
+        w = g.get("window") or c.get("window")
+        ident = f"{g['set']} : {g['record']}" if "set" in g else _closed_form(g)
+        event = g.get("EarthquakeName", g.get("earthquake"))
+        event = f"{event} ({g['EarthquakeYear']}, M {fmt_full(g.get('EarthquakeMagnitude'))})" \
+            if event and "EarthquakeYear" in g else (event or g.get("source", "closed form"))
+        rows.append([c["name"], ident, str(event), str(g.get("RecordingStationName", g.get("station", "-"))),
+                     f"{fmt_full(w[0])} to {fmt_full(w[1])}" if w else "whole record",
+                     fmt_full(g.get("scale", c.get("scale", 1.0))), fmt_full(g.get("rotate_deg", c.get("rotate_deg", 0.0))),
+                     fmt_full(g.get("time_factor")), fmt_full(c.get("model_duration", c.get("duration"))),
+                     fmt_full(c.get("dt_out")), "yes" if c.get("device", True) else "no (supports alone)",
+                     _settings_text(c.get("settings"))])
+        st = c.get("structure_used") or {}
+        prov = st.get("provenance") or {}
+        for key, sym, unit in (("mass", "M", "kg"), ("stiffness", "k_b", "N/m"), ("damping", "c_b", "N s/m"),
+                               ("radius_of_gyration", "r_g", "m"), ("support_radius", "r_b", "m")):
+            srows.append([c["name"], f"{sym} ({key.replace('_', ' ')})", fmt_full(st.get(key)), unit,
+                          str(prov.get(key, "not recorded"))])
+        if isinstance(prov.get("K_dev"), dict):
+            k = prov["K_dev"]
+            srows.append([c["name"], "K_dev (device, most negative)", fmt_full(k.get("value")), "N/m",
+                          f"{k.get('how', '')}; along psi = {fmt_full(k.get('direction_deg'))} deg"])
+    scols = [("case", 1, "l"), ("structure", 1, "l"), ("value", 1, "r"), ("unit", 1, "c"), ("provenance", 1, "l")]
+    return cols, rows, scols, srows
+
+
+def _table_pages(title: str, subtitle: str, blocks: list[tuple[str, list, list]]) -> list:
+    """Tables (heading, columns, rows) flowed over as many landscape pages as they need."""
+    prepared = []
+    for head, cols, rows in blocks:
+        if not rows:
+            continue
+        cols = fit_columns(cols, rows, fontsize=FS)
+        wrapped, _, stripe = wrap_rows(cols, rows, None, FS)
+        prepared.append((head, cols, wrapped, stripe))
+    pages, current, room = [], [], rows_per_page(0.87, BOTTOM, FS)
+    for head, cols, rows, stripe in prepared:
+        i = 0
+        while i < len(rows):
+            need_head = 4
+            take = room - need_head
+            if take < 3:
+                pages.append(current)
+                current, room = [], rows_per_page(0.87, BOTTOM, FS)
+                continue
+            j = min(i + take, len(rows))
+            while j < len(rows) and j > i + 1 and stripe[j] == stripe[j - 1]:  # never split a wrapped row
+                j -= 1
+            current.append((head + (" (continued)" if i else ""), cols, rows[i:j], stripe[i:j]))
+            room -= need_head + (j - i)
+            i = j
+    if current:
+        pages.append(current)
     figs = []
-    for k, chunk in enumerate(chunks):
-        def page(chunk=chunk, k=k):
-            f = new_figure(PORTRAIT, "Parameter set and provenance" + (" (continued)" if k else ""),
-                           "SI values used by every case (overrides: summary page); source: the paper's table,\n"
-                           "or 'assumed' with the model notes that argue for the value")
-            y = (table(f, 0.9, cols, chunk[0], fontsize=FS, stripe=chunk[1]) if chunk[0]
-                 else _text(f, 0.9, "no parameter rows recorded"))
-            last = k == len(chunks) - 1
-            if last and settings and y - BOTTOM > (3 * len(settings) + 3) * LINE:
-                y = _heading(f, y - 0.01, "Engine solver settings (as recorded by each engine, first case)")
-                scols = natural([("engine", 12, "l"), ("settings", 88, "l")], settings, flex=1, fontsize=FS)
-                srows, _, sstripe = wrap_rows(scols, settings, None, FS)
-                table(f, y, scols, srows, fontsize=FS, stripe=sstripe)
+    for k, content in enumerate(pages):
+        def page(content=content, k=k):
+            f = new_figure(LANDSCAPE, title + (f" (part {k + 1} of {len(pages)})" if len(pages) > 1 else ""), subtitle)
+            y = 0.9
+            for head, cols, rows, stripe in content:
+                y = _heading(f, y, head)
+                y = table(f, y, cols, rows, fontsize=FS, stripe=stripe) - 0.01
             return f
         figs.append(page)
     return figs
+
+
+def run_pages(data) -> list:
+    """What was run: every drive case, every seismic case with its record and structure."""
+    ccols, crows = case_rows(data)
+    scols, srows, tcols, trows = seismic_rows(data)
+    blocks = [("Drive cases: the plate's path, its size and the engines' settings", ccols, crows),
+              ("Seismic cases: the ground input (FEMA P695 record, window in record seconds, scale, rotation)",
+               scols, srows),
+              ("Seismic cases: the isolated structure on the plate, with provenance", tcols, trows)]
+    return _table_pages("What was run", "every case as the engines ran it; path minor axis B: the circle's radius, "
+                        "the ellipse's or figure eight's minor semi-axis (none for a line); time factor: model "
+                        "seconds per record second", blocks)
+
+
+def _head(name: str, chars: int = 11) -> str:
+    """A metric name as a column header, broken before underscores into lines of about ``chars``."""
+    lines = [""]
+    for i, tok in enumerate(name.split("_")):
+        part = ("_" if i else "") + tok
+        if lines[-1] and len(lines[-1]) + len(part) > chars:
+            lines.append(part)
+        else:
+            lines[-1] += part
+    return "\n".join(lines)
+
+
+def definitions_pages(data) -> list:
+    """Every metric with unit, definition, default and engine limits; then the case limits as a
+    table of (engine, case) rows against the metrics they set."""
+    s = data.summary
+    defs = s.get("metric_definitions")
+    if not defs:
+        from comparisons.config import METRICS
+        defs = {k: v[1] for k, v in METRICS.items()}
+    units = s.get("metric_units", {})
+    by_engine = s.get("tolerances_by_engine") or {}
+    rows = []
+    for m, v in s["tolerances"].items():
+        per = [f"{e} {fmt_full(t[m])}" for e, t in by_engine.items() if m in t]
+        rows.append([m, units.get(m, "-"), defs.get(m, "not defined in this results folder"), fmt_full(v),
+                     "; ".join(per) or "-"])
+    cols = [("metric", 1, "l"), ("unit", 1, "c"), ("definition (F_ref, u_ref: the reference engine's)", 1, "l"),
+            ("default\nlimit", 1, "r"), ("engine limits (override the default)", 1, "l")]
+    blocks = [("Metrics and their default and engine limits", cols, rows)]
+    metrics = [m for m in s["tolerances"] if any(m in (t or {}) for et in by_engine.values()
+                                                  for t in (et.get("case") or {}).values())]
+    crows = [[e, c] + [fmt_full(t[m]) if m in t else "" for m in metrics]
+             for e, et in by_engine.items() for c, t in (et.get("case") or {}).items()]
+    if crows:
+        blocks.append(("Case limits (override the engine's and the default on that case; blank: not set)",
+                       [("engine", 1, "l"), ("case", 1, "l")] + [(_head(m), 1, "r") for m in metrics], crows))
+    defaulted = s.get("tolerances_defaulted") or []
+    sub = ("drive cases on the steady (last) cycle resampled on a common phase grid; seismic cases on the time "
+           "histories at every output time; the most specific limit wins (case, then engine, then default)")
+    if defaulted:
+        sub += "\ntaken from the default tolerance file (the given file left them out): " + ", ".join(defaulted)
+    return _table_pages("Metrics: definitions and limits", sub, blocks)
+
+
+def parameter_pages(data) -> list:
+    """The parameter set at full precision with its provenance, then each engine's solver settings."""
+    params = data.summary.get("params") or []
+    rows = [[p.get("name", ""), fmt_full(p.get("value")) if p.get("value") is not None else "none",
+             p.get("unit", ""), p.get("source", ""), p.get("doc", "")] for p in params]
+    cols = [("parameter", 1, "l"), ("value", 1, "r"), ("unit", 1, "c"), ("source", 1, "l"), ("meaning", 1, "l")]
+    blocks = [("Parameters (SI)", cols, rows)]
+    settings = _settings_rows(data)
+    if settings:
+        blocks.append(("Engine solver settings (as recorded by each engine, first case)",
+                       [("engine", 1, "l"), ("settings", 1, "l")], settings))
+    return _table_pages("Parameter set and provenance", "SI values used by every case at full precision (overrides: "
+                        "what was run); source: the paper's table, or 'assumed' with the model notes that argue "
+                        "for the value", blocks)
 
 
 def _settings_rows(data) -> list[list[str]]:
     rows = []
     for e in data.engines:
         for c in data.cases:
-            run = data.run(c["name"], e)
-            st = (run.get("stats") or {}).get("settings")
+            st = (data.run(c["name"], e).get("stats") or {}).get("settings")
             if st:
-                rows.append([e, ", ".join(f"{k}={json.dumps(v) if isinstance(v, (list, dict)) else fmt(v)}"
-                                          for k, v in st.items())])
+                rows.append([e, ", ".join(f"{k} = {_val(v)}" for k, v in st.items())])
                 break
     return rows

@@ -26,7 +26,7 @@ def polar_figure(polar: dict):
                      f"{fmt(polar['amplitude'] * 1e3)} mm.\nEach curve is divided by its mean over the turn: "
                      "a unit circle = the same in every direction.")
     for i, (key, _scale, name, _unit) in enumerate(PANELS):
-        ax = fig.add_axes([0.025 + 0.197 * i, 0.43, 0.16, 0.4], projection="polar")
+        ax = fig.add_axes([0.035 + 0.197 * i, 0.45, 0.14, 0.34], projection="polar")
         lo, hi = 1.0, 1.0
         for j, (n, d) in enumerate(designs.items()):
             v = np.asarray(d[key], dtype=float)
@@ -34,10 +34,17 @@ def polar_figure(polar: dict):
             psi = np.radians(np.append(d["psi_deg"], d["psi_deg"][0]))
             ax.plot(psi, np.append(rel, rel[0]), color=COLORS[j % len(COLORS)], lw=1.4)
             lo, hi = min(lo, rel.min()), max(hi, rel.max())
-        ax.set_ylim(min(0.0, lo - 0.1), max(1.3, hi + 0.05))
-        ax.set_title(f"{name} / its mean", fontsize=9.5, pad=12)
-        ax.tick_params(labelsize=6.5)
-        ax.set_rlabel_position(200)
+        # a ratio below 0 (a quantity that changes sign over the turn) stays outside the centre: the
+        # radial axis starts below the smallest value instead of at 0
+        r0, top = min(0.0, lo - 0.1), max(1.3, hi + 0.05)
+        ax.set_ylim(r0, top)
+        ticks = sorted([1.0] + ([0.0] if r0 < 0 else [0.5]) + ([2.0] if top >= 2.0 else []))
+        ax.set_yticks(ticks, [fmt(t) for t in ticks])   # a "0" ring: the centre lies below zero
+        ax.set_xticks(np.radians([0, 90, 180, 270]), ["0°", "90°", "180°", "270°"])
+        ax.set_title(f"{name} / its mean" + (f"\n(centre = {fmt(r0, 2)}: it changes sign)" if r0 < 0 else ""),
+                     fontsize=9.5 if r0 >= 0 else 8.5, pad=16)
+        ax.tick_params(labelsize=6.5, pad=1)
+        ax.set_rlabel_position(112)
     fig.legend(handles=[Line2D([], [], color=COLORS[j % len(COLORS)], lw=1.6, label=f"n = {n}")
                         for j, n in enumerate(designs)], loc="upper center", bbox_to_anchor=(0.5, 0.905),
                ncol=len(designs), frameon=False, fontsize=9)

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from comparisons.power import threshold_text
 
-from .style import GREEN, PORTRAIT, RED, fmt, new_figure, table, wrap_width
+from .style import GREEN, LANDSCAPE, RED, fmt, new_figure, table, wrap_width
 
 FS = 7.0
 
@@ -11,7 +11,7 @@ FS = 7.0
 def power_figure(data):
     """One portrait page: per injected error, whether the gate failed, by which engine and metric."""
     p = data.power
-    fig = new_figure(PORTRAIT, title="What this gate can see",
+    fig = new_figure(LANDSCAPE, title="What this gate can see",
                      subtitle="small modelling errors injected into one engine's own model, one at a time")
     cases = ", ".join(c["name"] for c in p.get("cases", []))
     intro = (f"Each error below was put into the model of {' and '.join(p.get('engines', []))} only (never into the "
@@ -24,9 +24,9 @@ def power_figure(data):
              "'threshold ~' is the listed size divided by value/limit: the error of that kind the gate would just "
              "see, a linear estimate (small errors move the metrics in proportion), not a measurement.")
     y = 0.90
-    for line in wrap_width(intro, 0.88 * PORTRAIT[0] * 72, 8.0):
+    for line in wrap_width(intro, 0.88 * LANDSCAPE[0] * 72, 8.0):
         fig.text(0.06, y, line, fontsize=8.0, va="top")
-        y -= 1.45 * 8.0 / 72 / PORTRAIT[1]
+        y -= 1.45 * 8.0 / 72 / LANDSCAPE[1]
     cols = [("injected error", 3.2, "l"), ("seen", 0.7, "c"), ("by engine", 1.6, "l"), ("metric", 2.0, "l"),
             ("value/\nlimit", 1.1, "r"), ("weaker\nengine", 1.1, "r"), ("smallest\nseen", 1.2, "r"),
             ("threshold\n~", 1.3, "r")]

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from nsd_core.device.params import ParameterError
-from reports.style import GREY, LANDSCAPE, RED, fmt, new_figure, table
+from reports.style import GREY, LANDSCAPE, RED, fmt, new_figure, table, wrap_width
 
 RUNS = {"device": ("with the device", {"color": "#1f4e9c", "linestyle": "-", "linewidth": 1.5}),
         "supports": ("supports alone", {"color": "#d95f02", "linestyle": "--", "linewidth": 1.3})}
@@ -88,8 +88,9 @@ def overlay_figure(label: str, runs: dict, ratios: dict | None, stops: dict, war
                  str(v.get("what", ""))] for k, v in ratios.items()]
         table(fig, 0.31, [("quantity", 1.4, "l"), ("with the device", 0.8, "r"), ("supports alone", 0.8, "r"),
                           ("ratio", 0.6, "r"), ("what", 3.6, "l")], rows, fontsize=8.0, left=0.06, right=0.97)
-    for k, w in enumerate(warnings):
-        fig.text(0.06, 0.10 - 0.02 * k, f"warning: {w}"[:190], color=RED, fontsize=7.5)
+    lines = [ln for w in warnings for ln in wrap_width(f"warning: {w}", 0.9 * LANDSCAPE[0] * 72, 7.5, indent="   ")]
+    for k, line in enumerate(lines):   # wrapped, never cut (issue 20)
+        fig.text(0.06, 0.10 - 0.018 * k, line, color=RED, fontsize=7.5)
     return fig
 
 
@@ -109,11 +110,12 @@ def with_stop_mark(make_figure, stopped: dict):
     first, which is the orbit), for a run the device's failure ended."""
     def draw():
         fig = make_figure()
-        time_axes = [a for a in fig.axes[1:] if a.get_xlabel() in ("t [s]", "") and a.get_lines()]
+        time_axes = [a for a in fig.axes if getattr(a, "_nsd_time", False)] or \
+            [a for a in fig.axes[1:] if a.get_xlabel() in ("t [s]", "") and a.get_lines()]
         if time_axes:
             mark_stop(time_axes, stopped)
-        fig.text(0.5, 0.915, f"the run stopped (exit 4): {stopped.get('reason', '')}"[:160], ha="center", va="top",
-                 fontsize=8, color=RED)
+        text = "\n".join(wrap_width(f"the run stopped (exit 4): {stopped.get('reason', '')}", 0.9 * LANDSCAPE[0] * 72, 8))
+        fig.text(0.5, 0.03, text, ha="center", va="bottom", fontsize=8, color=RED)   # wrapped, never cut
         return fig
     return draw
 

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Callable
 
 from nsd_core.device.params import ParameterError
+from nsd_core.device.inputs import read_regular_text
 from nsd_core.device.results import read_csv
 
 from reports import building_pages as bp
@@ -40,10 +41,12 @@ def _runs(folder: Path, ref_name: str = "seismic.csv") -> dict:
     return runs
 
 
-def _run_pages(label: str, runs: dict, cost: dict | None = None) -> list[tuple[str, Callable]]:
-    """cost: engine -> wall seconds per model second, shown on the response page where known."""
+def _run_pages(label: str, runs: dict, cost: dict | None = None, ground: dict | None = None,
+               nodevice=None) -> list[tuple[str, Callable]]:
+    """cost: engine -> warm wall seconds per model second, shown on the response page where known;
+    ground: the ground motion's description; nodevice: the supports-alone run, overlaid where it exists."""
     stem = label.replace(":", "_").replace(" ", "_")
-    out = [(f"response_{stem}", lambda: sp.response_figure(f"Seismic response: {label}", runs, cost)),
+    out = [(f"response_{stem}", lambda: sp.response_figure(f"Seismic response: {label}", runs, cost, ground, nodevice)),
            (f"loops_{stem}", lambda: sp.loops_figure(f"Device loops during the record: {label}", runs))]
     if any("E_input" in r.columns for r in runs.values()):
         out.append((f"energy_{stem}", lambda: sp.energy_figure(f"Energy balance: {label}", runs)))
@@ -52,40 +55,57 @@ def _run_pages(label: str, runs: dict, cost: dict | None = None) -> list[tuple[s
     return out
 
 
+def _summary(folder: Path) -> dict:
+    try:
+        s = json.loads(read_regular_text(folder / "summary.json"))
+        return s if isinstance(s, dict) else {}
+    except (OSError, ValueError):
+        return {}
+
+
+def _cost(summary: dict) -> dict | None:
+    solver = summary.get("solver") if isinstance(summary.get("solver"), dict) else {}
+    if isinstance(solver.get("wall_time"), (int, float)) and solver.get("model_time"):
+        return {"semirecursive": solver["wall_time"] / solver["model_time"]}
+    return None
+
+
 def seismic_plan(folder) -> tuple[list[tuple[str, Callable]], str]:
     """(file stem, figure function) per page and the footer's title for an nsd seismic folder."""
     root = Path(folder)
     if (root / "set.json").is_file():
         try:
-            index = json.loads((root / "set.json").read_text())
+            index = json.loads(read_regular_text(root / "set.json"))
             rows = index["rows"]
         except (OSError, ValueError, KeyError, TypeError) as e:
             raise ParameterError(f"{root / 'set.json'}: malformed ({' '.join(str(e).split())[:100]})") from None
+        for row in rows:   # each record's warm cost, from its own summary (compilation timed apart)
+            solver = _summary(root / "records" / f"{row['set']}_{row['id']}").get("solver") or {}
+            if isinstance(solver.get("wall_time"), (int, float)) and solver.get("model_time"):
+                cpu = solver.get("cpu_time")
+                row["cost"] = (f"{solver['wall_time'] / solver['model_time']:.3g} / "
+                               + (f"{cpu / solver['model_time']:.3g}" if isinstance(cpu, (int, float)) else "n/a"))
         plan = [("set_table", lambda: sp.set_table_figure(index))]
         for row in rows:
             folder = root / "records" / f"{row['set']}_{row['id']}"
             if row.get("status") == "ok" and (folder / "seismic.csv").is_file():
                 runs = _runs(folder)
-                plan += _run_pages(f"{row['set']}:{row['id']}", runs)
+                summ = _summary(folder)
+                alone = folder.parent / (folder.name + "_nodevice") / "seismic.csv"
+                nodevice = _runs(alone.parent)["semirecursive"] if alone.is_file() else None
+                plan += _run_pages(f"{row['set']}:{row['id']}", runs, _cost(summ), summ.get("ground"), nodevice)
         return plan, f"NSD seismic report  |  record set {index.get('set')}"
     if bp.is_building_compare(root):  # nsd seismic --compare-building (reports.building_pages)
         return bp.compare_plan(root, _runs)
     if sc.is_compare(root):  # nsd seismic --compare-supports (reports.seismic_compare)
         return sc.compare_plan(root, _runs)
     runs = _runs(root)
-    try:
-        summary = json.loads((root / "summary.json").read_text())
-        summary = summary if isinstance(summary, dict) else {}
-        ground = summary.get("ground", {})
-        label = (f"{ground['set']}:{ground['record']}" if "record" in ground else ground.get("kind", "run"))
-    except (OSError, ValueError, AttributeError, KeyError):
-        summary, label = {}, "run"
+    summary = _summary(root)
+    ground = summary.get("ground") if isinstance(summary.get("ground"), dict) else {}
+    label = f"{ground['set']}:{ground['record']}" if "record" in ground else str(ground.get("kind", "run"))
     if summary.get("device") is False:
         label += " (supports alone)"
-    solver = summary.get("solver") if isinstance(summary.get("solver"), dict) else {}
-    cost = ({"semirecursive": solver["wall_time"] / solver["model_time"]}
-            if isinstance(solver.get("wall_time"), (int, float)) and solver.get("model_time") else None)
-    pages = _run_pages(label, runs, cost)
+    pages = _run_pages(label, runs, _cost(summary), ground)
     if isinstance(summary.get("stopped"), dict):  # exit 4: the series up to the event, the event marked
         pages = [(stem, sc.with_stop_mark(draw, summary["stopped"])) for stem, draw in pages]
     return pages, f"NSD seismic report  |  {label}"
@@ -104,14 +124,16 @@ def compare_seismic_pages(root) -> list[tuple[str, Callable]]:
         if all(c in r.columns for c in NEEDED):
             cases.setdefault(case, {})[eng] = r
     try:
-        recorded = json.loads((Path(root) / "results.json").read_text()).get("runs", {})
-    except (OSError, ValueError, AttributeError):
-        recorded = {}
+        results = json.loads(read_regular_text(Path(root) / "results.json"))
+        recorded = results.get("runs", {})
+        grounds = {c["name"]: c.get("ground") for c in results.get("seismic_cases", []) if isinstance(c, dict)}
+    except (OSError, ValueError, AttributeError, KeyError, TypeError):
+        recorded, grounds = {}, {}
     plan = []
     for case, runs in cases.items():
         runs = dict(sorted(runs.items(), key=lambda kv: kv[0] != "semirecursive"))
         entries = recorded.get(case, {}) if isinstance(recorded, dict) else {}
         cost = {e: v["wall_time_per_model_second"] for e, v in entries.items()
                 if isinstance(v, dict) and isinstance(v.get("wall_time_per_model_second"), (int, float))}
-        plan += _run_pages(f"seismic case {case}", runs, cost or None)
+        plan += _run_pages(f"seismic case {case}", runs, cost or None, grounds.get(case))
     return plan

@@ -42,11 +42,15 @@ def color(engine: str) -> str:
 
 
 def new_figure(size=LANDSCAPE, title: str | None = None, subtitle: str | None = None):
+    """A page; the subtitle wraps to the page's width. ``fig._nsd_top``: the y below the headings."""
     fig = plt.figure(figsize=size)
+    fig._nsd_top = 0.95
     if title:
         fig.text(0.5, 0.975, title, ha="center", va="top", fontsize=13, weight="bold")
     if subtitle:
-        fig.text(0.5, 0.945, subtitle, ha="center", va="top", fontsize=8.5, color=GREY)
+        lines = [ln for part in subtitle.split("\n") for ln in wrap_width(part, 0.92 * size[0] * 72, 8.5)]
+        fig.text(0.5, 0.945, "\n".join(lines), ha="center", va="top", fontsize=8.5, color=GREY)
+        fig._nsd_top = 0.945 - len(lines) * 1.2 * 8.5 / 72 / size[1] - 0.004
     return fig
 
 
@@ -60,12 +64,6 @@ def no_data(ax, text: str) -> None:
     ax.set_xticks([])
     ax.set_yticks([])
     ax.grid(False)
-
-
-def fit(text: str, chars: int) -> str:
-    """Shorten ``text`` to ``chars`` characters with an ellipsis."""
-    text = str(text)
-    return text if len(text) <= chars else text[: max(chars - 1, 1)] + "\u2026"
 
 
 CHAR = 0.6  # a safe average glyph width of DejaVu Sans, in units of the font size
@@ -135,11 +133,11 @@ def _spans(fig, columns, left, right):
 
 def widths(fig, columns, left: float = 0.06, right: float = 0.94, pad: float = 0.004) -> list[float]:
     """Usable width of each column [pt]."""
-    w_in = fig.get_size_inches()[0] if fig is not None else PORTRAIT[0]
+    w_in = fig.get_size_inches()[0] if fig is not None else LANDSCAPE[0]
     return [(b - a - 2 * pad) * w_in * 72 for a, b in _spans(fig, columns, left, right)]
 
 
-def natural(columns, rows, flex: int = -1, fontsize: float = 7.0, total: float = 0.88 * PORTRAIT[0] * 72):
+def natural(columns, rows, flex: int = -1, fontsize: float = 7.0, total: float = 0.88 * LANDSCAPE[0] * 72):
     """Columns re-sized to their content (measured; header lines in bold), column ``flex`` taking
     what is left of ``total`` points (it wraps or cuts)."""
     out = []
@@ -151,6 +149,23 @@ def natural(columns, rows, flex: int = -1, fontsize: float = 7.0, total: float =
     k = flex % len(columns)
     out[k][1] = max(total - sum(c[1] for i, c in enumerate(out) if i != k), 40.0)
     return [tuple(c) for c in out]
+
+
+def fit_columns(columns, rows, fontsize: float = 7.0, total: float = 0.88 * LANDSCAPE[0] * 72, short: float = 110.0):
+    """Columns sized to their content (measured, headers in bold) within ``total`` points: columns
+    narrower than ``short`` keep their natural width; the wider ones share what is left in proportion
+    to their natural widths (their cells then wrap, see ``wrap_rows``), never shortened."""
+    nat, heads = [], []
+    for j, (head, _, al) in enumerate(columns):
+        cells = [str(r[j]) for r in rows]
+        heads.append(max(text_width(h, fontsize, True) for h in head.split("\n")) + 8)   # headers never wrap
+        nat.append(max([heads[-1]] + [text_width(c, fontsize) + 8 for c in cells]))
+    if sum(nat) > total:
+        long_ = [j for j, w in enumerate(nat) if w > short]
+        room = total - sum(w for j, w in enumerate(nat) if j not in long_)
+        want = sum(nat[j] for j in long_)
+        nat = [max(room * w / want, 60.0, heads[j]) if j in long_ else w for j, w in enumerate(nat)]
+    return [(head, w, al) for (head, _, al), w in zip(columns, nat)]
 
 
 def wrap_rows(columns, rows, colors=None, fontsize: float = 7.0, fig=None, left: float = 0.06,
@@ -174,8 +189,8 @@ def table(fig, top: float, columns: list[tuple[str, float, str]], rows: list[lis
     """Draw rows of strings as a table in figure coordinates; returns the y below the last row.
 
     ``columns``: (header, relative width, alignment 'l'/'r'/'c'); a header may hold a line break.
-    Cells are cut (measured, with an ellipsis) to their column's width, so no text crosses into the
-    next column (use ``wrap_rows`` first to wrap instead of cutting).
+    Cells are drawn whole, never shortened (issue 20): size the columns with ``natural`` and wrap
+    long cells with ``wrap_rows`` first (tests/test_report.py checks that no two texts overlap).
     """
     h_in = fig.get_size_inches()[1]
     row_h = fontsize * 1.55 / 72 / h_in
@@ -191,7 +206,7 @@ def table(fig, top: float, columns: list[tuple[str, float, str]], rows: list[lis
     for j, (head, _, al) in enumerate(columns):
         a, b = xs[j]
         xt = {"l": a + pad, "r": b - pad, "c": (a + b) / 2}[al]
-        fig.text(xt, y - hh / 2, "\n".join(fit_width(t, ws[j], fontsize, True) for t in head.split("\n")),
+        fig.text(xt, y - hh / 2, head,
                  ha={"l": "left", "r": "right", "c": "center"}[al], va="center", fontsize=fontsize, weight="bold",
                  linespacing=1.1)
     y -= hh
@@ -206,15 +221,27 @@ def table(fig, top: float, columns: list[tuple[str, float, str]], rows: list[lis
             xt = {"l": a + pad, "r": b - pad, "c": (a + b) / 2}[al]
             col = colors[i][j] if (colors and colors[i][j]) else "black"
             bold = col == RED
-            fig.text(xt, y - row_h / 2, fit_width(cell, ws[j], fontsize, bold),
+            fig.text(xt, y - row_h / 2, str(cell),
                      ha={"l": "left", "r": "right", "c": "center"}[al], va="center", fontsize=fontsize, color=col,
                      weight="bold" if bold else "normal")
         y -= row_h
     return y
 
 
-def rows_per_page(top: float, bottom: float, fontsize: float = 7.0, height_in: float = PORTRAIT[1]) -> int:
+def rows_per_page(top: float, bottom: float, fontsize: float = 7.0, height_in: float = LANDSCAPE[1]) -> int:
     return max(int((top - bottom) / (fontsize * 1.55 / 72 / height_in)) - 1, 1)
+
+
+def fmt_full(v) -> str:
+    """A number in full: the shortest text that reads back as the same double (None: "none")."""
+    if v is None:
+        return "none"
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        return str(v)
+    if isinstance(v, int):
+        return str(v)
+    text = repr(float(v))   # Python's shortest round-trip text
+    return text[:-2] if text.endswith(".0") else text
 
 
 def fmt(v, digits: int = 3) -> str:
@@ -231,3 +258,42 @@ def fmt(v, digits: int = 3) -> str:
         text = f"{v:.{digits}g}"
         return f"{v:.0f}" if "e" in text else text
     return f"{v:.{max(digits - 1, 1)}e}"
+
+
+LIMIT_LS = (0, (1, 2))   # limit lines: thin dotted, a style no data series uses
+
+
+def limit_lines(ax, limits: dict, unit: str = "", x: float = 0.99, ha: str = "right", fontsize: float = 6.5) -> None:
+    """Horizontal limit lines, named in their panel: ``limits`` is {name: (value, colour)}. Values
+    close on the axis (within 3x on a log axis, 8 % of the range on a linear one) share one label
+    above the highest of them ("limits: a 7.1e-05, b 7.9e-05"), so labels never overprint."""
+    items = sorted((float(v), name, col) for name, (v, col) in limits.items() if v)
+    if not items:
+        return
+    log = ax.get_yscale() == "log"
+    span = (items[-1][0] - items[0][0]) or abs(items[-1][0]) or 1.0
+    clusters: list[list] = [[items[0]]]
+    for it in items[1:]:
+        last = clusters[-1][-1][0]
+        if (it[0] / last < 3.0) if log and last > 0 else (it[0] - last) < 0.08 * span:
+            clusters[-1].append(it)
+        else:
+            clusters.append([it])
+    u = f" {unit}" if unit else ""
+    for cl in clusters:
+        for value, _, col in cl:
+            ax.axhline(value, color=col, ls=LIMIT_LS, lw=0.9)
+        cols = {c for _, _, c in cl}
+        col = cl[0][2] if len(cols) == 1 else GREY
+        if len(cl) == 1:
+            label = f"{cl[0][1]} limit {fmt(cl[0][0], 2)}{u}"
+        elif len({v for v, _, _ in cl}) == 1:
+            label = f"{', '.join(n for _, n, _ in cl)} limit {fmt(cl[0][0], 2)}{u}"
+        else:
+            label = "limits: " + ", ".join(f"{n} {fmt(v, 2)}{u}" for v, n, _ in cl)
+        # above the highest line of the cluster, or below the lowest where that is near the panel's top
+        top = ax.transAxes.inverted().transform(ax.transData.transform((1.0, cl[-1][0])))[1]
+        y, va = (cl[0][0], "top") if top > 0.85 else (cl[-1][0], "bottom")
+        ax.annotate(label, (x, y), xycoords=ax.get_yaxis_transform(), xytext=(0, -2 if va == "top" else 2),
+                    textcoords="offset points", ha=ha, va=va, fontsize=fontsize, color=col,
+                    bbox=dict(fc="white", ec="none", alpha=0.85, pad=0.4))   # no line strikes it through

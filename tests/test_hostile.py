@@ -130,6 +130,9 @@ for v in ("0", "-1", "100000", "x"):
 add("compare-junit-folder", COMPARE + ["--junit", "{d}"], fragment="--junit")
 add("compare-junit-empty", COMPARE + ["--junit", ""], fragment="--junit")
 add("compare-junit-under-file", COMPARE + ["--junit", "{d}/f.txt/j.xml"], {"f.txt": "x"}, "--junit")
+add("compare-junit-name-250", COMPARE + ["--junit", "{d}/" + "j" * 250], fragment="too long")
+add("compare-junit-name-300", COMPARE + ["--junit", "{d}/" + "j" * 300], fragment="too long")
+add("compare-junit-link-loop", COMPARE + ["--junit", "{d}/loop/j.xml"], {"loop": ("link", "loop")}, "loop")
 add("compare-out-is-file", ["compare", "--out", "{d}/f.txt"], {"f.txt": "x"}, "not a folder")
 add("compare-convergence-without-table", COMPARE + ["--cases", "{d}/c.toml", "--convergence"], case_file(), "convergence")
 add("compare-set-bad", COMPARE + ["--set", "n_ropes=2"], fragment="n_ropes")
@@ -339,24 +342,227 @@ for v, frag in (("0", "repeats"), ("-1", "repeats"), ("x", "repeats"), ("21", "r
 add("benchmark-out-file", ["benchmark", "--out", "{d}/f.txt"], {"f.txt": "x"}, "not a folder")
 add("benchmark-out-empty", ["benchmark", "--out", ""], fragment="--out")
 
+# ---- round two (issue 22): the newer commands, odd files and output paths
+SEIS_G = ["seismic", "--ground", "harmonic:amplitude=1,frequency=2,duration=1", "--out", "{out}"]
+SEIS_R = ["seismic", "--record", "farfield:1", "--window", "5,6", "--out", "{out}"]
+SET_R = ["seismic", "--record-set", "farfield", "--records", "1", "--window", "5,6", "--out", "{out}"]
+for v in ("1e6", "1e-9", "0", "-1", "nan", "inf", "x", "101"):
+    add(f"seismic-time-factor-{v}", SEIS_R + ["--time-factor", v], fragment="time-factor")
+    add(f"seismic-set-time-factor-{v}", SET_R + ["--time-factor", v], fragment="time-factor")
+add("seismic-time-factor-with-ground", SEIS_G + ["--time-factor", "1"], fragment="time-factor")
+for v in ("1e6", "3000", "301", "0", "-1", "nan", "inf"):
+    add(f"seismic-duration-{v}", SEIS_G + ["--duration", v], fragment="duration")
+    add(f"seismic-set-duration-{v}", SET_R + ["--duration", v], fragment="duration")
+add("seismic-duration-steps-named", SEIS_G + ["--duration", "3000"], fragment="solver steps")
+for v in ("1e-9", "0", "-1", "nan", "inf", "2"):
+    add(f"seismic-dt-out-{v}", SEIS_G + ["--dt-out", v], fragment="dt-out")
+add("seismic-dt-out-over-duration", SEIS_G + ["--duration", "0.5", "--dt-out", "0.9"], fragment="dt-out")
+add("seismic-too-many-samples", SEIS_G + ["--duration", "10", "--dt-out", "1e-6"], fragment="samples")
+add("seismic-own-duration-too-many-samples", ["seismic", "--record", "farfield:1", "--window", "5,15", "--time-factor",
+                                              "10", "--dt-out", "1e-5", "--out", "{out}"], fragment="samples")
+add("seismic-set-own-duration-too-long", ["seismic", "--record-set", "farfield", "--records", "1", "--time-factor", "100",
+                                          "--out", "{out}"], fragment="duration")
+for v in ("1e9", "0", "-1", "nan", "x"):
+    add(f"seismic-scale-{v}", SEIS_R + ["--scale", v], fragment="scale")
+for v in ("1e9", "nan", "x"):
+    add(f"seismic-rotate-{v}", SEIS_R + ["--rotate", v], fragment="rotate")
+add("seismic-scheduler-timeout-single", SEIS_G + ["--scheduler-timeout", "5"], fragment="scheduler-timeout")
+for v in ("0", "-1", "nan", "1e9"):
+    add(f"seismic-set-scheduler-timeout-{v}", SET_R + ["--scheduler", "{silent}", "--scheduler-timeout", v],
+        fragment="scheduler-timeout")
+add("seismic-set-scheduler-timeout-alone", SET_R + ["--scheduler-timeout", "5"], fragment="--scheduler")
+add("seismic-set-scheduler-silent", SET_R + ["--scheduler", "{silent}", "--scheduler-timeout", "1"],
+    fragment="handshake")
+add("sweep-scheduler-silent", SWEEP + ["--scheduler", "{silent}", "--scheduler-timeout", "1"], fragment="{silent}")
+add("sweep-scheduler-closes", SWEEP + ["--scheduler", "{closing}", "--scheduler-timeout", "1"], fragment="closed")
+add("sweep-scheduler-timeout-nan", SWEEP + ["--scheduler", "{silent}", "--scheduler-timeout", "nan"],
+    fragment="scheduler-timeout")
+GROUNDS = {
+    "duplicate-key": ("pulse:velocity=0.3,frequency=1,velocity=0.5", "twice"),
+    "duplicate-key-spaced": ("pulse:velocity=0.3, frequency=1, frequency = 2", "twice"),
+    "unknown-key": ("pulse:velocity=0.3,frequency=1,damping=2", "damping"),
+    "empty-value": ("pulse:velocity=,frequency=1", "velocity"),
+    "no-equals": ("pulse:velocity,frequency=1", "velocity"),
+    "semicolon": ("pulse:velocity=0.3;frequency=1", "velocity"),
+    "kind-case": ("PULSE:velocity=0.3,frequency=1", "PULSE"),
+    "kind-only": ("harmonic:", "amplitude"),
+    "no-kind": ("velocity=0.3,frequency=1", "kind"),
+    "gamma-huge": ("pulse:velocity=0.3,frequency=1,gamma=1e9", "gamma"),
+    "gamma-one": ("pulse:velocity=0.3,frequency=1,gamma=1", "gamma"),
+    "gamma-nan": ("pulse:velocity=0.3,frequency=1,gamma=nan", "gamma"),
+    "pulse-too-long": ("pulse:velocity=0.3,frequency=0.05,gamma=20", "lasts"),
+    "frequency-zero": ("pulse:velocity=0.3,frequency=0", "frequency"),
+    "frequency-huge": ("pulse:velocity=0.3,frequency=1e9", "frequency"),
+    "frequency-inf": ("harmonic:amplitude=1,frequency=inf", "frequency"),
+    "velocity-huge": ("pulse:velocity=1e9,frequency=1", "velocity"),
+    "velocity-nan": ("pulse:velocity=nan,frequency=1", "velocity"),
+    "phase-huge": ("pulse:velocity=0.3,frequency=1,phase=1e9", "phase"),
+    "azimuth-nan": ("harmonic:amplitude=1,frequency=1,azimuth=nan", "azimuth"),
+    "amplitude-huge": ("harmonic:amplitude=1e9,frequency=1", "amplitude"),
+    "duration-huge": ("harmonic:amplitude=1,frequency=1,duration=1e6", "duration"),
+    "duration-zero": ("harmonic:amplitude=1,frequency=1,duration=0", "duration"),
+}
+for name, (spec, frag) in GROUNDS.items():
+    add(f"seismic-ground-{name}", ["seismic", "--ground", spec, "--out", "{out}"], fragment=frag)
+    add(f"seismic-case-ground-{name}", COMPARE + ["--cases", "{d}/c.toml"],
+        {"c.toml": f'[[case]]\nname = "s"\nmode = "seismic"\nground = "{spec}"\n'}, frag)
+for v, frag in (("mass=1e308", "mass"), ("mass=1e-9", "mass"), ("stiffness=1e12", "stiffness"),
+                ("damping=1e300", "damping"), ("radius_of_gyration=1e9", "radius_of_gyration"),
+                ("support_radius=0", "support_radius"), ("stiffness=1e10", "Hz"), ("mass=1e-3", "Hz")):
+    add(f"seismic-structure-{v}", SEIS_G + ["--structure", v], fragment=frag)
+    add(f"seismic-case-structure-{v}", COMPARE + ["--cases", "{d}/c.toml"],
+        {"c.toml": '[[case]]\nname = "s"\nmode = "seismic"\nground = "pulse:velocity=0.3,frequency=1"\n'
+                   f'structure = {{ {v.replace("=", " = ")} }}\n'}, frag)
+# nsd polar
+for flag, v, frag in (("--step", "1e-7", "step"), ("--step", "0.01", "step"), ("--step", "0", "step"),
+                      ("--step", "-15", "step"), ("--step", "nan", "step"), ("--step", "7", "divide"),
+                      ("--step", "100", "step"), ("--points-per-cycle", "16", "points-per-cycle"),
+                      ("--points-per-cycle", "63", "points-per-cycle"), ("--points-per-cycle", "0", "points-per-cycle"),
+                      ("--points-per-cycle", "100000", "points-per-cycle"), ("--wires", "", "wires"),
+                      ("--wires", ",", "wires"), ("--wires", "2", "wires"), ("--wires", "3,3", "once"),
+                      ("--wires", "65", "wires"), ("--wires", "x", "wires"), ("--wires", "4.5", "wires"),
+                      ("--wires", ",".join(str(n) for n in range(3, 20)), "wires"), ("--amplitude", "0", "amplitude"),
+                      ("--amplitude", "nan", "amplitude"), ("--amplitude", "1", "amplitude"),
+                      ("--workers", "0", "workers"), ("--workers", "1000", "workers"),
+                      ("--set", "n_ropes=2", "n_ropes"), ("--set", "rope_stiffness=-1", "rope_stiffness")):
+    add(f"polar{flag}-{v[:12] or 'empty'}", ["polar", flag, v, "--out", "{out}"], fragment=frag)
+add("polar-work-cap", ["polar", "--step", "0.1", "--points-per-cycle", "10000", "--out", "{out}"],
+    fragment="quasi-static points")
+# drive tables
+TABLE = "t,x,y\n0,0,0\n0.5,0.005,0\n1,0.01,0.002\n1.5,0.005,0\n2,0,0\n"
+TAB = ["cycle", "--path", "{d}/p.csv", "--frequency", "1", "--out", "{out}"]
+for name, (files, extra, frag) in {
+    "minor": ({"p.csv": TABLE}, ["--minor", "0.01"], "--minor"),
+    "direction": ({"p.csv": TABLE}, ["--direction", "30"], "--direction"),
+    "direction-zero": ({"p.csv": TABLE}, ["--direction", "0"], "--direction"),
+    "amplitude": ({"p.csv": TABLE}, ["--amplitude", "0.01"], "--amplitude"),
+    "fifo": ({"p.csv": ("fifo",)}, [], "FIFO"),
+    "device": ({}, ["--path", "/dev/null"], "device"),
+    "folder": ({"p.csv/": ""}, [], "folder"),
+    "dangling-link": ({"p.csv": ("link", "nowhere.csv")}, [], "not found"),
+    "link-loop": ({"p.csv": ("link", "p.csv")}, [], "p.csv"),
+    "nan": ({"p.csv": TABLE.replace("0.01,0.002", "nan,0")}, [], "finite"),
+    "not-increasing": ({"p.csv": TABLE.replace("1.5,", "0.9,")}, [], "increasing"),
+    "rows-too-close": ({"p.csv": TABLE.replace("0.5,", "1e-9,")}, [], "apart"),
+    "not-from-zero": ({"p.csv": TABLE.replace("0,0,0\n0.5", "0.1,0,0\n0.5", 1)}, [], "t = 0"),
+    "far-away": ({"p.csv": TABLE.replace("0.01,0.002", "5,0")}, [], "centre"),
+    "too-short": ({"p.csv": TABLE}, ["--cycles", "5"], "ends"),
+    "binary": ({"p.csv": b"\xff\xfe\x00" * 30}, [], "text"),
+}.items():
+    add(f"cycle-table-{name}", TAB + extra, files, frag)
+# work estimated before it starts
+add("cycle-work-long", cycle("--frequency", "0.05", "--cycles", "1000"), fragment="solver steps")
+add("cycle-work-max-step", cycle("--frequency", "1", "--cycles", "100", "--max-step", "1e-6"), fragment="solver steps")
+add("sweep-work", ["sweep", "--param", "rod_length", "--values", "0.03", "--frequency", "0.05", "--cycles", "1000",
+                   "--out", "{out}"], fragment="solver steps")
+# odd input files: FIFOs, devices, folders, never blocking
+for flag, argv in (("--params", cycle("--params", "{d}/x")), ("--cases", COMPARE + ["--cases", "{d}/x"]),
+                   ("--tolerances", COMPARE + ["--tolerances", "{d}/x"]),
+                   ("seismic-params", SEIS_G + ["--params", "{d}/x"]), ("polar-params", ["polar", "--params", "{d}/x",
+                                                                                     "--out", "{out}"])):
+    add(f"fifo{flag}", argv, {"x": ("fifo",)}, "FIFO")
+    add(f"device{flag}", [a.replace("{d}/x", "/dev/zero") for a in argv], {}, "device")
+add("report-results-fifo", ["report", "--from", "{d}/r", "--out", "{out}"], {"r/results.json": ("fifo",)}, "FIFO")
+add("report-seismic-summary-fifo", ["report", "--from", "{d}/r", "--out", "{out}"],
+    {"r/seismic.csv": ("fifo",), "r/set.json": ("fifo",)}, "results.json")
+# a damaged field in a compare folder
+GOOD_CSV = "t [s],u [m],F [N],closure [m]\n0,0,0,0\n0.05,0.001,10,0\n0.1,0,0,0\n"
+for name, change in (("metric-value-string", {"metrics": [{"case": "q", "engine": "semirecursive", "reference": None,
+                                                           "metric": "x", "value": "big", "limit": 1.0, "gated": True,
+                                                           "pass": True}]}),
+                     ("case-amplitude-string", {"cases": [{"name": "q", "amplitude": "x", "frequency": 10.0}]})):
+    add(f"report-damaged-{name}", ["report", "--from", "{d}/r", "--out", "{out}"],
+        {"r/results.json": json.dumps({**OK_RESULTS, **change}), "r/cycles/q__semirecursive.csv": GOOD_CSV},
+        "malformed")
+# output paths: symbolic link loops, dangling links, names too long, files on the way
+OUTS = {
+    "link-loop": ({"loop": ("link", "loop")}, "{d}/loop", "loop"),
+    "under-link-loop": ({"loop": ("link", "loop")}, "{d}/loop/sub", "loop"),
+    "dangling-link": ({"dangle": ("link", "nowhere")}, "{d}/dangle", "nothing"),
+    "under-dangling-link": ({"dangle": ("link", "nowhere")}, "{d}/dangle/sub", "nothing"),
+    "name-300": ({}, "{d}/" + "n" * 300, "too long"),
+    "path-5000": ({}, "{d}/" + "/".join(["p" * 200] * 25), "too long"),
+    "path-4000": ({}, "{d}/" + "/".join(["p" * 200] * 19), "too long"),
+    "under-file": ({"f.txt": "x"}, "{d}/f.txt/a/b", "not a folder"),
+    "device": ({}, "/dev/null", "not a folder"),
+}
+for name, (files, out, frag) in OUTS.items():
+    add(f"out-{name}", cyc_with("--out", out), files, frag)
+    add(f"seismic-out-{name}", SEIS_G[:-1] + [out], files, frag)
+    add(f"polar-out-{name}", ["polar", "--out", out], files, frag)
+# names with control characters: one line, escaped
+for name, argv, files, frag in (
+        ("params", cycle("--params", "{d}/a\nb.toml"), {}, "a\\nb.toml"),
+        ("cases", COMPARE + ["--cases", "{d}/a\x1b[2Jb.toml"], {}, "\\x1b"),
+        ("path", TAB[:2] + ["{d}/x\ny.csv"] + TAB[3:], {}, "x\\ny.csv"),
+        ("out-under-file", cyc_with("--out", "{d}/f.txt/a\nb"), {"f.txt": "x"}, "a\\nb"),
+        ("out-loop", cyc_with("--out", "{d}/lo\rop/x"), {"lo\rop": ("link", "lo\rop")}, "lo\\rop"),
+        ("record", ["seismic", "--record", "far\nfield:1", "--out", "{out}"], {}, "far\\nfield"),
+        ("ground", ["seismic", "--ground", "pulse:velocity=0.3,frequency=1,spe\ned=1", "--out", "{out}"], {}, "spe\\ned"),
+        ("power-case", COMPARE + ["--power", "--power-cases", "a\nb"], {}, "a\\nb"),
+        ("argparse", cycle("--frequency", "1\n2"), {}, "1\\n2")):
+    add(f"control-chars-{name}", argv, files, frag)
+# --power-cases
+for v, frag in ((",", "empty"), ("", "empty"), ("A15mm_f1Hz,,A15mm_f10Hz", "empty"),
+                ("A15mm_f1Hz,A15mm_f1Hz", "twice"), ("bogus", "unknown case")):
+    add(f"compare-power-cases-{v[:20] or 'empty'}", COMPARE + ["--power", "--power-cases", v], fragment=frag)
+add("compare-power-cases-without-power", COMPARE + ["--power-cases", "A15mm_f1Hz"], fragment="--power")
+
 
 def snapshot(root):
     out = {}
     for dirpath, dirs, files in os.walk(root):
         for n in dirs + files:
             p = os.path.join(dirpath, n)
-            out[p] = os.stat(p).st_mtime_ns if n in files else None
+            out[p] = os.lstat(p).st_mtime_ns if n in files else None  # lstat: links that loop are inputs here
     return out
 
 
 def materialise(d, files):
+    """{name: text | bytes | ("fifo",) | ("link", target)}; a name ending in / is a folder."""
     for name, content in files.items():
         path = d / name.rstrip("/")
         if name.endswith("/"):
             path.mkdir(parents=True, exist_ok=True)
             continue
         path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_bytes(content) if isinstance(content, bytes) else path.write_text(content)
+        if content == ("fifo",):
+            os.mkfifo(path)
+        elif isinstance(content, tuple):
+            os.symlink(content[1], path)
+        else:
+            path.write_bytes(content) if isinstance(content, bytes) else path.write_text(content)
+
+
+@pytest.fixture(scope="module")
+def listeners():
+    """Addresses of two listeners that are not Dask schedulers: one accepts and never speaks, one
+    accepts and closes at once."""
+    import socket
+    import threading
+    socks, conns, stop = [], [], threading.Event()
+
+    def serve(sock, close):
+        sock.settimeout(0.2)
+        while not stop.is_set():
+            try:
+                c, _ = sock.accept()
+            except OSError:
+                continue
+            c.close() if close else conns.append(c)
+
+    addresses = {}
+    for name, close in (("silent", False), ("closing", True)):
+        s = socket.socket()
+        s.bind(("127.0.0.1", 0))
+        s.listen(8)
+        socks.append(s)
+        threading.Thread(target=serve, args=(s, close), daemon=True).start()
+        addresses[name] = f"tcp://127.0.0.1:{s.getsockname()[1]}"
+    yield addresses
+    stop.set()
+    for c in conns + socks:
+        c.close()
 
 
 TIMES = []
@@ -367,11 +573,16 @@ def test_there_are_at_least_150_hostile_inputs():
 
 
 @pytest.mark.parametrize("argv,files,fragment", CASES)
-def test_hostile_input(tmp_path, capsys, argv, files, fragment):
+def test_hostile_input(tmp_path, capsys, listeners, argv, files, fragment):
     d = tmp_path / "w"
     d.mkdir()
     materialise(d, files)
-    argv = [a.replace("{d}", str(d)).replace("{out}", str(d / "out")) for a in argv]
+
+    def fill(a):
+        for name, address in listeners.items():
+            a = a.replace("{" + name + "}", address)
+        return a.replace("{d}", str(d)).replace("{out}", str(d / "out"))
+    argv, fragment = [fill(a) for a in argv], fill(fragment)
     before = snapshot(tmp_path)
     start = time.perf_counter()
     try:

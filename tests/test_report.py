@@ -1,8 +1,9 @@
 """The validation report (nsd report): built from a small real `nsd compare` run, no mocks.
 
-One passing run (1 case, 1 cycle at 10 Hz, semirecursive and MuJoCo) is made once per session; a
-failing run is made from it by tightening a limit in a copy of its results.json (what a failed
-gate writes), and a malformed folder by damaging a copy.
+One run (a line case and a circle, 1 cycle at 10 Hz, and 0.1 s of a harmonic ground motion;
+semirecursive and MuJoCo) is made once per session; a failing run is made from it by tightening a
+limit in a copy of its results.json (what a failed gate writes), and a malformed folder by damaging
+a copy. The page tests read the PDF's text layer (pypdf) and every figure's text extents (issue 20).
 """
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ import time
 from pathlib import Path
 
 import pytest
+from page_checks import figure_problems as _figure_problems, text_problems
 
 ROOT = Path(__file__).resolve().parents[1]
 NSD = [sys.executable, "-m", "nsd_cli.main"]
@@ -25,8 +27,28 @@ samples_per_cycle = 200
 name = "A15mm_f10Hz"
 amplitude = 0.015
 frequency = 10.0
+[[case]]
+name = "circle_A10mm_f10Hz"
+path = "circle"
+amplitude = 0.010
+frequency = 10.0
+[[case]]
+name = "quake"
+mode = "seismic"
+ground = "harmonic:amplitude=0.8,frequency=2,azimuth=30,duration=0.1"
+dt_out = 2e-3
+settings.mujoco = { timestep = 1e-5 }
 """
-EXPECTED = ["summary", "parameters", "cycles", "stiffness", "breakdown", "convergence", "cost", "closure"]
+EXPECTED = ["summary", "what_was_run", "metric_definitions", "metric_table", "parameters", "parameters_2", "cycles",
+            "stiffness",
+            "cycles_2", "breakdown", "convergence", "cost", "closure", "response_seismic_case_quake",
+            "loops_seismic_case_quake", "energy_seismic_case_quake"]
+SEISMIC_PAGES = 3
+EXTRA_AT = len(EXPECTED) - SEISMIC_PAGES   # optional pages (benchmark, tables, ...) come before the seismic ones
+
+
+def with_extra(stem: str) -> list[str]:
+    return EXPECTED[:EXTRA_AT] + [stem] + EXPECTED[EXTRA_AT:]
 
 
 def nsd(*args, timeout=300):
@@ -86,9 +108,10 @@ def test_pdf_has_the_expected_pages(report):
     assert pdf.is_file() and pdf.name == "validation.pdf"
     assert paths["pages"] == EXPECTED
     assert len(PdfReader(pdf).pages) == len(EXPECTED)
-    assert "Parameter set and provenance" in _page_text(pdf, 1)
-    assert "Convergence" in _page_text(pdf, 5)  # no study in this run: the page says how to make one
-    assert "nsd compare --cases FILE --convergence" in _page_text(pdf, 5)
+    assert "Parameter set and provenance" in _page_text(pdf, EXPECTED.index("parameters"))
+    conv = EXPECTED.index("convergence")
+    assert "Convergence" in _page_text(pdf, conv)  # no study in this run: the page says how to make one
+    assert "nsd compare --cases FILE --convergence" in _page_text(pdf, conv)
     assert not list(pdf.parent.glob(".*tmp*")), "temporary files left behind"
 
 
@@ -121,7 +144,7 @@ def test_failing_run_names_the_failure_on_page_one(failing_dir, tmp_path):
     paths = build_report(src, tmp_path / "r")
     text = _page_text(paths["pdf"])
     assert "VERDICT: FAIL" in text and "WHAT FAILED" in text
-    assert text.index("WHAT FAILED") < text.index("What was run")  # failures come first
+    assert text.index("WHAT FAILED") < text.index("What passed, against which limit")  # failures come first
     assert "A15mm_f10Hz: mujoco max_dF_rel" in text
 
 
@@ -163,19 +186,13 @@ def test_bad_input_exits_2_and_writes_nothing(run_dir, tmp_path, damage):
     assert not out.exists()
 
 
-def test_cli_writes_the_report_quickly(run_dir, tmp_path):
+def test_cli_writes_the_report(run_dir, tmp_path):
+    """The command writes the PDF and every PNG. Its time is not asserted here (the guide: speed is
+    measured by benchmarks, not by timed tests on a shared machine)."""
     out = tmp_path / "cli"
-    start = time.perf_counter()
-    p = nsd("report", "--from", str(run_dir[0]), "--out", str(out), timeout=120)
-    elapsed = time.perf_counter() - start
+    p = nsd("report", "--from", str(run_dir[0]), "--out", str(out), timeout=300)
     assert p.returncode == 0, p.stderr
     assert (out / "validation.pdf").is_file() and len(list(out.glob("*.png"))) == len(EXPECTED)
-    assert elapsed < 30.0
-
-
-def test_generation_time_under_30_s(report):
-    _, seconds = report
-    assert seconds < 30.0
 
 
 def test_extra_pages_when_the_folder_has_them(run_dir, tmp_path):
@@ -195,9 +212,10 @@ def test_extra_pages_when_the_folder_has_them(run_dir, tmp_path):
                                        {"rtol": 1e-10, "min_digits": 9.4, "wall_time": 0.1, "method": "DOP853"}]},
         "slider_crank": {"error": 1e-15, "cpu_time": 0.01, "goal": 1e-10, "passed": True}}}))
     paths = build_report(dst, tmp_path / "r")
-    assert paths["pages"] == EXPECTED + ["benchmark"]
-    assert "max |dF| against cost" in _page_text(paths["pdf"], 5)
-    assert "Andrews" in _page_text(paths["pdf"], len(EXPECTED))
+    assert paths["pages"] == with_extra("benchmark")
+    assert "max |dF| against cost" in _page_text(paths["pdf"], EXPECTED.index("convergence"))
+    assert "Andrews" in _page_text(paths["pdf"], EXTRA_AT)
+    assert not _figure_problems(dst, ("benchmark", "convergence"))
 
 
 def test_tables_page_from_nsd_tables(run_dir, tmp_path):
@@ -208,9 +226,10 @@ def test_tables_page_from_nsd_tables(run_dir, tmp_path):
     p = nsd("tables", "--out", str(dst / "study"))
     assert p.returncode == 0, p.stderr
     paths = build_report(dst, tmp_path / "r")
-    assert paths["pages"] == EXPECTED + ["tables"]
-    text = _page_text(paths["pdf"], len(EXPECTED))
+    assert paths["pages"] == with_extra("tables")
+    text = _page_text(paths["pdf"], EXTRA_AT)
     assert "Tables 5 and 6" in text and "worst" in text
+    assert not _figure_problems(dst, ("tables",))
 
 
 def test_work_precision_page_when_the_folder_has_it(run_dir, tmp_path):
@@ -232,8 +251,127 @@ def test_work_precision_page_when_the_folder_has_it(run_dir, tmp_path):
           "compile": {"mujoco": {"warm": {"startup_s": 1.5}, "cold": {"startup_s": 20.0}}}}
     (dst / "work_precision" / "work_precision.json").write_text(json.dumps(wp))
     paths = build_report(dst, tmp_path / "r")
-    assert paths["pages"] == EXPECTED + ["work_precision"]
-    text = _page_text(paths["pdf"], len(EXPECTED))
+    assert paths["pages"] == with_extra("work_precision")
+    text = _page_text(paths["pdf"], EXTRA_AT)
     assert "Work-precision" in text and "A15mm_f1Hz" in text and "0.333" in text and "Euler h 2.50e-05" in text
+    assert not _figure_problems(dst, ("work_precision",))
     (dst / "work_precision" / "work_precision.json").write_text('{"cases": "none"}')
     assert build_report(dst, tmp_path / "r2")["pages"] == EXPECTED
+
+
+# ---- issue 20: the pages say everything in full, nothing overlaps, costs are warm ----------------
+
+def _all_text(pdf) -> str:
+    from pypdf import PdfReader
+    return " ".join(" ".join(p.extract_text().split()) for p in PdfReader(pdf).pages)
+
+
+def test_every_gated_value_and_its_applied_limit_in_full_no_ellipsis(run_dir, report):
+    """The text layer holds each metric row whole: value in full, the limit applied, its source;
+    every case name whole; not a single ellipsis anywhere."""
+    from reports.style import fmt_full
+    paths, _ = report
+    s = json.loads((run_dir[0] / "results.json").read_text())
+    text = _all_text(paths["pdf"])
+    assert "\u2026" not in text, text[max(text.index("\u2026") - 80, 0):text.index("\u2026") + 20]
+    gated = [m for m in s["metrics"] if m["gated"]]
+    assert len(gated) >= 15 and {m["limit_source"] for m in gated} <= {"default", "engine", "case"}
+    for m in s["metrics"]:
+        row = f"{m['metric']} {s['metric_units'][m['metric']]} {fmt_full(m['value'])} {fmt_full(m['limit'])} " \
+              f"{m['limit_source']}"
+        assert row in text, row
+        assert float(fmt_full(m["value"])) == m["value"]   # the number in full: it reads back exactly
+    for name in [c["name"] for c in s["cases"]] + [c["name"] for c in s["seismic_cases"]]:
+        assert f" {name} " in f" {text} ", name
+    for metric in s["tolerances"]:   # every metric defined, the seismic ones too
+        assert f"{metric} " in text
+    assert "not defined in this results folder" not in text
+
+
+def test_what_was_run_names_every_path_and_the_seismic_case(report):
+    paths, _ = report
+    text = _page_text(paths["pdf"], EXPECTED.index("what_was_run"))
+    assert "circle_A10mm_f10Hz circle 10 10 0 10 1 200" in text   # path, A, minor axis B, psi, f, cycles, samples
+    assert "A15mm_f10Hz line 15 none 0 10 1 200" in text
+    assert "quake harmonic: amplitude = 0.8, frequency = 2" in text and "azimuth_deg = 30" in text  # a wrapped cell
+    assert "M (mass)" in text and "k_b (stiffness)" in text and "r_b" in text
+    assert "assumed rule (docs/model.md)" in text   # provenance of the structure
+
+
+def test_no_text_leaves_a_page_or_overlaps_another(run_dir):
+    problems = _figure_problems(run_dir[0])
+    assert not problems, json.dumps(problems, indent=1)[:3000]
+
+
+def test_the_overlap_check_sees_an_overlap():
+    """The check itself can fail: two texts on top of each other, and one off the page."""
+    import matplotlib.pyplot as plt
+    fig = plt.figure(figsize=(4, 3))
+    fig.text(0.5, 0.5, "one text")
+    fig.text(0.52, 0.5, "another text")
+    fig.text(0.95, 0.5, "leaves the page")
+    found = text_problems(fig)
+    plt.close(fig)
+    assert any(p.startswith("overlap") for p in found) and any(p.startswith("outside") for p in found)
+
+
+def test_the_in_house_cost_on_the_cost_page_is_its_warm_integration(run_dir, report):
+    """The recorded per-cycle cost (what the cost page prints, wall and CPU) is within 3x of a warm
+    benchmark of the same case in this process; compilation is recorded apart. CPU seconds are
+    compared: wall seconds on a loaded 2-core machine measure the load."""
+    from comparisons.config import load_cases
+    from nsd_core.device.model import simulate
+    from reports.style import fmt
+    paths, _ = report
+    s = json.loads((run_dir[0] / "results.json").read_text())
+    run = s["runs"]["A15mm_f10Hz"]["semirecursive"]
+    assert {"wall_time", "cpu_time", "compile_time", "job_wall_time"} <= set(run)
+    cycles = s["cases"][0]["cycles"]
+    page = _page_text(paths["pdf"], EXPECTED.index("cost"))
+    assert f"{fmt(run['wall_time'] / cycles)} / {fmt(run['cpu_time'] / cycles)}" in page
+    case = next(c for c in load_cases(run_dir[0].parent / "cases.toml") if c.name == "A15mm_f10Hz")
+    simulate(case.params, case.drive)   # warm
+    start = time.process_time()
+    simulate(case.params, case.drive)
+    warm = (time.process_time() - start) / case.drive.cycles
+    recorded = run["cpu_time"] / cycles
+    assert warm / 3 <= recorded <= 3 * warm, (recorded, warm)
+    assert s.get("worker_startup_time") is not None
+
+
+@pytest.mark.slow
+def test_cold_compile_cache_records_integration_not_compilation(tmp_path):
+    """An empty numba cache: the in-house A15mm_f1Hz run (2 cycles) records its integration (<= 2 s),
+    its compilation apart (the issue's judgement)."""
+    from comparisons.config import DEFAULT_CASES
+    text = DEFAULT_CASES.read_text()
+    start = text.index('name = "A15mm_f1Hz"')
+    (tmp_path / "c.toml").write_text("[[case]]\n" + text[start:text.index("[[case]]", start)])
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba"),
+           "PYTHONPATH": str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", "")}
+    p = subprocess.run(NSD + ["compare", "--cases", str(tmp_path / "c.toml"), "--engines", "semirecursive",
+                              "--out", str(tmp_path / "out")], capture_output=True, text=True, timeout=900, cwd=ROOT,
+                       env=env)
+    assert p.returncode in (0, 1), p.stderr[-2000:]
+    run = json.loads((tmp_path / "out" / "results.json").read_text())["runs"]["A15mm_f1Hz"]["semirecursive"]
+    assert run["wall_time"] <= 2.0 and run["compile_time"] > run["wall_time"], run
+
+
+def test_study_folders_draw_their_own_figures_and_report_from_them(tmp_path):
+    """nsd sweep draws its PNGs into its own folder; nsd report --from accepts a sweep and a polar
+    folder; their pages keep every text on the page and apart."""
+    sweep = tmp_path / "sweep"
+    p = nsd("sweep", "--param", "rod_length", "--values", "0.03,0.031", "--frequency", "10", "--cycles", "1",
+            "--samples-per-cycle", "200", "--workers", "1", "--out", str(sweep))
+    assert p.returncode == 0, p.stderr[-2000:]
+    assert "figures: 1 PNG(s)" in p.stdout and (sweep / "01_study_rod_length.png").is_file(), p.stdout
+    polar = tmp_path / "polar"
+    p = nsd("polar", "--wires", "3,4", "--step", "45", "--points-per-cycle", "32", "--workers", "1", "--out", str(polar))
+    assert p.returncode == 0, p.stderr[-2000:]
+    for folder, stem in ((sweep, "study_rod_length"), (polar, "polar")):
+        out = tmp_path / f"report_{folder.name}"
+        p = nsd("report", "--from", str(folder), "--out", str(out))
+        assert p.returncode == 0, p.stderr
+        assert (out / f"01_{stem}.png").is_file() and (out / "validation.pdf").is_file()
+        problems = _figure_problems(folder)
+        assert not problems, problems

@@ -20,6 +20,7 @@ Drive's packed parameters (``motion_params``): one implementation of every path.
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -36,6 +37,10 @@ PATHS = ("line", "circle", "ellipse", "figure8")
 # model evaluation (~3.6 us in-house: ~7 ms per cycle). `nsd sweep` keeps its own 500 (the study).
 SAMPLES_PER_CYCLE = 2000
 MAX_TABLE_BYTES = 50_000_000  # ~1e6 rows of t,x,y: far beyond any record a run could follow
+MAX_TABLE_ROWS = 1_000_000
+TABLE_DT_MIN = 1e-6   # s between rows: finer than any output step a run allows
+TABLE_T_MAX = 20_000.0  # s: the longest drive (1000 cycles at 0.05 Hz)
+TABLE_REACH_MAX = 1.0   # m: a sanity bound far beyond any rod length; |u| >= l_d stays exit 4
 
 
 # path kinds in motion_params[0]; an ellipse is a circle with B != A
@@ -109,16 +114,16 @@ def read_path_table(path: str | Path):
     plate starts from rest, as the rest state the engines start from requires.
     """
     from scipy.interpolate import CubicSpline
-    where = f"path = {str(path)!r}"
+    from nsd_core.device.inputs import printable, read_input_text
+    where = f"path = {printable(repr(str(path)))}"
+    if not os.path.lexists(path):
+        raise ParameterError(f"{where}: no such file; allowed: {', '.join(PATHS)} or a CSV file of t,x,y")
     try:
-        size = Path(path).stat().st_size
-        if size > MAX_TABLE_BYTES:
-            raise ParameterError(f"{where}: {size} bytes; a path table may hold at most {MAX_TABLE_BYTES} bytes")
-        lines = Path(path).read_text().splitlines()
-    except (FileNotFoundError, IsADirectoryError):
-        raise ParameterError(f"{where}: no such file; allowed: {', '.join(PATHS)} or a CSV file of t,x,y") from None
-    except (OSError, UnicodeDecodeError) as e:
-        raise ParameterError(f"{where}: cannot read the file ({type(e).__name__})") from None
+        lines = read_input_text(path, "path", MAX_TABLE_BYTES, "a CSV file of t,x,y").splitlines()
+    except ParameterError:
+        raise
+    except ValueError as e:  # InputError of nsd_core.device.inputs: one line naming the path
+        raise ParameterError(f"{e}; allowed: {', '.join(PATHS)} or a CSV file of t,x,y") from None
     rows, seen = [], 0
     for k, line in enumerate(lines, start=1):
         if not line.strip() or line.lstrip().startswith("#"):
@@ -134,6 +139,9 @@ def read_path_table(path: str | Path):
         if len(vals) != 3 or not all(math.isfinite(v) for v in vals):
             raise ParameterError(f"{where}, line {k}: {line.strip()!r} must be three finite numbers t,x,y")
         rows.append(vals)
+        if len(rows) > MAX_TABLE_ROWS:
+            raise ParameterError(f"{where}: more than {MAX_TABLE_ROWS} rows; a path table may hold at most "
+                                 f"{MAX_TABLE_ROWS} rows of t,x,y")
     if len(rows) < 4:
         raise ParameterError(f"{where}: {len(rows)} rows; a path table needs at least 4 rows of t,x,y")
     a = np.array(rows)
@@ -146,6 +154,16 @@ def read_path_table(path: str | Path):
     if np.any(dt <= 0.0):
         k = int(np.flatnonzero(dt <= 0.0)[0]) + 1
         raise ParameterError(f"{where}: t = {a[k, 0]!r} at row {k + 1} does not increase; t must be strictly increasing")
+    if np.min(dt) < TABLE_DT_MIN:
+        k = int(np.argmin(dt)) + 1
+        raise ParameterError(f"{where}: t = {a[k, 0]!r} at row {k + 1} lies {dt[k - 1]:.3g} s after the row before; "
+                             f"rows must be at least {TABLE_DT_MIN:g} s apart")
+    if a[-1, 0] > TABLE_T_MAX:
+        raise ParameterError(f"{where}: last t = {a[-1, 0]!r} s; a path table may span at most {TABLE_T_MAX:g} s")
+    reach = float(np.max(np.hypot(a[:, 1], a[:, 2])))
+    if reach > TABLE_REACH_MAX:
+        raise ParameterError(f"{where}: |(x, y)| reaches {reach:.6g} m; a plate position must stay within "
+                             f"{TABLE_REACH_MAX:g} m of the centre (the device's rod is centimetres long)")
     return CubicSpline(a[:, 0], a[:, 1:], bc_type="clamped")
 
 
@@ -199,6 +217,12 @@ class Drive:
         if self.path in ("line", "circle") and self.minor is not None:
             raise ParameterError(f"minor = {self.minor}: only an ellipse or a figure8 takes a minor semi-axis")
         if self.path not in PATHS:
+            if self.minor is not None:
+                raise ParameterError(f"minor = {self.minor}: a table path {self.path!r} gives its own positions; "
+                                     "leave the minor semi-axis out")
+            if self.direction_deg != 0.0:
+                raise ParameterError(f"direction_deg = {self.direction_deg}: a table path {self.path!r} gives world "
+                                     "x, y; leave the direction out")
             spline = read_path_table(self.path)
             if spline.x[-1] < self.duration * (1 - 1e-12):
                 raise ParameterError(f"path = {self.path!r}: the table ends at t = {spline.x[-1]:g} s, before "

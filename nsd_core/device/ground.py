@@ -408,3 +408,75 @@ class Pulse(GroundMotion):
     def scalar(self, t):
         """(d, v, a) along the azimuth at a scalar t (pulse_at)."""
         return pulse_at(float(t), self.velocity, self.frequency, self.gamma, math.radians(self.phase_deg))
+
+
+# ---- closed-form inputs from text (nsd seismic --ground, a seismic case's ground = "...") ----
+# kind -> (class, {key: (constructor argument, low, high, unit)}, required keys); every value is
+# named, finite and in its range, every key given once (issue 22): the bounds users read in --help
+# and docs/limits.md. Each closed-form input lasts at most GROUND_DURATION_MAX model seconds.
+GROUND_DURATION_MAX = 60.0  # s
+GROUND_SPECS = {
+    "harmonic": ("Harmonic", {"amplitude": ("amplitude", -50.0, 50.0, "m/s^2"),
+                              "frequency": ("frequency", 0.05, 100.0, "Hz"),
+                              "azimuth": ("azimuth_deg", -360.0, 360.0, "deg"),
+                              "duration": ("duration", 1e-3, GROUND_DURATION_MAX, "s")},
+                 ("amplitude", "frequency")),
+    "pulse": ("Pulse", {"velocity": ("velocity", -5.0, 5.0, "m/s"),
+                        "frequency": ("frequency", 0.05, 100.0, "Hz"),
+                        "gamma": ("gamma", 1.0, 20.0, "(dimensionless)"),
+                        "phase": ("phase_deg", -360.0, 360.0, "deg"),
+                        "azimuth": ("azimuth_deg", -360.0, 360.0, "deg")},
+              ("velocity", "frequency")),
+}
+
+
+def ground_spec_bounds() -> str:
+    """The keys and ranges of every closed-form kind, for --help."""
+    return "; ".join(f"{kind}: " + ", ".join(f"{k} in {'(' if k == 'gamma' else '['}{lo:g}, {hi:g}] {u}"
+                                             for k, (_, lo, hi, u) in keys.items())
+                     for kind, (_, keys, _) in GROUND_SPECS.items())
+
+
+def parse_ground_spec(text, where: str = "--ground") -> GroundMotion:
+    """A closed-form ground motion from ``KIND:KEY=VALUE,...``: an unknown kind or key, a key given
+    twice, a missing required key, a value that is not a finite number in its range (gamma > 1),
+    or an input longer than GROUND_DURATION_MAX is a ParameterError naming it."""
+    from nsd_core.device.inputs import printable
+    if not isinstance(text, str):
+        raise ParameterError(f"{where} = {printable(repr(text))}: must be a string KIND:KEY=VALUE,... "
+                             f"(kinds: {', '.join(GROUND_SPECS)})")
+    kind, _, rest = text.strip().partition(":")
+    if kind not in GROUND_SPECS:
+        raise ParameterError(f"{where} {printable(repr(kind))}: unknown kind; allowed: {', '.join(GROUND_SPECS)}")
+    cls, keys, required = GROUND_SPECS[kind]
+    values: dict[str, float] = {}
+    for item in filter(None, (s.strip() for s in rest.split(","))):
+        k, sep, v = (x.strip() for x in item.partition("="))
+        if not sep or k not in keys:
+            raise ParameterError(f"{where} {kind}: {printable(repr(item))}: expected KEY=VALUE with KEY in "
+                                 f"{', '.join(keys)}")
+        arg, lo, hi, unit = keys[k]
+        if arg in values:
+            raise ParameterError(f"{where} {kind}: {k} given twice; give each key once")
+        try:
+            x = float(v)
+        except ValueError:
+            raise ParameterError(f"{where} {kind}: {k} = {printable(repr(v))}: not a number; allowed "
+                                 f"[{lo:g}, {hi:g}] {unit}") from None
+        open_low = k == "gamma"  # Mavroeidis-Papageorgiou: gamma > 1
+        if open_low and math.isfinite(x) and x <= lo:
+            raise ParameterError(f"{where} {kind}: {k} = {printable(v)}: must be > {lo:g} (Mavroeidis-Papageorgiou) "
+                                 f"and <= {hi:g}")
+        if not (math.isfinite(x) and (lo < x if open_low else lo <= x) and x <= hi):
+            raise ParameterError(f"{where} {kind}: {k} = {printable(v)}: must be a finite number in "
+                                 f"{'(' if open_low else '['}{lo:g}, {hi:g}] {unit}")
+        values[arg] = x
+    missing = [k for k in required if keys[k][0] not in values]
+    if missing:
+        raise ParameterError(f"{where} {kind}: {', '.join(missing)} required (KEY=VALUE)")
+    motion = globals()[cls](**values)
+    if motion.duration > GROUND_DURATION_MAX:
+        raise ParameterError(f"{where} {kind}: lasts {motion.duration:g} s (gamma / frequency for a pulse); at most "
+                             f"{GROUND_DURATION_MAX:g} s")
+    return motion
+

@@ -31,6 +31,14 @@ PERIOD = 1.0          # s, supports alone (full scale ~3.2 s under the 1:10 simi
 DAMPING_RATIO = 0.05  # of critical
 MARGIN = 0.25         # k_b + K_dev >= MARGIN k_b over the working range
 SLAB_SIDE = 1.0       # m, model scale (assumed)
+# Bounds of an overridden structure (--structure, a seismic case's structure): generous (orders of
+# magnitude around the default, M ~ 3e3 kg, k_b ~ 1e5 N/m) but finite, so that mass = 1e308 is bad
+# input rather than a solver failure at t = 1e-323 s; the supports' own frequency is bounded so a
+# run's step count stays near the measured ~1400 per model second.
+STRUCTURE_BOUNDS = {"mass": (1e-3, 1e7, "kg"), "radius_of_gyration": (1e-4, 100.0, "m"),
+                    "stiffness": (1e-3, 1e10, "N/m"), "damping": (0.0, 1e9, "N s/m"),
+                    "support_radius": (1e-4, 100.0, "m")}
+SUPPORT_FREQUENCY_MAX = 100.0  # Hz, sqrt(k_b / M) / 2 pi: below the device's own 250 Hz vertical mode
 DIRECTIONS_DEG = (0.0, 45.0)
 
 # device_min_stiffness(Params()) as computed on 2026-11-23 (a 20 s computation, so the nominal device
@@ -62,6 +70,15 @@ class Structure:
                 raise ParameterError(f"structure {name} = {v!r}: must be a finite number > 0")
         if not (isinstance(self.damping, (int, float)) and math.isfinite(self.damping) and self.damping >= 0):
             raise ParameterError(f"structure damping = {self.damping!r}: must be a finite number >= 0")
+        for name, (low, high, unit) in STRUCTURE_BOUNDS.items():  # issue 22: bounded work, finite outputs
+            v = getattr(self, name)
+            if not low <= v <= high:
+                raise ParameterError(f"structure {name} = {v!r}: must be in [{low:g}, {high:g}] {unit}")
+        f_b = math.sqrt(self.stiffness / self.mass) / (2.0 * math.pi)
+        if f_b > SUPPORT_FREQUENCY_MAX:
+            raise ParameterError(f"structure stiffness / mass: the supports alone ring at {f_b:.4g} Hz; at most "
+                                 f"{SUPPORT_FREQUENCY_MAX:g} Hz (a stiffer or lighter structure needs a step count "
+                                 "no run here can afford)")
 
     def replace(self, **changes) -> "Structure":
         """A copy with some fields changed (values may be strings from the command line)."""

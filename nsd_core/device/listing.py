@@ -71,6 +71,16 @@ def structure_fields() -> list[str]:
     return [f.name for f in dataclasses.fields(Structure) if f.name != "provenance"]
 
 
+def _structure_bounds(name: str) -> str:
+    """The range ``isolation.Structure`` enforces for one field (issue 22's bounds where it has them)."""
+    from nsd_core.device.isolation import STRUCTURE_BOUNDS, SUPPORT_FREQUENCY_MAX
+    if name not in STRUCTURE_BOUNDS:
+        return "[0, inf)" if name == "damping" else "(0, inf)"
+    lo, hi, _ = STRUCTURE_BOUNDS[name]
+    extra = f"; sqrt(stiffness/mass)/2pi <= {SUPPORT_FREQUENCY_MAX:g} Hz" if name in ("mass", "stiffness") else ""
+    return f"[{lo:g}, {hi:g}]{extra}"
+
+
 def structure_rows(structure=None) -> list[dict[str, Any]]:
     """One row per field of the isolated structure (default: the nominal device's)."""
     from nsd_core.device.isolation import default_structure
@@ -79,7 +89,7 @@ def structure_rows(structure=None) -> list[dict[str, Any]]:
     for name in structure_fields():
         prov = st.provenance.get(name, "")
         rows.append({"name": name, "value": getattr(st, name), "unit": STRUCTURE_UNITS.get(name, "?"),
-                     "bounds": "[0, inf)" if name == "damping" else "(0, inf)",
+                     "bounds": _structure_bounds(name),
                      "provenance": prov if isinstance(prov, str) else str(prov), "doc": STRUCTURE_DOCS.get(name, "")})
     return rows
 

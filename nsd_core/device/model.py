@@ -24,6 +24,7 @@ from nsd_core.engine.mechanism import Cut, Mechanism, mechanism
 from nsd_core.device.outputs import device_columns
 from nsd_core.device.params import ParameterError, Params
 from nsd_core.device.results import RunResult
+from nsd_core.device.warmup import warm_and_time
 from nsd_core.engine.compiled_model import split_state
 from nsd_core.engine.semirecursive import ConstraintError, SemiRecursiveSystem
 
@@ -144,6 +145,7 @@ def device_system(params: Params, drive: Drive) -> tuple[SemiRecursiveSystem, De
     return system, g
 
 
+@warm_and_time("drive")  # compilation recorded apart, never in wall_time (issue 20)
 def simulate(params: Params, drive: Drive, method: str = DEFAULT_SOLVER["method"],
              rtol: float = DEFAULT_SOLVER["rtol"], atol: float = DEFAULT_SOLVER["atol"],
              max_step: float | None = DEFAULT_SOLVER["max_step"], progress=None,

@@ -167,24 +167,15 @@ def parse_set(items: list[str]) -> dict[str, str]:
 
 
 def read_toml(path: str | Path, what: str) -> dict:
-    """A TOML input file as a dict; every way it can be unreadable is one ParameterError line."""
-    path = Path(path)
+    """A TOML input file as a dict; every way it can be unreadable is one ParameterError line. Only a
+    regular file is read (a FIFO, a device or a folder is bad input, found before opening)."""
+    from nsd_core.device.inputs import printable, read_input_text
     try:
-        if path.is_dir():
-            raise ParameterError(f"{what} {path}: is a folder; a TOML file is expected")
-        if path.stat().st_size > 1_000_000:
-            raise ParameterError(f"{what} {path}: {path.stat().st_size} bytes; at most 1 MB expected")
-        return tomllib.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise ParameterError(f"{what} {path}: file not found") from None
-    except PermissionError:
-        raise ParameterError(f"{what} {path}: not readable (permission denied)") from None
-    except UnicodeDecodeError:
-        raise ParameterError(f"{what} {path}: not a text file (UTF-8 TOML expected)") from None
+        return tomllib.loads(read_input_text(path, what, 1_000_000, "UTF-8 TOML"))
+    except InputError as e:
+        raise ParameterError(str(e)) from None
     except tomllib.TOMLDecodeError as e:
-        raise ParameterError(f"{what} {path}: not valid TOML ({e})") from None
-    except OSError as e:
-        raise ParameterError(f"{what} {path}: cannot be read ({e.strerror or e})") from None
+        raise ParameterError(f"{what} {printable(path)}: not valid TOML ({e})") from None
 
 
 def params_from_toml(data: dict, what: str) -> dict[str, Any]:

@@ -15,6 +15,7 @@ import importlib.metadata as md
 import json
 import os
 import platform
+import shutil
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -74,24 +75,72 @@ class RunResult:
         return np.column_stack([self.columns[n] for n in names]) if names else np.zeros((len(self["t"]), 0))
 
 
+def first_nonfinite(data, where: str = "") -> str | None:
+    """Where the first NaN or inf in ``data`` (dicts, lists, numbers, arrays, RunResults) lies, as
+    'field[index] = value (N non-finite values)'; None when every number is finite. Any non-finite
+    output is a solver failure (exit 3), never a result (issue 22)."""
+    if isinstance(data, RunResult):
+        data = data.columns
+    if isinstance(data, dict):
+        items = data.items()
+    elif isinstance(data, (list, tuple)):
+        items = ((f"[{i}]", v) for i, v in enumerate(data))
+    elif isinstance(data, np.ndarray) and data.dtype.kind in "fc":
+        bad = ~np.isfinite(data)
+        if not bad.any():
+            return None
+        k = int(np.flatnonzero(bad.ravel())[0])
+        return f"{where}[{k}] = {data.ravel()[k]} ({int(bad.sum())} non-finite values)"
+    elif isinstance(data, (float, np.floating)):
+        return None if np.isfinite(data) else f"{where} = {data}"
+    else:
+        return None
+    for k, v in items:
+        name = k if str(k).startswith("[") else (f"{where}.{k}" if where else str(k))
+        found = first_nonfinite(v, f"{where}{k}" if str(k).startswith("[") else name)
+        if found:
+            return found
+    return None
+
+
 def last_cycle(t: np.ndarray, frequency: float) -> np.ndarray:
     """Boolean mask of the last full cycle of period 1/frequency (both end points included)."""
     return t >= t[-1] - 1.0 / frequency - 1e-9 / frequency
 
 
 def atomic_write_text(path: str | Path, text: str) -> None:
-    """Write to a temporary file in the same folder, then rename: readers never see half a file."""
+    """Write to a temporary file in the same folder, then rename: readers never see half a file.
+    A failed write (a full disk) removes the temporary file and raises OSError naming ``path``;
+    the file that was there before stays as it was."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    tmp = None
     try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
         with os.fdopen(fd, "w") as f:
             f.write(text)
         os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; a result file gets the usual mode
         os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
+    except BaseException as e:
+        if tmp is not None and os.path.exists(tmp):
             os.unlink(tmp)
+        if isinstance(e, OSError) and e.filename is None:
+            raise OSError(e.errno, e.strerror, str(path)) from None
+        raise
+
+
+def atomic_copy(src: str | Path, dest: str | Path) -> None:
+    """Copy a file atomically (temporary file, then rename); a failed copy leaves ``dest`` as it was."""
+    dest = Path(dest)
+    dest.parent.mkdir(parents=True, exist_ok=True)
+    tmp = dest.with_name(f".{dest.name}.tmp")
+    try:
+        shutil.copyfile(src, tmp)
+        tmp.replace(dest)
+    except BaseException as e:
+        tmp.unlink(missing_ok=True)
+        if isinstance(e, OSError) and e.errno is not None:
+            raise OSError(e.errno, e.strerror, str(dest)) from None
         raise
 
 
@@ -127,6 +176,8 @@ def write_csv(path: str | Path, result: RunResult) -> None:
 
 
 def read_csv(path: str | Path, engine: str = "") -> RunResult:
+    from nsd_core.device.inputs import check_regular
+    check_regular(path, "CSV")  # a FIFO or a device in a results folder: one line, never a hang
     with open(path) as f:
         header = f.readline().strip().split(",")
     names, units = [], {}

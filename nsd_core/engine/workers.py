@@ -1,17 +1,52 @@
 """Worker processes that stop when asked: a process pool whose workers leave Ctrl-C to the parent,
 send anything they print to stderr, and are terminated (not waited for) when the parent is
-interrupted, so that Ctrl-C or SIGTERM stops a run within seconds and leaves no process behind."""
+interrupted, so that Ctrl-C or SIGTERM stops a run within seconds and leaves no process behind.
+
+A parent that cannot tidy up (SIGKILL, a crash) takes its workers with it too (issue 22): on Linux
+each worker asks the kernel for SIGKILL when its parent ends (``prctl(PR_SET_PDEATHSIG)`` through
+ctypes), and everywhere a watchdog thread in each worker ends it within ``WATCH_INTERVAL`` seconds
+once its parent's pid is gone (it was re-parented). A later run resumes from what was stored."""
 from __future__ import annotations
 
 import contextlib
+import ctypes
+import ctypes.util
 import os
 import signal
 import sys
+import threading
+import time
 from concurrent.futures import ProcessPoolExecutor
 from multiprocessing import get_context
 
+PR_SET_PDEATHSIG = 1  # linux/prctl.h
+WATCH_INTERVAL = 0.5  # s between the watchdog's looks at the parent
 
-def _worker_init() -> None:
+
+def die_with_parent(parent: int) -> None:
+    """End this process when ``parent`` ends: the kernel's parent-death signal where there is one
+    (Linux), and a watchdog thread that polls the parent's pid (any Unix; also covers a parent that
+    died before the signal was armed)."""
+    try:
+        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6", use_errno=True)
+        libc.prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+    except (OSError, AttributeError):
+        pass  # not Linux: the watchdog alone
+    if os.getppid() != parent:  # the parent was gone before the signal was armed
+        os._exit(1)
+
+    def watch():
+        while True:
+            time.sleep(WATCH_INTERVAL)
+            if os.getppid() != parent:
+                os._exit(1)
+
+    threading.Thread(target=watch, name="nsd-parent-watchdog", daemon=True).start()
+
+
+def _worker_init(parent: int | None = None) -> None:
+    if parent is not None:
+        die_with_parent(parent)
     # Ctrl-C reaches the whole process group: the parent alone decides what to keep and stops us
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     # a parent that was stopped closes the pipes: a worker writing to one then ends quietly, the Unix
@@ -29,7 +64,8 @@ def _worker_init() -> None:
 def worker_pool(workers: int):
     """A spawn-context ProcessPoolExecutor (MuJoCo's callbacks are process-global: one per process)
     that terminates its workers when the body raises (KeyboardInterrupt, SIGTERM, an error)."""
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn"), initializer=_worker_init)
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn"), initializer=_worker_init,
+                               initargs=(os.getpid(),))
     try:
         yield pool
     except BaseException:

@@ -14,7 +14,6 @@ at 1 Hz, A = 15 mm it is within 0.1 % of the dynamic model's force, tests/test_p
 from __future__ import annotations
 
 import math
-from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 
@@ -62,8 +61,8 @@ def polar_study(wires=(3, 4, 6, 8), step_deg: float = 15.0, amplitude: float = 0
     designs = {n: base.replace(n_wires=n, n_ropes=n) for n in wires}
     jobs = [(designs[n], psi, amplitude, points_per_cycle) for n in wires for psi in psis]
     if workers > 1:
-        import multiprocessing
-        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+        from nsd_core.engine.workers import worker_pool  # workers that end with their parent
+        with worker_pool(min(workers, len(jobs))) as pool:
             points = list(pool.map(_job, jobs))
     else:
         points = [_job(j) for j in jobs]

@@ -9,7 +9,8 @@ from typing import Callable
 import numpy as np
 
 from nsd_core.device.params import ParameterError, Params
-from nsd_core.device.results import RunResult
+from nsd_core.device.results import RunResult, first_nonfinite
+from nsd_core.engine.errors import SolverError
 from nsd_core.study.designs import Design
 
 EngineRunner = Callable[..., RunResult]
@@ -55,6 +56,9 @@ def run_design(d: Design, run_engine: EngineRunner | None = None) -> dict:
             result = simulate(p, drive, **d.settings)
         else:
             raise ParameterError(f"engine {d.engine!r}: this sweep was given no runner for other engines")
+        bad = first_nonfinite(result.columns)
+        if bad:
+            raise SolverError(f"a non-finite output: {bad}")
         summary = analyse(result, d.amplitude, d.frequency)
         try:
             xq = x_max_at_slack(p, d.direction_deg)

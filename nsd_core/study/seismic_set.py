@@ -33,7 +33,8 @@ from pathlib import Path
 from typing import Callable
 
 from nsd_core.device.params import ParameterError
-from nsd_core.device.results import RunResult, atomic_write_json, atomic_write_text, read_csv
+from nsd_core.device.results import (RunResult, atomic_copy, atomic_write_json, atomic_write_text, first_nonfinite,
+                                     read_csv)
 from nsd_core.study.store import Store
 from nsd_core.study.sweep import run_stored
 
@@ -157,6 +158,10 @@ def run_record(r: RecordRun, run_engine: Callable | None = None) -> dict:
         else:
             result = run_engine(r.engine, params, structure, motion, duration=r.duration, dt_out=r.dt_out,
                                 settings=r.settings or None)
+        bad = first_nonfinite(result.columns)
+        if bad:
+            from nsd_core.engine.errors import SolverError
+            raise SolverError(f"a non-finite output: {bad}")
         summary = {"ground": motion.describe(), "structure": structure.to_dict(), "device": r.device,
                    **seismic_summary(result), "solver": result.stats, "wall_time": result.stats.get("wall_time"),
                    "versions": versions(), "params": params.describe()}
@@ -170,6 +175,7 @@ def run_record(r: RecordRun, run_engine: Callable | None = None) -> dict:
 
 
 def run_set(runs: list[RecordRun], out: str | Path, workers: int = 1, scheduler=None, retry_failed: bool = False,
+            scheduler_timeout: float = 10.0,
             log: Callable[[str], None] | None = None, run_engine: Callable | None = None,
             compare: Callable[[RunResult, RunResult], dict] | None = None, tally: dict | None = None) -> dict:
     """Run every record run not yet stored, store each as it finishes, then write the set's outputs.
@@ -177,17 +183,15 @@ def run_set(runs: list[RecordRun], out: str | Path, workers: int = 1, scheduler=
     log = log or (lambda s: print(s, file=sys.stderr, flush=True))
     store = Store(out)
     elapsed = run_stored(runs, store, partial(run_record, run_engine=run_engine), workers, scheduler, retry_failed,
-                         log, tally, f"seismic set: {len(runs)} runs ({len({(r.set, r.record) for r in runs})} records)")
+                         log, tally, f"seismic set: {len(runs)} runs ({len({(r.set, r.record) for r in runs})} records)",
+                         scheduler_timeout)
     index = write_set(runs, store, compare)
     index["elapsed_this_run_s"] = elapsed
     return index
 
 
 def _copy(src: Path, dest: Path) -> None:
-    dest.parent.mkdir(parents=True, exist_ok=True)
-    tmp = dest.with_name(f".{dest.name}.tmp")
-    shutil.copyfile(src, tmp)
-    tmp.replace(dest)
+    atomic_copy(src, dest)
 
 
 def write_set(runs: list[RecordRun], store: Store, compare=None) -> dict:

@@ -19,6 +19,7 @@ from pathlib import Path
 
 
 from nsd_core import __version__
+from nsd_core.device.inputs import read_regular_text
 from nsd_core.device.results import RunResult, atomic_write_json, write_columns, write_csv
 from nsd_core.study.designs import Design
 
@@ -33,10 +34,10 @@ class Store:
         return self.root / "designs" / key
 
     def load(self, key: str) -> dict | None:
-        try:
-            return json.loads((self.folder(key) / "result.json").read_text())
-        except FileNotFoundError:
+        path = self.folder(key) / "result.json"
+        if not path.exists():
             return None
+        return json.loads(read_regular_text(path, "stored result"))
 
     def save(self, d: Design, out: dict) -> dict:
         """Store one finished job (a Design or any frozen dataclass with ``key``): its files, then result.json."""

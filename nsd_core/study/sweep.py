@@ -6,7 +6,6 @@ on the next run.
 """
 from __future__ import annotations
 
-import shutil
 import sys
 import time
 from concurrent.futures import as_completed
@@ -16,7 +15,7 @@ from typing import Any, Callable, Iterator
 
 from nsd_core import __version__
 from nsd_core.device.params import ParameterError
-from nsd_core.device.results import atomic_write_json
+from nsd_core.device.results import atomic_copy, atomic_write_json
 from nsd_core.engine.workers import worker_pool
 from nsd_core.study.designs import PAPER_STUDIES, Design
 from nsd_core.study.run import EngineRunner, run_design
@@ -37,12 +36,16 @@ def _local(designs: list[Design], job, workers: int) -> Iterator[tuple[Design, d
             yield futures[f], f.result()
 
 
-def _dask(designs: list[Design], job, address) -> Iterator[tuple[Design, dict]]:
+def _dask(designs: list[Design], job, address, timeout: float = 10.0) -> Iterator[tuple[Design, dict]]:
     try:
         from distributed import Client, as_completed as dask_completed
     except ImportError:
         raise ParameterError("--scheduler: needs dask.distributed (pip install 'nsd-harness[dask]')") from None
-    client = address if hasattr(address, "submit") else Client(address, timeout="20s")
+    try:
+        client = address if hasattr(address, "submit") else Client(address, timeout=f"{timeout}s")
+    except (OSError, TimeoutError) as e:  # the address answered the check but not the client
+        raise ParameterError(f"--scheduler {address}: no Dask scheduler answered within {timeout:g} s "
+                             f"({type(e).__name__})") from None
     try:
         futures = {client.submit(job, d, key=f"nsd-design-{d.key}", pure=False): d for d in designs}
         for f in dask_completed(list(futures)):
@@ -52,20 +55,20 @@ def _dask(designs: list[Design], job, address) -> Iterator[tuple[Design, dict]]:
             client.close()
 
 
-def run_jobs(pending: list, job, workers: int = 1, scheduler=None) -> Iterator[tuple]:
+def run_jobs(pending: list, job, workers: int = 1, scheduler=None, timeout: float = 10.0) -> Iterator[tuple]:
     """(item, job(item)) for every item as each finishes: on the Dask cluster at ``scheduler``, on
     ``workers`` local processes, or in this process (one worker or one item). Each item needs a
     ``key``; ``job`` must be picklable (a module-level function or a partial of one)."""
     if not pending:
         return iter(())
     if scheduler is not None:
-        return _dask(pending, job, scheduler)
+        return _dask(pending, job, scheduler, timeout)
     if workers > 1 and len(pending) > 1:
         return _local(pending, job, min(workers, len(pending)))
     return _serial(pending, job)
 
 
-def run_sweep(designs: list[Design], out: str | Path, workers: int = 1, scheduler=None,
+def run_sweep(designs: list[Design], out: str | Path, workers: int = 1, scheduler=None, scheduler_timeout: float = 10.0,
               retry_failed: bool = False, log: Callable[[str], None] | None = None,
               run_engine: EngineRunner | None = None, tally: dict | None = None) -> dict:
     """Run every design not yet stored, store each as it finishes, then write the summaries.
@@ -77,12 +80,12 @@ def run_sweep(designs: list[Design], out: str | Path, workers: int = 1, schedule
     store = Store(out)
     n_unique = len({d.key for d in designs})
     elapsed = run_stored(designs, store, job, workers, scheduler, retry_failed, log, tally,
-                         f"sweep: {len(designs)} designs ({n_unique} distinct)")
+                         f"sweep: {len(designs)} designs ({n_unique} distinct)", scheduler_timeout)
     return write_summaries(designs, store, elapsed)
 
 
 def run_stored(items: list, store: Store, job: Callable, workers: int, scheduler, retry_failed: bool,
-               log: Callable[[str], None], tally: dict | None, heading: str) -> float:
+               log: Callable[[str], None], tally: dict | None, heading: str, timeout: float = 10.0) -> float:
     """Run each item (anything with ``key`` and ``label``) the store does not hold yet (or holds as
     failed, with ``retry_failed``), store each as it finishes; returns the seconds this took.
     ``tally`` is kept up to date with ``kept``, ``total`` and ``dir`` for an interrupt message."""
@@ -96,7 +99,7 @@ def run_stored(items: list, store: Store, job: Callable, workers: int, scheduler
     log(f"{heading}, {len(unique) - len(pending)} already stored, {len(pending)} to run on "
         + (f"Dask at {scheduler}" if scheduler is not None else f"{workers} local worker(s)"))
     start = time.perf_counter()
-    for n, (it, res) in enumerate(run_jobs(pending, job, workers, scheduler), 1):
+    for n, (it, res) in enumerate(run_jobs(pending, job, workers, scheduler, timeout), 1):
         rec = store.save(it, res)
         tally["kept"] += 1
         tail = f"{res['wall_time']:.1f} s" if rec["status"] == "ok" else f"FAILED: {rec['error']}"
@@ -120,11 +123,7 @@ def write_summaries(designs: list[Design], store: Store, elapsed: float) -> dict
                 entry[k] = m.get(k)
             entry["run_wall_time"] = rec["wall_time"]
             name = f"{d.study}={d.value:g}" + ("" if d.engine == "semirecursive" else f"@{d.engine}") + ".csv"
-            dest = store.root / d.study / name
-            dest.parent.mkdir(parents=True, exist_ok=True)
-            tmp = dest.with_name(f".{dest.name}.tmp")
-            shutil.copyfile(store.folder(d.key) / "steady.csv", tmp)
-            tmp.replace(dest)
+            atomic_copy(store.folder(d.key) / "steady.csv", store.root / d.study / name)
             entry["steady_csv"] = f"{d.study}/{name}"
             entry["cycle_csv"] = f"designs/{d.key}/cycle.csv"
         studies.setdefault(d.study, []).append(entry)

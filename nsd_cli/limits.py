@@ -1,0 +1,112 @@
+"""The bounds of the newer flags and fields, in one table (issue 22), and the work a request implies,
+estimated before it starts: a request over a cap is refused in well under a second with the number
+it would take (exit 2), instead of running for hours. ``--help`` and docs/limits.md quote these.
+
+Rates behind the estimates, measured on the project's 2-core machine (compiled in-house path,
+DOP853, rtol 1e-7): a drive cycle takes about 1100 accepted steps per model second at the default
+max_step 1e-3 s (2273 steps for 2 s at 1 Hz) and never fewer than duration / max_step; a seismic run
+about 1400 per model second (4345 steps for 3.16 s of far-field 1, 5688 for 5 s of a 2 Hz harmonic),
+about 2500 steps per second of wall time; ``nsd polar`` about 1.5 ms per quasi-static point.
+"""
+from __future__ import annotations
+
+import math
+
+from nsd_core.device.params import ParameterError
+
+# ---- nsd seismic (and --set): the request's own flags
+SEISMIC_DURATION_MAX = 300.0      # model seconds of one run (default: the input's own duration)
+SEISMIC_SAMPLES_MAX = 2_000_000   # duration / dt_out: the output rows (the drive's cap too)
+DT_OUT = (1e-6, 1.0)              # s
+TIME_FACTOR = (0.01, 100.0)       # model seconds per record second
+SCALE = (1e-6, 100.0)             # factor on the record's acceleration
+ROTATE = (-360.0, 360.0)          # deg
+SCHEDULER_TIMEOUT = (0.1, 600.0)  # s, connect and handshake each
+SCHEDULER_TIMEOUT_DEFAULT = 10.0
+
+# ---- work caps: estimated steps of the in-house integrator
+SEISMIC_STEPS_PER_SECOND = 1400   # measured (module docstring)
+DRIVE_STEPS_PER_SECOND = 1100     # measured at max_step 1e-3 s (module docstring)
+STEPS_MAX = 2_000_000             # one run: about 15 min of wall time on the 2-core machine
+SWEEP_STEPS_MAX = 20_000_000      # a whole sweep, every design together
+
+# ---- nsd polar
+POLAR_STEP = (0.1, 90.0)          # deg, dividing 360
+POLAR_POINTS = (64, 10_000)       # per cycle: below 64 the hysteresis steps overflow (NaN at 48, A = 25 mm)
+POLAR_WIRES = (3, 64)
+POLAR_DESIGNS_MAX = 16
+POLAR_WORK_MAX = 200_000          # designs x azimuths x points per cycle: about 5 min on one core
+
+
+def in_range(option: str, value, bounds: tuple[float, float], unit: str = "", low_open: bool = False) -> float:
+    """A finite number in [low, high] (or (low, high] with ``low_open``), else one line naming it."""
+    lo, hi = bounds
+    ok = (isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+          and (lo < value if low_open else lo <= value) and value <= hi)
+    if not ok:
+        raise ParameterError(f"{option} = {value}: must be a finite number in {'(' if low_open else '['}{lo:g}, "
+                             f"{hi:g}]{' ' + unit if unit else ''}")
+    return float(value)
+
+
+def number(option: str, text) -> float:
+    """A flag given as text (kept a string for a one-line message) as a float."""
+    try:
+        return float(text)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{option} {text!r}: not a number") from None
+
+
+def check_seismic_request(duration: float, dt_out: float, where: str = "") -> None:
+    """Duration, output step, the samples they imply and the steps they would take, before any work."""
+    tail = f" ({where})" if where else ""
+    if not (math.isfinite(duration) and duration > 0):
+        raise ParameterError(f"--duration = {duration}: must be a finite number > 0 s{tail}")
+    if duration > SEISMIC_DURATION_MAX:
+        steps = duration * SEISMIC_STEPS_PER_SECOND
+        raise ParameterError(f"--duration = {duration:g} s{tail}: would take about {steps:.3g} solver steps "
+                             f"(~{SEISMIC_STEPS_PER_SECOND} per model second); at most {SEISMIC_DURATION_MAX:g} s "
+                             "(use --window or --duration for a part)")
+    in_range("--dt-out", dt_out, DT_OUT, "s")
+    if dt_out > duration:
+        raise ParameterError(f"--dt-out = {dt_out:g}: must be <= the duration {duration:g} s{tail}")
+    samples = duration / dt_out
+    if samples > SEISMIC_SAMPLES_MAX:
+        raise ParameterError(f"--dt-out = {dt_out:g}: {duration:g} s / {dt_out:g} s = {samples:.3g} output samples"
+                             f"{tail}; at most {SEISMIC_SAMPLES_MAX:.0e} (a larger --dt-out or a shorter --duration)")
+
+
+def drive_steps(duration: float, max_step: float | None) -> float:
+    """Estimated accepted steps of one drive run on the in-house engine."""
+    floor = duration / max_step if max_step else 0.0
+    return max(duration * DRIVE_STEPS_PER_SECOND, floor)
+
+
+def check_drive_work(duration: float, max_step: float | None, what: str = "this drive") -> float:
+    steps = drive_steps(duration, max_step)
+    if steps > STEPS_MAX:
+        raise ParameterError(f"{what}: {duration:g} model seconds (cycles / frequency) would take about {steps:.3g} "
+                             f"solver steps; at most {STEPS_MAX:.0e} (fewer --cycles, a higher --frequency or a "
+                             "larger --max-step)")
+    return steps
+
+
+def check_polar_work(wires, step: float, points: int) -> None:
+    if not wires or len(wires) > POLAR_DESIGNS_MAX:
+        raise ParameterError(f"--wires: {len(wires)} designs; give 1 to {POLAR_DESIGNS_MAX}")
+    if len(set(wires)) != len(wires):
+        raise ParameterError(f"--wires {','.join(map(str, wires))}: each number once")
+    for n in wires:
+        if not POLAR_WIRES[0] <= n <= POLAR_WIRES[1]:
+            raise ParameterError(f"--wires {n}: must be a whole number in [{POLAR_WIRES[0]}, {POLAR_WIRES[1]}]")
+    in_range("--step", step, POLAR_STEP, "deg")
+    turns = 360.0 / step
+    if abs(turns - round(turns)) > 1e-9:
+        raise ParameterError(f"--step = {step:g}: must divide 360 deg (e.g. 1, 5, 15, 22.5, 45)")
+    if not POLAR_POINTS[0] <= points <= POLAR_POINTS[1]:
+        raise ParameterError(f"--points-per-cycle = {points}: must be a whole number in [{POLAR_POINTS[0]}, "
+                             f"{POLAR_POINTS[1]}] (fewer points let the hysteresis steps overflow)")
+    work = len(wires) * round(turns) * points
+    if work > POLAR_WORK_MAX:
+        raise ParameterError(f"--step {step:g} x --points-per-cycle {points} x {len(wires)} designs: {work} "
+                             f"quasi-static points (~{work * 1.5e-3:.0f} s of CPU); at most {POLAR_WORK_MAX}")
