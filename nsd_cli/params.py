@@ -70,7 +70,7 @@ def run(args) -> int:
     except ParameterError as e:  # a variant without negative stiffness has no default structure
         structure, note = None, f"# no default isolated structure for this device: {e}\n"
     rows_p = param_rows(params)
-    rows_s = structure_rows(structure) if structure is not None else []
+    rows_s = structure_rows(structure, params) if structure is not None else []
     text = (toml_text if fmt == "toml" else table_text)(rows_p, rows_s)
     if structure is None:
         text += note

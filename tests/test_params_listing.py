@@ -6,7 +6,7 @@ import tomllib
 import pytest
 
 from nsd_core.device.isolation import Structure, default_structure
-from nsd_core.device.listing import bounds, param_rows, structure_fields, structure_rows
+from nsd_core.device.listing import bounds, param_rows, restrainer_fields, structure_fields, structure_rows
 from nsd_core.device.params import FIELDS, ParameterError, Params, load_params
 
 
@@ -30,7 +30,7 @@ def test_every_parameter_is_listed_and_the_written_file_reads_back(tmp_path, cap
 def test_table_names_every_parameter_and_structure_field(capsys):
     assert run_nsd() == 0
     text = capsys.readouterr().out
-    for name in [*FIELDS, *structure_fields()]:
+    for name in [*FIELDS, *structure_fields(), *restrainer_fields()]:
         assert f"\n{name} " in text, name
     assert "Table 2" in text and "assumed: docs/model.md" in text
 
@@ -61,23 +61,61 @@ def test_stated_bounds_are_the_ones_validate_enforces(name):
 
 
 def test_structure_fields_listed_with_units_and_bounds():
-    names = [f.name for f in dataclasses.fields(Structure) if f.name != "provenance"]
+    from nsd_core.device.isolation import STRUCTURE_BOUNDS
+    from nsd_core.device.restrainer import with_restrainer
+    names = [f.name for f in dataclasses.fields(Structure) if f.name not in ("provenance", "restrainer")]
     rows = structure_rows()
-    assert [r["name"] for r in rows] == names == structure_fields()
+    assert [r["name"] for r in rows][:len(names)] == names == structure_fields()
+    assert [r["name"] for r in rows][len(names):] == restrainer_fields()
     st = default_structure()
+    p = Params()
     for r in rows:
         assert r["unit"] != "?" and r["doc"] and r["provenance"], r
-        assert r["value"] == getattr(st, r["name"])
-        st.replace(**{r["name"]: 1.0})  # accepted by --structure NAME=VALUE
-        lowest_ok = r["bounds"].startswith("[")
-        if lowest_ok:
-            st.replace(**{r["name"]: 0.0})
-        else:
+        name = r["name"]
+        if name == "restrainer":
+            assert r["value"] is False and r["bounds"] == "true or false"
+            continue
+        if name.startswith("restrainer_"):  # probed through --structure restrainer_*=VALUE
+            on = with_restrainer(st, p, True, {name: r["value"]})
+            assert getattr(on.restrainer, name[len("restrainer_"):]) == r["value"]
+            lo_closed = r["bounds"].startswith("[")
+            low = float(r["bounds"][1:].split(",")[0])
+            if lo_closed:
+                with_restrainer(st, p, True, {name: low})
+            else:
+                with pytest.raises(ParameterError):
+                    with_restrainer(st, p, True, {name: low})
             with pytest.raises(ParameterError):
-                st.replace(**{r["name"]: 0.0})
-        with pytest.raises(ParameterError):
-            st.replace(**{r["name"]: -1.0})
-        assert r["bounds"].endswith("inf)") and not math.isinf(r["value"])
+                with_restrainer(st, p, True, {name: low - 1.0})
+            if name == "restrainer_gap":
+                with pytest.raises(ParameterError):
+                    with_restrainer(st, p, True, {name: p.rod_length})
+            continue
+        assert r["value"] == getattr(st, name)
+        if name in STRUCTURE_BOUNDS:  # a stated finite interval: both ends accepted, beyond refused
+            lo, hi, _ = STRUCTURE_BOUNDS[name]
+            assert r["bounds"].startswith(f"[{lo:g}, {hi:g}]")
+            for v in (lo * 0.5 if lo > 0 else -1.0, hi * 2.0):
+                with pytest.raises(ParameterError):
+                    _replace_alone(st, name, v)
+        else:
+            st.replace(**{name: 1.0})
+            if r["bounds"].startswith("["):
+                st.replace(**{name: 0.0})
+            else:
+                with pytest.raises(ParameterError):
+                    st.replace(**{name: 0.0})
+            with pytest.raises(ParameterError):
+                st.replace(**{name: -1.0})
+            assert r["bounds"].endswith("inf)") and not math.isinf(r["value"])
+
+
+def _replace_alone(st, name, value):
+    """st with one field changed; the supports' frequency cap is kept out of the way by scaling the
+    stiffness with the mass, so only the field's own bound can refuse it."""
+    if name == "mass":
+        return st.replace(mass=value, stiffness=st.stiffness * value / st.mass)
+    return st.replace(**{name: value})
 
 
 @pytest.mark.parametrize("args, words", [

@@ -59,21 +59,39 @@ def param_rows(p: Params | None = None) -> list[dict[str, Any]]:
 
 
 STRUCTURE_UNITS = {"mass": "kg", "radius_of_gyration": "m", "stiffness": "N/m", "damping": "N s/m",
-                   "support_radius": "m"}
+                   "support_radius": "m", "restrainer": "-", "restrainer_gap": "m",
+                   "restrainer_stiffness": "N/m^n", "restrainer_exponent": "-", "restrainer_damping": "s/m"}
 STRUCTURE_DOCS = {"mass": "M, the isolated mass on the plate", "radius_of_gyration": "r_g, polar inertia M r_g^2",
                   "stiffness": "k_b, the supports' horizontal stiffness (each direction)",
-                  "damping": "c_b, the supports' viscous damping", "support_radius": "r_b, torsional pair k_b r_b^2, c_b r_b^2"}
+                  "damping": "c_b, the supports' viscous damping", "support_radius": "r_b, torsional pair k_b r_b^2, c_b r_b^2",
+                  "restrainer": "the displacement restrainer on (nsd seismic --restrainer; off by default)",
+                  "restrainer_gap": "u_gap, |u| at which the restrainer engages (Hunt-Crossley contact)",
+                  "restrainer_stiffness": "k, contact stiffness of F = k delta^n (1 + alpha delta')",
+                  "restrainer_exponent": "n, contact exponent", "restrainer_damping": "alpha, Hunt-Crossley damping"}
+# the ranges nsd_core.device.restrainer.Restrainer enforces (the gap also below the rod's length)
+_RESTRAINER_BOUNDS = {"restrainer_gap": "(0, rod_length)", "restrainer_stiffness": "(0, inf)",
+                      "restrainer_exponent": "[1, inf)", "restrainer_damping": "[0, inf)"}
 
 
 def structure_fields() -> list[str]:
-    """The fields an isolated structure accepts (``--structure NAME=VALUE``, a case's ``structure``)."""
+    """The isolated structure's own fields (``--structure NAME=VALUE``, a case's ``structure``)."""
     from nsd_core.device.isolation import Structure
-    return [f.name for f in dataclasses.fields(Structure) if f.name != "provenance"]
+    return [f.name for f in dataclasses.fields(Structure) if f.name not in ("provenance", "restrainer")]
+
+
+def restrainer_fields() -> list[str]:
+    """The restrainer's switch and its constants (``--restrainer``, ``--structure restrainer_*=VALUE``)."""
+    from nsd_core.device.restrainer import KEYS
+    return ["restrainer", *KEYS]
 
 
 def _structure_bounds(name: str) -> str:
     """The range ``isolation.Structure`` enforces for one field (issue 22's bounds where it has them)."""
     from nsd_core.device.isolation import STRUCTURE_BOUNDS, SUPPORT_FREQUENCY_MAX
+    if name == "restrainer":
+        return "true or false"
+    if name in _RESTRAINER_BOUNDS:
+        return _RESTRAINER_BOUNDS[name]
     if name not in STRUCTURE_BOUNDS:
         return "[0, inf)" if name == "damping" else "(0, inf)"
     lo, hi, _ = STRUCTURE_BOUNDS[name]
@@ -81,14 +99,24 @@ def _structure_bounds(name: str) -> str:
     return f"[{lo:g}, {hi:g}]{extra}"
 
 
-def structure_rows(structure=None) -> list[dict[str, Any]]:
-    """One row per field of the isolated structure (default: the nominal device's)."""
+def structure_rows(structure=None, params: Params | None = None) -> list[dict[str, Any]]:
+    """One row per field of the isolated structure (default: the nominal device's), then the
+    restrainer's switch and constants (their values: the default restrainer's, used when it is on)."""
     from nsd_core.device.isolation import default_structure
-    st = structure or default_structure()
+    from nsd_core.device.restrainer import default_restrainer
+    params = params or Params()
+    st = structure or default_structure(params)
+    rest = st.restrainer or default_restrainer(params, st)
     rows = []
-    for name in structure_fields():
-        prov = st.provenance.get(name, "")
-        rows.append({"name": name, "value": getattr(st, name), "unit": STRUCTURE_UNITS.get(name, "?"),
+    for name in [*structure_fields(), *restrainer_fields()]:
+        if name == "restrainer":
+            value, prov = st.restrainer is not None, "assumed: off by default (the paper's device has none)"
+        elif name.startswith("restrainer_"):
+            key = name[len("restrainer_"):]
+            value, prov = getattr(rest, key), rest.provenance.get(key, "")
+        else:
+            value, prov = getattr(st, name), st.provenance.get(name, "")
+        rows.append({"name": name, "value": value, "unit": STRUCTURE_UNITS.get(name, "?"),
                      "bounds": _structure_bounds(name),
                      "provenance": prov if isinstance(prov, str) else str(prov), "doc": STRUCTURE_DOCS.get(name, "")})
     return rows
