@@ -13,6 +13,9 @@ from nsd_core.device.params import ParameterError, Params, load_params, read_tom
 HERE = Path(__file__).resolve().parent
 DEFAULT_CASES = HERE / "cases.toml"
 DEFAULT_TOLERANCES = HERE / "tolerances.toml"
+# nsd compare --profile: (case file, tolerance file)
+PROFILES = {"default": (DEFAULT_CASES, DEFAULT_TOLERANCES),
+            "strict": (HERE / "cases_strict.toml", HERE / "tolerances_strict.toml")}
 
 METRICS = {  # name -> (unit, description)
     "max_dF_rel": ("-", "max |F - F_ref| / max |F_ref|, F the force vector (F_x, F_y)"),
@@ -34,6 +37,7 @@ METRICS = {  # name -> (unit, description)
     "max_dfloor_rel": ("-", "building: max over floors of max |d_i - d_i,ref| / max |d_i,ref| (plan vectors, relative to the ground)"),
     "max_ddrift_rel": ("-", "building: max over stories of max |drift_i - ref| / max |drift_i,ref| (plan vectors)"),
     "max_dfloor_a_rel": ("-", "building: max over floors of max |a_abs,i - ref| / max |a_abs,i,ref| (plan vectors)"),
+    "order_deviation": ("-", "largest |observed order - expected| over the step halved twice ([order] of the case file)"),
 }
 CASE_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._+-]{0,63}")
 MAX_CASES = 200
@@ -166,6 +170,39 @@ def load_convergence(path: str | Path | None, cases: list[Case]) -> dict | None:
     return parse_convergence(raw, cases) if raw is not None else None
 
 
+ORDER_KEYS = ("case", "setting", "expected")
+
+
+def load_order(path: str | Path | None, cases: list) -> dict | None:
+    """The [order] table of a case file (per peer: the drive case whose step is halved twice in the
+    gate, the step setting and the expected order; the band is the limit order_deviation of the
+    tolerance file), validated; None when there is none."""
+    from comparisons.engines import ENGINES, REFERENCE
+    raw = _read(Path(path or DEFAULT_CASES), "--cases").get("order")
+    if raw is None:
+        return None
+    drive = {c.name: c for c in cases if isinstance(c, Case)}
+    out = {}
+    for engine, spec in _table("order", raw).items():
+        where = f"order.{engine}"
+        if engine not in ENGINES or engine == REFERENCE:
+            raise ParameterError(f"{where}: must be a peer engine; allowed: "
+                                 f"{', '.join(e for e in ENGINES if e != REFERENCE)}")
+        for k in _table(where, spec):
+            if k not in ORDER_KEYS:
+                raise ParameterError(f"{where}.{k}: unknown key; allowed: {', '.join(ORDER_KEYS)}")
+        if spec.get("case") not in drive:
+            raise ParameterError(f"{where}.case = {spec.get('case')!r}: must name a drive case of the file "
+                                 f"({', '.join(drive)})")
+        setting = spec.get("setting")
+        from comparisons.engines import get_engine
+        if not isinstance(setting, str) or setting not in get_engine(engine).default_settings:
+            raise ParameterError(f"{where}.setting = {setting!r}: must name {engine}'s step setting")
+        out[engine] = {"case": spec["case"], "setting": setting,
+                       "expected": _number(f"{where}.expected", spec.get("expected"))}
+    return out
+
+
 CONVERGENCE_KEYS = ("case", "cycles", "reference", "sweep")
 SWEEP_KEYS = ("setting", "values", "settings")
 
@@ -216,9 +253,9 @@ def _path(name: str, value, case_file) -> str:
 
 def load_cases(path: str | Path | None = None, base_params: Params | None = None) -> list[Case]:
     data = _read(Path(path or DEFAULT_CASES), "--cases")
-    unknown = set(data) - {"defaults", "case", "convergence"}
+    unknown = set(data) - {"defaults", "case", "convergence", "order"}
     if unknown:
-        raise ParameterError(f"--cases: unknown table {sorted(unknown)[0]!r}; allowed: defaults, case, convergence")
+        raise ParameterError(f"--cases: unknown table {sorted(unknown)[0]!r}; allowed: defaults, case, convergence, order")
     defaults = _table("defaults", data.get("defaults", {}))
     for k in defaults:
         if k not in DEFAULT_KEYS:
@@ -366,9 +403,10 @@ class Limits(dict):
     ``limit(engine, case, metric)`` takes the most specific one."""
     defaulted: tuple[str, ...] = ()
 
-    def __init__(self, *args, engines: dict[str, dict] | None = None):
+    def __init__(self, *args, engines: dict[str, dict] | None = None, derived: dict | None = None):
         super().__init__(*args)
         self.engines = engines or {}
+        self.derived = derived or {}   # [derived]: the peer versions (and rule) the limits came from
 
     def limit(self, engine: str, case: str, metric: str) -> float | None:
         e = self.engines.get(engine, {})
@@ -404,18 +442,20 @@ def load_tolerances(path: str | Path | None = None) -> Limits:
     [limits.ENGINE] and per engine and case [limits.ENGINE.case."CASE"] (the most specific wins)."""
     what = "--tolerances"
     data = _read(Path(path or DEFAULT_TOLERANCES), what)
+    derived = {}
     if "limits" in data:
-        extra = sorted(set(data) - {"limits"})
+        extra = sorted(set(data) - {"limits", "derived"})
         if extra:
-            raise ParameterError(f"{what}: {extra[0]!r} beside [limits]; allowed: the [limits] table only")
+            raise ParameterError(f"{what}: {extra[0]!r} beside [limits]; allowed: [limits] and [derived]")
         limits = _table("limits", data["limits"])
+        derived = _table("derived", data.get("derived", {}))
     else:
         limits = data
     if not limits:
         raise ParameterError(f"{what} {path}: no limits; a gate that checks nothing would always pass "
                              f"(give some of: {', '.join(METRICS)})")
     out = Limits(_metric_limits("tolerance ", {k: v for k, v in limits.items() if not isinstance(v, dict)}),
-                 engines=_engine_limits(limits))
+                 engines=_engine_limits(limits), derived=derived)
     missing = [k for k in METRICS if k not in out]
     if missing:
         defaults = load_tolerances(DEFAULT_TOLERANCES) if path and Path(path) != DEFAULT_TOLERANCES else {}

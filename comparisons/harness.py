@@ -26,6 +26,7 @@ from comparisons.seismic import gate_metrics, own_seismic_metrics
 from comparisons.convergence import convergence_study
 from comparisons.metrics import own_metrics, pair_metrics
 from comparisons.energy import energy_balance_rel
+from comparisons.reference import CONVERGED, CONVERGED_SETTINGS, order_labels, order_rows, run_spec, version_warnings, warn
 from nsd_core.device.geometry import device_geometry
 from nsd_core.numba_cache import source_fingerprint
 
@@ -43,29 +44,30 @@ def code_fingerprint() -> str:
     return h.hexdigest()[:16]
 
 
-def job_key(case: Case, engine: str) -> str:
-    """What a kept run depends on: the engine, its parameters, the drive (a seismic case: the ground
-    input, duration, output interval, device, structure), its settings, the code."""
+def job_key(case: Case, engine: str, order: dict | None = None) -> str:
+    """What a kept run depends on: the engine (a run label: comparisons.reference.run_spec), its
+    parameters, the drive (a seismic case: the ground input, duration, output interval, device,
+    structure), its settings, the code."""
+    _, params, settings = run_spec(case, engine, order)
     if isinstance(case, SeismicCase):
-        text = json.dumps(["seismic", engine, case.params_for(engine).to_dict(), case.params.to_dict(), case.spec,
+        text = json.dumps(["seismic", engine, params.to_dict(), case.params.to_dict(), case.spec,
                            case.ground.describe(), case.model_duration, case.dt_out, case.device, case.structure,
-                           case.settings.get(engine, {}), code_fingerprint()], sort_keys=True, default=str)
+                           settings, code_fingerprint()], sort_keys=True, default=str)
         return hashlib.sha256(text.encode()).hexdigest()[:20]
     d = case.drive
     drive = dict(d.describe(), samples_per_cycle=d.samples_per_cycle, minor=d.minor)
     if d._table is not None:  # a path read from a file: its content, not its name
         drive["table"] = hashlib.sha256(Path(d.path).read_bytes()).hexdigest()
-    text = json.dumps([engine, case.params_for(engine).to_dict(), drive, case.settings.get(engine, {}),
-                       code_fingerprint()], sort_keys=True, default=str)
+    text = json.dumps([engine, params.to_dict(), drive, settings, code_fingerprint()], sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:20]
 
 
-def load_kept(out: Path, case: Case, engine: str) -> dict | None:
+def load_kept(out: Path, case: Case, engine: str, order: dict | None = None) -> dict | None:
     """A run an earlier call kept for exactly these inputs, or None."""
     csv = run_csv(out, case, engine)
     try:
         rec = json.loads(csv.with_suffix(".json").read_text())
-        if rec.get("key") != job_key(case, engine) or not csv.is_file():
+        if rec.get("key") != job_key(case, engine, order) or not csv.is_file():
             return None
         res = read_csv(csv, engine)
     except (OSError, ValueError):
@@ -94,18 +96,31 @@ def git_revision() -> str:
 
 def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float], out_dir: str | Path,
             workers: int | None = None, log: Callable[[str], None] = print,
-            convergence: dict | None = None, tally: dict | None = None) -> dict[str, Any]:
+            convergence: dict | None = None, tally: dict | None = None, order: dict | None = None,
+            warn: Callable[[str], None] = warn) -> dict[str, Any]:
     """Run, measure, and write ``out_dir/results.json`` and ``out_dir/cycles/CASE__ENGINE.csv``.
 
     Resumable: a run kept by an earlier, interrupted call with the same inputs (its CSV and its
     ``.json`` record with the same ``job_key``) is read back instead of run again. ``tally`` (a
-    dict) is kept up to date with ``kept``, ``total`` and ``dir`` for the interrupt message."""
+    dict) is kept up to date with ``kept``, ``total`` and ``dir`` for the interrupt message.
+
+    Every engine is gated against the converged reference (comparisons/reference.py), run once per
+    case beside the engines and kept the same way; ``order`` (the case file's [order] table) adds
+    each listed peer's step halved twice on one case, and gates the observed order."""
     out = Path(out_dir)
-    jobs = [(c, e) for c in cases for e in engines]
+    derived = getattr(tolerances, "derived", {})
+    warnings = version_warnings(derived, versions(), engines)
+    for line in warnings:
+        warn(line)
+    by_name = {c.name: c for c in cases}
+    extra = [(c, CONVERGED) for c in cases] + [(by_name[n], lab) for n, lab in order_labels(order, engines)
+                                                if n in by_name]
+    jobs = [(c, e) for c in cases for e in engines] + extra
     # longest first: seismic runs cost ~10x a drive run per model second (loaded 2-core machine)
-    jobs.sort(key=lambda j: -ENGINE_COST.get(j[1], 1.0) * _model_time(j[0]) * (10.0 if isinstance(j[0], SeismicCase) else 1.0))
+    jobs.sort(key=lambda j: -_cost(j[1]) * _model_time(j[0]) * (10.0 if isinstance(j[0], SeismicCase) else 1.0))
     workers = workers or min(len(jobs), os.cpu_count() or 1)
     runs: dict[str, dict[str, dict]] = {c.name: {} for c in cases}
+    reference_runs: dict[str, dict[str, dict]] = {c.name: {} for c in cases}   # converged and step-halved
     results: dict[tuple[str, str], RunResult] = {}
     started = time.perf_counter()
     tally = tally if tally is not None else {}
@@ -120,7 +135,7 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
             csv = run_csv(out, case, engine)
             if not resumed:  # the CSV first, then the record that marks it complete
                 write_csv(csv, res)
-                atomic_write_json(csv.with_suffix(".json"), {"key": job_key(case, engine), "engine": engine,
+                atomic_write_json(csv.with_suffix(".json"), {"key": job_key(case, engine, order), "engine": engine,
                                                              "stats": res.stats, "wall_time": job["wall_time"]})
             tally["kept"] += 1  # on disk (its record written): what the interrupt message counts
             if not resumed:
@@ -143,24 +158,25 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
         else:
             entry["message"] = job["message"]
             log(f"  {case.name:16s} {engine:14s} FAILED {job['message']}")
-        runs[case.name][engine] = entry
+        (runs if engine in engines else reference_runs)[case.name][engine] = entry
 
     todo = []
     for c, e in jobs:
-        done = load_kept(out, c, e)
+        done = load_kept(out, c, e, order)
         if done is not None:
             keep(c, e, done, resumed=True)
         else:
             todo.append((c, e))
     structures: dict[str, Any] = {}
 
-    def submit(pool, c, e):
+    def submit(pool, c, label):
+        e, params, settings = run_spec(c, label, order)
         if isinstance(c, SeismicCase):
             if c.name not in structures:   # derived once per case, the same for every engine
                 structures[c.name] = c.isolated_structure()
-            return pool.submit(run_seismic_job, e, c.params_for(e), structures[c.name], c.ground, c.duration,
-                               c.dt_out, c.settings.get(e, {}))
-        return pool.submit(run_job, e, c.params_for(e), c.drive, c.settings.get(e, {}))
+            return pool.submit(run_seismic_job, e, params, structures[c.name], c.ground, c.duration,
+                               c.dt_out, settings)
+        return pool.submit(run_job, e, params, c.drive, settings)
 
     startup = None
     if todo:
@@ -173,15 +189,20 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
                 if job.get("started") is not None:   # spawning the workers and their imports (issue 20)
                     startup = min(startup if startup is not None else float("inf"), job["started"] - pool_start)
                 keep(case, engine, job)
-    metrics = _metrics(cases, engines, tolerances, runs, results)
-    failed_engines = [(c, e) for c in runs for e, r in runs[c].items() if r["status"] != "ok"]
+    summaries = {c: {**reference_runs[c], **runs[c]} for c in runs}
+    metrics = _metrics(cases, engines, tolerances, summaries, results)
+    order_evidence = {}
+    if order:
+        rows, order_evidence = _order_rows(order, engines, by_name, results, tolerances)
+        metrics += rows
+    failed_engines = [(c, e) for c in runs for e, r in summaries[c].items() if r["status"] != "ok"]
     failed_metrics = [m for m in metrics if m["gated"] and not m["pass"]]
     nothing_gated = not any(m["gated"] for m in metrics)  # never a vacuous PASS
     exit_code = 3 if failed_engines or nothing_gated else (1 if failed_metrics else 0)
     summary = {
         "verdict": {0: "PASS", 1: "FAIL", 3: "ERROR"}[exit_code], "exit_code": exit_code,
         "failures": [f"{m['case']}: {m['engine']} {m['metric']} = {m['value']:.3g} > {m['limit']:.3g}"
-                     for m in failed_metrics] + [f"{c}: {e} failed: {runs[c][e]['message']}" for c, e in failed_engines]
+                     for m in failed_metrics] + [f"{c}: {e} failed: {summaries[c][e]['message']}" for c, e in failed_engines]
         + (["nothing was gated: no metric of the tolerance file was measured"] if nothing_gated else []),
         "date": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds"), "git_revision": git_revision(),
         "reference": REFERENCE, "engines": engines,
@@ -195,6 +216,12 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
         "worker_startup_time": startup, "metric_definitions": {k: v[1] for k, v in METRICS.items()},
     }
     summary["versions"] = versions()
+    summary["converged_reference"] = {"label": CONVERGED, "engine": REFERENCE, "settings": dict(CONVERGED_SETTINGS),
+                                      "own": _converged_own(cases, results)}
+    summary["reference_runs"] = reference_runs
+    summary["order"] = order_evidence
+    summary["limits_derived_on"] = derived
+    summary["limits_version_warnings"] = warnings
     if convergence:
         log("  convergence study ...")
         summary["convergence"] = convergence_study(convergence, engines, workers)
@@ -233,10 +260,12 @@ def _seismic_describe(c, structures: dict) -> dict:
 
 
 def _metrics(cases, engines, tolerances, runs, results) -> list[dict]:
-    """Every engine against the reference (gated) and every other pair (reported, not gated)."""
+    """Every engine, the in-house one included, against the converged reference (gated); every
+    engine against the in-house run at its case settings and every other pair (reported, not gated)."""
     rows = []
     others = [e for e in engines if e != REFERENCE]
-    pairs = [(e, REFERENCE, True) for e in others if REFERENCE in engines]
+    pairs = [(e, CONVERGED, True) for e in engines]
+    pairs += [(e, REFERENCE, False) for e in others if REFERENCE in engines]
     pairs += [(a, b, False) for i, a in enumerate(others) for b in others[i + 1:]]
     for c in cases:
         if isinstance(c, SeismicCase):
@@ -276,6 +305,50 @@ def _seismic_rows(c, engines, pairs, tolerances, results) -> list[dict]:
                 if (lim := limit_for(tolerances, a, c.name, k)) is not None:
                     rows.append(_row(c.name, a, b, k, v, lim, gated))
     return rows
+
+
+def _cost(label: str) -> float:
+    """Rough relative cost of a run label, for scheduling (a halved step costs its divisor)."""
+    from comparisons.reference import HALVED
+    m = HALVED.fullmatch(label)
+    if m:
+        return ENGINE_COST.get(m.group(1), 1.0) * int(m.group(2))
+    return ENGINE_COST.get(label, 1.0)
+
+
+def _converged_own(cases, results) -> dict:
+    """The converged reference's own metrics per case (closure, tracking, energy balance; seismic:
+    energy residual, closure): the floor of the limits on those (benchmarks/derive_limits.py)."""
+    out = {}
+    for c in cases:
+        r = results.get((c.name, CONVERGED))
+        if r is None:
+            continue
+        if isinstance(c, SeismicCase):
+            out[c.name] = own_seismic_metrics(r)
+        else:
+            own = own_metrics(r)
+            own["energy_balance_rel"] = energy_balance_rel(r, device_geometry(c.params), c.drive.frequency,
+                                                           c.drive.unit_vector)
+            out[c.name] = own
+    return out
+
+
+def _order_rows(order, engines, by_name, results, tolerances) -> tuple[list[dict], dict]:
+    """Each listed peer's error at its case step, halved and quartered, against the converged
+    reference: the observed order, gated within its band (comparisons.reference.order_rows)."""
+    from comparisons.reference import ORDER_DIVISORS, ORDER_METRIC
+    errors = {}
+    for e, spec in order.items():
+        c = by_name.get(spec["case"])
+        labels = [e] + [f"{e}_h{d}" for d in ORDER_DIVISORS]
+        if e not in engines or c is None or not all((c.name, lab) in results for lab in labels + [CONVERGED]):
+            continue
+        ref = results[(c.name, CONVERGED)]
+        d = c.drive
+        errors[e] = [pair_metrics(results[(c.name, lab)], ref, {}, {}, d.amplitude, d.frequency)[ORDER_METRIC]
+                     for lab in labels]
+    return order_rows(order, errors, _row, lambda e, case: limit_for(tolerances, e, case, "order_deviation"))
 
 
 def _seismic_peaks(r: RunResult) -> dict:

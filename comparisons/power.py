@@ -1,11 +1,13 @@
 """Detection power of the gate: small modelling errors injected into one engine's own model.
 
 For each injection (engines/perturb.py), each perturbed engine and each chosen case, the engine runs
-with its default settings plus ``perturb`` and is measured against the unperturbed reference exactly
-as the gate measures it (same metrics, same limits). A row records the largest value/limit ratio
+with its case settings plus ``perturb`` and is measured against the converged reference exactly as
+the gate measures it (same metrics, same limits: comparisons/reference.py). A row records the largest value/limit ratio
 and the metric that gave it, and whether the gate failed. An injection is *seen* when it fails the
 gate in at least one case. Injections that pass are tried again 10x larger (the ``ladder``), so
-the report can say the smallest error of that kind the gate sees.
+the report can say the smallest error of that kind the gate sees. ``scaled(spec, size)`` gives the
+list at another size (``nsd compare --power --power-size``); ``combine`` puts the tables of several
+profiles (default, strict) side by side, one line per error.
 """
 from __future__ import annotations
 
@@ -22,7 +24,8 @@ from nsd_core.engine.workers import worker_pool
 from comparisons.config import Case
 from comparisons.energy import energy_balance_rel
 from comparisons.engines import REFERENCE, run_job
-from comparisons.engines.perturb import describe
+from comparisons.engines.perturb import KINDS, describe
+from comparisons.reference import CONVERGED_SETTINGS
 from comparisons.harness import limit_for
 from comparisons.metrics import own_metrics, pair_metrics
 
@@ -40,6 +43,20 @@ INJECTIONS: list[dict] = (
     + [{"what": "wire_area", "by": s * 0.01} for s in (1, -1)]
     + [{"what": "rest_ignores_weight"}, {"what": "spring_zeta0", "by": 0.01}]
 )
+
+
+LISTED_SIZE = 0.01   # the relative size of the listed errors; their lengths (0.2 mm) scale with it
+
+
+def scaled(spec: dict, size: float) -> dict:
+    """The listed error at another size: relative ones (masses, stiffnesses, constants) become
+    +-size, lengths scale by size / 1 %; gravity off and the mis-set rest state are on/off and stay."""
+    if "by" not in spec or spec["what"] == "gravity":
+        return dict(spec)
+    by = spec["by"]
+    if KINDS[spec["what"]][0] == "m":
+        return {**spec, "by": by * size / LISTED_SIZE}
+    return {**spec, "by": size if by > 0 else -size}
 
 
 # the compiled force paths take one stiffness for every rope; a per-rope error runs on the engines'
@@ -68,7 +85,7 @@ def power_study(cases: list[Case], engines: list[str], tolerances, out_dir: str 
     refs: dict[str, tuple] = {}
     rows: list[dict] = []
     with worker_pool(workers) as pool:  # spawn; workers end with their parent (nsd_core.engine.workers)
-        ref_jobs = {c.name: pool.submit(run_job, REFERENCE, c.params, c.drive, c.settings.get(REFERENCE, {}))
+        ref_jobs = {c.name: pool.submit(run_job, REFERENCE, c.params, c.drive, dict(CONVERGED_SETTINGS))
                     for c in cases}
 
         def submit(spec, scale):
@@ -90,8 +107,8 @@ def power_study(cases: list[Case], engines: list[str], tolerances, out_dir: str 
             job = fut.result()
             row = {"case": c.name, "engine": e, "injection": describe(spec), "applied": describe(s),
                    "perturb": s, "scale": scale}
-            if job["status"] != "ok":
-                row.update(failed=True, metric="run", ratio=float("inf"), value=None, error=job["message"])
+            if job["status"] != "ok":   # a run that fails has not detected anything: reported, never "seen"
+                row.update(failed=False, metric="run error", ratio=0.0, value=None, error=job["message"])
             else:
                 ref, ref_summary = refs[c.name]
                 summary = analyse(job["result"], c.drive.amplitude, c.drive.frequency)
@@ -127,6 +144,7 @@ def summarise(rows: list[dict], injections: list[dict]) -> list[dict]:
         for r in nominal:
             per_engine[r["engine"]] = max(per_engine.get(r["engine"], 0.0), r["ratio"])
         table.append({"injection": name, "seen_at_nominal": any(r["failed"] for r in nominal),
+                      "run_errors": [f"{r['engine']} {r['case']}: {r['error']}" for r in nominal if r.get("error")],
                       "weakest_engine_ratio": min(per_engine.values()) if per_engine else None,
                       "engines_seeing": sorted({r["engine"] for r in nominal if r["failed"]}),
                       "best_metric": best["metric"] if best else None, "best_ratio": best["ratio"] if best else None,
@@ -143,6 +161,7 @@ def format_power(out: dict) -> str:
         lines.append(f"{t['injection']:34s} {'yes' if t['seen_at_nominal'] else 'NO':5s} "
                      f"{','.join(t['engines_seeing']) or '-':14s} {t['best_metric'] or '-':18s} "
                      f"{t['best_ratio'] or 0:11.3g}  {small:13s}  {threshold_text(t)}")
+    lines += [f"RUN ERROR ({t['injection']}) {e}" for t in out["table"] for e in t.get("run_errors", [])]
     return "\n".join(lines)
 
 
@@ -152,3 +171,31 @@ def threshold_text(t: dict) -> str:
     if th is None:
         return "-"
     return f"{th * 1e3:.2g} mm" if " mm" in name else f"{th * 100:.2g} %"
+
+
+def combine(outs: dict[str, dict]) -> list[dict]:
+    """One line per error: for each profile (name -> power_study output) seen or not, the value/limit
+    of the engine that saw it most and of the one that saw it least."""
+    names = [t["injection"] for t in next(iter(outs.values()))["table"]]
+    lines = []
+    for i, name in enumerate(names):
+        line = {"injection": name}
+        for prof, out in outs.items():
+            t = out["table"][i]
+            line[prof] = {"seen": t["seen_at_nominal"], "best_ratio": t["best_ratio"], "best_metric": t["best_metric"],
+                          "engines_seeing": t["engines_seeing"], "weakest_engine_ratio": t["weakest_engine_ratio"]}
+        lines.append(line)
+    return lines
+
+
+def format_profiles(lines: list[dict], profiles: list[str]) -> str:
+    head = f"{'injection':34s}" + "".join(f" {p + ': seen':>14s} {'max ratio':>10s} {'min engine':>10s}" for p in profiles)
+    out = [head]
+    for ln in lines:
+        row = f"{ln['injection']:34s}"
+        for p in profiles:
+            d = ln[p]
+            row += (f" {('yes ' + ','.join(d['engines_seeing'])) if d['seen'] else 'NO':>14s} "
+                    f"{d['best_ratio'] or 0:10.3g} {d['weakest_engine_ratio'] or 0:10.3g}")
+        out.append(row)
+    return "\n".join(out)

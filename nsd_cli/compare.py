@@ -5,7 +5,7 @@ import argparse
 from pathlib import Path
 from xml.sax.saxutils import escape, quoteattr
 
-from comparisons.config import load_cases, load_convergence, load_tolerances
+from comparisons.config import PROFILES, load_cases, load_convergence, load_order, load_tolerances
 from comparisons.engines import REFERENCE
 from nsd_cli.options import (WORKERS_MAX, add_param_arguments, base_params, check_out_dir, check_out_file,
                              parse_engines, whole)
@@ -49,6 +49,16 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--power-engines", default="mujoco,exudyn", help="engines whose own model gets the errors")
     p.add_argument("--power-cases", default=None,
                    help="comma-separated case names for --power (default: every case of the case file)")
+    p.add_argument("--power-profiles", default=None,
+                   help="--power: comma-separated profiles whose gates are measured side by side (default: "
+                        "default,strict; with --cases or --tolerances: those files alone)")
+    p.add_argument("--power-size", type=float, default=None,
+                   help="--power: the size of the listed errors (relative; 0.001 = 0.1 %%; the 0.2 mm "
+                        "lengths scale with it: 0.02 mm at 0.001; default: the listed sizes, 1 %% and 0.2 mm)")
+    p.add_argument("--profile", choices=sorted(PROFILES), default="default",
+                   help="default: comparisons/cases.toml and tolerances.toml; strict: finer peer settings "
+                        "and their own limits (comparisons/cases_strict.toml, tolerances_strict.toml); "
+                        "--cases / --tolerances still override")
     p.add_argument("--out", required=True, help="output folder")
 
 
@@ -128,17 +138,24 @@ def run(args) -> int:
         raise ParameterError(f"--engines {args.engines}: must include the reference {REFERENCE}; without it "
                              "nothing is gated and the verdict would mean nothing")
     whole("--workers", args.workers, 1, WORKERS_MAX)
+    own_files = bool(args.cases or args.tolerances)
+    args.cases = args.cases or PROFILES[args.profile][0]
+    args.tolerances = args.tolerances or PROFILES[args.profile][1]
     base = base_params(args)
     cases = load_cases(args.cases, base)
     tolerances = load_tolerances(args.tolerances)
     conv = load_convergence(args.cases, cases) if args.convergence else None
     if args.convergence and conv is None:
         raise ParameterError("--convergence: the case file has no [convergence] table")
+    if args.power_size is not None and not (args.power and 0 < args.power_size <= 0.1):
+        raise ParameterError(f"--power-size {args.power_size!r}: " + ("a size in (0, 0.1] (0.001 = 0.1 %)"
+                             if args.power else "applies to --power only"))
     if args.power:
-        return _run_power(args, cases, tolerances)
+        return _run_power(args, base, own_files)
     for flag in ("power_cases",):
         if getattr(args, flag) is not None:
             raise ParameterError(f"--{flag.replace('_', '-')}: applies to --power only")
+    order = load_order(args.cases, cases)
     check_settings(cases, engines, conv)
     out = check_out_dir("--out", args.out)
     check_out_file("--junit", args.junit)
@@ -147,10 +164,15 @@ def run(args) -> int:
               "(marked 'default' in the table)")
     from comparisons.harness import compare  # here, not at import: every nsd command's start-up stays light
     print(f"nsd compare: {len(cases)} cases x {len(engines)} engines -> {out}")
-    summary = compare(cases, engines, tolerances, out, workers=args.workers, convergence=conv, tally=args.tally)
+    summary = compare(cases, engines, tolerances, out, workers=args.workers, convergence=conv, tally=args.tally,
+                      order=order)
     print(format_table(summary))
     if args.junit:
         atomic_write_text(args.junit, junit_xml(summary))
+    d = summary.get("limits_derived_on") or {}
+    if d:
+        print(f"limits derived on mujoco {d.get('mujoco', '?')}, exudyn {d.get('exudyn', '?')} ({d.get('date', '?')}); "
+              f"gated against the converged reference (in-house {summary['converged_reference']['settings']})")
     for line in summary["failures"]:
         print(f"FAILED {line}")
     print(f"verdict: {summary['verdict']} ({summary['total_wall_time']:.1f} s); wrote {out / 'results.json'}")
@@ -177,20 +199,57 @@ def _power_cases(text: str, cases) -> list:
     return [known[n] for n in names]
 
 
-def _run_power(args, cases, tolerances) -> int:
-    from comparisons.power import format_power, power_study
+def _power_profiles(args, base, own_files) -> dict[str, tuple]:
+    """name -> (cases, tolerances) of each profile --power measures, the cases cut to --power-cases."""
+    if own_files:
+        if args.power_profiles:
+            raise ParameterError("--power-profiles: not with --cases / --tolerances (those files are the one profile)")
+        files = {"custom": (args.cases, args.tolerances)}
+    else:
+        names = [n.strip() for n in (args.power_profiles or "default,strict").split(",") if n.strip()]
+        for n in names:
+            if n not in PROFILES:
+                raise ParameterError(f"--power-profiles {n!r}: unknown; allowed: {', '.join(PROFILES)}")
+        if not names or len(set(names)) != len(names):
+            raise ParameterError(f"--power-profiles {args.power_profiles!r}: give each profile once")
+        files = {n: PROFILES[n] for n in names}
+    out = {}
+    for name, (case_file, tol_file) in files.items():
+        cases = load_cases(case_file, base)
+        if args.power_cases is not None:
+            cases = _power_cases(args.power_cases, cases)
+        out[name] = (cases, load_tolerances(tol_file))
+    return out
+
+
+def _run_power(args, base, own_files) -> int:
+    from comparisons.power import INJECTIONS, combine, format_power, format_profiles, power_study, scaled
+    from nsd_core.device.results import atomic_write_json
     engines = parse_engines(args.power_engines)
     if REFERENCE in engines:
         raise ParameterError(f"--power-engines {args.power_engines!r}: the reference {REFERENCE} cannot be perturbed")
-    if args.power_cases is not None:
-        cases = _power_cases(args.power_cases, cases)
-    check_settings(cases, engines)
+    profiles = _power_profiles(args, base, own_files)
+    for cases, _ in profiles.values():
+        check_settings(cases, engines)
     folder = check_out_dir("--out", args.out)
-    print(f"nsd compare --power: {len(cases)} cases x {len(engines)} engines -> {folder}")
-    out = power_study(cases, engines, tolerances, folder, workers=args.workers)
-    print(format_power(out))
-    print(f"{sum(t['seen_at_nominal'] for t in out['table'])} of {len(out['table'])} injected errors fail the gate "
-          f"({out['wall_time']:.0f} s); wrote {folder / 'power.json'}")
+    size = args.power_size
+    injections = INJECTIONS if size is None else [scaled(s, size) for s in INJECTIONS]
+    outs = {}
+    for name, (cases, tolerances) in profiles.items():
+        print(f"nsd compare --power ({name} profile{'' if size is None else f', errors at {size:g}'}): "
+              f"{len(cases)} cases x {len(engines)} engines -> {folder / name}")
+        outs[name] = power_study(cases, engines, tolerances, folder / name, injections=injections, workers=args.workers)
+        outs[name]["profile"], outs[name]["size"] = name, size
+        print(format_power(outs[name]))
+        print(f"{name}: {sum(t['seen_at_nominal'] for t in outs[name]['table'])} of {len(outs[name]['table'])} "
+              f"injected errors fail the gate ({outs[name]['wall_time']:.0f} s)")
+    first = next(iter(outs))
+    out = {**outs[first], "profiles": outs, "by_profile": combine(outs),
+           "all_seen": all(o["all_seen"] for o in outs.values())}
+    atomic_write_json(folder / "power.json", out)
+    if len(outs) > 1:
+        print(format_profiles(out["by_profile"], list(outs)))
+    print(f"wrote {folder / 'power.json'}")
     if args.report and (folder / "results.json").is_file():
         from reports.build import build_report
         print(f"report: {build_report(folder, folder / 'report')['pdf']}")

@@ -5,12 +5,18 @@ one calls: after an edit to a force law or to an engine kernel, a cached step lo
 would go on running the old code. So the cache folder is keyed by a hash of every source file of
 ``nsd_core`` and ``comparisons`` (whose MuJoCo callbacks are compiled from the same laws): any edit,
 any upgrade, starts a fresh folder. A NUMBA_CACHE_DIR set by the user is honoured as it is.
+
+numba warns on stderr when it cannot cache a kernel ("Cannot cache compiled function ... as it uses
+dynamic globals": every kernel under NUMBA_OPT=0). Such a kernel is compiled again in the next
+process, which costs time and changes no number; the warning would break the one-line error promise,
+so ``quiet_cache_warnings`` keeps it off the user's stderr (NSD_NUMBA_CACHE_WARNINGS=1 shows it).
 """
 from __future__ import annotations
 
 import hashlib
 import os
 import sys
+import warnings
 from pathlib import Path
 
 PACKAGES = ("nsd_core", "comparisons")
@@ -47,3 +53,15 @@ def use_versioned_cache(environ=os.environ) -> str | None:
         from numba.core import config
         config.CACHE_DIR = str(folder)
     return str(folder)
+
+
+CACHE_WARNING = r"Cannot cache compiled function"
+
+
+def quiet_cache_warnings(environ=os.environ) -> bool:
+    """Ignore numba's cannot-cache warnings in this process (worker processes import nsd_core and
+    do the same); True when the filter was installed, False where NSD_NUMBA_CACHE_WARNINGS=1."""
+    if environ.get("NSD_NUMBA_CACHE_WARNINGS") == "1":
+        return False
+    warnings.filterwarnings("ignore", message=CACHE_WARNING)
+    return True

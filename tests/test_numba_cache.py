@@ -55,3 +55,30 @@ def test_numba_writes_its_cache_into_the_versioned_folder(tmp_path):
     folders = list(root.iterdir())
     assert len(folders) == 1 and folders[0].name == source_fingerprint(Path(__file__).resolve().parents[1])
     assert any(p.suffix == ".nbi" for p in folders[0].rglob("*")), "numba cached nothing there"
+
+
+UNCACHEABLE = """
+import ctypes, ctypes.util, sys
+sys.path.insert(0, {path!r})
+{first}
+from numba import njit
+cos = ctypes.CDLL(ctypes.util.find_library("m")).cos
+cos.restype, cos.argtypes = ctypes.c_double, (ctypes.c_double,)
+
+@njit(cache=True)
+def f(x):
+    return cos(x)   # a ctypes pointer: a dynamic global, which numba cannot cache (as under NUMBA_OPT=0)
+
+assert f(0.0) == 1.0
+"""
+
+
+def test_numbas_cannot_cache_warning_never_reaches_stderr(tmp_path):
+    env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR", "NSD_NUMBA_CACHE_WARNINGS")}
+    env["XDG_CACHE_HOME"] = str(tmp_path / "cache")
+    for first, shown in (("import nsd_core", False), ("", True)):   # without nsd_core numba does warn
+        mod = tmp_path / f"k{int(shown)}.py"
+        mod.write_text(UNCACHEABLE.format(path=str(Path(__file__).resolve().parents[1]), first=first))
+        p = subprocess.run([sys.executable, str(mod)], env=env, capture_output=True, text=True, timeout=120)
+        assert p.returncode == 0, p.stderr
+        assert ("Cannot cache compiled function" in p.stderr) == shown, p.stderr
