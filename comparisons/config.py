@@ -33,6 +33,10 @@ METRICS = {  # name -> (unit, description)
     "peak_u_rel": ("-", "seismic: |peak |u| - reference| / reference"),
     "peak_a_rel": ("-", "seismic: |peak |a_abs| - reference| / reference, a_abs the plate's absolute acceleration"),
     "energy_residual_rel": ("-", "seismic: the engine's own max |E_residual| / max |E_input| (frame of the ground)"),
+    # seismic cases with a building (docs/building.md): the worst floor or story of each
+    "max_dfloor_rel": ("-", "building: max over floors of max |d_i - d_i,ref| / max |d_i,ref| (plan vectors, relative to the ground)"),
+    "max_ddrift_rel": ("-", "building: max over stories of max |drift_i - ref| / max |drift_i,ref| (plan vectors)"),
+    "max_dfloor_a_rel": ("-", "building: max over floors of max |a_abs,i - ref| / max |a_abs,i,ref| (plan vectors)"),
     "order_deviation": ("-", "largest |observed order - expected| over the step halved twice ([order] of the case file)"),
 }
 CASE_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._+-]{0,63}")
@@ -44,7 +48,7 @@ CASE_KEYS = {"name", "amplitude", "frequency", "direction_deg", "cycles", "sampl
 
 
 SEISMIC_KEYS = {"name", "mode", "record", "ground", "scale", "window", "rotate_deg", "duration", "dt_out",
-                "device", "params", "settings", "engine_params", "structure"}
+                "device", "params", "settings", "engine_params", "structure", "building"}
 SEISMIC_DURATION_MAX = 60.0   # model seconds: bounds one case's work
 SEISMIC_OUTPUTS_MAX = 1_000_000
 
@@ -63,6 +67,7 @@ class SeismicCase:
     structure: dict = field(default_factory=dict)                 # overrides of the default structure
     settings: dict[str, dict] = field(default_factory=dict)
     engine_params: dict[str, Params] = field(default_factory=dict)
+    building: dict | None = None                                  # [building] table (docs/building.md)
     mode = "seismic"
 
     def params_for(self, engine: str) -> Params:
@@ -80,11 +85,15 @@ class SeismicCase:
         st = default_structure(self.params)
         own, restrainer = split_overrides({k: v for k, v in self.structure.items() if k != "restrainer"})
         st = st.replace(**own) if own else st
-        return with_restrainer(st, self.params, self.structure.get("restrainer") is True, restrainer)
+        st = with_restrainer(st, self.params, self.structure.get("restrainer") is True, restrainer)
+        if self.building is not None:
+            from nsd_core.device.building import building_from
+            st = st.with_building(building_from(st.mass, self.building))
+        return st
 
     def describe(self) -> dict[str, Any]:
         return {"name": self.name, "mode": "seismic", **self.spec, "duration": self.model_duration,
-                "dt_out": self.dt_out, "device": self.device, "structure": self.structure,
+                "dt_out": self.dt_out, "device": self.device, "structure": self.structure, "building": self.building,
                 "params_overridden": {k: v for k, v in self.params.to_dict().items() if v != getattr(Params(), k)},
                 "settings": self.settings,
                 "engine_params": {e: {k: v for k, v in p.to_dict().items() if v != getattr(self.params, k)}
@@ -365,7 +374,14 @@ def _seismic_case(i: int, raw: dict, d_params: dict, base_params: Params | None)
     settings = {e: dict(t) for e, t in _engine_tables(f"{w}.settings", raw.get("settings", {})).items()}
     engine_params = {e: params.replace(**p) for e, p in
                      _engine_tables(f"{w}.engine_params", raw.get("engine_params", {})).items()}
-    case = SeismicCase(name, motion, spec, params, duration, dt_out, device, dict(structure), settings, engine_params)
+    building = None if "building" not in raw else dict(_table(f"{w}.building", raw["building"]))
+    case = SeismicCase(name, motion, spec, params, duration, dt_out, device, dict(structure), settings, engine_params,
+                       building)
+    if building is not None:
+        try:
+            case.isolated_structure()
+        except ParameterError as e:
+            raise ParameterError(f"{w}: {e}") from None
     if structure:
         from nsd_core.device.isolation import Structure
         from nsd_core.device.restrainer import KEYS

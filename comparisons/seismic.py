@@ -31,8 +31,31 @@ def gate_metrics(ref, other) -> dict:
     """The gated seismic metrics of ``other`` against the reference ``ref`` (names of
     comparisons.config.METRICS): max_du_rel, max_dF_device_rel (device force vector), peak_u_rel, peak_a_rel."""
     m = seismic_metrics(ref, other)
-    return {"max_du_rel": m["du"], "max_dF_device_rel": m["dF"], "peak_u_rel": abs(m["peak_displacement"]),
-            "peak_a_rel": abs(m["peak_absolute_acceleration"])}
+    out = {"max_du_rel": m["du"], "max_dF_device_rel": m["dF"], "peak_u_rel": abs(m["peak_displacement"]),
+           "peak_a_rel": abs(m["peak_absolute_acceleration"])}
+    if "floor1_x" in ref.columns and "floor1_x" in other.columns:
+        b = building_metrics(ref, other)
+        out.update({"max_dfloor_rel": b["dfloor"], "max_ddrift_rel": b["ddrift"], "max_dfloor_a_rel": b["dfloor_a"]})
+    return out
+
+
+def building_metrics(ref, other) -> dict:
+    """The building's differences (docs/building.md): per floor / story, max |o - r| / max |r| of the plan
+    vectors of the displacement relative to the ground (dfloor), the drift (ddrift) and the absolute
+    acceleration (dfloor_a), each list and its worst."""
+    n = 0
+    while f"floor{n + 1}_x" in ref.columns:
+        n += 1
+    out = {}
+    for key, (cx, cy) in {"dfloor": ("floor{}_x", "floor{}_y"), "ddrift": ("drift{}_x", "drift{}_y"),
+                          "dfloor_a": ("floor{}_ax_abs", "floor{}_ay_abs")}.items():
+        per = []
+        for i in range(1, n + 1):
+            r = np.column_stack([ref[cx.format(i)], ref[cy.format(i)]])
+            o = np.column_stack([other[cx.format(i)], other[cy.format(i)]])
+            per.append(float(np.max(np.linalg.norm(o - r, axis=1)) / max(np.max(np.linalg.norm(r, axis=1)), 1e-300)))
+        out[key], out[key + "_per_floor"] = max(per), per
+    return out
 
 
 def own_seismic_metrics(run) -> dict:

@@ -16,7 +16,7 @@ import argparse
 import math
 
 from nsd_cli import limits as lim
-from nsd_cli import seismic_extras
+from nsd_cli import seismic_building, seismic_extras
 from nsd_cli.options import (Progress, add_param_arguments, add_solver_arguments, base_params, check_finite,
                              check_out_dir, solver_settings)
 from nsd_core.device.params import ParameterError
@@ -59,6 +59,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "radius_of_gyration, support_radius, restrainer_gap, restrainer_stiffness, "
                         "restrainer_exponent, restrainer_damping (SI)")
     seismic_extras.add_arguments(p)
+    seismic_building.add_arguments(p)
     p.add_argument("--records", default=None, metavar="1,3,5-7", help="with --record-set: these records only (default all)")
     p.add_argument("--workers", type=int, default=None, help="with --record-set: local processes (default: the cores)")
     p.add_argument("--scheduler", default=None, help="with --record-set: address of a running Dask scheduler")
@@ -152,14 +153,25 @@ def run(args) -> int:
     motion = ground_motion(args)
     lim.check_seismic_request(motion.duration if args.duration is None else args.duration, args.dt_out,
                               "" if args.duration is not None else "the input's own duration")
-    structure = seismic_extras.isolated_structure(args, params)
+    structure = seismic_building.with_building(args, seismic_extras.isolated_structure(args, params))
+    if args.fixed_base and (not args.no_device or args.compare_supports):
+        raise ParameterError("--fixed-base: the slab is held to the ground, so the run has no device: add --no-device")
     solver = {**DEFAULT_SOLVER, **solver_settings(args)}
     for name in ("duration", "dt_out"):
         v = getattr(args, name)
         if v is not None and not (math.isfinite(v) and v > 0):
             raise ParameterError(f"--{name.replace('_', '-')} = {v}: must be a finite number > 0 (s)")
+    if args.fixed_base and len(engines) > 1:
+        raise ParameterError("--engines: the fixed base runs on the in-house engine only")
     out = check_out_dir("--out", args.out)
     head = {"ground": motion.describe(), "structure": structure.to_dict(), "device": not args.no_device}
+    if args.compare_building:
+        if len(engines) > 1:
+            raise ParameterError(f"--engines {args.engines!r}: --compare-building runs the in-house engine only")
+        return seismic_building.run_compare(args, params, structure, motion, solver, out, head)
+    if args.fixed_base:
+        solver["fixed_base"] = True
+        head["fixed_base"] = True
     if args.compare_supports:
         code = seismic_extras.run_compare(args, params, structure, motion, solver, out, head)
         from reports.build import draw_study  # the pair's PNGs into its own folder (issue 20)
@@ -180,6 +192,9 @@ def run(args) -> int:
         others[name] = other
         summary.setdefault("engines", {})[name] = {**seismic_metrics(result, other),
                                                    "wall_time": other.stats["wall_time"]}
+        if "floor1_x" in result.columns:  # the building's floors and stories (docs/building.md)
+            from comparisons.seismic import building_metrics
+            summary["engines"][name]["building"] = building_metrics(result, other)
     check_finite({"seismic.csv": result, **{f"seismic_{n}.csv": o for n, o in others.items()},
                   "summary.json": summary}, "nsd seismic")
     for name, other in others.items():
@@ -192,11 +207,16 @@ def run(args) -> int:
           f"at t = {pa['t']:.3f} s, residual |u| = {summary['residual_displacement']['u'] * 1e3:.3f} mm, "
           f"energy in {e['input']:.4g} J (balance residual {e['relative_residual']:.1e}); "
           f"{result.stats['steps']} steps in {result.stats['wall_time']:.1f} s for {result.stats['model_time']:.2f} s")
+    seismic_building.print_building(summary)
     for ev in summary["events"]:
         print(f"  event {ev['kind']}: t = {ev['start']:.4f} s for {ev['duration'] * 1e3:.2f} ms (|u| = {ev['u_start'] * 1e3:.2f} mm)")
     for name, m in summary.get("engines", {}).items():
         print(f"  {name}: max|du|/max|u| = {m['du']:.2e}, max|dF|/max|F| = {m['dF']:.2e}, "
               f"max|da|/max|a| = {m['da']:.2e}, {m['wall_time']:.1f} s")
+        if "building" in m:
+            b = m["building"]
+            print(f"    building: floors {b['dfloor']:.2e}, drifts {b['ddrift']:.2e}, floor accelerations "
+                  f"{b['dfloor_a']:.2e} (worst floor, max|d - d_ref| / max|d_ref|)")
     seismic_extras.print_restrainer(summary)
     if summary["outside_working_range"]:
         print("  WARNING: the ropes went slack: part of this run lies outside the device's working range")
@@ -236,6 +256,10 @@ def run_set(args) -> int:
         raise ParameterError("--no-device: --record-set runs every record both with and without the device")
     if args.compare_supports:
         raise ParameterError("--compare-supports: --record-set runs every record both with and without the device already")
+    if args.fixed_base or args.compare_building:
+        flag = "--fixed-base" if args.fixed_base else "--compare-building"
+        raise ParameterError(f"{flag}: --record-set runs every record with and without the device (a building: "
+                             "--building)")
     engines = parse_engine_list(args.engines)
     if engines[0] != "semirecursive":
         raise ParameterError(f"--engines {args.engines!r}: semirecursive (the reference) must come first")
@@ -248,7 +272,7 @@ def run_set(args) -> int:
     ground = {"scale": float(args.scale), "time_factor": float(tf), "window": window,
               "rotate_deg": float(args.rotate), "normalised": not args.raw}
     params = base_params(args)
-    structure = seismic_extras.isolated_structure(args, params)
+    structure = seismic_building.with_building(args, seismic_extras.isolated_structure(args, params))
     numbers = {k: v for k, v in structure.to_dict().items() if k != "provenance"}
     solver = {**DEFAULT_SOLVER, **solver_settings(args)}
     for name in ("duration", "dt_out"):

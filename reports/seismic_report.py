@@ -12,6 +12,7 @@ from nsd_core.device.params import ParameterError
 from nsd_core.device.inputs import read_regular_text
 from nsd_core.device.results import read_csv
 
+from reports import building_pages as bp
 from reports import seismic_compare as sc
 from reports import seismic_pages as sp
 
@@ -49,6 +50,8 @@ def _run_pages(label: str, runs: dict, cost: dict | None = None, ground: dict | 
            (f"loops_{stem}", lambda: sp.loops_figure(f"Device loops during the record: {label}", runs))]
     if any("E_input" in r.columns for r in runs.values()):
         out.append((f"energy_{stem}", lambda: sp.energy_figure(f"Energy balance: {label}", runs)))
+    if all("floor1_x" in r.columns for r in runs.values()):  # a building (reports.building_pages)
+        out.append((f"floors_{stem}", lambda: bp.floors_figure(f"The building's floors per engine: {label}", runs)))
     return out
 
 
@@ -92,6 +95,8 @@ def seismic_plan(folder) -> tuple[list[tuple[str, Callable]], str]:
                 nodevice = _runs(alone.parent)["semirecursive"] if alone.is_file() else None
                 plan += _run_pages(f"{row['set']}:{row['id']}", runs, _cost(summ), summ.get("ground"), nodevice)
         return plan, f"NSD seismic report  |  record set {index.get('set')}"
+    if bp.is_building_compare(root):  # nsd seismic --compare-building (reports.building_pages)
+        return bp.compare_plan(root, _runs)
     if sc.is_compare(root):  # nsd seismic --compare-supports (reports.seismic_compare)
         return sc.compare_plan(root, _runs)
     runs = _runs(root)

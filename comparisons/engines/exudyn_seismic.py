@@ -33,6 +33,7 @@ from exudyn.itemInterface import LoadForceVector, LoadTorqueVector, MarkerNodePo
 from exudyn.rigidBodyUtilities import RigidBodyInertia
 
 from comparisons.engines.base import EngineError, check_step_count, merged_settings
+from comparisons.engines.exudyn_building import ExudynFloors
 from comparisons.engines.exudyn_quiet import quiet_allocation_warning
 from comparisons.engines.perturb import perturbed, perturbed_structure
 from nsd_core.device.forces import (advance_spring_zeta, advance_wire_stress, restrainer_force_scalar,
@@ -165,6 +166,7 @@ class ExudynSeismic:
         bodies = (plate, cap, wall, rod)
         a_g0 = ground(0.0)[2]
         inertial = [force_load(b[0], (-b[2] * a_g0[0], -b[2] * a_g0[1], 0.0)) for b in bodies]  # -m a_g
+        floors = ExudynFloors(mbs, st.building, plate[0], a_g0) if st.building is not None else None
         el = _Elements(g)
         f0, m0, fw0 = el.loads(np.array([0.0, 0.0, cap_z]), 0.0, wall_z)
         cap_f, cap_m, wall_f = force_load(cap[0], f0), torque_load(cap[0], m0), force_load(wall[0], (0.0, 0.0, fw0))
@@ -178,7 +180,7 @@ class ExudynSeismic:
         rod_I0[2, 2] = float(s["rod_axial_inertia"]) * rod_I0[0, 0]
         nominal = [(plate[0], st0.mass, np.diag([J0 / 2, J0 / 2, J0])), (cap[0], g0.cap.mass, np.array(g0.cap.inertia)),
                    (wall[0], g0.wall.mass, np.array(g0.wall.inertia)), (rod[0], g0.rod.mass, rod_I0)]
-        energy = {"E": np.zeros(4), "t": None, "last": None, "h0": None}
+        energy = {"E": np.zeros(5), "t": None, "last": None, "h0": None}  # + E_building_dissipated
         res = st0.restrainer  # the displacement restrainer (None: none)
 
         def restrainer(pq, pv):
@@ -202,7 +204,11 @@ class ExudynSeismic:
             om = mbs.GetNodeOutput(plate[0], OV.AngularVelocity)[2]
             diss = st0.damping * (pv[0] ** 2 + pv[1] ** 2 + st0.support_radius ** 2 * om ** 2)
             _, _, rF, _, rrate = restrainer(mbs.GetNodeOutput(plate[0], OV.Position), pv)
-            now = np.array([-float(np.asarray(a_g)[:2] @ P), -applied, diss, rF * rrate])
+            bld = 0.0
+            if floors is not None:
+                P += floors.momentum()
+                bld = floors.dissipation()
+            now = np.array([-float(np.asarray(a_g)[:2] @ P), -applied, diss, rF * rrate, bld])
             if energy["t"] is not None and t > energy["t"]:
                 energy["E"] += 0.5 * (t - energy["t"]) * (now + energy["last"])
             energy["t"], energy["last"] = t, now
@@ -222,7 +228,10 @@ class ExudynSeismic:
             E = energy["E"]
             row = {"E_input": E[0], "E_kinetic": ke, "E_gravity": height - energy["h0"], "E_supports_stored": stored,
                    "E_supports_dissipated": E[2], "E_device": E[1]}
-            row["E_residual"] = E[0] - (ke + row["E_gravity"] + stored + E[2] + E[1] + E[3])
+            if floors is not None:  # the floors' kinetic energy; their stored energy joins at the end
+                ke += floors.kinetic()
+                row["E_kinetic"], row["E_building_dissipated"] = ke, E[4]
+            row["E_residual"] = E[0] - (ke + row["E_gravity"] + stored + E[2] + E[1] + E[3] + E[4])
             if res is not None:
                 delta = max(math.hypot(pq[0], pq[1]) - res.gap, 0.0)
                 row["E_restrainer_stored"] = restrainer_stored_scalar(delta, res.stiffness, res.exponent)
@@ -254,6 +263,8 @@ class ExudynSeismic:
             for j, sig in enumerate(el.sigma):
                 row[f"wire{j}_stress"] = sig
             row.update(energy_columns())
+            if floors is not None:
+                floors.sample(a_g)
             out.append(row)
 
         def predict(node, h):
@@ -276,6 +287,8 @@ class ExudynSeismic:
             a_g = ground(t)[2]
             for (node, _, m), ld_ in zip(bodies, inertial):
                 mbs_.SetLoadParameter(ld_, "loadVector", [-m * a_g[0], -m * a_g[1], 0.0])
+            if floors is not None:
+                floors.set_inertial(mbs_, a_g)
             cp, cthp, *_ = predict(cap[0], h)
             wzp = wz + h * mbs.GetNodeOutput(wall[0], OV.Velocity)[2] + 0.5 * h * h * mbs.GetNodeOutput(wall[0], OV.Acceleration)[2]
             f, m, fw = el.predicted_loads(cp, cthp, wzp)
@@ -314,6 +327,9 @@ class ExudynSeismic:
         record(t_out[-1], ground(n_steps * h)[2])
         cols = {k: np.array([r[k] for r in out]) for k in out[0]}
         cols["u"] = np.hypot(cols["x"], cols["y"])
+        if floors is not None:
+            cols.update(floors.columns(cols["x"], cols["y"], cols["vx"], cols["vy"]))
+            cols["E_residual"] = cols["E_residual"] - cols["E_building_stored"]
         if res is not None:
             fx, fy, F, delta, _ = restrainer_forces(cols["x"], cols["y"], cols["vx"], cols["vy"], res.gap,
                                                     res.stiffness, res.exponent, res.damping)

@@ -39,6 +39,7 @@ from nsd_core.device.results import RunResult
 from nsd_core.device.seismic import output_times, seismic_units
 
 from comparisons.engines.base import EngineError, check_step_count, merged_settings
+from comparisons.engines.mujoco_building import Floors, floors_mjcf, tendons_mjcf
 from comparisons.engines.mujoco_mjcf import wall_rod_loop_mjcf
 from comparisons.engines.perturb import perturbed, perturbed_structure
 
@@ -69,8 +70,17 @@ def build_mjcf(g, st: Structure, s: dict, h: float) -> str:
         <joint name="cap_z" type="slide" axis="0 0 1"/>
       </body>
     </body>
-{wall_rod_loop_mjcf(g, f"{_f(s['solref_factor'] * h)} 1.0", s['solimp'])}</mujoco>
+{_with_floors(wall_rod_loop_mjcf(g, f"{_f(s['solref_factor'] * h)} 1.0", s['solimp']), st)}</mujoco>
 """
+
+
+def _with_floors(loop: str, st: Structure) -> str:
+    """The building's floors after the device's bodies (qpos and qvel keep the device's indices) and
+    its tendons after the worldbody (comparisons.engines.mujoco_building)."""
+    if st.building is None:
+        return loop
+    head, sep, tail = loop.partition("  </worldbody>\n")
+    return head + floors_mjcf(st.building) + sep + tail + tendons_mjcf(st.building)
 
 
 class _Forces:
@@ -167,7 +177,8 @@ class _Energy:
                         np.array(g0.wall.inertia, dtype=float), rod_I]
         self.gravity, self.st = g0.params.gravity, st
         self.a_g = np.zeros(2)
-        self.E = np.zeros(4)           # E_input, E_device, E_supports_dissipated, E_restrainer
+        self.E = np.zeros(5)           # E_input, E_device, E_supports_dissipated, E_restrainer, E_building_dissipated
+        self.floors = None             # the building's floors (mujoco_building.Floors) when there is one
         self.t, self.last = None, None
         self.height0 = None
         self.v6 = np.zeros(6)
@@ -184,7 +195,11 @@ class _Energy:
         P = self.mass @ vel[:, 3:5]
         st, v = self.st, d.qvel
         diss = st.damping * (v[0] ** 2 + v[1] ** 2) + st.damping * st.support_radius ** 2 * v[2] ** 2
-        now = np.array([-float(self.a_g @ P), absorbed, diss, restrainer])
+        bld = 0.0
+        if self.floors is not None:
+            P = P + self.floors.momentum(v)
+            bld = self.floors.dissipation(v)
+        now = np.array([-float(self.a_g @ P), absorbed, diss, restrainer, bld])
         t = float(d.time)
         if self.t is not None and t > self.t:
             self.E += 0.5 * (t - self.t) * (now + self.last)
@@ -204,7 +219,11 @@ class _Energy:
         stored = 0.5 * st.stiffness * (q[0] ** 2 + q[1] ** 2 + st.support_radius ** 2 * q[2] ** 2)
         row = {"E_input": self.E[0], "E_kinetic": ke, "E_gravity": height - self.height0, "E_supports_stored": stored,
                "E_supports_dissipated": self.E[2], "E_device": self.E[1]}
-        row["E_residual"] = row["E_input"] - (ke + row["E_gravity"] + stored + self.E[2] + self.E[1] + self.E[3])
+        if self.floors is not None:  # the floors' kinetic energy; their stored energy joins in run()
+            row["E_kinetic"] = ke = ke + self.floors.kinetic(d.qvel)
+            row["E_building_dissipated"] = self.E[4]
+        row["E_residual"] = row["E_input"] - (ke + row["E_gravity"] + stored + self.E[2] + self.E[1] + self.E[3]
+                                              + self.E[4])
         if st.restrainer is not None:
             r = st.restrainer
             delta = max(math.hypot(q[0], q[1]) - r.gap, 0.0)
@@ -233,6 +252,7 @@ class MujocoSeismic:
         data = mujoco.MjData(model)
         dev = _Forces(g, structure, int(s["hysteresis_substeps"]))
         dev.energy = energy = _Energy(model, g0, structure)
+        floors = energy.floors = Floors(model, structure.building) if structure.building is not None else None
         dev.commit(data.qpos)
         a_g = ground(h * np.arange(n_out * n_sub + 1))[2]
         rows = []
@@ -248,6 +268,8 @@ class MujocoSeismic:
                     mujoco.mj_forward(model, data)
                     rows.append(self._row(t_out[n // n_sub], data, dev, a_g[n], tip, cap_id))
                     rows[-1].update(energy.columns(model, data))
+                    if floors is not None:
+                        floors.sample(data, a_g[n])
                     if not (np.isfinite(data.qpos).all() and rows[-1]["closure"] < s["closure_limit"]):
                         raise EngineError(f"mujoco: unstable at t = {n * h:.6g} s (loop gap {rows[-1]['closure']:.3g} m)")
                     if n == n_out * n_sub:
@@ -258,6 +280,9 @@ class MujocoSeismic:
             mujoco.set_mjcb_passive(previous)
         cols = {k: np.array([r[k] for r in rows]) for k in rows[0]}
         cols["u"] = np.hypot(cols["x"], cols["y"])
+        if floors is not None:
+            cols.update(floors.columns(cols["x"], cols["y"], cols["vx"], cols["vy"]))
+            cols["E_residual"] = cols["E_residual"] - cols["E_building_stored"]
         if structure.restrainer is not None:
             r = structure.restrainer
             fx, fy, F, delta, _ = restrainer_forces(cols["x"], cols["y"], cols["vx"], cols["vy"], r.gap, r.stiffness,

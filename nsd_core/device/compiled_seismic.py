@@ -16,8 +16,11 @@ row); the generic compiled engine (nsd_core.engine.compiled, rk) integrates it w
 force_params = [header (HEADER fields), device block (nsd_core.device.compiled.force_params), ground block]
 header: has_device, n_device_params, n_device_extra, ground offset, plate_x, plate_y, plate, base_x,
         base_y, base, cap, wall (indices; -1 without the device), k_b, c_b, k_b r_b^2, c_b r_b^2,
-        rod_length, total mass, has_restrainer, u_gap, k_c, n_c, alpha_c
-motion_params = the ground block (GroundMotion.block()).
+        rod_length, total mass, has_restrainer, u_gap, k_c, n_c, alpha_c, building offset
+        (the building's block, nsd_core.device.building_tree.building_block, after the ground's; its
+        story and floor-slab dampers' power is the fifth energy state, E_building_dissipated')
+motion_params = the ground block (GroundMotion.block()); a fixed-base run prescribes the plate too
+(six prescribed coordinates: the slab follows the ground).
 """
 from __future__ import annotations
 
@@ -26,6 +29,7 @@ import math
 import numpy as np
 from numba import njit, types
 
+from nsd_core.device.building_tree import building_block
 from nsd_core.device.compiled import device_forces, force_params as device_force_params
 from nsd_core.device.forces import restrainer_force_scalar
 from nsd_core.device.ground import ground_values
@@ -34,13 +38,42 @@ from nsd_core.engine.compiled_model import (FORCE_FN, FORCE_SIG, MODEL_TYPE, MOT
                                             build_model, make_workspace)
 from nsd_core.engine.rk import integrate_kernel, make_outputs, tableau
 
-HEADER = 23
+HEADER = 24
 CHUNK = 1.0  # s of model time per compiled call: progress and Ctrl-C are seen between calls
 STEPS_PER_SECOND = 100_000  # accepted steps per model second beyond which a run is a runaway
 ROD_REACH = 10  # the force callback's failure code: |u| >= l_d
 # columns of sample_outputs' table, in order
 COLUMNS = ("x_g", "y_g", "vx_g", "vy_g", "ax_g", "ay_g", "x", "y", "theta", "vx", "vy", "theta_rate", "ax_abs",
            "ay_abs", "device_Fx", "device_Fy", "cap_z", "wall_z", "closure", "kinetic", "height")
+
+
+@njit(cache=True, _nrt=False)
+def building_forces(z, zd, p, o, gen):
+    """The building's joint forces on floors and slab (nsd_core.device.building, per direction:
+    story S_i = k_i drift_i + c_i drift_i' on floor i, -S_i on floor i-1; b_i (d_i' - d_0') between
+    floor i and the slab); returns the power they dissipate."""
+    n = int(p[o])
+    if n == 0:
+        return 0.0
+    sx, sy = int(p[o + 1]), int(p[o + 2])
+    power = 0.0
+    for a in range(2):
+        lower = sx if a == 0 else sy
+        slab = lower
+        for i in range(n):
+            r = o + 3 + 5 * i
+            j = int(p[r + a])
+            k, c, b = p[r + 2], p[r + 3], p[r + 4]
+            dv = zd[j] - zd[lower]
+            S = k * (z[j] - z[lower]) + c * dv
+            gen[j] -= S
+            gen[lower] += S
+            rel = zd[j] - zd[slab]
+            gen[j] -= b * rel
+            gen[slab] += b * rel
+            power += c * dv * dv + b * rel * rel
+            lower = j
+    return power
 
 
 @njit(FORCE_SIG, cache=True, _nrt=False)
@@ -68,6 +101,7 @@ def seismic_forces(t, z, zd, P, L, Ld, extra, p, T, gen, rate):
     rate[nx_dev + 1] = absorbed
     rate[nx_dev + 2] = c * (vx * vx + vy * vy) + ct * thd * thd
     rate[nx_dev + 3] = 0.0
+    rate[nx_dev + 4] = building_forces(z, zd, p, int(p[23]), gen)
     if p[18] != 0.0:  # the displacement restrainer: the plate pushes it with (fx, fy), it pushes back
         fx, fy, F, _, drate = restrainer_force_scalar(ux, uy, vx, vy, p[19], p[20], p[21], p[22])
         gen[px] -= fx
@@ -78,9 +112,12 @@ def seismic_forces(t, z, zd, P, L, Ld, extra, p, T, gen, rate):
 
 @njit(MOTION_SIG, cache=True, _nrt=False)
 def seismic_motion(t, p, q, qd, qdd):
-    """The base's planar joint (base_x, base_y, base) follows the ground; no rotation."""
+    """The base's planar joint (base_x, base_y, base) follows the ground; no rotation. Six
+    prescribed coordinates (a fixed base): the plate's planar joint follows it too."""
     q[0], q[1], qd[0], qd[1], qdd[0], qdd[1] = ground_values(t, p, 0)
     q[2] = qd[2] = qdd[2] = 0.0
+    for k in range(3, q.shape[0]):
+        q[k], qd[k], qdd[k] = q[k - 3], qd[k - 3], qdd[k - 3]
     return 0
 
 
@@ -95,8 +132,9 @@ def seismic_force_params(mech, g, structure, ground_block, device: bool) -> np.n
               float(np.sum(mech.mass))]
     r = s.restrainer
     header += [1.0, *r.block()] if r is not None else [0.0, 0.0, 0.0, 1.0, 0.0]
+    header.append(HEADER + len(dev) + len(ground_block))
     assert len(header) == HEADER
-    return np.concatenate([header, dev, ground_block])
+    return np.concatenate([header, dev, ground_block, building_block(mech, s.building)])
 
 
 def seismic_model(system, g, structure, ground, device: bool):

@@ -23,6 +23,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from nsd_core.device.building import Building, building_dict_from
 from nsd_core.device.params import ParameterError, Params
 from nsd_core.device.restrainer import Restrainer, restrainer_from
 
@@ -58,9 +59,11 @@ class Structure:
     support_radius: float       # r_b [m]
     provenance: dict = field(default_factory=dict, compare=False)
     restrainer: Restrainer | None = None  # the displacement restrainer (nsd_core.device.restrainer), off by default
+    building: Building | None = None      # a shear building on the slab (nsd_core.device.building), none by default
 
     def __post_init__(self):
         object.__setattr__(self, "restrainer", restrainer_from(self.restrainer))
+        object.__setattr__(self, "building", building_dict_from(self.building))
         for name in ("mass", "radius_of_gyration", "stiffness", "support_radius"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
@@ -90,13 +93,19 @@ class Structure:
                 raise ParameterError(f"structure {name} = {value!r}: not a number") from None
         prov = dict(self.provenance)
         prov.update({n: "override" for n in changes})
-        return Structure(**values, provenance=prov, restrainer=self.restrainer)
+        return Structure(**values, provenance=prov, restrainer=self.restrainer, building=self.building)
 
     def with_restrainer(self, restrainer: Restrainer | None) -> "Structure":
         """A copy with this restrainer (None: without one)."""
         names = ("mass", "radius_of_gyration", "stiffness", "damping", "support_radius")
         return Structure(**{n: getattr(self, n) for n in names}, provenance=dict(self.provenance),
-                         restrainer=restrainer)
+                         restrainer=restrainer, building=self.building)
+
+    def with_building(self, building: Building | None) -> "Structure":
+        """A copy with this building on the slab (None: without one)."""
+        names = ("mass", "radius_of_gyration", "stiffness", "damping", "support_radius")
+        return Structure(**{n: getattr(self, n) for n in names}, provenance=dict(self.provenance),
+                         restrainer=self.restrainer, building=building)
 
     @property
     def polar_inertia(self) -> float:
@@ -112,7 +121,10 @@ class Structure:
         return self.damping / (2.0 * math.sqrt(self.stiffness * self.mass))
 
     def to_dict(self) -> dict:
-        return asdict(self)
+        d = asdict(self)
+        if self.building is not None:
+            d["building"] = self.building.to_dict()
+        return d
 
 
 def device_min_stiffness(params: Params, directions_deg=DIRECTIONS_DEG, points_per_cycle: int = 400,

@@ -74,9 +74,10 @@ _RESTRAINER_BOUNDS = {"restrainer_gap": "(0, rod_length)", "restrainer_stiffness
 
 
 def structure_fields() -> list[str]:
-    """The isolated structure's own fields (``--structure NAME=VALUE``, a case's ``structure``)."""
+    """The isolated structure's own fields (``--structure NAME=VALUE``, a case's ``structure``); the building
+    has its own table (``--building``, docs/building.md)."""
     from nsd_core.device.isolation import Structure
-    return [f.name for f in dataclasses.fields(Structure) if f.name not in ("provenance", "restrainer")]
+    return [f.name for f in dataclasses.fields(Structure) if f.name not in ("provenance", "restrainer", "building")]
 
 
 def restrainer_fields() -> list[str]:

@@ -180,14 +180,15 @@ def read_toml(path: str | Path, what: str) -> dict:
 
 def params_from_toml(data: dict, what: str) -> dict[str, Any]:
     """The overrides of a parameter file: flat ``name = value`` or under ``[params]``; a free-form
-    ``[provenance]`` table may sit beside them (nsd calibrate writes one). Anything else is an error
+    ``[provenance]`` table may sit beside them (nsd calibrate writes one), and a ``[building]`` table
+    (read by nsd seismic, nsd_cli.seismic_building). Anything else is an error
     rather than silently ignored (a key beside [params] would otherwise not apply)."""
-    data = {k: v for k, v in data.items() if k != "provenance"}
+    data = {k: v for k, v in data.items() if k not in ("provenance", "building")}  # [building]: nsd seismic's
     if "params" in data:
         extra = sorted(set(data) - {"params"})
         if extra:
             raise ParameterError(f"{what}: {extra[0]!r} beside [params]; put every parameter under [params] "
-                                 "(allowed tables: params, provenance)")
+                                 "(allowed tables: params, provenance, building)")
         data = data["params"]
         if not isinstance(data, dict):
             raise ParameterError(f"{what}: params = {data!r}: must be a table of name = value")

@@ -38,6 +38,8 @@ from nsd_core.device.drive import DriveError
 from nsd_core.device.forces import (restrainer_force_scalar, restrainer_forces, restrainer_stored_scalar, rope_tension,
                                     wire_tension)
 from nsd_core.device.geometry import device_geometry
+from nsd_core.device.building import building_columns, building_dissipation_rate
+from nsd_core.device.building_tree import BuildingIndex, floor_names, with_floors
 from nsd_core.device.ground import GroundMotion
 from nsd_core.device.isolation import Structure
 from nsd_core.device.model import (BODY, COMPILED_METHODS, DEFAULT_SOLVER, DeviceForces, _check_lengths,
@@ -53,7 +55,8 @@ from nsd_core.engine.semirecursive import ConstraintError, SemiRecursiveSystem
 
 GROUND_DRIVEN = ["base_x", "base_y", "base"]
 FREE = ["plate_x", "plate_y", "plate", "cap"]
-N_ENERGY = 4  # extra states: E_input, E_device, E_supports_dissipated, E_restrainer
+N_ENERGY = 5  # extra states: E_input, E_device, E_supports_dissipated, E_restrainer, E_building_dissipated
+FIXED_BASE = ["plate_x", "plate_y", "plate"]  # prescribed too in a fixed-base run: the slab follows the ground
 
 
 def output_times(duration: float, dt_out: float) -> np.ndarray:
@@ -73,7 +76,15 @@ def _plate_body(structure: Structure) -> dict:
 
 
 def seismic_mechanism(params: Params, structure: Structure, device: bool = True):
-    """The Figure 4 tree with the isolated mass on the plate (device=False: plate and base alone)."""
+    """The Figure 4 tree with the isolated mass on the plate (device=False: plate and base alone),
+    and the structure's building's floors (nsd_core.device.building_tree) when it has one."""
+    mech, g = _slab_mechanism(params, structure, device)
+    if structure.building is not None:
+        mech = with_floors(mech, structure.building)
+    return mech, g
+
+
+def _slab_mechanism(params: Params, structure: Structure, device: bool):
     g = device_geometry(params)
     if device:
         mech = device_mechanism(g)
@@ -102,6 +113,7 @@ class SeismicForces:
         self.n_dev = (g.n_wires + 1) if device else 0
         self.ground = ground_cache
         self.massive = np.flatnonzero(mech.mass > 0)
+        self.building = BuildingIndex(mech, structure.building) if structure.building is not None else None
 
     def relative(self, z, zd):
         """Plate relative to base: (u (2,), u' (2,), theta, theta')."""
@@ -139,10 +151,15 @@ class SeismicForces:
             gen[i["plate_x"]] -= fx
             gen[i["plate_y"]] -= fy
             e_res = F * rate
+        e_bld = 0.0
+        if self.building is not None:
+            self.building.add_forces(gen, z, zd)
+            _, v, _, v0 = self.building.motion(z, zd)
+            e_bld = building_dissipation_rate(self.building.b, v, v0)
         _, v_g, a_g = self.ground["now"]
         e_in = -float(a_g[:2] @ self.relative_momentum(kin, v_g))
         e_sup = s.damping * float(ud @ ud) + ct * thd * thd
-        return wrench, gen, np.concatenate([dev_rates, [e_in, absorbed, e_sup, e_res]])
+        return wrench, gen, np.concatenate([dev_rates, [e_in, absorbed, e_sup, e_res, e_bld]])
 
 
 class SeismicSystem(SemiRecursiveSystem):
@@ -165,10 +182,24 @@ class SeismicSystem(SemiRecursiveSystem):
                              f"close as the rod nears the horizontal (rod_length = {self.reach} m)")
 
 
-def seismic_system(params: Params, structure: Structure, ground: GroundMotion, device: bool = True):
-    """(system, geometry, forces) for the seismic mode."""
+def _rest(g, mech, device: bool) -> np.ndarray:
+    """The rest configuration: the device's (or zeros), the floors (appended) at zero."""
+    z = np.zeros(mech.n)
+    if device:
+        rest = rest_coordinates(g)
+        z[:len(rest)] = rest
+    return z
+
+
+def seismic_system(params: Params, structure: Structure, ground: GroundMotion, device: bool = True,
+                   fixed_base: bool = False):
+    """(system, geometry, forces) for the seismic mode. fixed_base (without the device): the plate
+    (the slab) is prescribed to follow the ground too."""
+    if fixed_base and device:
+        raise ParameterError("fixed base: the slab is held to the ground, so the run has no device")
     mech, g = seismic_mechanism(params, structure, device)
     cache = {}
+    copies = 2 if fixed_base else 1
 
     def motion(t):
         if cache.get("t") == t:  # the reach check and the engine ask for the same t in turn
@@ -176,15 +207,21 @@ def seismic_system(params: Params, structure: Structure, ground: GroundMotion, d
         d, v, a = ground(t)
         q = (np.array([d[0], d[1], 0.0]), np.array([v[0], v[1], 0.0]), np.array([a[0], a[1], 0.0]))
         cache["t"], cache["now"] = t, q
-        return q
+        if copies == 2:
+            cache["now"] = tuple(np.concatenate([x, x]) for x in q)
+            cache["now_ground"] = q
+        return cache["now"]
 
     forces = SeismicForces(mech, g, structure, device, cache)
-    prescribed = [mech.names.index(n) for n in GROUND_DRIVEN]
-    free = [mech.names.index(n) for n in FREE if n in mech.names]
+    driven = GROUND_DRIVEN + (FIXED_BASE if fixed_base else [])
+    prescribed = [mech.names.index(n) for n in driven]
+    free = [mech.names.index(n) for n in FREE if n in mech.names and n not in driven]
+    if structure.building is not None:
+        free += [mech.names.index(n) for n in floor_names(structure.building.stories)]
     system = SeismicSystem(mech, prescribed, motion, forces, n_extra=forces.n_dev + N_ENERGY, prefer_free=free)
     if device:
         system.reach = params.rod_length
-    z0 = rest_coordinates(g) if device else np.zeros(mech.n)
+    z0 = _rest(g, mech, device)
     system.choose_partition(z0)
     if sorted(system.partition.free) != sorted(free):
         raise SolverError(f"seismic partition: free {system.partition.free}, expected {free}")  # pragma: no cover
@@ -209,7 +246,7 @@ def simulate_seismic(params: Params, structure: Structure, ground: GroundMotion,
                      dt_out: float = 1e-3, device: bool = True, method: str = DEFAULT_SOLVER["method"],
                      rtol: float = DEFAULT_SOLVER["rtol"], atol: float = DEFAULT_SOLVER["atol"],
                      max_step: float = DEFAULT_SOLVER["max_step"], progress=None,
-                     backend: str = DEFAULT_SOLVER["backend"]) -> RunResult:
+                     backend: str = DEFAULT_SOLVER["backend"], fixed_base: bool = False) -> RunResult:
     """The seismic response from relative rest at t = 0, sampled every ``dt_out`` up to ``duration``
     (default: the ground motion's; longer: free vibration after it). Raises RodReachError (exit 4),
     DriveError (outside the laws' validity), SolverError (exit 3). backend: "compiled" the compiled
@@ -217,7 +254,8 @@ def simulate_seismic(params: Params, structure: Structure, ground: GroundMotion,
     (default) that for the methods it offers, else "scipy": SemiRecursiveSystem under scipy's
     solvers; "numpy" the same on the numpy specification. The compiled path restarts its step loop
     every compiled_seismic.CHUNK model seconds (progress, Ctrl-C), so it follows scipy's path step for
-    step over the first chunk and within the tolerance after."""
+    step over the first chunk and within the tolerance after. fixed_base (device=False): the slab
+    follows the ground (the building's fixed-base reference; nsd_core.device.building)."""
     if backend not in ("auto", "compiled", "scipy", "numpy"):
         raise ParameterError(f"backend = {backend!r}: the seismic mode offers auto, compiled, scipy, numpy")
     if backend == "auto":
@@ -230,10 +268,10 @@ def simulate_seismic(params: Params, structure: Structure, ground: GroundMotion,
     if not (math.isfinite(dt_out) and 0 < dt_out <= duration):
         raise ParameterError(f"dt_out = {dt_out!r}: must be in (0, duration]")
     start = time.perf_counter()
-    system, g, forces = seismic_system(params, structure, ground, device)
+    system, g, forces = seismic_system(params, structure, ground, device, fixed_base)
     system.fast = backend != "numpy"
     mech, ix = system.m, forces.ix
-    z0 = rest_coordinates(g) if device else np.zeros(mech.n)
+    z0 = _rest(g, mech, device)
     extra0 = np.concatenate([g.initial_wire_stress(), [g.spring_zeta0]]) if device else np.zeros(0)
     ws = system.workspace()
     y0 = system.state(system.assemble(ws, 0.0, z0[system.partition.free]).copy(), np.zeros(mech.n),
@@ -242,7 +280,7 @@ def simulate_seismic(params: Params, structure: Structure, ground: GroundMotion,
     first_step = min(max_step, 1e-4, duration)  # the ground moves: start small
     if backend == "compiled":
         return _simulate_compiled(system, g, structure, ground, device, y0, t_eval, method, rtol, atol, max_step,
-                                  first_step, progress, start)
+                                  first_step, progress, start, fixed_base)
     rows = []
     height0 = []
 
@@ -257,7 +295,7 @@ def simulate_seismic(params: Params, structure: Structure, ground: GroundMotion,
                "support_Fx": s.stiffness * u[0] + s.damping * ud[0],
                "support_Fy": s.stiffness * u[1] + s.damping * ud[1],
                "support_torque": s.support_radius ** 2 * (s.stiffness * th + s.damping * thd)}
-        E_in, E_dev, E_sup_diss, E_res = y[-N_ENERGY:]
+        E_in, E_dev, E_sup_diss, E_res, E_bld = y[-N_ENERGY:]
         kinetic, height = _kinetic_and_height(mech, ev.kin, v_g)
         if not height0:
             height0.append(height)
@@ -284,12 +322,19 @@ def simulate_seismic(params: Params, structure: Structure, ground: GroundMotion,
                         "E_restrainer_stored": res_stored, "E_restrainer_dissipated": E_res - res_stored})
             row["base_shear_x"] += fx
             row["base_shear_y"] += fy
+        if forces.building is not None:
+            d, v, d0, v0 = forces.building.motion(ev.z, ev.zd)
+            cols = building_columns(structure.building, d[:, :, None], v[:, :, None], d0[:, None], v0[:, None],
+                                    )
+            row.update({k: float(val[0]) for k, val in cols.items()})
+            row["E_building_dissipated"] = E_bld
+            stored += row["E_building_stored"] + E_bld
         row["E_residual"] = E_in - (kinetic + row["E_gravity"] + stored + E_sup_diss + E_dev + E_res)
         rows.append(row)
 
     def stats(steps, nfev):
-        return {"engine": "semirecursive", "mode": "seismic", "device": device, "version": __version__,
-                "backend": backend, "method": method, "rtol": rtol, "atol": atol, "max_step": max_step,
+        return {"engine": "semirecursive", "mode": "seismic", "device": device, "fixed_base": fixed_base,
+                "version": __version__, "backend": backend, "method": method, "rtol": rtol, "atol": atol, "max_step": max_step,
                 "steps": steps, "nfev": nfev, "wall_time": time.perf_counter() - start,
                 "model_time": float(t_eval[-1]), "dt_out": float(t_eval[1] - t_eval[0]),
                 "ground": ground.describe(), "structure": structure.to_dict()}
@@ -322,7 +367,7 @@ def _with_partial(err: DriveError, partial: RunResult | None, t_event: float) ->
 
 
 def _simulate_compiled(system, g, structure, ground, device, y0, t_eval, method, rtol, atol, max_step, first_step,
-                       progress, start):
+                       progress, start, fixed_base=False):
     """The seismic run on the compiled path (nsd_core.device.compiled_seismic): the same columns."""
     from nsd_core.device import compiled_seismic as cs
     from nsd_core.engine.rk import TOO_MANY_STEPS
@@ -347,8 +392,8 @@ def _simulate_compiled(system, g, structure, ground, device, y0, t_eval, method,
         else:
             raise SolverError(f"{method} (compiled) failed at t = {t_fail:.6g} s: status {res['status']} "
                               "(nsd_core.engine.compiled, nsd_core.engine.rk)")
-    stats = {"engine": "semirecursive", "mode": "seismic", "device": device, "version": __version__,
-             "backend": "compiled", "method": method, "rtol": rtol, "atol": atol, "max_step": max_step,
+    stats = {"engine": "semirecursive", "mode": "seismic", "device": device, "fixed_base": fixed_base,
+             "version": __version__, "backend": "compiled", "method": method, "rtol": rtol, "atol": atol, "max_step": max_step,
              "steps": res["steps"], "nfev": res["nfev"], "wall_time": time.perf_counter() - start,
              "model_time": float(t_eval[-1]), "dt_out": float(t_eval[1] - t_eval[0]), "ground": ground.describe(),
              "structure": structure.to_dict()}
@@ -371,7 +416,7 @@ def _compiled_result(res, keep, t_eval, system, g, structure, device, stats) -> 
             "y": y, "theta": th, "vx": vx, "vy": vy, "ax_abs": tab["ax_abs"], "ay_abs": tab["ay_abs"],
             "support_Fx": s.stiffness * x + s.damping * vx, "support_Fy": s.stiffness * y + s.damping * vy,
             "support_torque": s.support_radius ** 2 * (s.stiffness * th + s.damping * thd)}
-    E_in, E_dev, E_sup_diss, E_res = res["y"][:, -N_ENERGY:].T
+    E_in, E_dev, E_sup_diss, E_res, E_bld = res["y"][:, -N_ENERGY:].T
     cols["device_Fx"], cols["device_Fy"] = tab["device_Fx"], tab["device_Fy"]
     if device:
         dev, nw = system.forces.device, g.n_wires
@@ -394,10 +439,29 @@ def _compiled_result(res, keep, t_eval, system, g, structure, device, stats) -> 
                  "E_supports_dissipated": E_sup_diss, "E_device": E_dev})
     if s.restrainer is not None:
         _restrainer_columns(cols, s.restrainer, E_res)
+    if s.building is not None:
+        cols.update(_compiled_building_columns(res["y"], system, s.building, tab))
+        cols["E_building_dissipated"] = E_bld
+        stored = stored + cols["E_building_stored"] + E_bld
     cols["E_residual"] = E_in - (tab["kinetic"] + gravity + stored + E_sup_diss + E_dev + E_res)
     cols["u"] = np.hypot(x, y)
     cols = {k: np.array(v, dtype=float) for k, v in cols.items()}
     return RunResult("semirecursive", cols, seismic_units(cols), stats)
+
+
+def _compiled_building_columns(Y, system, building, tab) -> dict:
+    """The building's columns from the compiled run's states (the floors are free coordinates; the
+    slab's motion and the ground's from the table)."""
+    free = list(system.partition.free)
+    nf = len(free)
+    ix = BuildingIndex(system.m, building)
+    pos = np.array([[free.index(i), free.index(j)] for i, j in zip(ix.fx, ix.fy)])
+    g = np.array([tab["x_g"], tab["y_g"]])
+    gv = np.array([tab["vx_g"], tab["vy_g"]])
+    d = Y[:, pos].transpose(1, 2, 0) - g[None]
+    v = Y[:, nf + pos].transpose(1, 2, 0) - gv[None]
+    d0, v0 = np.array([tab["x"], tab["y"]]), np.array([tab["vx"], tab["vy"]])
+    return building_columns(building, d, v, d0, v0)
 
 
 def _restrainer_columns(cols: dict, r, absorbed) -> None:

@@ -36,6 +36,12 @@ def seismic_summary(result: RunResult) -> dict:
                    "max_residual": float(np.max(np.abs(c["E_residual"]))),
                    "relative_residual": float(np.max(np.abs(c["E_residual"])) / max(np.max(np.abs(E_in)), 1e-300))},
     }
+    if "floor1_x" in c:  # a building on the slab (nsd_core.device.building)
+        from nsd_core.device.building import building_dict_from, building_summary
+        building = building_dict_from((result.stats.get("structure") or {}).get("building"))
+        out["energy"]["building_stored"] = float(c["E_building_stored"][-1])
+        out["energy"]["building_dissipated"] = float(c["E_building_dissipated"][-1])
+        out["building"] = building_summary(building, c)
     if "restrainer_F" in c:
         out["energy"]["restrainer_stored"] = float(c["E_restrainer_stored"][-1])
         out["energy"]["restrainer_dissipated"] = float(c["E_restrainer_dissipated"][-1])

@@ -47,6 +47,10 @@ SET_COLUMNS = [  # name, unit ("" for text)
     ("residual_u", "m"), ("energy_residual", "-"), ("outside_working_range", ""), ("rod_reach_t", "s"),
     ("status", ""), ("reason", ""),
 ]
+BUILDING_COLUMNS = [  # with a building on the slab (docs/building.md): the worst story / floor
+    ("peak_drift_ratio", "-"), ("peak_drift_ratio_nodevice", "-"), ("peak_drift_ratio_ratio", "-"),
+    ("peak_floor_a_abs", "m/s^2"), ("peak_floor_a_abs_nodevice", "m/s^2"),
+]
 PEER_COLUMNS = ("du", "dF", "da")  # per peer engine: max|difference| / max over the record (comparisons.seismic)
 
 
@@ -228,11 +232,12 @@ def write_set(runs: list[RecordRun], store: Store, compare=None) -> dict:
         entries.append(entry)
     text = io.StringIO()
     w = csv.writer(text, lineterminator="\n")
-    w.writerow([f"{n} [{u}]" if u else n for n, u in SET_COLUMNS]
+    columns = SET_COLUMNS + (BUILDING_COLUMNS if any(k in row for row in rows for k, _ in BUILDING_COLUMNS) else [])
+    w.writerow([f"{n} [{u}]" if u else n for n, u in columns]
                + [f"{p}_{c} [-]" for p in peers for c in PEER_COLUMNS])
     for row in rows:
-        w.writerow([_cell(row.get(n)) for n, _ in SET_COLUMNS] + [_cell(row.get(f"{p}_{c}")) for p in peers
-                                                                   for c in PEER_COLUMNS])
+        w.writerow([_cell(row.get(n)) for n, _ in columns] + [_cell(row.get(f"{p}_{c}")) for p in peers
+                                                              for c in PEER_COLUMNS])
     atomic_write_text(root / "set.csv", text.getvalue())
     first = runs[0] if runs else None
     counts = {s: sum(row["status"] == s for row in rows) for s in ["ok", "missing", *REASONS]}
@@ -299,6 +304,12 @@ def _row(set_: str, rid: int, group: dict, recs: dict, peers: list[str]) -> tupl
     if s_dev and s_nod:
         row["peak_u_ratio"] = row["peak_u"] / max(row["peak_u_nodevice"], 1e-300)
         row["peak_a_abs_ratio"] = row["peak_a_abs"] / max(row["peak_a_abs_nodevice"], 1e-300)
+    for s, suffix in ((s_dev, ""), (s_nod, "_nodevice")):  # a building on the slab (docs/building.md)
+        if s and isinstance(s.get("building"), dict):
+            row["peak_drift_ratio" + suffix] = max(p["value"] for p in s["building"]["peak_drift_ratio"])
+            row["peak_floor_a_abs" + suffix] = max(p["value"] for p in s["building"]["peak_floor_acceleration"])
+    if "peak_drift_ratio" in row and "peak_drift_ratio_nodevice" in row:
+        row["peak_drift_ratio_ratio"] = row["peak_drift_ratio"] / max(row["peak_drift_ratio_nodevice"], 1e-300)
     residuals = [s["energy"]["relative_residual"] for s in (s_dev, s_nod) if s]
     row["energy_residual"] = max(residuals) if residuals else None
     row["status"], row["reason"] = worst, "; ".join(reasons)
