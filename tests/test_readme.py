@@ -17,7 +17,8 @@ README = (ROOT / "README.md").read_text(encoding="utf-8")
 CI = (ROOT / ".ci" / "run").read_text()
 NSD = Path(sys.executable).with_name("nsd")
 # long runs (minutes on 2 cores): checked by parsing their options and running their --help
-LONG = ("nsd compare", "nsd sweep --paper", "nsd seismic --record-set", "nsd report")
+LONG = ("nsd compare", "nsd sweep --paper", "nsd seismic --record-set", "nsd report", "nsd ida",
+        "nsd seismic --record nearfield-pulse:1 --scale 0.4 --restrainer")
 
 
 def blocks(lang: str) -> list[str]:
