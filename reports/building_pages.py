@@ -9,12 +9,12 @@
 """
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
 
 from nsd_core.device.params import ParameterError
+from reports.seismic_compare import read_table
 from reports.style import LANDSCAPE, fmt, new_figure, table
 
 CONFIGS = {"fixed_base": ("fixed base", {"color": "#444444", "linestyle": ":", "marker": "s"}),
@@ -37,21 +37,11 @@ def stories(run) -> int:
     return n
 
 
-def _json(path: Path) -> dict:
-    try:
-        s = json.loads(path.read_text())
-        if not isinstance(s, dict):
-            raise ValueError("not a table")
-        return s
-    except (OSError, ValueError) as e:
-        raise ParameterError(f"{path}: malformed ({' '.join(str(e).split())[:100]})") from None
-
-
 def compare_plan(folder, read_runs) -> tuple[list, str]:
     """(file stem, figure function) per page and the footer's title for a --compare-building folder."""
     root = Path(folder)
-    top = _json(root / "summary.json")
-    summaries = {c: _json(root / c / "summary.json") for c in CONFIGS if (root / c / "summary.json").is_file()}
+    top = read_table(root / "summary.json")
+    summaries = {c: read_table(root / c / "summary.json") for c in CONFIGS if (root / c / "summary.json").is_file()}
     for c, s in summaries.items():
         if not isinstance(s.get("building"), dict):
             raise ParameterError(f"{root / c / 'summary.json'}: malformed (no building)")

@@ -24,9 +24,11 @@ def is_compare(folder) -> bool:
     return (root / "device" / "seismic.csv").is_file() and (root / "summary.json").is_file()
 
 
-def _summary(path: Path) -> dict:
+def read_table(path: Path) -> dict:
+    """A JSON object from a regular file; anything else is one line, exit 2."""
+    from nsd_core.device.inputs import read_regular_text
     try:
-        s = json.loads(path.read_text())
+        s = json.loads(read_regular_text(path))
         if not isinstance(s, dict):
             raise ValueError("not a table")
         return s
@@ -38,12 +40,12 @@ def compare_plan(folder, read_runs) -> tuple[list, str]:
     """(file stem, figure function) per page and the footer's title for a --compare-supports folder;
     ``read_runs(folder)`` reads one run folder's CSVs (reports.seismic_report._runs)."""
     root = Path(folder)
-    top = _summary(root / "summary.json")
+    top = read_table(root / "summary.json")
     runs, stops, warnings = {}, {}, []
     for name in RUNS:
         if (root / name / "seismic.csv").is_file():
             runs[name] = read_runs(root / name)["semirecursive"]
-            s = _summary(root / name / "summary.json") if (root / name / "summary.json").is_file() else {}
+            s = read_table(root / name / "summary.json") if (root / name / "summary.json").is_file() else {}
             if isinstance(s.get("stopped"), dict):
                 stops[name] = s["stopped"]
             warnings += [f"{RUNS[name][0]}: {w}" for w in s.get("warnings", []) if isinstance(w, str)]
