@@ -26,6 +26,7 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))  # benchmarks.measure, when run as a script
 WARM = ("from nsd_core.device.seismic import simulate_seismic; from nsd_core.device.ground import Harmonic; "
         "from nsd_core.device.isolation import default_structure; from nsd_core.device.params import Params; "
         "[simulate_seismic(Params(), default_structure(), Harmonic(0.8, 2.0, 30.0, duration=0.05), device=d) "
@@ -50,6 +51,8 @@ def main() -> None:
     with tempfile.TemporaryDirectory(prefix="bench_ida_") as tmp:
         cmd = ["ida", "--set", "nearfield-pulse", "--records", args.records, "--limit", args.limit,
                "--engines", "semirecursive", "--workers", args.workers, "--out", tmp] + args.extra.split()
+        from benchmarks.measure import _git_commit
+        commit = _git_commit()  # the code that runs
         load_before, cpu0 = os.getloadavg(), _children_cpu()
         t0 = time.perf_counter()
         proc = subprocess.run(nsd + cmd, cwd=ROOT, capture_output=True, text=True)
@@ -60,26 +63,33 @@ def main() -> None:
         index = json.loads((Path(tmp) / "ida.json").read_text())
         runs = [json.loads(p.read_text()) for p in Path(tmp).glob("designs/*/result.json")]
     model_s = sum((r["metrics"].get("solver") or {}).get("model_time", 0.0) for r in runs if r["status"] == "ok")
+    from nsd_core.device.results import versions
+    cpus = os.cpu_count() or 1
+    # the schema of benchmarks/measure.py (name, command, measured, data): benchmarks.docs reads it
     report = {
-        "command": "nsd " + " ".join(c if c != cmd[-1] else "DIR" for c in cmd),
-        "machine": platform.platform(), "cpus": os.cpu_count(), "python": platform.python_version(),
-        "date_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
-        "wall_s": wall, "cpu_s": cpu, "load_average_before": load_before, "load_average_after": load_after,
-        "loaded": max(load_before[0], load_after[0]) > (os.cpu_count() or 1),
-        "exit_code": proc.returncode, "runs": len(runs), "runs_ok": sum(r["status"] == "ok" for r in runs),
-        "runs_stopped": sum(r["status"] != "ok" for r in runs), "model_seconds_completed_runs": model_s,
-        "sum_of_run_wall_s": sum(r["wall_time"] for r in runs),
-        "fragility": index["fragility"], "hunt": index["hunt"], "traces": [
-            {k: t[k] for k in ("name", "runs", "limit_im", "below_im", "censored_at", "undetermined")}
-            for t in index["traces"]],
-        "notes": "wall_s: the whole command (worker start-up included, compilation excluded by a warm-up); "
-                 "cpu_s: user + system of the command and its workers; model_seconds_completed_runs leaves "
-                 "out the runs stopped by the rod's length (their simulated time is not stored)",
+        "name": "bench_ida", "command": "nsd " + " ".join(c if c != cmd[-1] else "DIR" for c in cmd),
+        "exit_code": proc.returncode,
+        "measured": {"date_utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime()), "machine": platform.platform(),
+                     "processor": platform.machine(), "cpus": cpus, "python": platform.python_version(),
+                     "load_average_before": [round(x, 2) for x in load_before],
+                     "load_average_after": [round(x, 2) for x in load_after],
+                     "loaded": max(load_before[0], load_after[0]) > cpus, "wall_s": wall, "cpu_s": cpu,
+                     "versions": versions(), "git_commit": commit},
+        "data": {
+            "runs": len(runs), "runs_ok": sum(r["status"] == "ok" for r in runs),
+            "runs_stopped": sum(r["status"] != "ok" for r in runs), "model_seconds_completed_runs": model_s,
+            "sum_of_run_wall_s": sum(r["wall_time"] for r in runs),
+            "fragility": index["fragility"], "hunt": index["hunt"], "traces": [
+                {k: t[k] for k in ("name", "runs", "limit_im", "below_im", "censored_at", "undetermined")}
+                for t in index["traces"]],
+            "notes": "wall_s: the whole command (worker start-up included, compilation excluded by a warm-up); "
+                     "cpu_s: user + system of the command and its workers; model_seconds_completed_runs leaves "
+                     "out the runs stopped by the rod's length (their simulated time is not stored)"},
     }
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(report, indent=2) + "\n")
-    print(f"{report['runs']} runs in {wall:.1f} s wall, {cpu:.1f} s CPU (load {load_before[0]:.2f} -> "
+    print(f"{report['data']['runs']} runs in {wall:.1f} s wall, {cpu:.1f} s CPU (load {load_before[0]:.2f} -> "
           f"{load_after[0]:.2f}); wrote {out}")
 
 

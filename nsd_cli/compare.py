@@ -183,8 +183,8 @@ def run(args) -> int:
     return summary["exit_code"]
 
 
-def _power_cases(text: str, cases) -> list:
-    """--power-cases A,B: names of the case file's cases, each once, none empty (issue 22)."""
+def _power_cases(text: str, cases, profile: str) -> list:
+    """--power-cases A,B: names of the profile's cases, each once, none empty (issue 22)."""
     from nsd_core.device.inputs import printable
     known = {c.name: c for c in cases}
     names = [n.strip() for n in text.split(",")]
@@ -193,7 +193,8 @@ def _power_cases(text: str, cases) -> list:
             raise ParameterError(f"--power-cases {printable(repr(text))}: an empty name; give comma-separated case "
                                  f"names from {', '.join(known)}")
         if n not in known:
-            raise ParameterError(f"--power-cases {printable(repr(n))}: unknown case; allowed: {', '.join(known)}")
+            raise ParameterError(f"--power-cases {printable(repr(n))}: unknown case, not a case of the {profile} "
+                                 f"profile; allowed: {', '.join(known)}")
         if names.count(n) > 1:
             raise ParameterError(f"--power-cases {printable(repr(text))}: {n} given twice; give each case once")
     return [known[n] for n in names]
@@ -217,7 +218,7 @@ def _power_profiles(args, base, own_files) -> dict[str, tuple]:
     for name, (case_file, tol_file) in files.items():
         cases = load_cases(case_file, base)
         if args.power_cases is not None:
-            cases = _power_cases(args.power_cases, cases)
+            cases = _power_cases(args.power_cases, cases, name)
         out[name] = (cases, load_tolerances(tol_file))
     return out
 

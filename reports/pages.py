@@ -273,11 +273,16 @@ def definitions_pages(data) -> list:
     blocks = [("Metrics and their default and engine limits", cols, rows)]
     metrics = [m for m in s["tolerances"] if any(m in (t or {}) for et in by_engine.values()
                                                   for t in (et.get("case") or {}).values())]
-    crows = [[e, c] + [fmt_full(t[m]) if m in t else "" for m in metrics]
-             for e, et in by_engine.items() for c, t in (et.get("case") or {}).items()]
-    if crows:
-        blocks.append(("Case limits (override the engine's and the default on that case; blank: not set)",
-                       [("engine", 1, "l"), ("case", 1, "l")] + [(_head(m), 1, "r") for m in metrics], crows))
+    per_block = 7  # metric columns per table: more would not fit the page's width with their headers whole
+    groups = [metrics[i:i + per_block] for i in range(0, len(metrics), per_block)]
+    for n, group in enumerate(groups, start=1):
+        crows = [[e, c] + [fmt_full(t[m]) if m in t else "" for m in group]
+                 for e, et in by_engine.items() for c, t in (et.get("case") or {}).items()
+                 if any(m in t for m in group)]
+        part = f", part {n} of {len(groups)}" if len(groups) > 1 else ""
+        if crows:
+            blocks.append((f"Case limits (override the engine's and the default on that case; blank: not set{part})",
+                           [("engine", 1, "l"), ("case", 1, "l")] + [(_head(m), 1, "r") for m in group], crows))
     defaulted = s.get("tolerances_defaulted") or []
     sub = ("drive cases on the steady (last) cycle resampled on a common phase grid; seismic cases on the time "
            "histories at every output time; the most specific limit wins (case, then engine, then default)")

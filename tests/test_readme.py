@@ -86,8 +86,9 @@ def test_readme_commands_run(tmp_path):
         assert p.returncode == 0, (line, p.stdout[-1500:], p.stderr[-1500:])
         ran += 1
     assert ran >= 6
-    assert (tmp_path / "out" / "nf1" / "summary.json").is_file()
-    assert (tmp_path / "out" / "nf1-supports" / "summary.json").is_file()
+    for run in ("", "device", "supports"):  # --compare-supports: both runs and the ratios
+        assert (tmp_path / "out" / "nf1" / run / "summary.json").is_file(), run
+    assert (tmp_path / "out" / "nf1" / "ratios.csv").is_file()
     assert (tmp_path / "out" / "my-device.toml").is_file()
 
 
