@@ -124,6 +124,7 @@ def run(args) -> int:
                   settings=solver, code=code_fingerprint())
     traces = make_traces(set_, records, {r: im[r]["value"] for r in records}, common, limit, hunt, levels)
     store = Store(out)
+    store.remove_stale_temps()  # a killed run's half-written files (no worker runs yet)
     elapsed = trace_all(traces, store, workers=workers, scheduler=args.scheduler, retry_failed=args.retry_failed,
                         run_engine=run_seismic_engine, tally=args.tally)
     measure = {k: v for k, v in im[records[0]].items() if k not in ("value", "components")}

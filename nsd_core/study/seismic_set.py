@@ -182,6 +182,7 @@ def run_set(runs: list[RecordRun], out: str | Path, workers: int = 1, scheduler=
     ``compare(reference, peer) -> {du, dF, da, ...}`` measures a peer against the in-house run."""
     log = log or (lambda s: print(s, file=sys.stderr, flush=True))
     store = Store(out)
+    store.remove_stale_temps()  # a killed run's half-written files (no worker runs yet)
     elapsed = run_stored(runs, store, partial(run_record, run_engine=run_engine), workers, scheduler, retry_failed,
                          log, tally, f"seismic set: {len(runs)} runs ({len({(r.set, r.record) for r in runs})} records)",
                          scheduler_timeout)

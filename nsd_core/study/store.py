@@ -33,6 +33,17 @@ class Store:
     def folder(self, key: str) -> Path:
         return self.root / "designs" / key
 
+    def remove_stale_temps(self) -> int:
+        """Delete the temporary files of atomic writes that a killed run left in its design folders
+        (a worker ended by its parent's SIGKILL mid-write). Call it from the parent before any worker
+        starts, while it holds the output folder's lock, so no live writer owns one. Returns the count."""
+        n = 0
+        for tmp in self.root.glob("designs/*/.*.tmp"):
+            if tmp.is_file() and not tmp.is_symlink():
+                tmp.unlink()
+                n += 1
+        return n
+
     def load(self, key: str) -> dict | None:
         path = self.folder(key) / "result.json"
         if not path.exists():

@@ -78,6 +78,7 @@ def run_sweep(designs: list[Design], out: str | Path, workers: int = 1, schedule
     job = partial(run_design, run_engine=run_engine)
     log = log or (lambda s: print(s, file=sys.stderr, flush=True))
     store = Store(out)
+    store.remove_stale_temps()  # a killed run's half-written files (no worker runs yet)
     n_unique = len({d.key for d in designs})
     elapsed = run_stored(designs, store, job, workers, scheduler, retry_failed, log, tally,
                          f"sweep: {len(designs)} designs ({n_unique} distinct)", scheduler_timeout)
