@@ -35,13 +35,8 @@ def building_overrides(args) -> dict | None:
     items = getattr(args, "building", None) or []
     if table is None and not items:
         return None
-    out = dict(table or {})
-    for item in items:
-        name, sep, value = item.partition("=")
-        if not sep or not name.strip():
-            raise ParameterError(f"--building {item!r}: expected name=value")
-        out[name.strip()] = value.strip()
-    return out
+    from nsd_core.device.params import parse_set
+    return {**(table or {}), **parse_set(items, "--building")}
 
 
 def with_building(args, structure):

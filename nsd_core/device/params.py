@@ -155,13 +155,13 @@ def with_overrides(base: Params, overrides: Mapping[str, Any]) -> Params:
     return Params(**values)
 
 
-def parse_set(items: list[str]) -> dict[str, str]:
-    """Parse ``name=value`` strings of ``--set``."""
+def parse_set(items: list[str], flag: str = "--set") -> dict[str, str]:
+    """Parse ``name=value`` strings of ``--set`` (or of another NAME=VALUE flag, named in errors)."""
     out = {}
     for item in items:
         name, sep, value = item.partition("=")
         if not sep or not name.strip():
-            raise ParameterError(f"--set {item!r}: expected name=value")
+            raise ParameterError(f"{flag} {item!r}: expected name=value")
         out[name.strip()] = value.strip()
     return out
 

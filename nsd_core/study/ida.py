@@ -66,8 +66,8 @@ def parse_limit(text: str) -> Limit:
     if kind not in LIMITS:
         raise ParameterError(f"--limit {text!r}: unknown limit state; allowed: {allowed}")
     if kind == "drift":
-        raise ParameterError(f"--limit {text!r}: drift needs a building on the isolation (the model has none "
-                             "yet); allowed now: stroke=VALUE, restrainer")
+        raise ParameterError(f"--limit {text!r}: drift needs a building, which nsd ida does not "
+                             "take yet (nsd seismic --building does); allowed now: stroke=VALUE, restrainer")
     if kind == "restrainer":
         if sep:
             raise ParameterError(f"--limit {text!r}: restrainer takes no value (its gap is the structure's "
