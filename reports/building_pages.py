@@ -121,7 +121,7 @@ def floors_figure(title: str, runs: dict):
     names = list(runs)
     ref = runs[names[0]]
     n = stories(ref)
-    cols = [("floor{}_x", "floor {} x [m]"), ("drift{}_x", "drift {} x [m]"), ("floor{}_ax_abs", "floor {} a_abs x [m/s^2]")]
+    cols = [("floor{}_x", "floor {}\nx [m]"), ("drift{}_x", "drift {}\nx [m]"), ("floor{}_ax_abs", "floor {}\na_abs x\n[m/s^2]")]
     height = 0.84 / (3 * n)
     k = 0
     for i in range(1, n + 1):
@@ -137,9 +137,12 @@ def floors_figure(title: str, runs: dict):
             ax.set_ylabel(text.format(i), fontsize=6)
             axd.set_ylabel("difference", fontsize=6)
             for a in (ax, axd):
-                a.tick_params(labelsize=6)
-                a.grid(alpha=0.3)
-            if k == 0:
-                ax.legend(loc="upper right", fontsize=6)
+                a.tick_params(labelsize=6, labelbottom=k == 3 * n - 1)  # time labels on the bottom row only:
+                a.grid(alpha=0.3)                                         # each panel's scale sits in that gap
+            if k == 3 * n - 1:
+                ax.set_xlabel("t [s]", fontsize=6)
+                axd.set_xlabel("t [s]", fontsize=6)
+            if k == 0:  # above the first panel, over no data
+                ax.legend(loc="lower right", bbox_to_anchor=(1.0, 1.15), ncol=len(names), fontsize=6, frameon=False)
             k += 1
     return fig
