@@ -9,6 +9,7 @@ from nsd_core.device.model import device_system, rest_coordinates, simulate
 from nsd_core.device.params import Params
 from nsd_core.engine.callbacks import linear_springs, no_forces, no_motion
 from nsd_core.engine.compiled_model import build_model, make_workspace, split_state
+from nsd_core.engine.dynamics import tree_kernel, tree_product
 from nsd_core.engine.mechanism import mechanism
 from nsd_core.engine.problems.andrews import andrews_system, load_reference
 from nsd_core.engine.semirecursive import SemiRecursiveSystem
@@ -70,6 +71,34 @@ def test_andrews_rhs_compiled_equals_the_numpy_specification():
     assert rhs_entry(0.0, y, model, ws, linear_springs, no_motion, dydt) == 0
     ref = numpy_rhs(system, 0.0, y)
     np.testing.assert_allclose(dydt, ref, rtol=1e-9, atol=1e-9 * np.max(np.abs(ref)))
+
+
+@pytest.mark.parametrize("case", ["device", "andrews"])
+def test_tree_product_is_the_assembled_mass_matrix_times_a_vector(case):
+    """Eq. 12 uses M only in products, computed by one O(n) recursion each (tree_product); they equal
+    M v - Q and M v with M, Q assembled by Eqs. 7-8 (tree_kernel), for random v."""
+    if case == "device":
+        _, model, z, y, t = device_case()
+        forces, motion = device_forces, device_motion
+    else:
+        _, model, z, y = andrews_model()
+        y, t, forces, motion = y.copy(), 0.0, linear_springs, no_motion
+        y[1] = 50.0
+    ws = make_workspace(model, z)
+    assert rhs_entry(t, y, model, ws, forces, motion, np.zeros(len(y))) == 0  # fills the body terms
+    n = len(model.parent)
+    M, Q = np.zeros((n, n)), np.zeros(n)
+    tree_kernel(model.parent, ws.B, ws.vp, ws.Mb.copy(), ws.Qb.copy(), M, Q, np.zeros(6))
+    Q += ws.gen
+    assert np.linalg.matrix_rank(M) > 1 and np.any(Q != 0.0)
+    rng = np.random.default_rng(7)
+    acc, F, out = np.zeros((n, 6)), np.zeros((n, 6)), np.zeros(n)
+    for _ in range(5):
+        v = rng.normal(size=n)
+        tree_product(model.parent, ws.B, ws.vp, ws.Mb, ws.Qb, ws.gen, v, True, acc, F, out)
+        np.testing.assert_allclose(out, M @ v - Q, rtol=1e-12, atol=1e-12 * np.max(np.abs(M @ v - Q)))
+        tree_product(model.parent, ws.B, ws.vp, ws.Mb, ws.Qb, ws.gen, v, False, acc, F, out)
+        np.testing.assert_allclose(out, M @ v, rtol=1e-12, atol=1e-12 * np.max(np.abs(M @ v)))
 
 
 def double_pendulum():

@@ -17,7 +17,7 @@ import numpy as np
 from numba import njit
 
 from nsd_core.engine.closure import closure_kernel
-from nsd_core.engine.dynamics import body_terms_kernel, linear_momentum_kernel, tree_kernel
+from nsd_core.engine.dynamics import body_terms_kernel, linear_momentum_kernel, tree_product
 from nsd_core.engine.elements import apply_tensions, element_kinematics
 from nsd_core.engine.kinematics import positions_kernel, velocities_kernel
 
@@ -248,16 +248,16 @@ def velocities_and_predictor(m, w, zfd):
 @njit(cache=True, _nrt=False)
 def reduced_dynamics(m, w, reactions=True):
     """Eqs. 7-8 with w.wrench, w.gen; Eq. 12 in the free coordinates; the reactions lambda, tau
-    (unless ``reactions`` is False: a step's stages need only z'', the outputs need the reactions)."""
+    (unless ``reactions`` is False: a step's stages need only z'', the outputs need the reactions).
+
+    Eq. 12 needs M only in products (R_z^T M R_z and M z''_0), so each is one O(n) pass of the
+    recursion (dynamics.tree_product) and the n x n matrix of Eq. 8 is never formed.
+    """
     dep, rows, free, pres = m.dependent, m.rows, m.free, m.prescribed
     nd, nf, npr, n = dep.shape[0], free.shape[0], pres.shape[0], w.z.shape[0]
     w.Mb[:, :, :] = 0.0
     copy_into(w.Qb, w.wrench)
     body_terms_kernel(m.mass, m.com, m.inertia, m.gravity, w.A, w.r, w.Z, True, w.Mb, w.Qb, w.scratch)
-    w.M[:, :] = 0.0
-    tree_kernel(m.parent, w.B, w.vp, w.Mb, w.Qb, w.M, w.Q, w.scratch6)
-    for i in range(n):
-        w.Q[i] += w.gen[i]
     w.Rz[:, :] = 0.0  # Eq. 10
     for a in range(nf):
         w.Rz[free[a], a] = 1.0
@@ -274,24 +274,22 @@ def reduced_dynamics(m, w, reactions=True):
                 rhs_i -= w.J[rows[i], pres[a]] * w.qdd[a]
             acc += w.Jd_inv[j, i] * rhs_i
         w.zdd0[dep[j]] = acc
-    for i in range(n):  # res = Q - M zdd0, then the reduced right-hand side
-        acc = w.Q[i]
-        for k in range(n):
-            acc -= w.M[i, k] * w.zdd0[k]
-        w.res[i] = acc
+    # res = M zdd0 - Q; the reduced right-hand side is -R_z^T res
+    tree_product(m.parent, w.B, w.vp, w.Mb, w.Qb, w.gen, w.zdd0, True, w.acc6, w.Fsub, w.res)
+    for b in range(nf):
+        for i in range(n):
+            w.vec[i] = w.Rz[i, b]
+        tree_product(m.parent, w.B, w.vp, w.Mb, w.Qb, w.gen, w.vec, False, w.acc6, w.Fsub, w.Mv)  # M R_z[:, b]
+        for a in range(nf):
+            acc = 0.0
+            for i in range(n):
+                acc += w.Rz[i, a] * w.Mv[i]
+            w.red[a, b] = acc
     for a in range(nf):
         acc = 0.0
         for i in range(n):
-            acc += w.Rz[i, a] * w.res[i]
+            acc -= w.Rz[i, a] * w.res[i]
         w.red_rhs[a] = acc
-        for b in range(nf):
-            acc = 0.0
-            for i in range(n):
-                mi = 0.0
-                for k in range(n):
-                    mi += w.M[i, k] * w.Rz[k, b]
-                acc += w.Rz[i, a] * mi
-            w.red[a, b] = acc
     if nf and not lu_factor(w.red, w.red_piv):
         return SINGULAR_MASS
     lu_solve(w.red, w.red_piv, w.red_rhs)
@@ -302,11 +300,8 @@ def reduced_dynamics(m, w, reactions=True):
         w.zdd[i] = acc
     if not reactions:
         return OK
-    for i in range(n):  # M z'' - Q = Phi_z^T lambda + E^T tau
-        acc = -w.Q[i]
-        for k in range(n):
-            acc += w.M[i, k] * w.zdd[k]
-        w.res[i] = acc
+    # M z'' - Q = Phi_z^T lambda + E^T tau
+    tree_product(m.parent, w.B, w.vp, w.Mb, w.Qb, w.gen, w.zdd, True, w.acc6, w.Fsub, w.res)
     for j in range(nd):
         acc = 0.0
         for i in range(nd):

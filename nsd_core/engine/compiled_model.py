@@ -45,7 +45,8 @@ _WORK_FIELDS = {
     "P_lo": (float, 2), "gen": (float, 1), "wrench": (float, 2), "extra": (float, 1),
     "extra_rate": (float, 1),
     # Eqs. 7-8 and the reduced Eq. 12
-    "Mb": (float, 3), "Qb": (float, 2), "M": (float, 2), "Q": (float, 1), "Rz": (float, 2),
+    "Mb": (float, 3), "Qb": (float, 2), "acc6": (float, 2), "Fsub": (float, 2), "vec": (float, 1),
+    "Mv": (float, 1), "Rz": (float, 2),
     "zdd0": (float, 1), "red": (float, 2), "red_rhs": (float, 1), "red_piv": (np.int64, 1), "res": (float, 1),
     "scratch": (float, 2), "scratch6": (float, 1),   # the recursions' 3-vectors, the tree's 6-vector
     "momentum": (float, 1),  # the mechanism's linear momentum sum m_i v_com,i, for the force callback
@@ -117,7 +118,8 @@ def make_workspace(model: SystemModel, z0: np.ndarray) -> Workspace:
         Jd=(nd, nd), piv=(nd,), Jd_inv=(nd, nd), col=(max(nd, nf),),
         q=(npr,), qd=(npr,), qdd=(npr,), zd=(n,), zdd=(n,), lam=(nd,), tau=(npr,),
         L=(ne,), Ld=(ne,), T=(ne,), N=(ne, 3), P_up=(ne, 3), P_lo=(ne, 3), gen=(n,), wrench=(n, 6),
-        extra=(nx,), extra_rate=(nx,), Mb=(n, 6, 6), Qb=(n, 6), M=(n, n), Q=(n,), Rz=(n, nf), zdd0=(n,),
+        extra=(nx,), extra_rate=(nx,), Mb=(n, 6, 6), Qb=(n, 6), acc6=(n, 6), Fsub=(n, 6), vec=(n,), Mv=(n,), Rz=(n, nf),
+        zdd0=(n,),
         red=(nf, nf), red_rhs=(nf,), red_piv=(nf,), res=(n,), scratch=(SCRATCH_ROWS, 3), scratch6=(6,),
         momentum=(3,), time=(1,), kin_current=(1,), counters=(3,))
     ws = Workspace(**{k: np.zeros(shapes[k], dtype=dt) for k, (dt, _) in _WORK_FIELDS.items()})

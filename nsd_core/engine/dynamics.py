@@ -61,12 +61,17 @@ def body_terms_kernel(mass, com, inertia, gravity, A, r, Z, has_vel, Mb, Qb, scr
             for b in range(3):
                 acc += A[i, a, b] * com[i, b]
             g[a] = acc
+        for a in range(3):  # JG = A J A^T as two 3x3 products (G holds A J for now)
+            for d in range(3):
+                acc = 0.0
+                for c in range(3):
+                    acc += A[i, a, c] * inertia[i, c, d]
+                G[a, d] = acc
         for a in range(3):
             for b in range(3):
                 acc = 0.0
-                for c in range(3):
-                    for d in range(3):
-                        acc += A[i, a, c] * inertia[i, c, d] * A[i, b, d]
+                for d in range(3):
+                    acc += G[a, d] * A[i, b, d]
                 JG[a, b] = acc
         G[0, 0], G[0, 1], G[0, 2] = 0.0, -g[2], g[1]
         G[1, 0], G[1, 1], G[1, 2] = g[2], 0.0, -g[0]
@@ -137,6 +142,42 @@ def tree_kernel(parent, B, vp, Mb, Fb, Mred, Qred, F):
         for a in range(6):
             acc += B[k, a] * Fb[k, a]
         Qred[k] = acc
+
+
+
+@njit(cache=True, _nrt=False)
+def tree_product(parent, B, vp, Mb, Qb, gen, v, bias, acc, F, out):
+    """out = M v - Q (with ``bias``) or M v (without), M and Q those of tree_kernel, without forming M.
+
+    Eqs. 7-8 applied to one vector: the bodies' accelerations T R_d v (+ vp: the velocity products)
+    root to leaves, each body's M_i a_i - Qb_i, the subtree sums leaves to root, each summed wrench
+    projected on its joint's b_k (minus the joint force gen_k). O(n) where M itself is O(n^2), so a
+    mechanism with few free coordinates never needs the full matrix. acc, F: (n, 6) scratch; Mb, Qb
+    the bodies' own terms (body_terms_kernel), left unchanged.
+    """
+    n = parent.shape[0]
+    for i in range(n):
+        p = parent[i]
+        for a in range(6):
+            acc[i, a] = (acc[p, a] if p >= 0 else 0.0) + B[i, a] * v[i]
+    for i in range(n):
+        massless = Mb[i, 0, 0] == 0.0 and Mb[i, 3, 3] == 0.0 and Mb[i, 4, 4] == 0.0 and Mb[i, 5, 5] == 0.0
+        for a in range(6):
+            f = -Qb[i, a] if bias else 0.0
+            if not massless:  # a zero diagonal of the positive semidefinite M_i: M_i = 0
+                for b in range(6):
+                    f += Mb[i, a, b] * (acc[i, b] + vp[i, b] if bias else acc[i, b])
+            F[i, a] = f
+    for i in range(n - 1, -1, -1):
+        p = parent[i]
+        if p >= 0:
+            for a in range(6):
+                F[p, a] += F[i, a]
+    for k in range(n):
+        acc_k = 0.0
+        for a in range(6):
+            acc_k += B[k, a] * F[k, a]
+        out[k] = acc_k - gen[k] if bias else acc_k
 
 
 def body_inertia_terms(m: Mechanism, k: Kinematics, wrench: np.ndarray):
