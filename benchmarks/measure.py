@@ -1,6 +1,7 @@
 """Run one measurement behind docs/validation.md or docs/performance.md and commit its JSON.
 
     python -m benchmarks.measure NAME [NAME ...]      (NAME: see MEASUREMENTS; `all` for every one)
+    python -m benchmarks.measure --short NAME ...      (the benchmark's short mode, where it has one: SHORT)
 
 Each measurement is a project command run as a user runs it, in a fresh process, into a temporary
 folder; what the documents need is kept in ``benchmarks/results/NAME.json`` together with the
@@ -37,7 +38,14 @@ MEASUREMENTS = {
                     "bench_cycle.json", "json"),
     "bench_seismic": (PY + ["benchmarks/bench_seismic.py", "--no-compile", "--repeats", "3", "--out", "OUT"],
                       "bench_seismic.json", "json"),
+    # issue 26: the cold and the warm gate, a record set on warm workers, the ratios at the 1e-4 aim
+    "bench_start": (PY + ["benchmarks/bench_start.py", "--repeats", "1", "--out", "OUT"], "bench_start.json", "json"),
+    "bench_record_set": (PY + ["benchmarks/bench_record_set.py", "--repeats", "3", "--out", "OUT"],
+                         "bench_record_set.json", "json"),
+    "work_precision": (PY + ["benchmarks/work_precision.py", "--to-aim", "--no-compile", "--repeats", "3", "--out",
+                             "OUT"], "work_precision.json", "json"),
 }
+SHORT = ("bench_start", "bench_record_set", "work_precision")   # their --short: fewer cases or records, 1 repeat
 
 
 def _git_commit() -> str:
@@ -59,8 +67,11 @@ def _keep_compare(data: dict) -> dict:
     return keep
 
 
-def measure(name: str) -> dict:
+def measure(name: str, short: bool = False) -> dict:
     cmd, produced, kind = MEASUREMENTS[name]
+    if short:   # the short mode's own repeat count: drop the full run's
+        i = cmd.index("--repeats") if "--repeats" in cmd else None
+        cmd = (cmd[:i] + cmd[i + 2:] if i is not None else cmd)[:-2] + ["--short"] + cmd[-2:]
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "out"
         argv = [str(out) if a == "OUT" else a for a in cmd]
@@ -93,21 +104,26 @@ def measure(name: str) -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
-    names = (argv if argv is not None else sys.argv[1:]) or ["--help"]
+    names = list(argv if argv is not None else sys.argv[1:]) or ["--help"]
+    short = "--short" in names
+    names = [n for n in names if n != "--short"] or ["--help"]
     if names[0] in ("-h", "--help"):
-        print(__doc__.strip() + "\n\nmeasurements: " + ", ".join(MEASUREMENTS))
+        print(__doc__.strip() + "\n\nmeasurements: " + ", ".join(MEASUREMENTS) + "; with --short: " + ", ".join(SHORT))
         return 0
     if names == ["all"]:
-        names = list(MEASUREMENTS)
+        names = [n for n in MEASUREMENTS if not short or n in SHORT]
     for n in names:
         if n not in MEASUREMENTS:
             print(f"measure: {n!r}: unknown; allowed: {', '.join(MEASUREMENTS)}, all", file=sys.stderr)
+            return 2
+        if short and n not in SHORT:
+            print(f"measure: --short {n}: no short mode; those with one: {', '.join(SHORT)}", file=sys.stderr)
             return 2
     RESULTS.mkdir(parents=True, exist_ok=True)
     from nsd_core.device.results import atomic_write_json
     for n in names:
         print(f"measuring {n} ...", file=sys.stderr, flush=True)
-        rec = measure(n)
+        rec = measure(n, short)
         atomic_write_json(RESULTS / f"{n}.json", rec)
         m = rec["measured"]
         print(f"{n}: exit {rec['exit_code']}, {m['wall_s']:.1f} s, load {m['load_average_before'][0]} -> "

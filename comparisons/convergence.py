@@ -35,7 +35,8 @@ def convergence_study(spec: dict, engines: list[str], workers: int) -> dict:
             fixed = {**case.settings.get(e, {}), **s.get("settings", {})}
             jobs += [(e, {**fixed, s["setting"]: v}, v) for v in s["values"]]
     from nsd_core.engine.workers import worker_pool
-    with worker_pool(workers) as pool:
+    from comparisons.warmup import job_warmup, spec as warm_spec
+    with worker_pool(workers, warm=job_warmup(warm_spec(e, False, drive, s) for e, s, _ in jobs)) as pool:
         futs = [pool.submit(run_job, e, case.params_for(e), drive, settings) for e, settings, _ in jobs]
         outs = [f.result() for f in futs]
     if outs[0]["status"] != "ok":

@@ -22,6 +22,7 @@ from nsd_core.engine.workers import worker_pool
 
 from comparisons.config import METRICS, Case, SeismicCase
 from comparisons.engines import REFERENCE, run_job, run_seismic_job
+from comparisons.warmup import job_warmup, spec as warm_spec
 from comparisons.seismic import gate_metrics, own_seismic_metrics
 from comparisons.convergence import convergence_study
 from comparisons.metrics import own_metrics, pair_metrics
@@ -178,10 +179,12 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
                                c.dt_out, settings)
         return pool.submit(run_job, e, params, c.drive, settings)
 
-    startup = None
+    startup, warmup = None, None
     if todo:
         pool_start = time.time()
-        with worker_pool(min(workers, len(todo))) as pool:
+        warm = job_warmup(warm_spec(engine, isinstance(c, SeismicCase), getattr(c, "drive", None), settings)
+                          for c, e in todo for engine, _, settings in [run_spec(c, e, order)])
+        with worker_pool(min(workers, len(todo)), warm=warm) as pool:
             futures = {submit(pool, c, e): (c, e) for c, e in todo}
             for fut in as_completed(futures):
                 case, engine = futures[fut]
@@ -189,6 +192,7 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
                 if job.get("started") is not None:   # spawning the workers and their imports (issue 20)
                     startup = min(startup if startup is not None else float("inf"), job["started"] - pool_start)
                 keep(case, engine, job)
+            warmup = pool.startup.summary()   # each worker's spawn and warm-up, before its first job
     summaries = {c: {**reference_runs[c], **runs[c]} for c in runs}
     metrics = _metrics(cases, engines, tolerances, summaries, results)
     order_evidence = {}
@@ -213,7 +217,8 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
         "metric_units": {k: v[0] for k, v in METRICS.items()},
         "params": cases[0].params.describe() if cases else [], "runs": runs, "metrics": metrics,
         "total_wall_time": time.perf_counter() - started, "workers": workers,
-        "worker_startup_time": startup, "metric_definitions": {k: v[1] for k, v in METRICS.items()},
+        "worker_startup_time": startup, "worker_warmup": warmup,
+        "metric_definitions": {k: v[1] for k, v in METRICS.items()},
     }
     summary["versions"] = versions()
     summary["converged_reference"] = {"label": CONVERGED, "engine": REFERENCE, "settings": dict(CONVERGED_SETTINGS),

@@ -26,6 +26,7 @@ from comparisons.energy import energy_balance_rel
 from comparisons.engines import REFERENCE, run_job
 from comparisons.engines.perturb import KINDS, describe
 from comparisons.reference import CONVERGED_SETTINGS
+from comparisons.warmup import job_warmup, spec as warm_spec
 from comparisons.harness import limit_for
 from comparisons.metrics import own_metrics, pair_metrics
 
@@ -84,7 +85,9 @@ def power_study(cases: list[Case], engines: list[str], tolerances, out_dir: str 
     workers = workers or os.cpu_count() or 1
     refs: dict[str, tuple] = {}
     rows: list[dict] = []
-    with worker_pool(workers) as pool:  # spawn; workers end with their parent (nsd_core.engine.workers)
+    warm = job_warmup([warm_spec(REFERENCE, False, c.drive, CONVERGED_SETTINGS) for c in cases]
+                      + [warm_spec(e, False, c.drive, c.settings.get(e, {})) for c in cases for e in engines])
+    with worker_pool(workers, warm=warm) as pool:  # spawn; workers end with their parent, warm (issue 26)
         ref_jobs = {c.name: pool.submit(run_job, REFERENCE, c.params, c.drive, dict(CONVERGED_SETTINGS))
                     for c in cases}
 

@@ -357,8 +357,11 @@ def test_cold_compile_cache_records_integration_not_compilation(tmp_path):
                               "--out", str(tmp_path / "out")], capture_output=True, text=True, timeout=900, cwd=ROOT,
                        env=env)
     assert p.returncode in (0, 1), p.stderr[-2000:]
-    run = json.loads((tmp_path / "out" / "results.json").read_text())["runs"]["A15mm_f1Hz"]["semirecursive"]
-    assert run["wall_time"] <= 2.0 and run["compile_time"] > run["wall_time"], run
+    res = json.loads((tmp_path / "out" / "results.json").read_text())
+    run = res["runs"]["A15mm_f1Hz"]["semirecursive"]
+    # the compilation: in the workers' warm-up before their first job (issue 26), or in the run's compile_time
+    compiled = run["compile_time"] + (res["worker_warmup"] or {}).get("warm_s", 0.0)
+    assert run["wall_time"] <= 2.0 and compiled > run["wall_time"], (run, res["worker_warmup"])
 
 
 def test_study_folders_draw_their_own_figures_and_report_from_them(tmp_path):

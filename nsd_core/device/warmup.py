@@ -8,6 +8,8 @@ tiny problem of the same kind (a 20 Hz, 1 mm line cycle of 16 samples; 20 ms of 
 motion) and records its duration as ``stats["compile_time"]`` (0 once warm); ``stats["cpu_time"]``
 is the run's own CPU time (time.process_time), beside its ``wall_time``. Neither start-up nor the
 warm-up run is ever part of ``wall_time``/``cpu_time``: those are the integration.
+
+A pool worker does all of this before its first job (issue 26): nsd_core.device.worker_warmup.
 """
 from __future__ import annotations
 
@@ -19,20 +21,29 @@ _WARM: set[tuple] = set()   # (mode, method, backend, path kind) already compile
 PATHS = ("line", "circle", "ellipse", "figure8")
 
 
-def _tiny_drive_run(fn, method: str, backend: str, path: str) -> None:
+def tiny_drive(path: str = "line"):
+    """The warm-up's drive: a 20 Hz, 1 mm cycle of 16 samples along ``path`` (a path kind of PATHS)."""
     from nsd_core.device.drive import Drive
-    from nsd_core.device.params import Params
     minor = 0.0005 if path in ("ellipse", "figure8") else None
-    fn(Params(), Drive(0.001, 20.0, cycles=1, samples_per_cycle=16, path=path, minor=minor), method=method,
-       backend=backend)
+    return Drive(0.001, 20.0, cycles=1, samples_per_cycle=16, path=path, minor=minor)
+
+
+def tiny_ground():
+    """The warm-up's ground motion: 20 ms of a 2 Hz, 0.1 m/s^2 harmonic."""
+    from nsd_core.device.ground import Harmonic
+    return Harmonic(0.1, 2.0, duration=0.02)
+
+
+def _tiny_drive_run(fn, method: str, backend: str, path: str) -> None:
+    from nsd_core.device.params import Params
+    fn(Params(), tiny_drive(path), method=method, backend=backend)
 
 
 def _tiny_seismic_run(fn, method: str, backend: str, path: str) -> None:
-    from nsd_core.device.ground import Harmonic
     from nsd_core.device.isolation import default_structure
     from nsd_core.device.params import Params
-    ground = Harmonic(0.1, 2.0, duration=0.02)
-    fn(Params(), default_structure(Params()), ground, duration=0.02, dt_out=1e-3, method=method, backend=backend)
+    fn(Params(), default_structure(Params()), tiny_ground(), duration=0.02, dt_out=1e-3, method=method,
+       backend=backend)
 
 
 TINY = {"drive": _tiny_drive_run, "seismic": _tiny_seismic_run}
@@ -72,3 +83,4 @@ def warm_and_time(mode: str):
             return result
         return run
     return wrap
+

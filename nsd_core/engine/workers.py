@@ -5,13 +5,20 @@ interrupted, so that Ctrl-C or SIGTERM stops a run within seconds and leaves no 
 A parent that cannot tidy up (SIGKILL, a crash) takes its workers with it too (issue 22): on Linux
 each worker asks the kernel for SIGKILL when its parent ends (``prctl(PR_SET_PDEATHSIG)`` through
 ctypes), and everywhere a watchdog thread in each worker ends it within ``WATCH_INTERVAL`` seconds
-once its parent's pid is gone (it was re-parented). A later run resumes from what was stored."""
+once its parent's pid is gone (it was re-parented). A later run resumes from what was stored.
+
+Warm workers (issue 26): ``worker_pool(n, warm=...)`` runs ``warm`` (a picklable callable: the
+imports and tiny runs that load or compile every kernel the pool's jobs will use) once in each worker
+before its first job, so that no job pays for start-up. What each worker's start cost, the spawn and
+imports up to the initializer and the warm-up itself, is reported apart (``pool.startup``): it is
+never part of a job's own time."""
 from __future__ import annotations
 
 import contextlib
 import ctypes
 import ctypes.util
 import os
+import queue
 import signal
 import sys
 import threading
@@ -44,7 +51,8 @@ def die_with_parent(parent: int) -> None:
     threading.Thread(target=watch, name="nsd-parent-watchdog", daemon=True).start()
 
 
-def _worker_init(parent: int | None = None) -> None:
+def _worker_init(parent: int | None = None, warm=None, report=None) -> None:
+    entered = time.time()
     if parent is not None:
         die_with_parent(parent)
     # Ctrl-C reaches the whole process group: the parent alone decides what to keep and stops us
@@ -58,14 +66,62 @@ def _worker_init(parent: int | None = None) -> None:
     # probe its library: a grandchild that stop() does not reach, and that prints a BrokenPipeError
     # traceback when its worker is ended in the middle of the probe
     os.environ.setdefault("MUJOCO_GL", "disable")
+    start, failed = time.perf_counter(), None
+    if warm is not None:
+        try:
+            warm()
+        except Exception as e:  # noqa: BLE001 (a job meeting the same failure reports it, with its inputs)
+            failed = f"{type(e).__name__}: {e}".splitlines()[0][:300]
+    if report is not None:
+        report.put({"pid": os.getpid(), "entered": entered, "warm_s": time.perf_counter() - start,
+                    "warm_error": failed})
+
+
+class Startup:
+    """Each worker's start-up as its initializer reported it: ``spawn_s`` from the pool's creation to
+    the initializer (process start, interpreter, the imports that unpickling its arguments needs) and
+    ``warm_s`` the warm-up; ``ready_s`` their sum, the worker's first job cannot start before it."""
+
+    def __init__(self, queue, created: float):
+        self._queue, self._created, self._seen = queue, created, []
+
+    def workers(self) -> list[dict]:
+        """One entry per worker that has reported so far (pid, spawn_s, warm_s, ready_s, warm_error)."""
+        try:
+            while True:
+                r = self._queue.get_nowait()
+                spawn = r["entered"] - self._created
+                self._seen.append({"pid": r["pid"], "spawn_s": spawn, "warm_s": r["warm_s"],
+                                   "ready_s": spawn + r["warm_s"], "warm_error": r["warm_error"]})
+        except (queue.Empty, OSError, EOFError, ValueError):  # all read, or the pool was ended: keep what came
+            pass
+        return list(self._seen)
+
+    def summary(self) -> dict | None:
+        """The slowest worker's spawn, warm-up and sum, and every worker's entry; None if none reported."""
+        seen = self.workers()
+        if not seen:
+            return None
+        return {"workers": len(seen), "spawn_s": max(w["spawn_s"] for w in seen),
+                "warm_s": max(w["warm_s"] for w in seen), "ready_s": max(w["ready_s"] for w in seen),
+                "per_worker": seen}
 
 
 @contextlib.contextmanager
-def worker_pool(workers: int):
+def worker_pool(workers: int, warm=None):
     """A spawn-context ProcessPoolExecutor (MuJoCo's callbacks are process-global: one per process)
-    that terminates its workers when the body raises (KeyboardInterrupt, SIGTERM, an error)."""
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn"), initializer=_worker_init,
-                               initargs=(os.getpid(),))
+    that terminates its workers when the body raises (KeyboardInterrupt, SIGTERM, an error).
+
+    ``warm``: a picklable callable (a module-level function or a partial of one) each worker runs once
+    before its first job, e.g. ``nsd_core.device.warmup.warm_worker``; it must not raise (an error is
+    reported in ``pool.startup`` and left to the jobs). ``pool.startup`` (``Startup``) reports each
+    worker's start-up apart from the jobs' times."""
+    ctx = get_context("spawn")
+    # a Queue, not a SimpleQueue: the pool's own result pipe is the one SimpleQueue in a worker
+    report, created = ctx.Queue(), time.time()
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_worker_init,
+                               initargs=(os.getpid(), warm, report))
+    pool.startup = Startup(report, created)
     try:
         yield pool
     except BaseException:

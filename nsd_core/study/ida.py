@@ -26,7 +26,7 @@ from typing import Callable
 
 from nsd_core.device.params import ParameterError
 from nsd_core.study.hunt import Hunt, next_hunt_level, next_stripe_level
-from nsd_core.study.seismic_set import RecordRun, run_record
+from nsd_core.study.seismic_set import RecordRun, run_record, set_warmup
 from nsd_core.study.store import Store
 
 SPENT = ("rod_reach", "outside_validity")  # a run stopped by these reached every limit state
@@ -155,9 +155,9 @@ def _advance(tr: Trace, store: Store, retry_failed: bool, tried: set) -> tuple[I
 
 
 class _Local:
-    def __init__(self, workers):
+    def __init__(self, workers, warm=None):
         from nsd_core.engine.workers import worker_pool
-        self.cm = worker_pool(workers)
+        self.cm = worker_pool(workers, warm=warm)   # warm workers (issue 26)
 
     def __enter__(self):
         self.pool = self.cm.__enter__()
@@ -233,7 +233,8 @@ def trace_all(traces: list[Trace], store: Store, workers: int = 1, scheduler=Non
                 done(tr, *nxt, job(nxt[0]))
                 nxt = _advance(tr, store, retry_failed, tried)
         return time.perf_counter() - start
-    with (_Dask(scheduler) if scheduler is not None else _Local(min(workers, waiting))) as ex:
+    warm = set_warmup([nxt[0] for nxt in first.values() if nxt is not None], run_engine)
+    with (_Dask(scheduler) if scheduler is not None else _Local(min(workers, waiting), warm)) as ex:
         inflight = {ex.submit(job, nxt[0]): (tr, *nxt) for tr in traces if (nxt := first[id(tr)]) is not None}
         while inflight:
             for f in ex.wait(inflight):

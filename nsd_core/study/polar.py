@@ -14,6 +14,7 @@ at 1 Hz, A = 15 mm it is within 0.1 % of the dynamic model's force, tests/test_p
 from __future__ import annotations
 
 import math
+from functools import partial
 
 import numpy as np
 
@@ -62,7 +63,8 @@ def polar_study(wires=(3, 4, 6, 8), step_deg: float = 15.0, amplitude: float = 0
     jobs = [(designs[n], psi, amplitude, points_per_cycle) for n in wires for psi in psis]
     if workers > 1:
         from nsd_core.engine.workers import worker_pool  # workers that end with their parent
-        with worker_pool(min(workers, len(jobs))) as pool:
+        warm = partial(_job, jobs[0])  # its kernels loaded before the first job (issue 26; ~0.1 s warm)
+        with worker_pool(min(workers, len(jobs)), warm=warm) as pool:
             points = list(pool.map(_job, jobs))
     else:
         points = [_job(j) for j in jobs]

@@ -183,12 +183,29 @@ def run_set(runs: list[RecordRun], out: str | Path, workers: int = 1, scheduler=
     log = log or (lambda s: print(s, file=sys.stderr, flush=True))
     store = Store(out)
     store.remove_stale_temps()  # a killed run's half-written files (no worker runs yet)
+    startup: dict = {}
     elapsed = run_stored(runs, store, partial(run_record, run_engine=run_engine), workers, scheduler, retry_failed,
                          log, tally, f"seismic set: {len(runs)} runs ({len({(r.set, r.record) for r in runs})} records)",
-                         scheduler_timeout)
+                         scheduler_timeout, set_warmup(runs, run_engine), startup)
     index = write_set(runs, store, compare)
     index["elapsed_this_run_s"] = elapsed
+    index["worker_startup"] = startup or None   # this run's workers: spawn, imports, warm-up (not in set.json)
     return index
+
+
+def set_warmup(runs: list[RecordRun], run_engine: Callable | None = None):
+    """A worker's warm-up for these runs (nsd_core.device.warmup.warm_worker): the in-house seismic
+    kernels of each solver setting, the record sets' files, and a tiny run of each peer engine."""
+    from nsd_core.device.isolation import default_structure
+    from nsd_core.device.params import Params
+    from nsd_core.device.warmup import tiny_ground
+    from nsd_core.device.worker_warmup import kind, warm_worker
+    kinds = sorted({kind("seismic", r.settings) for r in runs if r.engine == "semirecursive"})
+    peers = {(r.engine, repr(sorted(r.settings.items()))): (r.engine, r.settings) for r in runs
+             if r.engine != "semirecursive" and run_engine is not None}
+    calls = [partial(run_engine, e, Params(), default_structure(Params()), tiny_ground(), duration=0.02, dt_out=1e-3,
+                     settings=s or None) for e, s in peers.values()]
+    return partial(warm_worker, tuple(kinds), tuple(sorted({r.set for r in runs})), tuple(calls))
 
 
 def _copy(src: Path, dest: Path) -> None:

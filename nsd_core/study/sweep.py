@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any, Callable, Iterator
 
 from nsd_core import __version__
-from nsd_core.device.params import ParameterError
+from nsd_core.device.params import ParameterError, Params
 from nsd_core.device.results import atomic_copy, atomic_write_json
 from nsd_core.engine.workers import worker_pool
 from nsd_core.study.designs import PAPER_STUDIES, Design
@@ -27,13 +27,17 @@ def _serial(designs: list[Design], job) -> Iterator[tuple[Design, dict]]:
         yield d, job(d)
 
 
-def _local(designs: list[Design], job, workers: int) -> Iterator[tuple[Design, dict]]:
+def _local(designs: list[Design], job, workers: int, warm=None, startup: dict | None = None
+           ) -> Iterator[tuple[Design, dict]]:
     # spawn, not fork: the parent may hold threads (a Dask client, numba) that fork would copy badly;
-    # on Ctrl-C or SIGTERM the workers are terminated, not waited for (nsd_core.engine.workers)
-    with worker_pool(workers) as ex:
+    # on Ctrl-C or SIGTERM the workers are terminated, not waited for (nsd_core.engine.workers);
+    # ``warm`` runs once per worker before its first job, its cost reported into ``startup`` (issue 26)
+    with worker_pool(workers, warm=warm) as ex:
         futures = {ex.submit(job, d): d for d in designs}
         for f in as_completed(futures):
             yield futures[f], f.result()
+        if startup is not None:
+            startup.update(ex.startup.summary() or {})
 
 
 def _dask(designs: list[Design], job, address, timeout: float = 10.0) -> Iterator[tuple[Design, dict]]:
@@ -55,16 +59,18 @@ def _dask(designs: list[Design], job, address, timeout: float = 10.0) -> Iterato
             client.close()
 
 
-def run_jobs(pending: list, job, workers: int = 1, scheduler=None, timeout: float = 10.0) -> Iterator[tuple]:
+def run_jobs(pending: list, job, workers: int = 1, scheduler=None, timeout: float = 10.0, warm=None,
+             startup: dict | None = None) -> Iterator[tuple]:
     """(item, job(item)) for every item as each finishes: on the Dask cluster at ``scheduler``, on
     ``workers`` local processes, or in this process (one worker or one item). Each item needs a
-    ``key``; ``job`` must be picklable (a module-level function or a partial of one)."""
+    ``key``; ``job`` must be picklable (a module-level function or a partial of one). Local workers
+    run ``warm`` (picklable) before their first job and report its cost into ``startup``."""
     if not pending:
         return iter(())
     if scheduler is not None:
         return _dask(pending, job, scheduler, timeout)
     if workers > 1 and len(pending) > 1:
-        return _local(pending, job, min(workers, len(pending)))
+        return _local(pending, job, min(workers, len(pending)), warm, startup)
     return _serial(pending, job)
 
 
@@ -81,15 +87,31 @@ def run_sweep(designs: list[Design], out: str | Path, workers: int = 1, schedule
     store.remove_stale_temps()  # a killed run's half-written files (no worker runs yet)
     n_unique = len({d.key for d in designs})
     elapsed = run_stored(designs, store, job, workers, scheduler, retry_failed, log, tally,
-                         f"sweep: {len(designs)} designs ({n_unique} distinct)", scheduler_timeout)
+                         f"sweep: {len(designs)} designs ({n_unique} distinct)", scheduler_timeout,
+                         sweep_warmup(designs, run_engine))
     return write_summaries(designs, store, elapsed)
 
 
+def sweep_warmup(designs: list[Design], run_engine: EngineRunner | None = None):
+    """A worker's warm-up for these designs: the in-house kernels of each solver setting, and a tiny
+    run of each other engine and setting through ``run_engine`` (nsd_core.device.warmup)."""
+    from nsd_core.device.warmup import tiny_drive
+    from nsd_core.device.worker_warmup import kind, warm_worker
+    kinds = sorted({kind("drive", d.settings) for d in designs if d.engine == "semirecursive"})
+    peers = {(d.engine, repr(sorted(d.settings.items()))): (d.engine, d.settings) for d in designs
+             if d.engine != "semirecursive" and run_engine is not None}
+    calls = [partial(run_engine, e, Params(), tiny_drive(), s) for e, s in peers.values()]
+    return partial(warm_worker, tuple(kinds), (), tuple(calls))
+
+
 def run_stored(items: list, store: Store, job: Callable, workers: int, scheduler, retry_failed: bool,
-               log: Callable[[str], None], tally: dict | None, heading: str, timeout: float = 10.0) -> float:
+               log: Callable[[str], None], tally: dict | None, heading: str, timeout: float = 10.0,
+               warm=None, startup: dict | None = None) -> float:
     """Run each item (anything with ``key`` and ``label``) the store does not hold yet (or holds as
     failed, with ``retry_failed``), store each as it finishes; returns the seconds this took.
-    ``tally`` is kept up to date with ``kept``, ``total`` and ``dir`` for an interrupt message."""
+    ``tally`` is kept up to date with ``kept``, ``total`` and ``dir`` for an interrupt message.
+    ``warm``: each local worker's warm-up before its first job (``nsd_core.engine.workers``); its
+    cost is logged and put into ``startup`` (a dict), apart from every job's own time."""
     unique: dict[str, Any] = {}
     for it in items:
         unique.setdefault(it.key, it)
@@ -100,11 +122,16 @@ def run_stored(items: list, store: Store, job: Callable, workers: int, scheduler
     log(f"{heading}, {len(unique) - len(pending)} already stored, {len(pending)} to run on "
         + (f"Dask at {scheduler}" if scheduler is not None else f"{workers} local worker(s)"))
     start = time.perf_counter()
-    for n, (it, res) in enumerate(run_jobs(pending, job, workers, scheduler, timeout), 1):
+    startup = startup if startup is not None else {}
+    for n, (it, res) in enumerate(run_jobs(pending, job, workers, scheduler, timeout, warm, startup), 1):
         rec = store.save(it, res)
         tally["kept"] += 1
         tail = f"{res['wall_time']:.1f} s" if rec["status"] == "ok" else f"FAILED: {rec['error']}"
         log(f"  [{n}/{len(pending)}] {it.label} ({it.key}): {tail}")
+    if startup:
+        log(f"  worker start-up (not in the runs' times): {startup['workers']} worker(s) ready after "
+            f"{startup['ready_s']:.1f} s at most (spawn and imports {startup['spawn_s']:.1f} s, warm-up "
+            f"{startup['warm_s']:.1f} s)")
     return time.perf_counter() - start
 
 

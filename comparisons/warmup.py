@@ -1,0 +1,47 @@
+"""Warm pool workers for the comparisons' jobs (issue 26): what each worker runs once before its
+first job (``nsd_core.engine.workers.worker_pool``'s ``warm``), so that no job pays for imports,
+numba's cache loading or compilation. The in-house kernels warm through ``nsd_core.device.warmup``;
+each peer engine and setting through a tiny job of the same kind (its import, its compiled force
+callbacks and step loop: ``comparisons.engines._warm_peer``)."""
+from __future__ import annotations
+
+from functools import partial
+
+from nsd_core.device.isolation import default_structure
+from nsd_core.device.params import Params
+from nsd_core.device.warmup import tiny_drive, tiny_ground
+from nsd_core.device.worker_warmup import kind, warm_worker
+
+from comparisons.engines import REFERENCE, run_job, run_seismic_job
+
+
+def spec(engine: str, seismic: bool, drive=None, settings: dict | None = None) -> tuple:
+    """One job's warm-up kind: (engine, mode, path kind, the settings' choices, settings), the path
+    kind and choices as each engine tells its runs apart (the in-house engine by path, method and
+    backend; a peer by line or not and its named choices, e.g. MuJoCo's integrator)."""
+    mode = "seismic" if seismic else "drive"
+    if seismic:
+        path = "line"
+    elif engine == REFERENCE:
+        path = kind("drive", None, drive.path)[3]
+    else:
+        path = "line" if drive.is_line else "circle"
+    choices = tuple(sorted((k, v) for k, v in (settings or {}).items() if isinstance(v, str)))  # as _warm_peer
+    return (engine, mode, path, choices, settings or {})
+
+
+def job_warmup(specs) -> partial:
+    """``warm`` for ``worker_pool``: every distinct kind of ``specs`` (from ``spec``), the in-house
+    ones as kernels, each peer's as a tiny job of the same engine, mode and settings."""
+    kinds, calls, seen = set(), [], set()
+    for engine, mode, path, key, settings in specs:
+        if engine == REFERENCE:
+            kinds.add(kind(mode, settings, path))
+        elif (engine, mode, path, key) not in seen:
+            seen.add((engine, mode, path, key))
+            if mode == "seismic":
+                calls.append(partial(run_seismic_job, engine, Params(), default_structure(Params()), tiny_ground(),
+                                     0.02, 1e-3, settings))
+            else:
+                calls.append(partial(run_job, engine, Params(), tiny_drive(path), settings))
+    return partial(warm_worker, tuple(sorted(kinds)), (), tuple(calls))
