@@ -223,9 +223,73 @@ def gate_times() -> str:
             + table(["case"] + engines, rows))
 
 
+def bench_start() -> str:
+    rec = load("bench_start")
+    d = rec["data"]
+    rows = []
+    for i, pair in enumerate(d["pairs"], 1):
+        for state in ("cold", "warm"):
+            r = pair[state]
+            comp = ", ".join(f"{e} {g(v)}" for e, v in (r.get("compile_in_runs_s") or {}).items() if v) or "0"
+            rows.append([f"{state}" + (f" ({i})" if len(d["pairs"]) > 1 else ""), g(r["command_wall_s"]),
+                         g(r["command_cpu_s"]), g(r.get("compare_wall_s")), g(r.get("worker_ready_s")),
+                         g(r.get("worker_warm_s")), comp, f"{r.get('verdict', r.get('error'))} (exit {r['exit_code']})"])
+    return (provenance(rec) + "\n"
+            + f"`{d['command']}` in a fresh process, cold (an empty cache folder: every kernel compiled) then warm "
+              "(the same command again); wall and CPU seconds of the whole command, the compare's own wall seconds, "
+              "the slowest worker's start-up (spawn, imports and warm-up: where the compilation goes) and its "
+              "warm-up alone, and compilation left inside the runs:\n\n"
+            + table(["cache", "command wall s", "command CPU s", "compare wall s", "worker ready s", "of which warm-up s",
+                     "compile in runs s", "verdict"], rows))
+
+
+def bench_record_set() -> str:
+    rec = load("bench_record_set")
+    d = rec["data"]
+    rows = [[r["record"], g(r["single_wall_s"]), g(r["set_wall_s"]), g(r["ratio_set_over_single"]),
+             g(r["single_cpu_s"]), g(r["set_cpu_s"])] for r in d["rows"]]
+    verdict = "met" if d["met"] else "**not met**"
+    return (provenance(rec) + "\n"
+            + f"Set {d['set']}, records {d['records']}, window {g(d['window_record_s'][0])}–{g(d['window_record_s'][1])} "
+              f"record s, each with and without the device; {d['workers']} workers, median of {d['repeats']}. Seconds "
+              "per record (its two runs): alone in a warm process, and in the set as its workers timed them; the "
+              f"workers' start-up is apart (median {g(d['startup_ready_s_median'])} s until ready, of which warm-up "
+              f"{g(d['startup_warm_s_median'])} s; the set's elapsed time {g(d['set_elapsed_s_median'])} s). Worst "
+              f"ratio {g(d['worst_ratio'])}, aim ≤ {g(d['aim_ratio'])}: {verdict}.\n\n"
+            + table(["record", "single warm run s", f"in the set ({d['workers']} workers) s", "ratio",
+                     "single CPU s (solver)", "set CPU s (solver)"], rows))
+
+
+def _setting(s: dict) -> str:
+    return ", ".join(f"{k} {g(v) if isinstance(v, float) else v}" for k, v in s.items()) or "case default"
+
+
+def work_precision() -> str:
+    rec = load("work_precision")
+    d = rec["data"]
+    rows = []
+    for c in d["cases"]:
+        ih = c["at_aim"].get("semirecursive")
+        peer = c.get("best_peer")
+        p = c["at_aim"].get(peer) if peer else None
+        rows.append([c["name"], f"{g(ih['cpu_per_cycle'])} ({_setting(ih['settings'])})" if ih else "not reached",
+                     f"{g(p['cpu_per_cycle'])} ({peer}, {_setting(p['settings'])})" if p else "not reached",
+                     g(c["ratio_best_peer_over_in_house"])])
+    ratios = [c["ratio_best_peer_over_in_house"] for c in d["cases"] if c["ratio_best_peer_over_in_house"] is not None]
+    behind = sum(r < 1 for r in ratios)
+    return (provenance(rec) + "\n"
+            + f"CPU seconds per cycle (outputs included, median of {d['repeats']}) at the cheapest setting within the "
+              f"{g(d['aim'])} aim (last-cycle max\\|ΔF\\|/max\\|F\\| against the in-house model at rtol 1e-10), the "
+              "engines interleaved per case; ratio ≥ 1: the in-house engine is the cheaper. In-house behind on "
+              f"{behind} of {len(ratios)} cases.\n\n"
+            + table(["case", "in-house CPU s (setting)", "best peer CPU s (engine, setting)",
+                     "ratio best peer / in-house"], rows))
+
+
 RENDER = {"compare-gate": compare_gate, "convergence": convergence, "tables-5-6": tables_5_6,
           "engine-benchmarks": engine_benchmarks, "direction-study": direction_study, "bench-cycle": bench_cycle, "bench-seismic": bench_seismic,
-          "gate-times": gate_times}
+          "gate-times": gate_times, "bench-start": bench_start, "bench-record-set": bench_record_set,
+          "work-precision": work_precision}
 
 
 def regenerate(text: str) -> str:

@@ -67,11 +67,19 @@ def _keep_compare(data: dict) -> dict:
     return keep
 
 
+def command(name: str, short: bool = False) -> list[str]:
+    """The measurement's command; ``short``: its --short mode, with that mode's own repeat count."""
+    cmd = MEASUREMENTS[name][0]
+    if not short:
+        return list(cmd)
+    i = cmd.index("--repeats") if "--repeats" in cmd else None
+    cmd = cmd[:i] + cmd[i + 2:] if i is not None else list(cmd)
+    return cmd[:-2] + ["--short"] + cmd[-2:]
+
+
 def measure(name: str, short: bool = False) -> dict:
-    cmd, produced, kind = MEASUREMENTS[name]
-    if short:   # the short mode's own repeat count: drop the full run's
-        i = cmd.index("--repeats") if "--repeats" in cmd else None
-        cmd = (cmd[:i] + cmd[i + 2:] if i is not None else cmd)[:-2] + ["--short"] + cmd[-2:]
+    _, produced, kind = MEASUREMENTS[name]
+    cmd = command(name, short)
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "out"
         argv = [str(out) if a == "OUT" else a for a in cmd]

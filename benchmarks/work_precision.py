@@ -10,7 +10,8 @@ ladder of settings (LADDERS: tolerances for the in-house model, step sizes for M
 plus the case's own default settings; the error of a run is max|F - F_ref| / max|F_ref| on the last
 cycle against the in-house model at rtol 1e-10 (benchmarks/refcompare.py) and its work is the CPU
 time per cycle (time.process_time around ``engine.run``, model construction included, divided by
-the number of cycles; median over ``--repeats``). The runs are interleaved: each repeat visits every
+the number of cycles; median over ``--repeats``), every engine warmed up first (``warm_up``: imports and
+compilation are in no timed run). The runs are interleaved: each repeat visits every
 case and, within a case, the engines in turn rung by rung, so a load change on the machine hits all
 engines alike. A rung whose step is the same as an earlier one's (the step divides the output
 interval, so at 10 Hz every step >= 5e-5 s is 5e-5 s) is not run twice.
@@ -22,8 +23,10 @@ force). ``--to-aim`` measures just that, in one interleaved run: per case, the f
 engine's sub-ladders (an integrator or method: its steps or tolerances from the cheapest) up to the
 first rung within the aim, the engines in turn rung by rung; the later repeats run only the rungs
 within the aim, again interleaved (a peer's rung that cost more than PRUNE x the best peer's within
-the aim on the first repeat is not repeated: it cannot be the best peer). Compilation is measured apart (``compile``): for each engine a fresh Python process runs a
-short drive twice, with numba's cache as it is (``warm``: loading cached machine code) and with an
+the aim on the first repeat is not repeated: it cannot be the best peer).
+
+Compilation is measured apart (``compile``): for each engine a fresh Python process runs a short
+drive twice, with numba's cache as it is (``warm``: loading cached machine code) and with an
 empty cache directory (``cold``: compiling everything, as on a fresh install); the first run minus
 the second is that engine's start-up cost, not counted in any per-cycle time.
 The JSON (``work_precision.json``) is read by the report's work-precision page.
@@ -182,6 +185,26 @@ def _best_peer_cpu(rungs: dict, key=lambda r: r["cpu"][0]):
     return min(at) if at else None
 
 
+def warm_up(cases, ladders: dict) -> float:
+    """Each engine's tiny run of every path kind and sub-ladder the cases will use, so that no timed
+    run holds an import or a compilation (the in-house kernels, MuJoCo's and Exudyn's callbacks);
+    returns the seconds this took."""
+    from nsd_core.device.params import Params
+    from nsd_core.device.warmup import PATHS, tiny_drive
+    t0 = time.perf_counter()
+    paths = sorted({c.drive.path if c.drive.path in PATHS else "line" for c in cases})
+    for e, ladder in ladders.items():
+        groups = {group_of(s): s for s in ladder + [c.settings.get(e, {}) for c in cases]}
+        for s in groups.values():
+            choice = {k: v for k, v in s.items() if isinstance(v, str)}
+            for path in paths:
+                try:
+                    get_engine(e).run(Params(), tiny_drive(path), choice or None)
+                except EngineError:
+                    pass
+    return time.perf_counter() - t0
+
+
 def run_case(case, ladders: dict, repeats: int, to_aim: bool = False) -> dict:
     """Every rung of every engine, ``repeats`` times, interleaved (a repeat visits the engines in turn
     rung by rung). ``to_aim``: the first repeat walks each sub-ladder only up to the aim
@@ -268,6 +291,7 @@ def main(argv=None) -> int:
               "machine": platform.platform(), "cpus": os.cpu_count(), "load_average_start": os.getloadavg(),
               "repeats": a.repeats, "to_aim": a.to_aim, "prune": PRUNE if a.to_aim else None,
               "ladders": ladders, "cases": []}
+    report["warm_up_s"] = warm_up(cases, ladders)   # imports and compilation: before any timed run
     for case in cases:
         print(f"case {case.name}", flush=True)
         report["cases"].append(run_case(case, ladders, a.repeats, a.to_aim))
