@@ -8,6 +8,10 @@ dependent velocities (Eq. 10), the two-point elements, the applied forces throug
 per call beyond a few 3-vectors inside the shared recursions. Small dense blocks are factored by
 LU with partial pivoting written here, so a singular block is a status code, not an exception.
 
+The whole evaluation (``evaluate``) is compiled once, as ``generic_evaluator`` for
+compiled_model.EVAL_SIG, and reaches the step loop and the output kernels as an argument (a function
+pointer, EVAL_FN): they are compiled small and once, and a mechanism may hand them its own evaluation.
+
 Status codes: 0 ok, 1 Newton did not converge, 2 singular dependent block, 3 singular reduced mass
 matrix, >= 10 a failure reported by the force callback.
 """
@@ -17,9 +21,13 @@ import numpy as np
 from numba import njit
 
 from nsd_core.engine.closure import closure_kernel
+from nsd_core.engine.compiled_model import EVAL_SIG
 from nsd_core.engine.dynamics import body_terms_kernel, linear_momentum_kernel, tree_product
 from nsd_core.engine.elements import apply_tensions, element_kinematics
 from nsd_core.engine.kinematics import positions_kernel, velocities_kernel
+from nsd_core.engine.compile_once import announce_compilation
+
+announce_compilation()  # one line on stderr when this process compiles the engine (a cold cache)
 
 OK, NEWTON_FAILED, SINGULAR_BLOCK, SINGULAR_MASS = 0, 1, 2, 3
 
@@ -316,9 +324,9 @@ def reduced_dynamics(m, w, reactions=True):
 
 
 @njit(cache=True, _nrt=False)
-def evaluate(t, y, m, w, forces, motion, reactions=True):
+def evaluate(t, y, m, w, forces, motion, reactions):
     """Everything at (t, y): w.z, w.zd, w.zdd, w.lam, w.tau (with ``reactions``), w.extra_rate, the
-    kinematics."""
+    kinematics (the contract of compiled_model.EVAL_SIG)."""
     nf = m.free.shape[0]  # y = [z_f, z'_f, extra]: the layout of compiled_model.split_state
     w.time[0] = t
     motion(t, m.motion_params, w.q, w.qd, w.qdd)
@@ -342,9 +350,34 @@ def evaluate(t, y, m, w, forces, motion, reactions=True):
 
 
 @njit(cache=True, _nrt=False)
-def rhs_into(t, y, m, w, forces, motion, dydt, reactions=True):
-    """dy/dt = [z'_f, z''_f, extra rates] into dydt; returns the status code. The reactions
-    w.lam, w.tau are computed too unless ``reactions`` is False (an integrator's stages)."""
+def _generic_evaluator(t, y, m, w, forces, motion, reactions):
+    return evaluate(t, y, m, w, forces, motion, reactions)
+
+
+# The generic evaluation for any mechanism, compiled once for compiled_model.EVAL_SIG (at its first
+# use: compile_once, or when a kernel receives it as its EVAL_FN argument). A kernel calls it through
+# a function pointer, so the evaluate chain is compiled here only, never again inside each caller.
+generic_evaluator = _generic_evaluator
+EVALUATOR_KERNELS = ((generic_evaluator, EVAL_SIG),)
+
+
+@njit(cache=True, _nrt=False)
+def derivatives(evaluator, t, y, m, w, forces, motion, dydt, reactions):
+    """dy/dt = [z'_f, z''_f, extra rates] into dydt from ``evaluator`` (an EVAL_FN); the status code.
+    The reactions w.lam, w.tau are computed too unless ``reactions`` is False (an integrator's stages)."""
+    code = evaluator(t, y, m, w, forces, motion, reactions)
+    nf = m.free.shape[0]
+    for a in range(nf):
+        dydt[a] = y[nf + a]
+        dydt[nf + a] = w.zdd[m.free[a]]
+    copy_into(dydt[2 * nf:], w.extra_rate)
+    return code
+
+
+@njit(cache=True, _nrt=False)
+def rhs_into(t, y, m, w, forces, motion, dydt, reactions):
+    """``derivatives`` with the generic evaluation inlined (a direct call, no function pointer): the
+    engine's kernels use ``derivatives``; the benchmarks time this form against it."""
     code = evaluate(t, y, m, w, forces, motion, reactions)
     nf = m.free.shape[0]
     for a in range(nf):
