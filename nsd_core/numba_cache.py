@@ -76,7 +76,9 @@ def compile_engine() -> float:
     processes doing the same (``compile_once``); the seconds it took. A pool initializer calls it, so
     a worker's first task finds the engine ready."""
     start = time.perf_counter()
-    from nsd_core.device.compiled_seismic import engine_kernels
+    from nsd_core.device.compiled_seismic import SAMPLES
     from nsd_core.engine.compile_once import compile_once
-    compile_once(engine_kernels())
+    from nsd_core.engine.compiled import EVALUATE
+    from nsd_core.engine.rk import STEP_LOOP
+    compile_once(EVALUATE, STEP_LOOP, SAMPLES)
     return time.perf_counter() - start

@@ -33,11 +33,11 @@ from nsd_core.device.building_tree import building_block
 from nsd_core.device.compiled import device_forces, force_params as device_force_params
 from nsd_core.device.forces import restrainer_force_scalar
 from nsd_core.device.ground import ground_values
-from nsd_core.engine.compiled import derivatives, generic_evaluator
+from nsd_core.engine.compiled import EVALUATE, copy_into, derivatives, generic_evaluator
 from nsd_core.engine.compiled_model import (EVAL_FN, FORCE_FN, FORCE_SIG, MODEL_TYPE, MOTION_FN, MOTION_SIG,
                                             WORK_TYPE, build_model, make_workspace)
-from nsd_core.engine.rk import KERNELS, integrate_kernel, make_outputs, tableau
-from nsd_core.engine.compile_once import compile_once
+from nsd_core.engine.compile_once import compile_once, unit
+from nsd_core.engine.rk import STEP_LOOP, integrate_kernel, make_outputs, tableau
 
 HEADER = 24
 CHUNK = 1.0  # s of model time per compiled call: progress and Ctrl-C are seen between calls
@@ -190,7 +190,7 @@ def _sample_outputs(m, w, forces, motion, evaluator, ts, Y, table, tensions, len
     dydt = np.zeros(Y.shape[1])
     on_cap = np.zeros(3)
     for k in range(ts.shape[0]):
-        code = derivatives(evaluator, ts[k], Y[k], m, w, forces, motion, dydt, True)
+        code = derivatives(evaluator, ts[k], Y[k], m, w, forces, motion, dydt, bool(True))
         if code != 0:
             return code
         row = table[k]
@@ -212,24 +212,20 @@ def _sample_outputs(m, w, forces, motion, evaluator, ts, Y, table, tensions, len
             clo = max(clo, abs(v))
         row[18] = clo
         row[19], row[20] = _kinetic_and_height(m, w, row[2], row[3])
-        tensions[k] = w.T
-        lengths[k] = w.L
+        copy_into(tensions[k], w.T)  # not tensions[k] = w.T: its shape check compiles a raise path
+        copy_into(lengths[k], w.L)
     return 0
 
 
 F1, F2 = types.float64[::1], types.float64[:, ::1]
 SAMPLE_SIG = types.int64(MODEL_TYPE, WORK_TYPE, FORCE_FN, MOTION_FN, EVAL_FN, F1, F2, F2, F2, F2)
 _sample_kernel = njit(cache=True)(_sample_outputs)
-
-
-def engine_kernels():
-    """Every kernel of the in-house engine with its one signature (numba_cache.compile_engine)."""
-    return KERNELS + ((_sample_kernel, SAMPLE_SIG),)
+SAMPLES = unit("seismic_outputs", ((_sample_kernel, SAMPLE_SIG),))
 
 
 def sample_outputs(m, w, forces, motion, evaluator, ts, Y, table, tensions, lengths):
     """_sample_outputs compiled once (for SAMPLE_SIG)."""
-    compile_once(((_sample_kernel, SAMPLE_SIG),))
+    compile_once(SAMPLES)
     return _sample_kernel(m, w, forces, motion, evaluator, ts, Y, table, tensions, lengths)
 
 
@@ -242,6 +238,8 @@ def run(model, z0, y0, t_eval, method, rtol, atol, max_step, first_step, progres
     failure, t_fail, z_fail, q_fail (the time, configuration and prescribed motion being evaluated).
     evaluator: an EVAL_FN (nsd_core.engine.compiled_model); default the generic one."""
     evaluator = evaluator or generic_evaluator
+    # all three at once: processes started together (a pool's workers) share them out
+    compile_once(*((EVALUATE,) if evaluator is generic_evaluator else ()), STEP_LOOP, SAMPLES)
     ns, ny, ne = len(t_eval), len(y0), len(model.elem_up)
     n, nd, npr = len(model.parent), len(model.dependent), len(model.prescribed)
     res = dict(y=np.zeros((ns, ny)), table=np.zeros((ns, len(COLUMNS))), tensions=np.zeros((ns, ne)),

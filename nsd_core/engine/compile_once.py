@@ -18,6 +18,8 @@ import contextlib
 import os
 import sys
 
+from numba import types
+
 
 NOTICE = ("nsd: compiling the in-house engine once for this version of the source (about {seconds} s on "
           "2 cores; later runs load it from the cache) ...")
@@ -80,31 +82,43 @@ def _locked(name: str, block: bool):
         os.close(fd)  # closing releases the lock
 
 
-def _ready(dispatcher, sig) -> bool:
-    return tuple(sig.args) in dispatcher.overloads
+UNITS: dict[str, tuple] = {}  # name -> ((dispatcher, signature), ...), compiled in order under one lock
+_DONE: set[str] = set()
 
 
-def compile_once(kernels) -> None:
-    """Compile each (dispatcher, signature) of ``kernels`` in this process (or load it from the
-    cache), each under its own lock: a kernel another process is compiling is left for later and
-    waited for (then loaded) only when nothing else is left. Then each dispatcher is closed to other
-    signatures, as ``njit(signature)`` would (a call from Python with a compiled function for a
-    function-pointer argument then converts it, instead of compiling a specialisation for it)."""
-    pending = [(d, s) for d, s in kernels if not _ready(d, s)]
-    while pending:
-        left = []
-        for d, s in pending:
-            name = f"{d.py_func.__module__}.{d.py_func.__qualname__}"
-            with _locked(name, block=False) as held:
-                if held:
-                    d.compile(s)
-                else:
-                    left.append((d, s))
-        if left:  # all taken by others: wait for the first, then go round again
-            d, s = left[0]
-            with _locked(f"{d.py_func.__module__}.{d.py_func.__qualname__}", block=True):
-                d.compile(s)
-            left = left[1:]
-        pending = left
-    for d, _ in kernels:
-        d.disable_compile()
+def unit(name: str, kernels) -> str:
+    """Register a unit: kernels compiled together (a kernel after the ones it calls, so that it links
+    them instead of compiling them again); ``name`` names its lock. Returns the name."""
+    UNITS[name] = tuple(kernels)
+    return name
+
+
+def _compile_unit(name: str, block: bool) -> bool:
+    """Compile (or load) the unit under its lock; False when ``block`` is False and another process
+    holds the lock (it is compiling the unit now)."""
+    with _locked(name, block) as held:
+        if not held:
+            return False
+        for d, sig in UNITS[name]:
+            if tuple(sig.args) not in d.overloads:
+                d.compile(sig)
+            if any(isinstance(a, types.FunctionType) for a in sig.args):
+                # closed to other signatures, as njit(signature) is: a call from Python with a compiled
+                # function for a function-pointer argument then converts it (no specialisation for it)
+                d.disable_compile()
+    _DONE.add(name)
+    return True
+
+
+def compile_once(*names: str) -> None:
+    """Make the units ``names`` ready in this process: compiled, or loaded from the cache. A unit that
+    another process is compiling is waited for (then loaded), and meanwhile this process compiles the
+    registered units no one has taken: processes started together share the work, none is done twice."""
+    needed = [n for n in names if n not in _DONE]
+    while needed:
+        needed = [n for n in needed if not _compile_unit(n, block=False)]
+        if needed:  # others are compiling what is needed: do the rest of the work meanwhile
+            for other in list(UNITS):
+                if other not in _DONE and other not in needed:
+                    _compile_unit(other, block=False)
+            _compile_unit(needed.pop(0), block=True)

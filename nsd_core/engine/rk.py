@@ -21,9 +21,9 @@ from scipy.integrate import RK45 as _SciRK45
 
 from numba import typeof, types
 
-from nsd_core.engine.compiled import EVALUATOR_KERNELS, OK, copy_into, derivatives
+from nsd_core.engine.compiled import EVALUATE, OK, copy_into, derivatives, generic_evaluator
 from nsd_core.engine.compiled_model import EVAL_FN, FORCE_FN, MODEL_TYPE, MOTION_FN, WORK_TYPE
-from nsd_core.engine.compile_once import compile_once
+from nsd_core.engine.compile_once import compile_once, unit
 
 Tableau = namedtuple("Tableau", "A B C E E3 E5 P D A_extra C_extra info")
 # info: [n_stages, error_estimator_order, dop853 (1) or interpolating polynomial (0)]
@@ -151,7 +151,7 @@ def _step_loop(m, w, forces, motion, evaluator, tab, t_eval, settings, out, stat
     err_exp = -1.0 / (tab.info[1] + 1.0)
     nk = K.shape[0]
     t0, t1 = t_eval[0], t_eval[t_eval.shape[0] - 1]
-    nfev, steps, k = 0, 0, 0
+    nfev, steps, k = 0, 0, int(0)  # int(): _record for an int64 k, not also for a Literal 0
     t = t0
     while k < t_eval.shape[0] and t_eval[k] <= t:
         code = _record(k, t_eval[k], y, m, w, forces, motion, evaluator, out)
@@ -159,7 +159,7 @@ def _step_loop(m, w, forces, motion, evaluator, tab, t_eval, settings, out, stat
             stats[2], stats[3] = code, k
             return code
         k += 1
-    code = derivatives(evaluator, t, y, m, w, forces, motion, f, False)
+    code = derivatives(evaluator, t, y, m, w, forces, motion, f, bool(False))
     nfev += 1
     if code != OK:
         stats[2], stats[3] = code, k
@@ -175,7 +175,7 @@ def _step_loop(m, w, forces, motion, evaluator, tab, t_eval, settings, out, stat
         h0 = min(h0, t1 - t0)
         for i in range(ny):
             ys[i] = y[i] + h0 * f[i]
-        code = derivatives(evaluator, t0 + h0, ys, m, w, forces, motion, f_new, False)
+        code = derivatives(evaluator, t0 + h0, ys, m, w, forces, motion, f_new, bool(False))
         nfev += 1
         if code != OK:
             stats[2], stats[3] = code, k
@@ -207,13 +207,13 @@ def _step_loop(m, w, forces, motion, evaluator, tab, t_eval, settings, out, stat
             copy_into(K[0], f)
             for s in range(1, ns):
                 _stage_state(K, tab.A[s], s, h, y, ys)
-                code = derivatives(evaluator, t + tab.C[s] * h, ys, m, w, forces, motion, K[s], False)
+                code = derivatives(evaluator, t + tab.C[s] * h, ys, m, w, forces, motion, K[s], bool(False))
                 nfev += 1
                 if code != OK:
                     stats[0], stats[1], stats[2], stats[3] = steps, nfev, code, k
                     return code
             _stage_state(K, tab.B, ns, h, y, y_new)
-            code = derivatives(evaluator, t + h, y_new, m, w, forces, motion, f_new, False)
+            code = derivatives(evaluator, t + h, y_new, m, w, forces, motion, f_new, bool(False))
             nfev += 1
             if code != OK:
                 stats[0], stats[1], stats[2], stats[3] = steps, nfev, code, k
@@ -239,7 +239,7 @@ def _step_loop(m, w, forces, motion, evaluator, tab, t_eval, settings, out, stat
         if k < t_eval.shape[0] and t_eval[k] <= t_new and t_eval[k] != t_new and dop:
             for s in range(ns + 1, nk):  # the three extra stages of DOP853's interpolant
                 _stage_state(K, tab.A_extra[s - ns - 1], s, h, y, ys)
-                code = derivatives(evaluator, t + tab.C_extra[s - ns - 1] * h, ys, m, w, forces, motion, K[s], False)
+                code = derivatives(evaluator, t + tab.C_extra[s - ns - 1] * h, ys, m, w, forces, motion, K[s], bool(False))
                 nfev += 1
                 if code != OK:
                     stats[0], stats[1], stats[2], stats[3] = steps, nfev, code, k
@@ -287,10 +287,16 @@ RHS_SIG = types.int64(types.float64, F1, MODEL_TYPE, WORK_TYPE, FORCE_FN, MOTION
 
 @njit(cache=True, _nrt=False)
 def _rhs(t, y, m, w, forces, motion, evaluator, dydt):
-    return derivatives(evaluator, t, y, m, w, forces, motion, dydt, True)
+    return derivatives(evaluator, t, y, m, w, forces, motion, dydt, bool(True))
 
 
-KERNELS = EVALUATOR_KERNELS + ((_step_loop, STEP_LOOP_SIG), (_rhs, RHS_SIG))
+STEP_LOOP = unit("step_loop", ((_step_loop, STEP_LOOP_SIG),))
+RHS = unit("rhs_entry", ((_rhs, RHS_SIG),))
+
+
+def _units(evaluator, *units):
+    """The units a kernel call needs: the generic evaluation's too when it is the one passed."""
+    return ((EVALUATE,) if evaluator is generic_evaluator else ()) + units
 
 
 def integrate_kernel(m, w, forces, motion, evaluator, tab, y0, t_eval, settings, out, stats):
@@ -299,7 +305,7 @@ def integrate_kernel(m, w, forces, motion, evaluator, tab, y0, t_eval, settings,
     evaluator: an EVAL_FN (nsd_core.engine.compiled.generic_evaluator, or a mechanism's own).
     settings: rtol, atol, max_step, first_step (0 = select), max_steps (accepted steps; more is a
     runaway: TOO_MANY_STEPS). stats: steps, nfev, status, samples done. Returns the status (0 ok)."""
-    compile_once(KERNELS)
+    compile_once(*_units(evaluator, STEP_LOOP))
     ny, ns = y0.shape[0], int(tab.info[0])
     dop = tab.info[2] == 1.0
     nk = tab.A_extra.shape[0] + ns + 1 if dop else ns + 1
@@ -312,5 +318,5 @@ def integrate_kernel(m, w, forces, motion, evaluator, tab, y0, t_eval, settings,
 
 def rhs_entry(t, y, m, w, forces, motion, evaluator, dydt):
     """One right-hand side (with the reactions) callable from Python (scipy's solvers, the tests)."""
-    compile_once(KERNELS)
+    compile_once(*_units(evaluator, RHS))
     return _rhs(t, y, m, w, forces, motion, evaluator, dydt)
