@@ -40,6 +40,15 @@ from nsd_core.study.store import Store  # noqa: E402
 AIM = 1.5
 
 
+def sched_autogroup() -> bool | None:
+    """Whether the Linux scheduler shares CPU time per session (then, on a loaded machine, the set's
+    two workers share what this one command gets, and their wall seconds stretch; their CPU do not)."""
+    try:
+        return Path("/proc/sys/kernel/sched_autogroup_enabled").read_text().strip() == "1"
+    except OSError:
+        return None
+
+
 def _runs(set_: str, records: str, window: tuple[float, float]):
     p = Params()
     return record_runs(set_, parse_records(records, set_), {"window": list(window)}, p.to_dict(),
@@ -119,6 +128,8 @@ def main(argv=None) -> int:
                                                           for s in sets),
               "startup_warm_s_median": statistics.median((s["worker_startup"] or {}).get("warm_s", float("nan"))
                                                          for s in sets),
+              "median_cpu_ratio": statistics.median(r["set_cpu_s"] / r["single_cpu_s"] for r in rows),
+              "sched_autogroup": sched_autogroup(),
               "machine": platform.platform(), "cpus": os.cpu_count(), "load_average_start": load0,
               "load_average_end": os.getloadavg(), "versions": versions(),
               "date_utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime())}

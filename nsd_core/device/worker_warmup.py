@@ -12,6 +12,7 @@ from nsd_core.device import ground
 from nsd_core.device.model import DEFAULT_SOLVER, simulate
 from nsd_core.device.seismic import simulate_seismic
 from nsd_core.device.warmup import PATHS, warm
+from nsd_core.engine.rk import compile_engine
 
 
 def kind(mode: str, settings: dict | None = None, path: str = "line") -> tuple:
@@ -27,6 +28,8 @@ def warm_worker(kinds=(), record_sets=(), calls=()) -> None:
     or compiled), read the files of each FEMA P695 set named in ``record_sets``, and call each of
     ``calls`` (picklable; a peer engine's tiny run, its import and compiled callbacks). A failure is
     left to the job that meets it, with its own inputs."""
+    if kinds:
+        compile_engine()   # the shared units first, under their locks (nsd_core.engine.compile_once)
     fns = {"drive": simulate, "seismic": simulate_seismic}
     for mode, method, backend, path in kinds:
         warm(mode, fns[mode], method, backend, path)

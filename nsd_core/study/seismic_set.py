@@ -194,7 +194,7 @@ def run_set(runs: list[RecordRun], out: str | Path, workers: int = 1, scheduler=
 
 
 def set_warmup(runs: list[RecordRun], run_engine: Callable | None = None):
-    """A worker's warm-up for these runs (nsd_core.device.warmup.warm_worker): the in-house seismic
+    """A worker's warm-up for these runs (nsd_core.device.worker_warmup.warm_worker): the in-house seismic
     kernels of each solver setting, the record sets' files, and a tiny run of each peer engine."""
     from nsd_core.device.isolation import default_structure
     from nsd_core.device.params import Params

@@ -94,7 +94,7 @@ def run_sweep(designs: list[Design], out: str | Path, workers: int = 1, schedule
 
 def sweep_warmup(designs: list[Design], run_engine: EngineRunner | None = None):
     """A worker's warm-up for these designs: the in-house kernels of each solver setting, and a tiny
-    run of each other engine and setting through ``run_engine`` (nsd_core.device.warmup)."""
+    run of each other engine and setting through ``run_engine`` (nsd_core.device.worker_warmup)."""
     from nsd_core.device.warmup import tiny_drive
     from nsd_core.device.worker_warmup import kind, warm_worker
     kinds = sorted({kind("drive", d.settings) for d in designs if d.engine == "semirecursive"})
