@@ -2,6 +2,7 @@
 pages (closed-loop benchmarks, parametric study) when the results folder holds them."""
 from __future__ import annotations
 
+import math
 import re
 import textwrap
 
@@ -216,16 +217,13 @@ def cost_figure(data):
                           color=color(e), marker=".", lw=1.0)
     lims = _engine_limits(data, "max_dF_rel")
     sp.set_yscale("log")
-    # labels at 1, 2, 5 x 10^k, none on minor ticks: before matplotlib 3.11 a view of less than a decade
-    # fell back to linear minor ticks 0.02 apart, each labelled (1.8e-1 on top of 2e-1)
-    sp.xaxis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0), numticks=12))
-    sp.xaxis.set_minor_formatter(NullFormatter())
     limit_lines(sp, {(e if e in data.engines else "the"): (lim, color(e) if e in data.engines else RED)
                      for e, lim in lims.items()}, x=0.02, ha="left")
     if not sp.lines:
         no_data(sp, "no engine besides the reference ran: nothing to compare")
     else:
         sp.margins(x=0.15, y=0.15)
+        _log_axis_125(sp.xaxis, sp.set_xlim, *sp.get_xlim())
     sp.set_xlabel("warm wall time per cycle [s]")
     sp.set_ylabel(f"max |F - F_ref| / max |F_ref| [-] (vs {ref})")
     sp.set_title("speed-accuracy", fontsize=9)
@@ -237,6 +235,24 @@ def cost_figure(data):
     # below the panel, clear of the points and the limit lines
     sp.legend(handles=handles, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.15), ncol=4, frameon=False)
     return fig
+
+
+def _log_axis_125(axis, set_lim, lo: float, hi: float) -> None:
+    """A log axis with labelled ticks at 1, 2 and 5 x 10^k, its view widened to the nearest of them on
+    each side (so at least two lie in view) and minor ticks unlabelled. Left alone, matplotlib before
+    3.11 falls back on a view under a decade to linear ticks 0.02 x 10^k apart, each labelled: the
+    labels (1.8e-1 and 2e-1, 4.5e-2 and 5e-2) overlap."""
+    if not (0 < lo < hi and math.isfinite(hi)):
+        return
+    steps = (1.0, 2.0, 5.0, 10.0)
+
+    def nice(v, pick):
+        k = math.floor(math.log10(v))
+        return pick(c for c in steps if (c <= v / 10 ** k * (1 + 1e-12) if pick is max else
+                                          c >= v / 10 ** k * (1 - 1e-12))) * 10 ** k
+    set_lim(nice(lo, max), nice(hi, min))
+    axis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0), numticks=12))
+    axis.set_minor_formatter(NullFormatter())
 
 
 def _engine_limits(data, metric: str) -> dict:
