@@ -65,3 +65,4 @@ def quiet_cache_warnings(environ=os.environ) -> bool:
         return False
     warnings.filterwarnings("ignore", message=CACHE_WARNING)
     return True
+
