@@ -57,8 +57,8 @@ from numba import njit, types
 from comparisons.config import SeismicCase, load_cases
 from nsd_core.device.results import atomic_write_json, atomic_write_text
 from nsd_core.engine import rk
-from nsd_core.engine.compiled import OK, evaluate, rhs_into
-from nsd_core.engine.compiled_model import FORCE_FN, MODEL_TYPE, MOTION_FN, WORK_TYPE, make_workspace
+from nsd_core.engine.compiled import OK, derivatives, generic_evaluator
+from nsd_core.engine.compiled_model import EVAL_FN, FORCE_FN, MODEL_TYPE, MOTION_FN, WORK_TYPE, make_workspace
 
 SCAN_CASES = ("figure8_A15mm_f10Hz", "A15mm_f10Hz_psi45")
 SCAN_FACTORS = (0.7, 0.85, 0.95, 1.0, 1.05, 1.2, 1.4)
@@ -66,19 +66,22 @@ DEFAULT_SEISMIC = ("seismic_nf1_pulse",)
 F1 = types.float64[::1]
 
 
-def _stage(t, y, m, w, forces, motion, dydt):
-    return rhs_into(t, y, m, w, forces, motion, dydt, False)  # as the step loop's stages: no reactions
+def _stage(t, y, m, w, forces, motion, evaluator, dydt):
+    return derivatives(evaluator, t, y, m, w, forces, motion, dydt, False)  # as the step loop's stages
 
 
-def _evaluate(t, y, m, w, forces, motion):
-    return evaluate(t, y, m, w, forces, motion, True)
+def _evaluate(t, y, m, w, forces, motion, evaluator):
+    return evaluator(t, y, m, w, forces, motion, True)
 
 
 # the compiled pieces with the callbacks typed as function pointers, as in rk.integrate_kernel
-stage_rhs = njit(types.int64(types.float64, F1, MODEL_TYPE, WORK_TYPE, FORCE_FN, MOTION_FN, F1), cache=True)(_stage)
-evaluate_at = njit(types.int64(types.float64, F1, MODEL_TYPE, WORK_TYPE, FORCE_FN, MOTION_FN), cache=True)(_evaluate)
-record_sample = njit(types.int64(types.int64, types.float64, F1, MODEL_TYPE, WORK_TYPE, FORCE_FN, MOTION_FN,
+stage_rhs = njit(types.int64(types.float64, F1, MODEL_TYPE, WORK_TYPE, FORCE_FN, MOTION_FN, EVAL_FN, F1),
+                 cache=True)(_stage)
+evaluate_at = njit(types.int64(types.float64, F1, MODEL_TYPE, WORK_TYPE, FORCE_FN, MOTION_FN, EVAL_FN),
+                   cache=True)(_evaluate)
+record_sample = njit(types.int64(types.int64, types.float64, F1, MODEL_TYPE, WORK_TYPE, FORCE_FN, MOTION_FN, EVAL_FN,
                                  rk.OUTPUTS_TYPE), cache=True)(rk._record.py_func)
+EVALUATOR = generic_evaluator  # the evaluation every default run uses (nsd_core.device.compiled.run)
 
 
 @dataclass
@@ -145,7 +148,7 @@ def _outputs(s: Setup, keep_steps=0):
 def kernel_run(s: Setup, keep_steps: int):
     """The real compiled kernel: (accepted step ends, [steps, nfev, status, samples], outputs)."""
     out, stats = _outputs(s, keep_steps), np.zeros(4, dtype=np.int64)
-    rk.integrate_kernel(s.model, make_workspace(s.model, s.z0), s.forces, s.motion, rk.tableau("DOP853"),
+    rk.integrate_kernel(s.model, make_workspace(s.model, s.z0), s.forces, s.motion, EVALUATOR, rk.tableau("DOP853"),
                         s.y0.copy(), np.ascontiguousarray(s.t_eval), s.settings, out, stats)
     return out.step_t[:min(int(stats[0]), keep_steps)].copy(), stats, out
 
@@ -156,7 +159,7 @@ def switching(s: Setup, w, t: float, y: np.ndarray) -> np.ndarray | None:
     H), the spring's unclipped push k_se x_s + zeta (Eq. 18, push-only), each wire's stress (Eq. 17a's
     H(sigma)), strain (|eps| in 17d and H(-eps deps) in 17c) and strain rate (sgn(deps) in 17b and
     17c), the spring's zeta and compression rate (sgn(zeta dx_s) in Eq. 18b)."""
-    if evaluate_at(t, y, s.model, w, s.forces, s.motion) != OK:
+    if evaluate_at(t, y, s.model, w, s.forces, s.motion, EVALUATOR) != OK:
         return None
     nr, nw = s.n_ropes, s.n_wires
     ex = y[2 * s.n_free:]
@@ -191,7 +194,8 @@ def traced_run(s: Setup, keep_states: bool = False) -> dict:
     differs between the trial's start and end state), knot (a record sample inside the trial); the
     accepted step ends; steps and nfev counted as the kernel counts them."""
     tab = rk.tableau("DOP853")
-    m, forces, motion = s.model, s.forces, s.motion
+    m, forces, motion, ev = s.model, s.forces, s.motion, EVALUATOR
+    rk.compile_engine()  # the generic evaluation compiled (or loaded) before it is passed as a pointer
     w, w2 = make_workspace(m, s.z0), make_workspace(m, s.z0)  # the run's, the switching functions'
     rtol, atol, max_step = s.settings[0], s.settings[1], s.settings[2]
     t_eval = np.ascontiguousarray(s.t_eval)
@@ -205,9 +209,9 @@ def traced_run(s: Setup, keep_states: bool = False) -> dict:
     t0, t1 = t_eval[0], t_eval[-1]
     nfev, steps, k, t = 0, 0, 0, t0
     while k < len(t_eval) and t_eval[k] <= t:
-        assert record_sample(k, t_eval[k], y, m, w, forces, motion, out) == OK
+        assert record_sample(k, t_eval[k], y, m, w, forces, motion, ev, out) == OK
         k += 1
-    assert stage_rhs(t, y, m, w, forces, motion, f) == OK
+    assert stage_rhs(t, y, m, w, forces, motion, ev, f) == OK
     nfev += 1
     h_abs = s.settings[3]
     if h_abs <= 0.0:  # scipy's select_initial_step, as the kernel
@@ -216,7 +220,7 @@ def traced_run(s: Setup, keep_states: bool = False) -> dict:
         h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
         h0 = min(h0, t1 - t0)
         ys[:] = y + h0 * f
-        assert stage_rhs(t0 + h0, ys, m, w, forces, motion, f_new) == OK
+        assert stage_rhs(t0 + h0, ys, m, w, forces, motion, ev, f_new) == OK
         nfev += 1
         d2 = rk._rms((f_new - f) / scale) / h0
         h1 = max(1e-6, h0 * 1e-3) if d1 <= 1e-15 and d2 <= 1e-15 else (0.01 / max(d1, d2)) ** (1.0 / (tab.info[1] + 1.0))
@@ -236,10 +240,10 @@ def traced_run(s: Setup, keep_states: bool = False) -> dict:
             K[0] = f
             for st in range(1, ns):
                 rk._stage_state(K, tab.A[st], st, h, y, ys)
-                assert stage_rhs(t + tab.C[st] * h, ys, m, w, forces, motion, K[st]) == OK
+                assert stage_rhs(t + tab.C[st] * h, ys, m, w, forces, motion, ev, K[st]) == OK
                 nfev += 1
             rk._stage_state(K, tab.B, ns, h, y, y_new)
-            assert stage_rhs(t + h, y_new, m, w, forces, motion, f_new) == OK
+            assert stage_rhs(t + h, y_new, m, w, forces, motion, ev, f_new) == OK
             nfev += 1
             K[ns] = f_new
             scale[:] = atol + np.maximum(np.abs(y), np.abs(y_new)) * rtol
@@ -270,7 +274,7 @@ def traced_run(s: Setup, keep_states: bool = False) -> dict:
         if k < len(t_eval) and t_eval[k] <= t_new and t_eval[k] != t_new:  # DOP853's three extra stages
             for st in range(ns + 1, nk):
                 rk._stage_state(K, tab.A_extra[st - ns - 1], st, h, y, ys)
-                assert stage_rhs(t + tab.C_extra[st - ns - 1] * h, ys, m, w, forces, motion, K[st]) == OK
+                assert stage_rhs(t + tab.C_extra[st - ns - 1] * h, ys, m, w, forces, motion, ev, K[st]) == OK
                 nfev += 1
             dy = y_new - y
             F[0], F[1], F[2] = dy, h * K[0] - dy, 2.0 * dy - h * (f_new + K[0])
@@ -281,7 +285,7 @@ def traced_run(s: Setup, keep_states: bool = False) -> dict:
                 yq[:] = y_new
             else:
                 rk._dense(tab, K, F, t, h, y, y_new, f_new, t_eval[k], yq)
-            assert record_sample(k, t_eval[k], yq, m, w, forces, motion, out) == OK
+            assert record_sample(k, t_eval[k], yq, m, w, forces, motion, ev, out) == OK
             k += 1
         t = t_new
         y[:] = y_new
