@@ -8,6 +8,7 @@ from nsd_core.device.drive import Drive
 from nsd_core.device.model import device_system, rest_coordinates, simulate
 from nsd_core.device.params import Params
 from nsd_core.engine.callbacks import linear_springs, no_forces, no_motion
+from nsd_core.engine.compiled import generic_evaluator
 from nsd_core.engine.compiled_model import build_model, make_workspace, split_state
 from nsd_core.engine.dynamics import tree_kernel, tree_product
 from nsd_core.engine.mechanism import mechanism
@@ -41,7 +42,7 @@ def test_device_rhs_compiled_equals_the_numpy_specification():
     system, model, z, y, t = device_case()
     ws = make_workspace(model, z)
     dydt = np.zeros(len(y))
-    assert rhs_entry(t, y, model, ws, device_forces, device_motion, dydt) == 0
+    assert rhs_entry(t, y, model, ws, device_forces, device_motion, generic_evaluator, dydt) == 0
     ref = numpy_rhs(system, t, y)
     assert np.all(ref[2:] != 0.0)  # the hysteretic states really move
     np.testing.assert_allclose(dydt, ref, rtol=1e-9, atol=1e-9 * np.max(np.abs(ref)))
@@ -68,7 +69,7 @@ def test_andrews_rhs_compiled_equals_the_numpy_specification():
     y[1] = 50.0  # beta' (rad/s)
     ws = make_workspace(model, z0)
     dydt = np.zeros(len(y))
-    assert rhs_entry(0.0, y, model, ws, linear_springs, no_motion, dydt) == 0
+    assert rhs_entry(0.0, y, model, ws, linear_springs, no_motion, generic_evaluator, dydt) == 0
     ref = numpy_rhs(system, 0.0, y)
     np.testing.assert_allclose(dydt, ref, rtol=1e-9, atol=1e-9 * np.max(np.abs(ref)))
 
@@ -85,7 +86,8 @@ def test_tree_product_is_the_assembled_mass_matrix_times_a_vector(case):
         y, t, forces, motion = y.copy(), 0.0, linear_springs, no_motion
         y[1] = 50.0
     ws = make_workspace(model, z)
-    assert rhs_entry(t, y, model, ws, forces, motion, np.zeros(len(y))) == 0  # fills the body terms
+    # fills the body terms
+    assert rhs_entry(t, y, model, ws, forces, motion, generic_evaluator, np.zeros(len(y))) == 0
     n = len(model.parent)
     M, Q = np.zeros((n, n)), np.zeros(n)
     tree_kernel(model.parent, ws.B, ws.vp, ws.Mb.copy(), ws.Qb.copy(), M, Q, np.zeros(6))
@@ -127,13 +129,14 @@ def test_compiled_step_loop_is_scipys_step_for_step(method, scipy_solver):
     ws = make_workspace(model, z0)
     out = make_outputs(2, len(y0), len(model.parent), 0, 0, 0, keep_steps=100000)
     stats = np.zeros(4, dtype=np.int64)
-    assert integrate_kernel(model, ws, no_forces, no_motion, tableau(method), y0.copy(),
+    assert integrate_kernel(model, ws, no_forces, no_motion, generic_evaluator, tableau(method), y0.copy(),
                             np.array([0.0, t1]), np.array([rtol, atol, np.inf, 0.0, 1e9]), out, stats) == 0
     ws2 = make_workspace(model, z0)
 
     def fun(t, y):
         dydt = np.zeros(len(y))
-        assert rhs_entry(t, np.ascontiguousarray(y), model, ws2, no_forces, no_motion, dydt) == 0
+        assert rhs_entry(t, np.ascontiguousarray(y), model, ws2, no_forces, no_motion, generic_evaluator,
+                         dydt) == 0
         return dydt
 
     solver = scipy_solver(fun, 0.0, y0.copy(), t1, rtol=rtol, atol=atol)

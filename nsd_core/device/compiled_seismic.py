@@ -33,10 +33,11 @@ from nsd_core.device.building_tree import building_block
 from nsd_core.device.compiled import device_forces, force_params as device_force_params
 from nsd_core.device.forces import restrainer_force_scalar
 from nsd_core.device.ground import ground_values
-from nsd_core.engine.compiled import rhs_into
-from nsd_core.engine.compiled_model import (FORCE_FN, FORCE_SIG, MODEL_TYPE, MOTION_FN, MOTION_SIG, WORK_TYPE,
-                                            build_model, make_workspace)
-from nsd_core.engine.rk import integrate_kernel, make_outputs, tableau
+from nsd_core.engine.compiled import EVALUATE, copy_into, derivatives, generic_evaluator
+from nsd_core.engine.compiled_model import (EVAL_FN, FORCE_FN, FORCE_SIG, MODEL_TYPE, MOTION_FN, MOTION_SIG,
+                                            WORK_TYPE, build_model, make_workspace)
+from nsd_core.engine.compile_once import compile_once, unit
+from nsd_core.engine.rk import STEP_LOOP, integrate_kernel, make_outputs, tableau
 
 HEADER = 24
 CHUNK = 1.0  # s of model time per compiled call: progress and Ctrl-C are seen between calls
@@ -176,7 +177,7 @@ def _kinetic_and_height(m, w, vgx, vgy):
     return kin, height
 
 
-def _sample_outputs(m, w, forces, motion, ts, Y, table, tensions, lengths):
+def _sample_outputs(m, w, forces, motion, evaluator, ts, Y, table, tensions, lengths):
     """Evaluate the model once at every sample (t_k, y_k) (the states from the step's dense output)
     for what the state does not hold: accelerations, multipliers, element forces, energies.
     Returns the first failing status (0: all done)."""
@@ -189,7 +190,7 @@ def _sample_outputs(m, w, forces, motion, ts, Y, table, tensions, lengths):
     dydt = np.zeros(Y.shape[1])
     on_cap = np.zeros(3)
     for k in range(ts.shape[0]):
-        code = rhs_into(ts[k], Y[k], m, w, forces, motion, dydt)
+        code = derivatives(evaluator, ts[k], Y[k], m, w, forces, motion, dydt, bool(True))
         if code != 0:
             return code
         row = table[k]
@@ -211,23 +212,34 @@ def _sample_outputs(m, w, forces, motion, ts, Y, table, tensions, lengths):
             clo = max(clo, abs(v))
         row[18] = clo
         row[19], row[20] = _kinetic_and_height(m, w, row[2], row[3])
-        tensions[k] = w.T
-        lengths[k] = w.L
+        copy_into(tensions[k], w.T)  # not tensions[k] = w.T: its shape check compiles a raise path
+        copy_into(lengths[k], w.L)
     return 0
 
 
 F1, F2 = types.float64[::1], types.float64[:, ::1]
-sample_outputs = njit(types.int64(MODEL_TYPE, WORK_TYPE, FORCE_FN, MOTION_FN, F1, F2, F2, F2, F2),
-                      cache=True)(_sample_outputs)
+SAMPLE_SIG = types.int64(MODEL_TYPE, WORK_TYPE, FORCE_FN, MOTION_FN, EVAL_FN, F1, F2, F2, F2, F2)
+_sample_kernel = njit(cache=True)(_sample_outputs)
+SAMPLES = unit("seismic_outputs", ((_sample_kernel, SAMPLE_SIG),))
 
 
-def run(model, z0, y0, t_eval, method, rtol, atol, max_step, first_step, progress=None):
+def sample_outputs(m, w, forces, motion, evaluator, ts, Y, table, tensions, lengths):
+    """_sample_outputs compiled once (for SAMPLE_SIG)."""
+    compile_once(SAMPLES)
+    return _sample_kernel(m, w, forces, motion, evaluator, ts, Y, table, tensions, lengths)
+
+
+def run(model, z0, y0, t_eval, method, rtol, atol, max_step, first_step, progress=None, evaluator=None):
     """Integrate the seismic model over t_eval in compiled chunks of CHUNK model seconds (each starts
     from the last state of the one before, with first_step) and evaluate the outputs at every sample.
 
     Returns a dict: y (samples, len(y0)), table (samples, COLUMNS), tensions, lengths (samples,
     elements), done (samples computed), steps, nfev, status (0 ok, else the kernel's code) and, on a
-    failure, t_fail, z_fail, q_fail (the time, configuration and prescribed motion being evaluated)."""
+    failure, t_fail, z_fail, q_fail (the time, configuration and prescribed motion being evaluated).
+    evaluator: an EVAL_FN (nsd_core.engine.compiled_model); default the generic one."""
+    evaluator = evaluator or generic_evaluator
+    # all three at once: processes started together (a pool's workers) share them out
+    compile_once(*((EVALUATE,) if evaluator is generic_evaluator else ()), STEP_LOOP, SAMPLES)
     ns, ny, ne = len(t_eval), len(y0), len(model.elem_up)
     n, nd, npr = len(model.parent), len(model.dependent), len(model.prescribed)
     res = dict(y=np.zeros((ns, ny)), table=np.zeros((ns, len(COLUMNS))), tensions=np.zeros((ns, ne)),
@@ -243,8 +255,10 @@ def run(model, z0, y0, t_eval, method, rtol, atol, max_step, first_step, progres
         out = make_outputs(len(ts), ny, n, nd, npr, ne)
         stats = np.zeros(4, dtype=np.int64)
         settings = np.array([rtol, atol, max_step, first_step, float(STEPS_PER_SECOND * max(1.0, ts[-1] - ts[0]))])
-        status = integrate_kernel(model, ws, seismic_forces, seismic_motion, tab, y, ts, settings, out, stats) \
-            if len(ts) > 1 else 0
+        status = 0
+        if len(ts) > 1:
+            status = integrate_kernel(model, ws, seismic_forces, seismic_motion, evaluator, tab, y, ts, settings,
+                                      out, stats)
         done = len(ts) if status == 0 else int(stats[3])
         res["steps"] += int(stats[0])
         res["nfev"] += int(stats[1])
@@ -257,7 +271,7 @@ def run(model, z0, y0, t_eval, method, rtol, atol, max_step, first_step, progres
             sl = slice(a + first, a + done)
             res["y"][sl] = out.y[first:done]
             # row slices of C arrays are C-contiguous: the kernel writes into res in place
-            code = sample_outputs(model, ws_out, seismic_forces, seismic_motion, ts[first:done].copy(),
+            code = sample_outputs(model, ws_out, seismic_forces, seismic_motion, evaluator, ts[first:done].copy(),
                                   res["y"][sl], res["table"][sl], res["tensions"][sl], res["lengths"][sl])
             if code != 0 and status == 0:  # pragma: no cover (the samples were evaluated once already)
                 res.update(status=int(code), t_fail=float(ws_out.time[0]), z_fail=ws_out.z.copy(),

@@ -8,18 +8,29 @@ dependent velocities (Eq. 10), the two-point elements, the applied forces throug
 per call beyond a few 3-vectors inside the shared recursions. Small dense blocks are factored by
 LU with partial pivoting written here, so a singular block is a status code, not an exception.
 
+The whole evaluation (``evaluate``) is compiled once, as ``generic_evaluator`` for
+compiled_model.EVAL_SIG, and reaches the step loop and the output kernels as an argument (a function
+pointer, EVAL_FN): they are compiled small and once, and a mechanism may hand them its own evaluation.
+
+Flags handed to the shared kernels are written bool(...) and int(...): numba types a constant
+argument as a Literal and compiles the callee once per value; a plain bool or int makes one serve.
+
 Status codes: 0 ok, 1 Newton did not converge, 2 singular dependent block, 3 singular reduced mass
 matrix, >= 10 a failure reported by the force callback.
 """
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, types
 
 from nsd_core.engine.closure import closure_kernel
+from nsd_core.engine.compiled_model import ARRAY, EVAL_SIG, MODEL_TYPE, WORK_TYPE
 from nsd_core.engine.dynamics import body_terms_kernel, linear_momentum_kernel, tree_product
 from nsd_core.engine.elements import apply_tensions, element_kinematics
 from nsd_core.engine.kinematics import positions_kernel, velocities_kernel
+from nsd_core.engine.compile_once import announce_compilation, compile_once, unit
+
+announce_compilation()  # one line on stderr when this process compiles the engine (a cold cache)
 
 OK, NEWTON_FAILED, SINGULAR_BLOCK, SINGULAR_MASS = 0, 1, 2, 3
 
@@ -78,7 +89,7 @@ def lu_solve(a, piv, b):
 
 
 @njit(cache=True, _nrt=False)
-def _closure(m, w, with_rates, with_positions=True):
+def _closure(m, w, with_rates, with_positions):
     """Phi and Phi_z (with_positions), c (with_rates) of the loop cuts into the workspace."""
     if with_positions:
         w.Phi[:] = 0.0
@@ -113,7 +124,7 @@ def newton(m, w, z):
         # joint (bodies are in tree order, parents first) keep their positions
         start = 0 if it == 0 else first_dep
         positions_kernel(m.parent, m.jtype, m.axis, m.offset, z, w.A, w.r, w.B, w.scratch, start)
-        _closure(m, w, False)
+        _closure(m, w, bool(False), bool(True))
         res, pos = 0.0, 1.0
         for i in range(nd):
             res = max(res, abs(w.Phi[rows[i]]))
@@ -147,7 +158,7 @@ def _maxdiff_dep(dep, a, b):
 
 
 @njit(cache=True, _nrt=False)
-def assemble(m, w, t, zf):
+def _assemble(m, w, t, zf):
     """Full configuration on the loop manifold into w.z, for free coordinates zf and w.q.
 
     The branch rule of SemiRecursiveSystem.assemble, taken from the other side: Newton starts from
@@ -208,8 +219,8 @@ def velocities_and_predictor(m, w, zfd):
     dep, rows, free, pres = m.dependent, m.rows, m.free, m.prescribed
     nd, n = dep.shape[0], w.z.shape[0]
     if w.kin_current[0] == 0:
-        positions_kernel(m.parent, m.jtype, m.axis, m.offset, w.z, w.A, w.r, w.B, w.scratch)
-        _closure(m, w, False)
+        positions_kernel(m.parent, m.jtype, m.axis, m.offset, w.z, w.A, w.r, w.B, w.scratch, int(0))
+        _closure(m, w, bool(False), bool(True))
     w.kin_current[0] = 0
     w.zd[:] = 0.0
     for a in range(pres.shape[0]):
@@ -241,7 +252,7 @@ def velocities_and_predictor(m, w, zfd):
         copy_into(w.z_lin, w.z)
         w.has_lin[0] = 1
     velocities_kernel(m.parent, m.jtype, w.B, w.r, w.zd, w.Z, w.vp, w.scratch)
-    _closure(m, w, True, False)  # positions unchanged: only c is new
+    _closure(m, w, bool(True), bool(False))  # positions unchanged: only c is new
     return OK
 
 
@@ -275,11 +286,11 @@ def reduced_dynamics(m, w, reactions=True):
             acc += w.Jd_inv[j, i] * rhs_i
         w.zdd0[dep[j]] = acc
     # res = M zdd0 - Q; the reduced right-hand side is -R_z^T res
-    tree_product(m.parent, w.B, w.vp, w.Mb, w.Qb, w.gen, w.zdd0, True, w.acc6, w.Fsub, w.res)
+    tree_product(m.parent, w.B, w.vp, w.Mb, w.Qb, w.gen, w.zdd0, bool(True), w.acc6, w.Fsub, w.res)
     for b in range(nf):
         for i in range(n):
             w.vec[i] = w.Rz[i, b]
-        tree_product(m.parent, w.B, w.vp, w.Mb, w.Qb, w.gen, w.vec, False, w.acc6, w.Fsub, w.Mv)  # M R_z[:, b]
+        tree_product(m.parent, w.B, w.vp, w.Mb, w.Qb, w.gen, w.vec, bool(False), w.acc6, w.Fsub, w.Mv)  # M R_z[:, b]
         for a in range(nf):
             acc = 0.0
             for i in range(n):
@@ -301,7 +312,7 @@ def reduced_dynamics(m, w, reactions=True):
     if not reactions:
         return OK
     # M z'' - Q = Phi_z^T lambda + E^T tau
-    tree_product(m.parent, w.B, w.vp, w.Mb, w.Qb, w.gen, w.zdd, True, w.acc6, w.Fsub, w.res)
+    tree_product(m.parent, w.B, w.vp, w.Mb, w.Qb, w.gen, w.zdd, bool(True), w.acc6, w.Fsub, w.res)
     for j in range(nd):
         acc = 0.0
         for i in range(nd):
@@ -316,13 +327,13 @@ def reduced_dynamics(m, w, reactions=True):
 
 
 @njit(cache=True, _nrt=False)
-def evaluate(t, y, m, w, forces, motion, reactions=True):
+def evaluate(t, y, m, w, forces, motion, reactions):
     """Everything at (t, y): w.z, w.zd, w.zdd, w.lam, w.tau (with ``reactions``), w.extra_rate, the
-    kinematics."""
+    kinematics (the contract of compiled_model.EVAL_SIG)."""
     nf = m.free.shape[0]  # y = [z_f, z'_f, extra]: the layout of compiled_model.split_state
     w.time[0] = t
     motion(t, m.motion_params, w.q, w.qd, w.qdd)
-    code = assemble(m, w, t, y[:nf])
+    code = _assemble(m, w, t, y[:nf])
     if code != OK:
         return code
     code = velocities_and_predictor(m, w, y[nf:2 * nf])
@@ -342,9 +353,42 @@ def evaluate(t, y, m, w, forces, motion, reactions=True):
 
 
 @njit(cache=True, _nrt=False)
-def rhs_into(t, y, m, w, forces, motion, dydt, reactions=True):
-    """dy/dt = [z'_f, z''_f, extra rates] into dydt; returns the status code. The reactions
-    w.lam, w.tau are computed too unless ``reactions`` is False (an integrator's stages)."""
+def _generic_evaluator(t, y, m, w, forces, motion, reactions):
+    return evaluate(t, y, m, w, forces, motion, reactions)
+
+
+# The generic evaluation for any mechanism, compiled once for compiled_model.EVAL_SIG (at its first
+# use: compile_once). A kernel calls it through a function pointer, so the evaluate chain is compiled
+# here only, never again inside each caller. Its unit holds _assemble first (Python calls that too:
+# a start state), so that the evaluation links it instead of compiling it again.
+generic_evaluator = _generic_evaluator
+ASSEMBLE_SIG = types.int64(MODEL_TYPE, WORK_TYPE, types.float64, ARRAY)
+EVALUATE = unit("evaluate", ((_assemble, ASSEMBLE_SIG), (generic_evaluator, EVAL_SIG)))
+
+
+def assemble(m, w, t, zf):
+    """_assemble from Python (the evaluation's unit compiled once first)."""
+    compile_once(EVALUATE)
+    return _assemble(m, w, t, zf)
+
+
+@njit(cache=True, _nrt=False)
+def derivatives(evaluator, t, y, m, w, forces, motion, dydt, reactions):
+    """dy/dt = [z'_f, z''_f, extra rates] into dydt from ``evaluator`` (an EVAL_FN); the status code.
+    The reactions w.lam, w.tau are computed too unless ``reactions`` is False (an integrator's stages)."""
+    code = evaluator(t, y, m, w, forces, motion, reactions)
+    nf = m.free.shape[0]
+    for a in range(nf):
+        dydt[a] = y[nf + a]
+        dydt[nf + a] = w.zdd[m.free[a]]
+    copy_into(dydt[2 * nf:], w.extra_rate)
+    return code
+
+
+@njit(cache=True, _nrt=False)
+def rhs_into(t, y, m, w, forces, motion, dydt, reactions):
+    """``derivatives`` with the generic evaluation inlined (a direct call, no function pointer): the
+    engine's kernels use ``derivatives``; the benchmarks time this form against it."""
     code = evaluate(t, y, m, w, forces, motion, reactions)
     nf = m.free.shape[0]
     for a in range(nf):

@@ -78,6 +78,14 @@ FORCE_SIG = types.int64(types.float64, ARRAY, ARRAY, ARRAY, ARRAY, ARRAY, ARRAY,
 MOTION_SIG = types.int64(types.float64, PARAMS, ARRAY, ARRAY, ARRAY)
 FORCE_FN = types.FunctionType(FORCE_SIG)
 MOTION_FN = types.FunctionType(MOTION_SIG)
+# evaluate(t, y, model, workspace, forces, motion, reactions) -> 0 ok, else a status code
+# (nsd_core.engine.compiled): everything at (t, y) into the workspace: w.z, w.zd, w.zdd (Eqs. 9-12),
+# w.lam, w.tau when ``reactions``, w.extra_rate, the kinematics w.A, w.r, w.B, w.Z, w.Phi, the
+# elements' w.L, w.Ld, w.T, w.N, w.time. The kernels (nsd_core.engine.rk, the seismic outputs) take the
+# evaluation as an argument of this type, so it is compiled once, apart from them, and a mechanism
+# may bring its own (a generated one) that fills the same fields.
+EVAL_SIG = types.int64(types.float64, ARRAY, MODEL_TYPE, WORK_TYPE, FORCE_FN, MOTION_FN, types.boolean)
+EVAL_FN = types.FunctionType(EVAL_SIG)
 
 
 def build_model(mech, partition, prescribed, elements=None, force_params=(), motion_params=(),

@@ -6,6 +6,8 @@ in [0.2, 10], no growth right after a rejection), and dense output; tests/test_c
 the accepted steps against scipy's on the same right-hand side. The Butcher tableaus are read from
 scipy's own coefficient arrays at import (data, not code). Outputs at the requested times come
 from each step's dense output, and the model is evaluated there once (reactions, kinematics).
+The model's evaluation is an argument (compiled_model.EVAL_FN: nsd_core.engine.compiled's
+generic_evaluator, or a mechanism's own), called through a function pointer.
 """
 from __future__ import annotations
 
@@ -19,8 +21,9 @@ from scipy.integrate import RK45 as _SciRK45
 
 from numba import typeof, types
 
-from nsd_core.engine.compiled import OK, copy_into, evaluate, rhs_into
-from nsd_core.engine.compiled_model import FORCE_FN, MODEL_TYPE, MOTION_FN, WORK_TYPE
+from nsd_core.engine.compiled import EVALUATE, OK, copy_into, derivatives, generic_evaluator
+from nsd_core.engine.compiled_model import EVAL_FN, FORCE_FN, MODEL_TYPE, MOTION_FN, WORK_TYPE
+from nsd_core.engine.compile_once import compile_once, unit
 
 Tableau = namedtuple("Tableau", "A B C E E3 E5 P D A_extra C_extra info")
 # info: [n_stages, error_estimator_order, dop853 (1) or interpolating polynomial (0)]
@@ -60,8 +63,8 @@ def _rms(v):
 
 
 @njit(cache=True, _nrt=False)
-def _record(k, t, y, m, w, forces, motion, out):
-    code = evaluate(t, y, m, w, forces, motion)
+def _record(k, t, y, m, w, forces, motion, evaluator, out):
+    code = evaluator(t, y, m, w, forces, motion, True)
     copy_into(out.y[k], y)
     copy_into(out.z[k], w.z)
     copy_into(out.zd[k], w.zd)
@@ -135,25 +138,10 @@ def _dense(tab, K, F, t_old, h, y_old, y_new, f_new, tq, out):
         out[i] = acc + y_old[i]
 
 
-def _integrate(m, w, forces, motion, tab, y0, t_eval, settings, out, stats):
-    """Integrate from t_eval[0] to t_eval[-1], evaluating the model at every t_eval into out.
-
-    settings: rtol, atol, max_step, first_step (0 = select), max_steps (accepted steps; more is a
-    runaway: TOO_MANY_STEPS). stats: steps, nfev, status, samples done. Returns the status (0 ok)."""
-    ny, ns = y0.shape[0], int(tab.info[0])
-    dop = tab.info[2] == 1.0
-    nk = tab.A_extra.shape[0] + ns + 1 if dop else ns + 1
-    K = np.zeros((nk, ny))
-    F = np.zeros((7 if dop else 0, ny))
-    vectors = np.zeros((9, ny))  # y, y_new, f, f_new, ys, scale, err, err3, yq
-    vectors[0] = y0
-    return _step_loop(m, w, forces, motion, tab, t_eval, settings, out, stats, K, F, vectors)
-
-
 @njit(cache=True, _nrt=False)
-def _step_loop(m, w, forces, motion, tab, t_eval, settings, out, stats, K, F, vectors):
-    """The step loop of _integrate on preallocated arrays; compiled without reference counting (the
-    workspace's arrays are read through namedtuples in the inner loops, where NRT's atomic counts
+def _step_loop(m, w, forces, motion, evaluator, tab, t_eval, settings, out, stats, K, F, vectors):
+    """The step loop of integrate_kernel on preallocated arrays; compiled without reference counting
+    (the workspace's arrays are read through namedtuples in the inner loops, where NRT's atomic counts
     cost more than the arithmetic)."""
     y, y_new, f, f_new, ys = vectors[0], vectors[1], vectors[2], vectors[3], vectors[4]
     scale, err, err3, yq = vectors[5], vectors[6], vectors[7], vectors[8]
@@ -163,15 +151,15 @@ def _step_loop(m, w, forces, motion, tab, t_eval, settings, out, stats, K, F, ve
     err_exp = -1.0 / (tab.info[1] + 1.0)
     nk = K.shape[0]
     t0, t1 = t_eval[0], t_eval[t_eval.shape[0] - 1]
-    nfev, steps, k = 0, 0, 0
+    nfev, steps, k = 0, 0, int(0)  # int(): _record for an int64 k, not also for a Literal 0
     t = t0
     while k < t_eval.shape[0] and t_eval[k] <= t:
-        code = _record(k, t_eval[k], y, m, w, forces, motion, out)
+        code = _record(k, t_eval[k], y, m, w, forces, motion, evaluator, out)
         if code != OK:
             stats[2], stats[3] = code, k
             return code
         k += 1
-    code = rhs_into(t, y, m, w, forces, motion, f, False)
+    code = derivatives(evaluator, t, y, m, w, forces, motion, f, bool(False))
     nfev += 1
     if code != OK:
         stats[2], stats[3] = code, k
@@ -187,7 +175,7 @@ def _step_loop(m, w, forces, motion, tab, t_eval, settings, out, stats, K, F, ve
         h0 = min(h0, t1 - t0)
         for i in range(ny):
             ys[i] = y[i] + h0 * f[i]
-        code = rhs_into(t0 + h0, ys, m, w, forces, motion, f_new, False)
+        code = derivatives(evaluator, t0 + h0, ys, m, w, forces, motion, f_new, bool(False))
         nfev += 1
         if code != OK:
             stats[2], stats[3] = code, k
@@ -219,13 +207,13 @@ def _step_loop(m, w, forces, motion, tab, t_eval, settings, out, stats, K, F, ve
             copy_into(K[0], f)
             for s in range(1, ns):
                 _stage_state(K, tab.A[s], s, h, y, ys)
-                code = rhs_into(t + tab.C[s] * h, ys, m, w, forces, motion, K[s], False)
+                code = derivatives(evaluator, t + tab.C[s] * h, ys, m, w, forces, motion, K[s], bool(False))
                 nfev += 1
                 if code != OK:
                     stats[0], stats[1], stats[2], stats[3] = steps, nfev, code, k
                     return code
             _stage_state(K, tab.B, ns, h, y, y_new)
-            code = rhs_into(t + h, y_new, m, w, forces, motion, f_new, False)
+            code = derivatives(evaluator, t + h, y_new, m, w, forces, motion, f_new, bool(False))
             nfev += 1
             if code != OK:
                 stats[0], stats[1], stats[2], stats[3] = steps, nfev, code, k
@@ -251,7 +239,7 @@ def _step_loop(m, w, forces, motion, tab, t_eval, settings, out, stats, K, F, ve
         if k < t_eval.shape[0] and t_eval[k] <= t_new and t_eval[k] != t_new and dop:
             for s in range(ns + 1, nk):  # the three extra stages of DOP853's interpolant
                 _stage_state(K, tab.A_extra[s - ns - 1], s, h, y, ys)
-                code = rhs_into(t + tab.C_extra[s - ns - 1] * h, ys, m, w, forces, motion, K[s], False)
+                code = derivatives(evaluator, t + tab.C_extra[s - ns - 1] * h, ys, m, w, forces, motion, K[s], bool(False))
                 nfev += 1
                 if code != OK:
                     stats[0], stats[1], stats[2], stats[3] = steps, nfev, code, k
@@ -271,7 +259,7 @@ def _step_loop(m, w, forces, motion, tab, t_eval, settings, out, stats, K, F, ve
                 copy_into(yq, y_new)
             else:
                 _dense(tab, K, F, t, h, y, y_new, f_new, t_eval[k], yq)
-            code = _record(k, t_eval[k], yq, m, w, forces, motion, out)
+            code = _record(k, t_eval[k], yq, m, w, forces, motion, evaluator, out)
             if code != OK:
                 stats[0], stats[1], stats[2], stats[3] = steps, nfev, code, k
                 return code
@@ -289,16 +277,46 @@ def _step_loop(m, w, forces, motion, tab, t_eval, settings, out, stats, K, F, ve
 
 TABLEAU_TYPE = typeof(tableau("DOP853"))
 OUTPUTS_TYPE = typeof(make_outputs(1, 1, 1, 1, 1, 1, 1))
-F1, I1 = types.float64[::1], types.int64[::1]
-# an explicit signature: the force and motion callbacks are typed as function pointers, so the
-# compiled loop is cached on disk once for every mechanism and force law
-integrate_kernel = njit(types.int64(MODEL_TYPE, WORK_TYPE, FORCE_FN, MOTION_FN, TABLEAU_TYPE, F1, F1, F1,
-                                    OUTPUTS_TYPE, I1), cache=True)(_integrate)
+F1, F2, I1 = types.float64[::1], types.float64[:, ::1], types.int64[::1]
+# explicit signatures: the force, motion and evaluation callbacks are typed as function pointers, so
+# each kernel is compiled (and cached on disk) once for every mechanism, force law and evaluator
+STEP_LOOP_SIG = types.int64(MODEL_TYPE, WORK_TYPE, FORCE_FN, MOTION_FN, EVAL_FN, TABLEAU_TYPE, F1, F1, OUTPUTS_TYPE,
+                            I1, F2, F2, F2)
+RHS_SIG = types.int64(types.float64, F1, MODEL_TYPE, WORK_TYPE, FORCE_FN, MOTION_FN, EVAL_FN, F1)
 
 
-def _rhs(t, y, m, w, forces, motion, dydt):
-    return rhs_into(t, y, m, w, forces, motion, dydt)
+@njit(cache=True, _nrt=False)
+def _rhs(t, y, m, w, forces, motion, evaluator, dydt):
+    return derivatives(evaluator, t, y, m, w, forces, motion, dydt, bool(True))
 
 
-# one right-hand side callable from Python (scipy's solvers, the tests)
-rhs_entry = njit(types.int64(types.float64, F1, MODEL_TYPE, WORK_TYPE, FORCE_FN, MOTION_FN, F1), cache=True)(_rhs)
+STEP_LOOP = unit("step_loop", ((_step_loop, STEP_LOOP_SIG),))
+RHS = unit("rhs_entry", ((_rhs, RHS_SIG),))
+
+
+def _units(evaluator, *units):
+    """The units a kernel call needs: the generic evaluation's too when it is the one passed."""
+    return ((EVALUATE,) if evaluator is generic_evaluator else ()) + units
+
+
+def integrate_kernel(m, w, forces, motion, evaluator, tab, y0, t_eval, settings, out, stats):
+    """Integrate from t_eval[0] to t_eval[-1], evaluating the model at every t_eval into out.
+
+    evaluator: an EVAL_FN (nsd_core.engine.compiled.generic_evaluator, or a mechanism's own).
+    settings: rtol, atol, max_step, first_step (0 = select), max_steps (accepted steps; more is a
+    runaway: TOO_MANY_STEPS). stats: steps, nfev, status, samples done. Returns the status (0 ok)."""
+    compile_once(*_units(evaluator, STEP_LOOP))
+    ny, ns = y0.shape[0], int(tab.info[0])
+    dop = tab.info[2] == 1.0
+    nk = tab.A_extra.shape[0] + ns + 1 if dop else ns + 1
+    K = np.zeros((nk, ny))
+    F = np.zeros((7 if dop else 0, ny))
+    vectors = np.zeros((9, ny))  # y, y_new, f, f_new, ys, scale, err, err3, yq
+    vectors[0] = y0
+    return _step_loop(m, w, forces, motion, evaluator, tab, t_eval, settings, out, stats, K, F, vectors)
+
+
+def rhs_entry(t, y, m, w, forces, motion, evaluator, dydt):
+    """One right-hand side (with the reactions) callable from Python (scipy's solvers, the tests)."""
+    compile_once(*_units(evaluator, RHS))
+    return _rhs(t, y, m, w, forces, motion, evaluator, dydt)

@@ -1,0 +1,124 @@
+"""Each kernel of the engine compiled once: for its one signature, at its first use, by one process.
+
+The engine's kernels are numba functions whose arguments include compiled callbacks (forces, motion,
+the evaluation) typed as function pointers (compiled_model.FORCE_FN, MOTION_FN, EVAL_FN), so one
+machine-code version serves every mechanism. ``compile_once`` compiles a kernel for its signature
+when it is first needed, not at import (an import, or a bad input's one-line error, never waits for
+the compiler), or loads it from numba's on-disk cache (nsd_core.numba_cache), under a lock file per
+kernel in the cache folder: processes started together (a pool's workers) never compile the same
+kernel at once; the first takes it, the others compile what is left, or wait and then load it.
+
+The first real compilation in a process prints one line on stderr (``announce_compilation``: numba's
+"numba:compile" event fires only when it compiles, never on a load from the cache), so a newcomer on
+a cold cache knows why the first run waits.
+"""
+from __future__ import annotations
+
+import contextlib
+import os
+import sys
+
+from numba import types
+
+
+NOTICE = ("nsd: compiling the in-house engine once for this version of the source (about {seconds} s on "
+          "2 cores; later runs load it from the cache) ...")
+NOTICE_SECONDS = 60  # measured, cold cache, one process: the first drive run's compilation
+_announced = False
+
+
+def _notice(stream=None) -> None:
+    global _announced
+    if not _announced:
+        _announced = True
+        print(NOTICE.format(seconds=NOTICE_SECONDS), file=stream or sys.stderr, flush=True)
+
+
+def announce_compilation() -> None:
+    """Print ``NOTICE`` once in this process when numba starts compiling a function of nsd_core
+    (numba's "numba:compile" event fires only on a real compilation, never on a load from the cache)."""
+    from numba.core import event
+
+    class Listener(event.Listener):
+        def on_start(self, ev):
+            func = getattr(ev.data.get("dispatcher"), "py_func", None)
+            if getattr(func, "__module__", "").startswith("nsd_core."):
+                _notice()
+
+        def on_end(self, ev):
+            pass
+
+    if not getattr(announce_compilation, "installed", False):
+        announce_compilation.installed = True
+        event.register("numba:compile", Listener())
+
+
+@contextlib.contextmanager
+def _locked(name: str, block: bool):
+    """An exclusive lock file ``name`` in the cache folder: yields True when held (False when
+    ``block`` is False and another process holds it). Without a cache folder or flock: no lock."""
+    from numba.core import config
+    folder = config.CACHE_DIR or os.environ.get("NUMBA_CACHE_DIR")
+    try:
+        import fcntl
+    except ImportError:  # not Unix
+        fcntl = None
+    if not folder or fcntl is None:
+        yield True
+        return
+    try:
+        fd = os.open(os.path.join(folder, f".{name}.lock"), os.O_RDWR | os.O_CREAT, 0o644)
+    except OSError:
+        yield True
+        return
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | (0 if block else fcntl.LOCK_NB))
+        except BlockingIOError:
+            yield False
+            return
+        yield True
+    finally:
+        os.close(fd)  # closing releases the lock
+
+
+UNITS: dict[str, tuple] = {}  # name -> ((dispatcher, signature), ...), compiled in order under one lock
+_DONE: set[str] = set()
+
+
+def unit(name: str, kernels) -> str:
+    """Register a unit: kernels compiled together (a kernel after the ones it calls, so that it links
+    them instead of compiling them again); ``name`` names its lock. Returns the name."""
+    UNITS[name] = tuple(kernels)
+    return name
+
+
+def _compile_unit(name: str, block: bool) -> bool:
+    """Compile (or load) the unit under its lock; False when ``block`` is False and another process
+    holds the lock (it is compiling the unit now)."""
+    with _locked(name, block) as held:
+        if not held:
+            return False
+        for d, sig in UNITS[name]:
+            if tuple(sig.args) not in d.overloads:
+                d.compile(sig)
+            if any(isinstance(a, types.FunctionType) for a in sig.args):
+                # closed to other signatures, as njit(signature) is: a call from Python with a compiled
+                # function for a function-pointer argument then converts it (no specialisation for it)
+                d.disable_compile()
+    _DONE.add(name)
+    return True
+
+
+def compile_once(*names: str) -> None:
+    """Make the units ``names`` ready in this process: compiled, or loaded from the cache. A unit that
+    another process is compiling is waited for (then loaded), and meanwhile this process compiles the
+    registered units no one has taken: processes started together share the work, none is done twice."""
+    needed = [n for n in names if n not in _DONE]
+    while needed:
+        needed = [n for n in needed if not _compile_unit(n, block=False)]
+        if needed:  # others are compiling what is needed: do the rest of the work meanwhile
+            for other in list(UNITS):
+                if other not in _DONE and other not in needed:
+                    _compile_unit(other, block=False)
+            _compile_unit(needed.pop(0), block=True)
