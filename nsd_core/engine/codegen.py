@@ -28,6 +28,7 @@ import tempfile
 from pathlib import Path
 
 from nsd_core.engine.codegen_main import generate_source
+from nsd_core.engine.compile_once import _locked, compile_once
 
 ENV = "NSD_EVALUATOR"  # "generic": the generic kernels; anything else (default "generated"): this module
 _LOADED: dict[str, object] = {}
@@ -64,16 +65,18 @@ def generated_evaluator(model):
     name = f"nsd_eval_{key}"
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
+    with _locked(name, True):  # processes started together compile it once; the others load it
+        spec.loader.exec_module(module)  # njit with a signature: compiled (or loaded) here
     sys.modules[name] = module
-    spec.loader.exec_module(module)
     _LOADED[key] = module.evaluate
     return module.evaluate
 
 
 def generic_evaluator():
-    """nsd_core.engine.compiled.evaluate with the evaluator signature (the specification)."""
-    from nsd_core.engine.codegen_main import generic_entry
-    return generic_entry()
+    """nsd_core.engine.compiled.generic_evaluator, compiled (the specification)."""
+    from nsd_core.engine.compiled import EVALUATE, generic_evaluator as generic
+    compile_once(EVALUATE)
+    return generic
 
 
 def evaluator_for(model, kind: str | None = None):
