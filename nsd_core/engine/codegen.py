@@ -65,9 +65,9 @@ def generated_evaluator(model):
     name = f"nsd_eval_{key}"
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module  # before it runs: numba's cache records the module by name, to import it
     with _locked(name, True):  # processes started together compile it once; the others load it
         spec.loader.exec_module(module)  # njit with a signature: compiled (or loaded) here
-    sys.modules[name] = module
     _LOADED[key] = module.evaluate
     return module.evaluate
 
