@@ -60,13 +60,14 @@ def generated_evaluator(model):
     if key in _LOADED:
         return _LOADED[key]
     path = source_folder() / f"nsd_eval_{key}.py"
-    if not path.exists() or path.read_text() != source:
-        _write_atomic(path, source)  # an unchanged file keeps its time stamp, which numba's cache checks
     name = f"nsd_eval_{key}"
-    spec = importlib.util.spec_from_file_location(name, path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module  # before it runs: numba's cache records the module by name, to import it
-    with _locked(name, True):  # processes started together compile it once; the others load it
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with _locked(name, True):  # processes started together write and compile it once; the others load it
+        if not path.exists() or path.read_text() != source:
+            _write_atomic(path, source)  # an unchanged file keeps its time stamp, which numba's cache checks
+        spec = importlib.util.spec_from_file_location(name, path)
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[name] = module  # before it runs: numba's cache records the module by name, to import it
         spec.loader.exec_module(module)  # njit with a signature: compiled (or loaded) here
     _LOADED[key] = module.evaluate
     return module.evaluate
