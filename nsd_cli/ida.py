@@ -137,6 +137,8 @@ def run(args) -> int:
     index = write_ida(traces, store, index)
     bad = _cross_check(traces, store, engines, workers, args, index, run_seismic_engine)
     _print(index, out)
+    from reports.build import draw_study  # the study's PNGs into its own folder (issue 20)
+    draw_study(out)
     undetermined = [t["name"] for t in index["traces"] if t["undetermined"]]
     return 3 if undetermined or bad else 0
 

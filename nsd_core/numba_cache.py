@@ -10,16 +10,12 @@ numba warns on stderr when it cannot cache a kernel ("Cannot cache compiled func
 dynamic globals": every kernel under NUMBA_OPT=0). Such a kernel is compiled again in the next
 process, which costs time and changes no number; the warning would break the one-line error promise,
 so ``quiet_cache_warnings`` keeps it off the user's stderr (NSD_NUMBA_CACHE_WARNINGS=1 shows it).
-
-``compile_engine`` compiles (or loads) every kernel of the in-house engine at once, cooperating
-with other processes doing the same (nsd_core.engine.compile_once): a pool initializer calls it.
 """
 from __future__ import annotations
 
 import hashlib
 import os
 import sys
-import time
 import warnings
 from pathlib import Path
 
@@ -70,15 +66,3 @@ def quiet_cache_warnings(environ=os.environ) -> bool:
     warnings.filterwarnings("ignore", message=CACHE_WARNING)
     return True
 
-
-def compile_engine() -> float:
-    """Compile (or load) every kernel of the in-house engine in this process, cooperating with other
-    processes doing the same (``compile_once``); the seconds it took. A pool initializer calls it, so
-    a worker's first task finds the engine ready."""
-    start = time.perf_counter()
-    from nsd_core.device.compiled_seismic import SAMPLES
-    from nsd_core.engine.compile_once import compile_once
-    from nsd_core.engine.compiled import EVALUATE
-    from nsd_core.engine.rk import STEP_LOOP
-    compile_once(EVALUATE, STEP_LOOP, SAMPLES)
-    return time.perf_counter() - start

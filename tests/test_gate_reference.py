@@ -131,3 +131,21 @@ def test_power_options_bad_input_exit_2_and_nothing_written(tmp_path, args, word
                        capture_output=True, text=True, timeout=120)
     assert p.returncode == 2 and words in p.stderr and len(p.stderr.strip().splitlines()) == 1, p.stderr
     assert not out.exists()
+
+
+def test_the_in_house_limit_follows_its_ensemble_and_a_peers_its_own_error():
+    """derive_limits: the in-house engine error is the largest over its realizations (rtol x
+    REALIZATIONS); a fixed-step peer's is its one run's. A realization above the run raises the
+    in-house limit to FACTOR x it; the peer's limit does not see the ensemble."""
+    from benchmarks.derive_limits import FACTOR, derive
+
+    def row(engine, value):
+        return {"engine": engine, "case": "c", "metric": "max_dF_rel", "value": value, "gated": True,
+                "reference": "converged"}
+    summary = {"metrics": [row("semirecursive", 1e-7), row("mujoco", 2e-5)]}
+    base = derive(summary, {"c": {"max_dF_rel": 1e-10}})
+    spread = derive(summary, {"c": {"max_dF_rel": 1e-10}}, {"c": {"max_dF_rel": 4e-6}})
+    assert base["semirecursive"]["case"]["c"]["max_dF_rel"] == pytest.approx(FACTOR * 1e-7)
+    assert spread["semirecursive"]["case"]["c"]["max_dF_rel"] == pytest.approx(FACTOR * 4e-6)
+    assert spread["mujoco"]["case"]["c"]["max_dF_rel"] == base["mujoco"]["case"]["c"]["max_dF_rel"] \
+        == pytest.approx(FACTOR * 2e-5)

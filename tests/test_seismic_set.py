@@ -216,3 +216,26 @@ def test_report_bad_seismic_folder_exit_2_nothing_written(tmp_path, capsys):
     err = capsys.readouterr().err
     assert code == 2 and "malformed (no column 'x')" in err and len(err.strip().splitlines()) == 1, err
     assert not out.exists()
+
+
+def test_a_set_run_with_peer_engines_stores_their_differences(tmp_path):
+    """--engines with --record-set: every peer's run is summarised like the in-house one (it once failed
+    with KeyError 'ax_g': the peers did not write the ground's columns), its differences reach set.csv
+    and the record's summary.json, and its CSV carries the same ground input as the in-house run's."""
+    from nsd_core.device.results import read_csv
+    out = tmp_path / "run"
+    p = nsd("seismic", "--record-set", "nearfield-pulse", "--records", "2", "--window", "2,2.3", "--dt-out", "0.002",
+            "--engines", "semirecursive,mujoco,exudyn", "--workers", "1", "--out", str(out))
+    assert p.returncode == 0, p.stdout + p.stderr
+    (row,) = rows(out / "set.csv")
+    assert row["status"] == "ok" and row["reason"] == "", row
+    summary = json.loads((out / "records" / "nearfield-pulse_2" / "summary.json").read_text())
+    ref = read_csv(out / "records" / "nearfield-pulse_2" / "seismic.csv")
+    for peer in ("mujoco", "exudyn"):
+        diffs = summary["engines"][peer]
+        for c in ("du", "dF", "da"):
+            assert float(row[f"{peer}_{c} [-]"]) == pytest.approx(diffs[c], rel=1e-9)
+            assert 0 < diffs[c] < 0.05, (peer, c, diffs[c])  # the engines agree; a broken peer would not
+        other = read_csv(out / "records" / "nearfield-pulse_2" / f"seismic_{peer}.csv")
+        for c in ("x_g", "y_g", "ax_g", "ay_g"):
+            np.testing.assert_allclose(other[c], ref[c], rtol=0, atol=1e-12 * np.max(np.abs(ref[c])))

@@ -91,7 +91,28 @@ def run_seismic_engine(name: str, params: Params, structure, ground, duration=No
         c0 = time.process_time()
         result = engine.run_seismic(params, structure, ground, duration=duration, dt_out=dt_out,
                                     settings=settings or None)
-    return _with_times(name, result, warm, time.process_time() - c0)
+    return _with_ground(_with_times(name, result, warm, time.process_time() - c0), ground)
+
+
+GROUND_COLUMNS = ("x_g", "y_g", "ax_g", "ay_g")  # nsd_core.device.seismic's columns of the input itself
+
+
+def _with_ground(result, ground):
+    """The ground motion the engine was given, at its output times, as the in-house run's columns
+    (x_g, y_g, ax_g, ay_g) where the engine did not write them: a peer's seismic_<engine>.csv then has
+    the in-house columns, and its summary (nsd_core.device.seismic_summary: the peak ground
+    acceleration) can be made from it, as a record set does for every run."""
+    from nsd_core.device.seismic import seismic_units
+    missing = [c for c in GROUND_COLUMNS if c not in result.columns]
+    if missing:
+        d, _, a = ground(result["t"])
+        values = {"x_g": d[:, 0], "y_g": d[:, 1], "ax_g": a[:, 0], "ay_g": a[:, 1]}
+        cols = {"t": result.columns["t"], **{c: values[c] for c in missing},
+                **{k: v for k, v in result.columns.items() if k != "t"}}
+        result.columns.clear()
+        result.columns.update(cols)
+        result.units.update(seismic_units(dict.fromkeys(missing)))
+    return result
 
 
 def run_seismic_job(engine: str, params: Params, structure, ground, duration, dt_out, settings: dict) -> dict[str, Any]:

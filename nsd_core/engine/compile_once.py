@@ -58,7 +58,7 @@ def _locked(name: str, block: bool):
     """An exclusive lock file ``name`` in the cache folder: yields True when held (False when
     ``block`` is False and another process holds it). Without a cache folder or flock: no lock."""
     from numba.core import config
-    folder = config.CACHE_DIR or os.environ.get("NUMBA_CACHE_DIR")
+    folder = os.environ.get("NUMBA_CACHE_DIR") or config.CACHE_DIR  # numba reloads its config from it
     try:
         import fcntl
     except ImportError:  # not Unix
@@ -82,43 +82,46 @@ def _locked(name: str, block: bool):
         os.close(fd)  # closing releases the lock
 
 
-UNITS: dict[str, tuple] = {}  # name -> ((dispatcher, signature), ...), compiled in order under one lock
-_DONE: set[str] = set()
+UNITS: dict[str, tuple] = {}  # name -> (((dispatcher, signature), ...), lock name, shared)
+DONE: set[str] = set()
 
 
-def unit(name: str, kernels) -> str:
-    """Register a unit: kernels compiled together (a kernel after the ones it calls, so that it links
-    them instead of compiling them again); ``name`` names its lock. Returns the name."""
-    UNITS[name] = tuple(kernels)
+def unit(name: str, kernels, lock: str | None = None, shared: bool = True) -> str:
+    """Register a unit: kernels compiled together, in order (a kernel after the ones it calls, so that
+    it links them instead of compiling them again), under the lock ``lock`` (default: the name; units
+    that hold the same kernel share one). ``shared``: a process waiting for another unit compiles this
+    one meanwhile (every run needs it). Returns the name."""
+    UNITS[name] = (tuple(kernels), lock or name, shared)
     return name
 
 
 def _compile_unit(name: str, block: bool) -> bool:
     """Compile (or load) the unit under its lock; False when ``block`` is False and another process
     holds the lock (it is compiling the unit now)."""
-    with _locked(name, block) as held:
+    kernels, lock, _ = UNITS[name]
+    with _locked(lock, block) as held:
         if not held:
             return False
-        for d, sig in UNITS[name]:
+        for d, sig in kernels:
             if tuple(sig.args) not in d.overloads:
                 d.compile(sig)
             if any(isinstance(a, types.FunctionType) for a in sig.args):
                 # closed to other signatures, as njit(signature) is: a call from Python with a compiled
                 # function for a function-pointer argument then converts it (no specialisation for it)
                 d.disable_compile()
-    _DONE.add(name)
+    DONE.add(name)
     return True
 
 
 def compile_once(*names: str) -> None:
     """Make the units ``names`` ready in this process: compiled, or loaded from the cache. A unit that
     another process is compiling is waited for (then loaded), and meanwhile this process compiles the
-    registered units no one has taken: processes started together share the work, none is done twice."""
-    needed = [n for n in names if n not in _DONE]
+    shared units no one has taken: processes started together share the work, none is done twice."""
+    needed = [n for n in names if n not in DONE]
     while needed:
         needed = [n for n in needed if not _compile_unit(n, block=False)]
         if needed:  # others are compiling what is needed: do the rest of the work meanwhile
-            for other in list(UNITS):
-                if other not in _DONE and other not in needed:
+            for other, (_, _, shared) in list(UNITS.items()):
+                if shared and other not in DONE and other not in needed:
                     _compile_unit(other, block=False)
             _compile_unit(needed.pop(0), block=True)

@@ -28,7 +28,7 @@ from nsd_core.engine.compiled_model import ARRAY, EVAL_SIG, MODEL_TYPE, WORK_TYP
 from nsd_core.engine.dynamics import body_terms_kernel, linear_momentum_kernel, tree_product
 from nsd_core.engine.elements import apply_tensions, element_kinematics
 from nsd_core.engine.kinematics import positions_kernel, velocities_kernel
-from nsd_core.engine.compile_once import announce_compilation, compile_once, unit
+from nsd_core.engine.compile_once import DONE, announce_compilation, compile_once, unit
 
 announce_compilation()  # one line on stderr when this process compiles the engine (a cold cache)
 
@@ -360,16 +360,17 @@ def _generic_evaluator(t, y, m, w, forces, motion, reactions):
 # The generic evaluation for any mechanism, compiled once for compiled_model.EVAL_SIG (at its first
 # use: compile_once). A kernel calls it through a function pointer, so the evaluate chain is compiled
 # here only, never again inside each caller. Its unit holds _assemble first (Python calls that too:
-# a start state), so that the evaluation links it instead of compiling it again.
+# a start state, unit ASSEMBLE), so that the evaluation links it instead of compiling it again.
 generic_evaluator = _generic_evaluator
 ASSEMBLE_SIG = types.int64(MODEL_TYPE, WORK_TYPE, types.float64, ARRAY)
 EVALUATE = unit("evaluate", ((_assemble, ASSEMBLE_SIG), (generic_evaluator, EVAL_SIG)))
-ASSEMBLE = unit("assemble", ((_assemble, ASSEMBLE_SIG),))  # alone: a run on a generated evaluation
+ASSEMBLE = unit("assemble", ((_assemble, ASSEMBLE_SIG),), lock="evaluate")  # one lock: one _assemble
 
 
 def assemble(m, w, t, zf):
-    """_assemble from Python (compiled once first; the generic evaluation only where a run uses it)."""
-    compile_once(ASSEMBLE)
+    """_assemble from Python (a run's start state), compiled once (unit ASSEMBLE)."""
+    if ASSEMBLE not in DONE:
+        compile_once(ASSEMBLE)
     return _assemble(m, w, t, zf)
 
 

@@ -12,6 +12,7 @@ generic_evaluator, or a mechanism's own), called through a function pointer.
 from __future__ import annotations
 
 import math
+import time
 from collections import namedtuple
 
 import numpy as np
@@ -291,7 +292,16 @@ def _rhs(t, y, m, w, forces, motion, evaluator, dydt):
 
 
 STEP_LOOP = unit("step_loop", ((_step_loop, STEP_LOOP_SIG),))
-RHS = unit("rhs_entry", ((_rhs, RHS_SIG),))
+RHS = unit("rhs_entry", ((_rhs, RHS_SIG),), shared=False)  # scipy's solvers and the tests only
+
+
+def compile_engine() -> float:
+    """Make the units every in-house run needs ready in this process (the generic evaluation, the step
+    loop: compiled, or loaded from the cache), sharing the work with processes doing the same
+    (compile_once); the seconds it took. For a pool initializer: the engine ready before a task."""
+    start = time.perf_counter()
+    compile_once(EVALUATE, STEP_LOOP)
+    return time.perf_counter() - start
 
 
 def _units(evaluator, *units):

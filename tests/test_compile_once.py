@@ -1,0 +1,122 @@
+"""The engine compiled once (nsd_core.engine.compile_once): one line on stderr when a process really
+compiles it, nothing when it loads a warm cache or stops on a bad input, nothing at import; and
+processes started together share the units out instead of compiling the same one at once."""
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import textwrap
+import time
+
+import pytest
+from numba import njit, types
+
+from nsd_core.engine import compile_once as co
+
+NOTICE_START = co.NOTICE.split("(")[0]
+
+
+def _python(code: str, cache_home, timeout=900) -> subprocess.CompletedProcess:
+    env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR", "XDG_CACHE_HOME")}
+    env["XDG_CACHE_HOME"] = str(cache_home)
+    return subprocess.run([sys.executable, "-c", textwrap.dedent(code)], env=env, capture_output=True, text=True,
+                          timeout=timeout)
+
+
+def test_the_notice_comes_once_for_a_compilation_of_nsd_core_and_never_at_import(tmp_path):
+    p = _python("""
+        import sys
+        from numba import njit
+        import nsd_core.engine.compiled as C
+        import nsd_core.engine.rk  # the engine's kernels compile at their first use, not at import
+        sys.stderr.write("imported\\n")
+        sys.stderr.flush()
+        njit(lambda x: 2 * x)(3)  # not nsd_core's: no notice
+        sys.stderr.write("other code compiled\\n")
+        sys.stderr.flush()
+        f = njit(cache=False)(C.copy_into.py_func)  # a fresh dispatcher of an engine function
+        import numpy as np
+        f(np.zeros(3), np.ones(3))
+        f(np.zeros((2, 2)), np.ones((2, 2)))  # a second compilation: no second line
+    """, tmp_path)
+    assert p.returncode == 0, p.stderr
+    lines = p.stderr.strip().splitlines()
+    assert lines[:2] == ["imported", "other code compiled"], p.stderr
+    assert len(lines) == 3 and lines[2].startswith(NOTICE_START), p.stderr
+
+
+def test_a_bad_input_on_a_cold_cache_is_one_line_and_compiles_nothing(tmp_path):
+    p = _python("""
+        import sys
+        from nsd_cli.main import main
+        sys.argv = ["nsd", "cycle", "--amplitude", "0.01", "--frequency", "1", "--set", "bogus=1", "--out", "x"]
+        sys.exit(main())
+    """, tmp_path, timeout=120)
+    assert p.returncode == 2, p.stderr
+    lines = p.stderr.strip().splitlines()
+    assert len(lines) == 1 and "bogus" in lines[0] and NOTICE_START not in p.stderr, p.stderr
+
+
+@pytest.mark.slow
+def test_a_cold_cache_prints_the_notice_a_warm_one_does_not(tmp_path):
+    run = """
+        from nsd_core.device.drive import Drive
+        from nsd_core.device.model import simulate
+        from nsd_core.device.params import Params
+        r = simulate(Params(), Drive(0.001, 20.0, cycles=1, samples_per_cycle=16))
+        print(r["F"][-1])
+    """
+    cold = _python(run, tmp_path)
+    assert cold.returncode == 0, cold.stderr
+    assert [line for line in cold.stderr.splitlines() if line.startswith(NOTICE_START)] == \
+        [co.NOTICE.format(seconds=co.NOTICE_SECONDS)], cold.stderr
+    warm = _python(run, tmp_path)
+    assert warm.returncode == 0 and warm.stdout == cold.stdout, warm.stderr
+    assert NOTICE_START not in warm.stderr, warm.stderr
+
+
+def _twice(x):
+    return 2.0 * x
+
+
+def _thrice(x):
+    return 3.0 * x
+
+
+def test_a_unit_another_process_compiles_is_waited_for_and_the_rest_done_meanwhile(tmp_path, monkeypatch):
+    """A process holds unit a's lock (it is compiling a) for 2 s: compile_once("a") compiles the free
+    unit b first, then waits for a's lock and only then makes a ready."""
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    sig = types.float64(types.float64)
+    a, b = njit(cache=False)(_twice), njit(cache=False)(_thrice)
+    monkeypatch.setattr(co, "UNITS", {})
+    monkeypatch.setattr(co, "DONE", set())
+    co.unit("test_a", ((a, sig),))
+    co.unit("test_b", ((b, sig),))
+    holder = subprocess.Popen([sys.executable, "-c", textwrap.dedent(f"""
+        import fcntl, os, sys, time
+        fd = os.open({str(tmp_path / ".test_a.lock")!r}, os.O_RDWR | os.O_CREAT)
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        print("held", flush=True)
+        time.sleep(2.0)
+    """)], stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        t0 = time.perf_counter()
+        seen = {}
+        original = co._compile_unit
+
+        def spy(name, block):
+            done = original(name, block)
+            if done:
+                seen[name] = time.perf_counter() - t0
+            return done
+
+        monkeypatch.setattr(co, "_compile_unit", spy)
+        co.compile_once("test_a")
+    finally:
+        holder.wait(timeout=30)
+    assert list(seen) == ["test_b", "test_a"], seen  # the free unit meanwhile, then the one waited for
+    assert seen["test_a"] > 1.0, seen  # after the other process let go of a's lock
+    assert a(2.0) == 4.0 and b(2.0) == 6.0 and co.DONE == {"test_a", "test_b"}
