@@ -106,7 +106,11 @@ def test_the_structure_not_the_numbers_selects_the_source():
     model2 = compiled_model(system, g, Drive(0.02, 1.0), system.forces.elements)
     assert not np.array_equal(model.mass, model2.mass)
     assert generate_source(model) == generate_source(model2)
-    assert generate_source(andrews_model()[1]) != generate_source(model)
+    assert codegen.structure_key(model) == codegen.structure_key(model2)  # the in-process memo's key
+    andrews = andrews_model()[1]
+    assert generate_source(andrews) != generate_source(model)
+    assert codegen.structure_key(andrews) != codegen.structure_key(model)
+    assert codegen.generated_evaluator(model2) is codegen.generated_evaluator(model)
 
 
 def test_generated_source_is_in_the_cache_folder_named_by_its_hash():

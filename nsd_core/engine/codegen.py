@@ -27,6 +27,8 @@ import sys
 import tempfile
 from pathlib import Path
 
+import numpy as np
+
 from nsd_core.engine.codegen_main import generate_source
 from nsd_core.engine.compile_once import _locked, compile_once
 
@@ -53,12 +55,29 @@ def _write_atomic(path: Path, text: str) -> None:
         raise
 
 
+def structure_key(model) -> bytes:
+    """Everything generate_source reads from ``model``: its integer arrays, n_extra, and where its
+    numbers are exactly 0 (joint axes: or 1). Equal keys, equal sources (a cheap in-process memo)."""
+    h = hashlib.sha256()
+    for name in model._fields:
+        a = np.asarray(getattr(model, name))
+        if name in ("force_params", "motion_params"):
+            continue
+        if name == "settings":
+            a = a[2:3]
+        elif a.dtype.kind == "f":
+            a = (a == 0.0) + 2 * (a == 1.0) if name == "axis" else (a == 0.0)
+        h.update(name.encode() + str(a.shape).encode() + np.ascontiguousarray(a).tobytes())
+    return h.digest()
+
+
 def generated_evaluator(model):
     """The compiled generated evaluation for ``model``'s structure (one per structure and process)."""
+    skey = structure_key(model)
+    if skey in _LOADED:
+        return _LOADED[skey]
     source = generate_source(model)
     key = hashlib.sha256(source.encode()).hexdigest()[:20]
-    if key in _LOADED:
-        return _LOADED[key]
     path = source_folder() / f"nsd_eval_{key}.py"
     name = f"nsd_eval_{key}"
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -69,7 +88,7 @@ def generated_evaluator(model):
         module = importlib.util.module_from_spec(spec)
         sys.modules[name] = module  # before it runs: numba's cache records the module by name, to import it
         spec.loader.exec_module(module)  # njit with a signature: compiled (or loaded) here
-    _LOADED[key] = module.evaluate
+    _LOADED[skey] = module.evaluate
     return module.evaluate
 
 
