@@ -20,6 +20,7 @@ from nsd_core.engine import codegen
 from nsd_core.engine.callbacks import linear_springs, no_motion
 from nsd_core.engine.codegen_main import generate_source
 from nsd_core.engine.compiled_model import make_workspace
+from nsd_core.engine.errors import InputError
 from tests.test_compiled import andrews_model, device_case
 
 FIELDS = ("z", "zd", "zdd", "lam", "tau", "extra_rate", "Phi", "L", "Ld", "T", "r", "A", "Z", "N", "momentum")
@@ -126,7 +127,7 @@ def test_evaluator_choice(monkeypatch):
     monkeypatch.setenv(codegen.ENV, "generic")
     assert codegen.evaluator_for(model) is codegen.generic_evaluator()
     monkeypatch.setenv(codegen.ENV, "fast")
-    with pytest.raises(ValueError, match="NSD_EVALUATOR = 'fast'"):
+    with pytest.raises(InputError, match="NSD_EVALUATOR = 'fast'"):
         codegen.evaluator_for(model)
 
 

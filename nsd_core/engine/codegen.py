@@ -31,6 +31,7 @@ import numpy as np
 
 from nsd_core.engine.codegen_main import generate_source
 from nsd_core.engine.compile_once import _locked, compile_once
+from nsd_core.engine.errors import InputError
 
 ENV = "NSD_EVALUATOR"  # "generic": the generic kernels; anything else (default "generated"): this module
 _LOADED: dict[str, object] = {}
@@ -106,5 +107,5 @@ def evaluator_for(model, kind: str | None = None):
     if kind == "generic":
         return generic_evaluator()
     if kind != "generated":
-        raise ValueError(f"{ENV} = {kind!r}: allowed 'generated' or 'generic'")
+        raise InputError(f"{ENV} = {kind!r}: allowed 'generated' (the default) or 'generic'")
     return generated_evaluator(model)
