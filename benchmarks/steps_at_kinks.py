@@ -41,7 +41,9 @@ lies in (its size, error norm, the kinks it crossed, whether the sample is the s
 from its dense output), and the largest increases of the state's error from one sample to the next
 (``error_jumps``), each with its step.
 
-Deterministic (same inputs, same numbers). CPU times are not measured here (the counts are the cost).
+The model's evaluation is the one the runs use (nsd_core.engine.codegen.evaluator_for: the generated
+one, or the generic kernels with NSD_EVALUATOR=generic). Deterministic (same inputs, same numbers).
+CPU times are not measured here (the counts are the cost).
 """
 from __future__ import annotations
 
@@ -57,7 +59,8 @@ from numba import njit, types
 from comparisons.config import SeismicCase, load_cases
 from nsd_core.device.results import atomic_write_json, atomic_write_text
 from nsd_core.engine import rk
-from nsd_core.engine.compiled import OK, derivatives, generic_evaluator
+from nsd_core.engine.codegen import evaluator_for
+from nsd_core.engine.compiled import OK, derivatives
 from nsd_core.engine.compiled_model import EVAL_FN, FORCE_FN, MODEL_TYPE, MOTION_FN, WORK_TYPE, make_workspace
 
 SCAN_CASES = ("figure8_A15mm_f10Hz", "A15mm_f10Hz_psi45")
@@ -81,7 +84,6 @@ evaluate_at = njit(types.int64(types.float64, F1, MODEL_TYPE, WORK_TYPE, FORCE_F
                    cache=True)(_evaluate)
 record_sample = njit(types.int64(types.int64, types.float64, F1, MODEL_TYPE, WORK_TYPE, FORCE_FN, MOTION_FN, EVAL_FN,
                                  rk.OUTPUTS_TYPE), cache=True)(rk._record.py_func)
-EVALUATOR = generic_evaluator  # the evaluation every default run uses (nsd_core.device.compiled.run)
 
 
 @dataclass
@@ -102,6 +104,10 @@ class Setup:
     wire_l0: float
     spring: tuple             # (k_se, free length) of Eq. 18
     knots: np.ndarray         # times where the input itself has a kink (the record's samples)
+    evaluator: object = None  # the model's evaluation, as the runs choose it (codegen.evaluator_for)
+
+    def __post_init__(self):
+        self.evaluator = self.evaluator or evaluator_for(self.model)
 
 
 def drive_setup(case, rtol=1e-7, atol=1e-12, max_step=1e-3) -> Setup:
@@ -148,7 +154,7 @@ def _outputs(s: Setup, keep_steps=0):
 def kernel_run(s: Setup, keep_steps: int):
     """The real compiled kernel: (accepted step ends, [steps, nfev, status, samples], outputs)."""
     out, stats = _outputs(s, keep_steps), np.zeros(4, dtype=np.int64)
-    rk.integrate_kernel(s.model, make_workspace(s.model, s.z0), s.forces, s.motion, EVALUATOR, rk.tableau("DOP853"),
+    rk.integrate_kernel(s.model, make_workspace(s.model, s.z0), s.forces, s.motion, s.evaluator, rk.tableau("DOP853"),
                         s.y0.copy(), np.ascontiguousarray(s.t_eval), s.settings, out, stats)
     return out.step_t[:min(int(stats[0]), keep_steps)].copy(), stats, out
 
@@ -159,7 +165,7 @@ def switching(s: Setup, w, t: float, y: np.ndarray) -> np.ndarray | None:
     H), the spring's unclipped push k_se x_s + zeta (Eq. 18, push-only), each wire's stress (Eq. 17a's
     H(sigma)), strain (|eps| in 17d and H(-eps deps) in 17c) and strain rate (sgn(deps) in 17b and
     17c), the spring's zeta and compression rate (sgn(zeta dx_s) in Eq. 18b)."""
-    if evaluate_at(t, y, s.model, w, s.forces, s.motion, EVALUATOR) != OK:
+    if evaluate_at(t, y, s.model, w, s.forces, s.motion, s.evaluator) != OK:
         return None
     nr, nw = s.n_ropes, s.n_wires
     ex = y[2 * s.n_free:]
@@ -194,8 +200,7 @@ def traced_run(s: Setup, keep_states: bool = False) -> dict:
     differs between the trial's start and end state), knot (a record sample inside the trial); the
     accepted step ends; steps and nfev counted as the kernel counts them."""
     tab = rk.tableau("DOP853")
-    m, forces, motion, ev = s.model, s.forces, s.motion, EVALUATOR
-    rk.compile_engine()  # the generic evaluation compiled (or loaded) before it is passed as a pointer
+    m, forces, motion, ev = s.model, s.forces, s.motion, s.evaluator
     w, w2 = make_workspace(m, s.z0), make_workspace(m, s.z0)  # the run's, the switching functions'
     rtol, atol, max_step = s.settings[0], s.settings[1], s.settings[2]
     t_eval = np.ascontiguousarray(s.t_eval)
@@ -223,7 +228,10 @@ def traced_run(s: Setup, keep_states: bool = False) -> dict:
         assert stage_rhs(t0 + h0, ys, m, w, forces, motion, ev, f_new) == OK
         nfev += 1
         d2 = rk._rms((f_new - f) / scale) / h0
-        h1 = max(1e-6, h0 * 1e-3) if d1 <= 1e-15 and d2 <= 1e-15 else (0.01 / max(d1, d2)) ** (1.0 / (tab.info[1] + 1.0))
+        if d1 <= 1e-15 and d2 <= 1e-15:
+            h1 = max(1e-6, h0 * 1e-3)
+        else:
+            h1 = (0.01 / max(d1, d2)) ** (1.0 / (tab.info[1] + 1.0))
         h_abs = min(100.0 * h0, h1, t1 - t0, max_step)
     trials = {"t": [], "h": [], "err": [], "accepted": [], "crossed": [], "knot": [], "worst": []}
     step_ends, states = [], []
@@ -508,7 +516,8 @@ def main(argv=None) -> int:
         checks[name] = check_copy(s, tr)
         results[name] = step_report(s, tr)
         r = results[name]
-        log(f"{name}: {r['accepted']} accepted, {r['rejected']} rejected {r['rejected_by_class']}; by the entry that failed the "
+        log(f"{name}: {r['accepted']} accepted, {r['rejected']} rejected {r['rejected_by_class']}; "
+            f"by the entry that failed the "
             f"test: {r['rejected_by_error_component']}; copy == kernel: {checks[name]} "
             f"({time.perf_counter() - start:.1f} s)")
     doc = {"settings": {"method": "DOP853", "rtol": 1e-7, "atol": 1e-12, "max_step": 1e-3},
