@@ -345,8 +345,9 @@ def test_the_in_house_cost_on_the_cost_page_is_its_warm_integration(run_dir, rep
 
 @pytest.mark.slow
 def test_cold_compile_cache_records_integration_not_compilation(tmp_path):
-    """An empty numba cache: the in-house A15mm_f1Hz run (2 cycles) records its integration (<= 2 s),
-    its compilation apart (the issue's judgement)."""
+    """An empty numba cache: the in-house A15mm_f1Hz run (2 cycles) records its integration, its
+    compilation apart (the issue's judgement). CPU seconds, not wall: a shared machine stretches wall
+    time, not the work; the run's own CPU (~0.2 s warm) must be a small part of the compilation's."""
     from comparisons.config import DEFAULT_CASES
     text = DEFAULT_CASES.read_text()
     start = text.index('name = "A15mm_f1Hz"')
@@ -358,7 +359,7 @@ def test_cold_compile_cache_records_integration_not_compilation(tmp_path):
                        env=env)
     assert p.returncode in (0, 1), p.stderr[-2000:]
     run = json.loads((tmp_path / "out" / "results.json").read_text())["runs"]["A15mm_f1Hz"]["semirecursive"]
-    assert run["wall_time"] <= 2.0 and run["compile_time"] > run["wall_time"], run
+    assert run["cpu_time"] <= 0.1 * run["compile_time"] and run["compile_time"] > run["wall_time"], run
 
 
 def test_study_folders_draw_their_own_figures_and_report_from_them(tmp_path):
