@@ -4,7 +4,9 @@
 
 A right-hand side of the Figure 6 drive (A = 15 mm, 1 Hz) near its start, called in a compiled
 loop with t moving 10 us a call; each part (the dependent velocities, element kinematics, the force
-laws, the reduced dynamics, ...) timed the same way on the same state. The minimum over ``repeats`` loops of ``loops``
+laws, the reduced dynamics, ...) timed the same way on the same state; the evaluation generated for
+the mechanism (nsd_core.engine.codegen) and the generic one, both called through the function
+pointer the step loop uses. The minimum over ``repeats`` loops of ``loops``
 calls: a shared machine only ever adds time, so the minimum is the least disturbed reading.
 Counters: Newton iterations per assembly in the loop.
 """
@@ -25,6 +27,7 @@ from nsd_core.device.model import device_system, rest_state
 from nsd_core.device.params import Params
 from nsd_core.device.results import atomic_write_json
 from nsd_core.engine import compiled as C
+from nsd_core.engine.codegen import generated_evaluator, generic_evaluator
 from nsd_core.engine.compiled_model import make_workspace
 from nsd_core.engine.dynamics import body_terms_kernel
 from nsd_core.engine.elements import element_kinematics
@@ -35,6 +38,12 @@ from nsd_core.engine.kinematics import positions_kernel
 def _rhs(N, y, m, w, forces, motion, dydt, reactions):
     for i in range(N):  # t moves 10 us a call, as between stages, so Newton has work to do
         C.rhs_into(0.25 + i * 1e-5, y, m, w, forces, motion, dydt, reactions)
+
+
+@njit
+def _evaluator(N, evaluator, y, m, w, forces, motion, reactions):
+    for i in range(N):  # through a function pointer, as the step loop calls it
+        evaluator(0.25 + i * 1e-5, y, m, w, forces, motion, reactions)
 
 
 @njit
@@ -116,6 +125,15 @@ def main() -> None:
     newton_per_assembly = w.counters[1] / max(w.counters[0], 1)
     rows["evaluation with reactions (an output sample)"] = best(
         _rhs, (y, m, w, device_forces, device_motion, dydt, True), a.loops, a.repeats)
+    generated = generated_evaluator(m)
+    w.counters[:] = 0
+    rows["generated evaluation (a stage: no reactions)"] = best(
+        _evaluator, (generated, y, m, w, device_forces, device_motion, False), a.loops, a.repeats)
+    newton_generated = w.counters[1] / max(w.counters[0], 1)
+    rows["generated evaluation with reactions"] = best(
+        _evaluator, (generated, y, m, w, device_forces, device_motion, True), a.loops, a.repeats)
+    rows["generic evaluation through the pointer, no reactions"] = best(
+        _evaluator, (generic_evaluator(), y, m, w, device_forces, device_motion, False), a.loops, a.repeats)
     rows["positions (one pass)"] = best(_positions, (m, w), a.loops, a.repeats)
     rows["dependent velocities + predictor"] = best(_velocities, (y, m, w), a.loops, a.repeats)
     rows["element kinematics"] = best(_elements, (m, w), a.loops, a.repeats)
@@ -125,9 +143,10 @@ def main() -> None:
     rows["reduced dynamics with reactions"] = best(_reduced, (m, w, True), a.loops, a.repeats)
     for k, v in rows.items():
         print(f"{k:46s} {1e6 * v:.3f} us")
-    print(f"Newton iterations per assembly: {newton_per_assembly:.2f}")
+    print(f"Newton iterations per assembly: {newton_per_assembly:.2f} (generic), {newton_generated:.2f} (generated)")
     report = {"machine": platform.platform(), "cpus": os.cpu_count(), "load_average": os.getloadavg(),
               "seconds": rows, "newton_iterations_per_assembly": newton_per_assembly,
+              "newton_iterations_per_assembly_generated": newton_generated,
               "loops": a.loops, "repeats": a.repeats}
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)

@@ -2,13 +2,14 @@
 pages (closed-loop benchmarks, parametric study) when the results folder holds them."""
 from __future__ import annotations
 
+import math
 import re
 import textwrap
 
 import matplotlib
 import numpy as np
 from matplotlib.lines import Line2D
-from matplotlib.ticker import NullFormatter
+from matplotlib.ticker import LogLocator, NullFormatter
 
 from reports.style import GREEN, GREY, LANDSCAPE, RED, color, fmt, limit_lines, new_figure, no_data, style, table
 
@@ -222,6 +223,7 @@ def cost_figure(data):
         no_data(sp, "no engine besides the reference ran: nothing to compare")
     else:
         sp.margins(x=0.15, y=0.15)
+        _log_axis_125(sp.xaxis, sp.set_xlim, *sp.get_xlim())
     sp.set_xlabel("warm wall time per cycle [s]")
     sp.set_ylabel(f"max |F - F_ref| / max |F_ref| [-] (vs {ref})")
     sp.set_title("speed-accuracy", fontsize=9)
@@ -233,6 +235,24 @@ def cost_figure(data):
     # below the panel, clear of the points and the limit lines
     sp.legend(handles=handles, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.15), ncol=4, frameon=False)
     return fig
+
+
+def _log_axis_125(axis, set_lim, lo: float, hi: float) -> None:
+    """A log axis with labelled ticks at 1, 2 and 5 x 10^k, its view widened to the nearest of them on
+    each side (so at least two lie in view) and minor ticks unlabelled. Left alone, matplotlib before
+    3.11 falls back on a view under a decade to linear ticks 0.02 x 10^k apart, each labelled: the
+    labels (1.8e-1 and 2e-1, 4.5e-2 and 5e-2) overlap."""
+    if not (0 < lo < hi and math.isfinite(hi)):
+        return
+    steps = (1.0, 2.0, 5.0, 10.0)
+
+    def nice(v, pick):
+        k = math.floor(math.log10(v))
+        return pick(c for c in steps if (c <= v / 10 ** k * (1 + 1e-12) if pick is max else
+                                          c >= v / 10 ** k * (1 - 1e-12))) * 10 ** k
+    set_lim(nice(lo, max), nice(hi, min))
+    axis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0), numticks=12))
+    axis.set_minor_formatter(NullFormatter())
 
 
 def _engine_limits(data, metric: str) -> dict:

@@ -345,8 +345,9 @@ def test_the_in_house_cost_on_the_cost_page_is_its_warm_integration(run_dir, rep
 
 @pytest.mark.slow
 def test_cold_compile_cache_records_integration_not_compilation(tmp_path):
-    """An empty numba cache: the in-house A15mm_f1Hz run (2 cycles) records its integration (<= 2 s),
-    its compilation apart (the issue's judgement)."""
+    """An empty numba cache: the in-house A15mm_f1Hz run (2 cycles) records its integration, its
+    compilation apart (the issue's judgement). CPU seconds, not wall: a shared machine stretches wall
+    time, not the work; the run's own CPU (~0.2 s warm) must be a small part of the compilation's."""
     from comparisons.config import DEFAULT_CASES
     text = DEFAULT_CASES.read_text()
     start = text.index('name = "A15mm_f1Hz"')
@@ -361,7 +362,7 @@ def test_cold_compile_cache_records_integration_not_compilation(tmp_path):
     run = res["runs"]["A15mm_f1Hz"]["semirecursive"]
     # the compilation: in the workers' warm-up before their first job (issue 26), or in the run's compile_time
     compiled = run["compile_time"] + (res["worker_warmup"] or {}).get("warm_s", 0.0)
-    assert run["wall_time"] <= 2.0 and compiled > run["wall_time"], (run, res["worker_warmup"])
+    assert run["cpu_time"] <= 0.1 * compiled and compiled > run["wall_time"], (run, res["worker_warmup"])
 
 
 def test_study_folders_draw_their_own_figures_and_report_from_them(tmp_path):

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from nsd_core.engine.compiled import generic_evaluator
+from nsd_core.engine.codegen import evaluator_for
 from nsd_core.engine.compiled_model import FORCE_SIG, MOTION_SIG, build_model, make_workspace, split_state
 from nsd_core.device.drive import Drive, plate_motion
 from nsd_core.device.forces import (bouc_wen_slope_scalar, rope_tension_scalar, sma_slope_scalar, spring_push_scalar,
@@ -83,13 +83,15 @@ def compiled_model(system, g: DeviceGeometry, drive: Drive, elements):
 def run(model, z0: np.ndarray, y0: np.ndarray, t_eval: np.ndarray, method: str, rtol: float, atol: float,
         max_step: float, max_steps: int, evaluator=None) -> tuple[Outputs, np.ndarray]:
     """One compiled integration; returns the outputs at t_eval and [steps, nfev, status, samples].
-    evaluator: an EVAL_FN (nsd_core.engine.compiled_model); default the generic one."""
+    evaluator: an EVAL_FN (nsd_core.engine.compiled_model); default the one generated for the model
+    (nsd_core.engine.codegen; NSD_EVALUATOR=generic: the generic one)."""
+    evaluator = evaluator or evaluator_for(model)
     ws = make_workspace(model, z0)
     out = make_outputs(len(t_eval), len(y0), len(model.parent), len(model.dependent), len(model.prescribed),
                        len(model.elem_up))
     stats = np.zeros(4, dtype=np.int64)
     settings = np.array([rtol, atol, max_step, 0.0, float(max_steps)])
-    integrate_kernel(model, ws, device_forces, device_motion, evaluator or generic_evaluator, tableau(method),
+    integrate_kernel(model, ws, device_forces, device_motion, evaluator, tableau(method),
                      np.ascontiguousarray(y0, float), np.ascontiguousarray(t_eval, float), settings, out, stats)
     return out, stats
 

@@ -33,6 +33,7 @@ from nsd_core.device.building_tree import building_block
 from nsd_core.device.compiled import device_forces, force_params as device_force_params
 from nsd_core.device.forces import restrainer_force_scalar
 from nsd_core.device.ground import ground_values
+from nsd_core.engine.codegen import evaluator_for
 from nsd_core.engine.compiled import EVALUATE, copy_into, derivatives, generic_evaluator
 from nsd_core.engine.compiled_model import (EVAL_FN, FORCE_FN, FORCE_SIG, MODEL_TYPE, MOTION_FN, MOTION_SIG,
                                             WORK_TYPE, build_model, make_workspace)
@@ -236,8 +237,9 @@ def run(model, z0, y0, t_eval, method, rtol, atol, max_step, first_step, progres
     Returns a dict: y (samples, len(y0)), table (samples, COLUMNS), tensions, lengths (samples,
     elements), done (samples computed), steps, nfev, status (0 ok, else the kernel's code) and, on a
     failure, t_fail, z_fail, q_fail (the time, configuration and prescribed motion being evaluated).
-    evaluator: an EVAL_FN (nsd_core.engine.compiled_model); default the generic one."""
-    evaluator = evaluator or generic_evaluator
+    evaluator: an EVAL_FN (nsd_core.engine.compiled_model); default the one generated for the model
+    (nsd_core.engine.codegen; NSD_EVALUATOR=generic: the generic one)."""
+    evaluator = evaluator or evaluator_for(model)
     # all three at once: processes started together (a pool's workers) share them out
     compile_once(*((EVALUATE,) if evaluator is generic_evaluator else ()), STEP_LOOP, SAMPLES)
     ns, ny, ne = len(t_eval), len(y0), len(model.elem_up)

@@ -1,0 +1,111 @@
+"""A per-mechanism evaluation generated from the mechanism's data (issue 26, item 2).
+
+``generated_evaluator(model)`` writes the Python source of one numba function with the evaluator
+contract of nsd_core.engine.compiled.evaluate, ``evaluate(t, y, m, w, forces, motion, reactions)``,
+for the *structure* of ``model`` (a SystemModel): the parent array, the joint types, which joint-axis
+components are exactly 0 or 1, which offsets, centres of mass, inertia entries, cut vectors and
+element points are exactly 0, the massless bodies, the cuts' kinds and bodies, the partition into
+prescribed / free / dependent coordinates and rows, the elements' bodies. The tree is unrolled body
+by body, the structural zeros are left out (a prismatic joint's rotation is its parent's, a massless
+body adds nothing, the reduced mass matrix of one free coordinate is a scalar, a zero entry of
+Phi_z is never formed), and every number (offsets, axes, masses, inertias, points, parameters) is
+read from the model when the function runs: designs that differ only in their numbers share one
+compiled function. The arithmetic is the generic kernels' in the same order (codegen_sym), so the
+two agree to round-off (tests/test_codegen.py); the generic kernels stay the specification.
+
+The source goes to the numba cache folder (nsd_core.numba_cache), named by the hash of its text, and
+is compiled with an explicit signature and cache=True: a second process loads the machine code from
+disk. NSD_EVALUATOR=generic selects the generic evaluator everywhere the device's runs would use
+the generated one (``evaluator_for``).
+"""
+from __future__ import annotations
+
+import hashlib
+import importlib.util
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from nsd_core.engine.codegen_main import generate_source
+from nsd_core.engine.compile_once import _locked, compile_once
+from nsd_core.engine.errors import InputError
+
+ENV = "NSD_EVALUATOR"  # "generic": the generic kernels; anything else (default "generated"): this module
+_LOADED: dict[str, object] = {}
+
+
+def source_folder() -> Path:
+    """Where generated sources live: beside numba's cache (keyed by the package's source version)."""
+    base = os.environ.get("NUMBA_CACHE_DIR") or os.path.join(tempfile.gettempdir(), "nsd-harness-numba")
+    return Path(base) / "generated"
+
+
+def _write_atomic(path: Path, text: str) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w") as f:
+            f.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def structure_key(model) -> bytes:
+    """Everything generate_source reads from ``model``: its integer arrays, n_extra, and where its
+    numbers are exactly 0 (joint axes: or 1). Equal keys, equal sources (a cheap in-process memo)."""
+    h = hashlib.sha256()
+    for name in model._fields:
+        a = np.asarray(getattr(model, name))
+        if name in ("force_params", "motion_params"):
+            continue
+        if name == "settings":
+            a = a[2:3]
+        elif a.dtype.kind == "f":
+            a = (a == 0.0) + 2 * (a == 1.0) if name == "axis" else (a == 0.0)
+        h.update(name.encode() + str(a.shape).encode() + np.ascontiguousarray(a).tobytes())
+    return h.digest()
+
+
+def generated_evaluator(model):
+    """The compiled generated evaluation for ``model``'s structure (one per structure and process)."""
+    skey = structure_key(model)
+    if skey in _LOADED:
+        return _LOADED[skey]
+    source = generate_source(model)
+    key = hashlib.sha256(source.encode()).hexdigest()[:20]
+    path = source_folder() / f"nsd_eval_{key}.py"
+    name = f"nsd_eval_{key}"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with _locked(name, True):  # processes started together write and compile it once; the others load it
+        if not path.exists() or path.read_text() != source:
+            _write_atomic(path, source)  # an unchanged file keeps its time stamp, which numba's cache checks
+        spec = importlib.util.spec_from_file_location(name, path)
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[name] = module  # before it runs: numba's cache records the module by name, to import it
+        spec.loader.exec_module(module)  # njit with a signature: compiled (or loaded) here
+    _LOADED[skey] = module.evaluate
+    return module.evaluate
+
+
+def generic_evaluator():
+    """nsd_core.engine.compiled.generic_evaluator, compiled (the specification)."""
+    from nsd_core.engine.compiled import EVALUATE, generic_evaluator as generic
+    compile_once(EVALUATE)
+    return generic
+
+
+def evaluator_for(model, kind: str | None = None):
+    """The evaluator a run uses: ``kind`` "generated" or "generic"; None reads NSD_EVALUATOR
+    (default generated)."""
+    kind = kind or os.environ.get(ENV, "generated")
+    if kind == "generic":
+        return generic_evaluator()
+    if kind != "generated":
+        raise InputError(f"{ENV} = {kind!r}: allowed 'generated' (the default) or 'generic'")
+    return generated_evaluator(model)

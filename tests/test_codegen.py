@@ -1,0 +1,158 @@
+"""The generated per-mechanism evaluation (nsd_core.engine.codegen) against the generic kernels, its
+specification: on random states of the device (drive mode; seismic mode with and without the
+building and the restrainer) and of Andrews' mechanism, and over whole drive and seismic runs."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from nsd_core.device import compiled_seismic as cs
+from nsd_core.device.building import building_from
+from nsd_core.device.compiled import device_forces, device_motion
+from nsd_core.device.drive import Drive
+from nsd_core.device.ground import Harmonic
+from nsd_core.device.isolation import default_structure
+from nsd_core.device.model import simulate
+from nsd_core.device.params import Params
+from nsd_core.device.restrainer import with_restrainer
+from nsd_core.device.seismic import simulate_seismic
+from nsd_core.engine import codegen
+from nsd_core.engine.callbacks import linear_springs, no_motion
+from nsd_core.engine.codegen_main import generate_source
+from nsd_core.engine.compiled_model import make_workspace
+from nsd_core.engine.errors import InputError
+from tests.test_compiled import andrews_model, device_case
+
+FIELDS = ("z", "zd", "zdd", "lam", "tau", "extra_rate", "Phi", "L", "Ld", "T", "r", "A", "Z", "N", "momentum")
+
+
+def _rel(a, b):
+    scale = np.max(np.abs(b)) if b.size else 0.0
+    return float(np.max(np.abs(a - b)) / scale) if scale > 0 else float(np.max(np.abs(a - b), initial=0.0))
+
+
+def _compare(model, z0, y, ts, forces, motion, seed, scale=1e-3):
+    """Both evaluators from the same workspaces on perturbed states, three times in a row (the
+    predictor and warm start carried along): the worst relative difference per field."""
+    gen, ref = codegen.generated_evaluator(model), codegen.generic_evaluator()
+    rng = np.random.default_rng(seed)
+    worst = dict.fromkeys(FIELDS, 0.0)
+    for trial in range(8):
+        yy = y + rng.normal(scale=scale, size=len(y)) * np.maximum(np.abs(y), 1e-2)
+        wg, wr = make_workspace(model, z0), make_workspace(model, z0)
+        for t in ts:
+            for reactions in (False, True):
+                cr = ref(t, yy, model, wr, forces, motion, reactions)
+                cg = gen(t, yy, model, wg, forces, motion, reactions)
+                assert cg == cr
+                assert cr == 0
+            for f in FIELDS:
+                worst[f] = max(worst[f], _rel(getattr(wg, f), getattr(wr, f)))
+        assert np.array_equal(wg.counters, wr.counters)  # the same Newton iterations, the same branches
+    return worst
+
+
+def test_device_drive_generated_equals_generic():
+    _, model, z, y, t = device_case()
+    worst = _compare(model, z, y, (t, t + 2e-4, t + 5e-4), device_forces, device_motion, 1)
+    assert max(worst.values()) <= 1e-12, worst
+
+
+def test_andrews_generated_equals_generic():
+    _, model, z0, y0 = andrews_model()
+    y = y0.copy()
+    y[1] = 50.0
+    worst = _compare(model, z0, y, (0.0, 1e-4, 3e-4), linear_springs, no_motion, 2, scale=1e-4)
+    assert max(worst.values()) <= 1e-12, worst
+
+
+def _seismic_case(monkeypatch, structure, device=True):
+    """The model, start and a mid-run state of a short seismic run (cs.run's arguments captured)."""
+    seen = {}
+    original = cs.run
+
+    def capture(model, z0, y0, t_eval, *args, **kw):
+        res = original(model, z0, y0, t_eval, *args, **kw)
+        seen.update(model=model, z0=z0, y=res["y"][-1].copy(), t=float(t_eval[-1]))
+        return res
+    monkeypatch.setattr(cs, "run", capture)
+    simulate_seismic(Params(), structure, Harmonic(0.8, 2.0, 30.0, duration=0.05), duration=0.05, dt_out=1e-2,
+                     device=device)
+    return seen
+
+
+@pytest.mark.parametrize("variant", ["device", "restrainer", "building", "building_no_device"])
+def test_seismic_generated_equals_generic(monkeypatch, variant):
+    structure = default_structure(Params())
+    if variant == "restrainer":
+        structure = with_restrainer(structure, Params(), True)
+    if variant.startswith("building"):
+        structure = structure.with_building(building_from(structure.mass, {"stories": 3}))
+    c = _seismic_case(monkeypatch, structure, device=variant != "building_no_device")
+    y = c["y"].copy()
+    y[len(y) // 2:] += 1e-3 * np.max(np.abs(y))  # moving
+    worst = _compare(c["model"], c["z0"], y, (c["t"], c["t"] + 1e-4), cs.seismic_forces, cs.seismic_motion, 3,
+                     scale=1e-4)
+    assert max(worst.values()) <= 1e-12, worst
+
+
+def test_the_structure_not_the_numbers_selects_the_source():
+    """A design with other numbers (masses, lengths, stiffnesses) shares the generated source, so a
+    sweep compiles once; another partition or tree is another source."""
+    _, model, _, _, _ = device_case()
+    other = Params().replace(cap_mass=0.9, rod_length=0.034, rope_stiffness=4e5, base_mass=1.3)
+    from nsd_core.device.compiled import compiled_model
+    from nsd_core.device.model import device_system
+    system, g = device_system(other, Drive(0.02, 1.0))
+    model2 = compiled_model(system, g, Drive(0.02, 1.0), system.forces.elements)
+    assert not np.array_equal(model.mass, model2.mass)
+    assert generate_source(model) == generate_source(model2)
+    assert codegen.structure_key(model) == codegen.structure_key(model2)  # the in-process memo's key
+    andrews = andrews_model()[1]
+    assert generate_source(andrews) != generate_source(model)
+    assert codegen.structure_key(andrews) != codegen.structure_key(model)
+    assert codegen.generated_evaluator(model2) is codegen.generated_evaluator(model)
+
+
+def test_generated_source_is_in_the_cache_folder_named_by_its_hash():
+    _, model, _, _, _ = device_case()
+    ev = codegen.generated_evaluator(model)
+    files = [p for p in codegen.source_folder().glob("nsd_eval_*.py") if p.read_text() == generate_source(model)]
+    assert len(files) == 1 and ev is codegen.generated_evaluator(model)
+
+
+def test_evaluator_choice(monkeypatch):
+    _, model, _, _, _ = device_case()
+    assert codegen.evaluator_for(model, "generic") is codegen.generic_evaluator()
+    monkeypatch.setenv(codegen.ENV, "generic")
+    assert codegen.evaluator_for(model) is codegen.generic_evaluator()
+    monkeypatch.setenv(codegen.ENV, "fast")
+    with pytest.raises(InputError, match="NSD_EVALUATOR = 'fast'"):
+        codegen.evaluator_for(model)
+
+
+def _runs(monkeypatch, fn):
+    out = {}
+    for kind in ("generic", "generated"):
+        monkeypatch.setenv(codegen.ENV, kind)
+        out[kind] = fn()
+    return out["generated"], out["generic"]
+
+
+def test_whole_drive_run_equals_the_generic_one(monkeypatch):
+    """The Figure 6 drive A = 15 mm at 1 Hz, one cycle at the default accuracy: the force on the plate
+    from the generated evaluation against the generic one (bit-identical arithmetic: measured 0)."""
+    g, r = _runs(monkeypatch, lambda: simulate(Params(), Drive(0.015, 1.0, cycles=1)))
+    assert g.stats["steps"] == r.stats["steps"]
+    for k in ("F", "F_rod", "F_ropes", "F_wires"):
+        assert np.max(np.abs(g[k] - r[k])) <= 1e-9 * np.max(np.abs(r[k])), k
+
+
+def test_whole_seismic_run_equals_the_generic_one(monkeypatch):
+    structure = with_restrainer(default_structure(Params()), Params(), True)
+    run = lambda: simulate_seismic(Params(), structure, Harmonic(0.8, 2.0, 30.0, duration=0.3), duration=0.3,  # noqa: E731
+                                   dt_out=2e-3)
+    g, r = _runs(monkeypatch, run)
+    assert g.stats["steps"] == r.stats["steps"]
+    for k in ("x", "y", "device_Fx", "device_Fy", "ax_abs"):
+        assert np.max(np.abs(g[k] - r[k])) <= 1e-9 * np.max(np.abs(r[k])), k
