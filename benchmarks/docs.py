@@ -255,7 +255,7 @@ def bench_record_set() -> str:
               "per record (its two runs): alone in a warm process, and in the set as its workers timed them; the "
               f"workers' start-up is apart (median {g(d['startup_ready_s_median'])} s until ready, of which warm-up "
               f"{g(d['startup_warm_s_median'])} s; the set's elapsed time {g(d['set_elapsed_s_median'])} s). Worst "
-              f"ratio {g(d['worst_ratio'])}, aim ≤ {g(d['aim_ratio'])}: {verdict}"
+              f"ratio {g(d['worst_ratio'], 5)}, aim ≤ {g(d['aim_ratio'])}: {verdict}"
               + (f"; the solver's CPU seconds in the set over alone: {g(d['median_cpu_ratio'])} (median)"
                  if "median_cpu_ratio" in d else "")
               + {True: "; this kernel shares CPU time per session (sched_autogroup on)", False: "",
