@@ -296,11 +296,13 @@ RHS = unit("rhs_entry", ((_rhs, RHS_SIG),), shared=False)  # scipy's solvers and
 
 
 def compile_engine() -> float:
-    """Make the units every in-house run needs ready in this process (the generic evaluation, the step
-    loop: compiled, or loaded from the cache), sharing the work with processes doing the same
-    (compile_once); the seconds it took. For a pool initializer: the engine ready before a task."""
+    """Make the units every in-house run needs ready in this process (the step loop; the generic
+    evaluation only where NSD_EVALUATOR=generic selects it: the device's runs use their generated
+    evaluation, which their warm-up runs compile; compiled, or loaded from the cache), sharing the
+    work with processes doing the same (compile_once); the seconds it took. For a pool initializer."""
+    import os
     start = time.perf_counter()
-    compile_once(EVALUATE, STEP_LOOP)
+    compile_once(*((EVALUATE,) if os.environ.get("NSD_EVALUATOR") == "generic" else ()), STEP_LOOP)
     return time.perf_counter() - start
 
 
