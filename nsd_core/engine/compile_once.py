@@ -125,3 +125,39 @@ def compile_once(*names: str) -> None:
                 if shared and other not in DONE and other not in needed:
                     _compile_unit(other, block=False)
             _compile_unit(needed.pop(0), block=True)
+
+
+class _CompileClock:
+    """Seconds (wall, CPU) this process has spent in numba compilations, outermost ones only: a run
+    that compiles something its warm-up did not (another mechanism's generated evaluation, a kernel
+    of another kind) moves those seconds from its cost to its compile time (device.warmup)."""
+    depth, wall0, cpu0, wall, cpu = 0, 0.0, 0.0, 0.0, 0.0
+
+
+def _install_clock() -> None:
+    import time
+    from numba.core import event
+
+    class Listener(event.Listener):
+        def on_start(self, ev):
+            if _CompileClock.depth == 0:
+                _CompileClock.wall0, _CompileClock.cpu0 = time.perf_counter(), time.process_time()
+            _CompileClock.depth += 1
+
+        def on_end(self, ev):
+            _CompileClock.depth -= 1
+            if _CompileClock.depth == 0:
+                _CompileClock.wall += time.perf_counter() - _CompileClock.wall0
+                _CompileClock.cpu += time.process_time() - _CompileClock.cpu0
+
+    event.register("numba:compile", Listener())
+
+
+_install_clock()
+
+
+def compile_seconds() -> tuple[float, float]:
+    """(wall, CPU) seconds spent compiling in this process so far (numba's "numba:compile" events;
+    a load from the on-disk cache is not a compilation)."""
+    return _CompileClock.wall, _CompileClock.cpu
+
