@@ -54,10 +54,14 @@ def _cost_line(data) -> str:
         for e, r in per.items():
             if isinstance(r.get("compile_time"), (int, float)):
                 comp[e] = comp.get(e, 0.0) + r["compile_time"]
-    start = s.get("worker_startup_time")
+    start, warm = s.get("worker_startup_time"), s.get("worker_warmup") or {}
+    parts = (f" (spawn and imports {fmt(warm['spawn_s'])} s, warm-up: imports, compilation, tiny runs "
+             f"{fmt(warm['warm_s'])} s)") if isinstance(warm.get("spawn_s"), (int, float)) and \
+        isinstance(warm.get("warm_s"), (int, float)) else ""
     text = (f"Total wall time {fmt(s.get('total_wall_time'))} s on {s.get('workers', '?')} worker process(es); "
-            f"worker start-up (spawn and imports) {fmt(start) + ' s' if start is not None else 'not recorded'}; "
-            "compilation (a tiny warm-up run before the first run of its kind in each worker, summed over the runs): "
+            f"worker start-up {fmt(start) + ' s' if start is not None else 'not recorded'}{parts}; "
+            "compilation inside the runs (a tiny warm-up run before the first run of its kind, or a structure "
+            "met first in a run; summed over the runs): "
             + (", ".join(f"{e} {fmt(v)} s" for e, v in comp.items()) if comp else "not recorded in this folder")
             + ". Neither is in any per-cycle or per-model-second cost.")
     return text
