@@ -117,6 +117,10 @@ def main(argv: list[str] | None = None) -> int:
         where = (f"; {t['kept']} of {t['total']} cases kept in {printable(t['dir'])}" if "total" in t
                  else "; nothing kept")
         print(f"nsd: interrupted{where}", file=sys.stderr, flush=True)
+        # an interrupt inside numba's compiler (a run compiling its mechanism's evaluation) leaves
+        # llvmlite objects half-built, whose finalizers print "Exception ignored ... Traceback" at exit:
+        # the process is ending, and that noise must not follow the one line
+        sys.unraisablehook = lambda unraisable: None
         return 128 + int(signum)
     finally:
         from nsd_cli.outlock import release_all

@@ -179,7 +179,7 @@ class SeismicSystem(SemiRecursiveSystem):
         t, u = self.last
         return RodReachError(f"t = {t:.6g} s: |u| = {u:.6g} m >= rod_length = {self.reach} m: the rod cannot "
                              f"reach" if u >= self.reach else f"t = {t:.6g} s: |u| = {u:.6g} m: the loop cannot "
-                             f"close as the rod nears the horizontal (rod_length = {self.reach} m)")
+                             f"close as the rod nears the horizontal (rod_length = {self.reach} m): the rod cannot reach")
 
 
 def _rest(g, mech, device: bool) -> np.ndarray:
