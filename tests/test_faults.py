@@ -113,7 +113,8 @@ def test_sigkill_of_a_record_set_leaves_no_worker_and_the_rerun_gives_the_same_b
 def test_a_second_run_into_the_same_folder_exits_2_at_once_naming_the_first(tmp_path):
     cases_a, cases_b = tmp_path / "a.toml", tmp_path / "b.toml"
     case = '[[case]]\nname = "{n}"\namplitude = {a}\nfrequency = 1.0\ncycles = {c}\n'
-    cases_a.write_text("".join(case.format(n=f"a{i}", a=0.01 + 0.001 * i, c=5) for i in range(6)))
+    # long enough to still hold the folder when the second starts (~30 ms a cycle warm since issue 26)
+    cases_a.write_text("".join(case.format(n=f"a{i}", a=0.01 + 0.001 * i, c=40) for i in range(10)))
     cases_b.write_text("".join(case.format(n=f"b{i}", a=0.012, c=1) for i in range(2)))
     out = tmp_path / "out"
     first = start(["compare", "--cases", str(cases_a), "--engines", "semirecursive", "--workers", "1",
@@ -129,7 +130,7 @@ def test_a_second_run_into_the_same_folder_exits_2_at_once_naming_the_first(tmp_
     o, e = first.communicate(timeout=600)
     assert first.returncode == 0, o + e
     results = json.loads((out / "results.json").read_text())
-    assert [c["name"] for c in results["cases"]] == [f"a{i}" for i in range(6)]
+    assert [c["name"] for c in results["cases"]] == [f"a{i}" for i in range(10)]
     assert not glob.glob(str(out / "cycles" / "b*")) and not (out / ".nsd.lock").exists()
 
 
