@@ -375,15 +375,21 @@ def assemble(m, w, t, zf):
 
 
 @njit(cache=True, _nrt=False)
-def derivatives(evaluator, t, y, m, w, forces, motion, dydt, reactions):
-    """dy/dt = [z'_f, z''_f, extra rates] into dydt from ``evaluator`` (an EVAL_FN); the status code.
-    The reactions w.lam, w.tau are computed too unless ``reactions`` is False (an integrator's stages)."""
-    code = evaluator(t, y, m, w, forces, motion, reactions)
+def _state_rates(y, m, w, dydt):
+    """dy/dt = [z'_f, z''_f, extra rates] (the layout of compiled_model.split_state) from an evaluation."""
     nf = m.free.shape[0]
     for a in range(nf):
         dydt[a] = y[nf + a]
         dydt[nf + a] = w.zdd[m.free[a]]
     copy_into(dydt[2 * nf:], w.extra_rate)
+
+
+@njit(cache=True, _nrt=False)
+def derivatives(evaluator, t, y, m, w, forces, motion, dydt, reactions):
+    """dy/dt = [z'_f, z''_f, extra rates] into dydt from ``evaluator`` (an EVAL_FN); the status code.
+    The reactions w.lam, w.tau are computed too unless ``reactions`` is False (an integrator's stages)."""
+    code = evaluator(t, y, m, w, forces, motion, reactions)
+    _state_rates(y, m, w, dydt)
     return code
 
 
@@ -392,9 +398,5 @@ def rhs_into(t, y, m, w, forces, motion, dydt, reactions):
     """``derivatives`` with the generic evaluation inlined (a direct call, no function pointer): the
     engine's kernels use ``derivatives``; the benchmarks time this form against it."""
     code = evaluate(t, y, m, w, forces, motion, reactions)
-    nf = m.free.shape[0]
-    for a in range(nf):
-        dydt[a] = y[nf + a]
-        dydt[nf + a] = w.zdd[m.free[a]]
-    copy_into(dydt[2 * nf:], w.extra_rate)
+    _state_rates(y, m, w, dydt)
     return code
