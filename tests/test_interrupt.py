@@ -116,8 +116,11 @@ def test_compare_interrupted_then_resumed(tmp_path, signum, to_group):
 
 def test_sweep_interrupted_then_resumed(tmp_path):
     out = tmp_path / "sweep"
-    args = ["sweep", "--param", "rod_length", "--values", "0.026,0.027,0.028,0.029,0.03,0.031,0.032,0.033",
-            "--frequency", "1", "--cycles", "2", "--samples-per-cycle", "100", "--workers", "2", "--out", str(out)]
+    # 40 designs x 10 cycles: ~0.3 s a design with the generated evaluation (8 designs x 2 cycles all
+    # finished between two 0.2 s looks in CI), so several are still running when the first is kept
+    values = ",".join(f"{0.026 + 0.0002 * i:.4f}" for i in range(40))
+    args = ["sweep", "--param", "rod_length", "--values", values,
+            "--frequency", "1", "--cycles", "10", "--samples-per-cycle", "100", "--workers", "2", "--out", str(out)]
     p = start(args)
     _, err, seconds, children = interrupt_after_first_kept(p, str(out / "designs" / "*" / "result.json"),
                                                            signal.SIGTERM, False)
