@@ -34,6 +34,8 @@ DISK_ERRNOS = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EROFS, errno.EIO}
 
 SUBCOMMANDS = ("cycle", "seismic", "compare", "report", "sweep", "tables", "calibrate", "benchmark", "polar", "params",
                "ida")
+# many runs of one structure: worth compiling its generated evaluation (nsd_core.engine.codegen)
+STUDIES = ("sweep", "tables", "calibrate", "polar", "ida")
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -91,6 +93,10 @@ def main(argv: list[str] | None = None) -> int:
     args.tally = {}  # subcommands that keep results as they go fill in kept / total / dir
     saved = _handle_signals()
     try:
+        from nsd_core.engine.codegen import evaluator_kind, prefer_generated
+        evaluator_kind()  # a bad NSD_EVALUATOR: one line, exit 2, before any work
+        if args.command in STUDIES or getattr(args, "record_set", None):
+            prefer_generated()
         return int(args.handler(args) or 0)
     except InputError as e:
         print(f"nsd: error: {printable(e)}", file=sys.stderr)

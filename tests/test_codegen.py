@@ -3,6 +3,10 @@ specification: on random states of the device (drive mode; seismic mode with and
 building and the restrainer) and of Andrews' mechanism, and over whole drive and seismic runs."""
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 
@@ -129,6 +133,42 @@ def test_evaluator_choice(monkeypatch):
     monkeypatch.setenv(codegen.ENV, "fast")
     with pytest.raises(InputError, match="NSD_EVALUATOR = 'fast'"):
         codegen.evaluator_for(model)
+
+
+def test_auto_uses_the_generated_evaluation_only_once_it_is_compiled(monkeypatch, tmp_path):
+    """"auto" (the default): the generic kernels for a structure whose generated evaluation is not
+    compiled (a short run would pay 12-25 s to save milliseconds), the generated one once its mark
+    is on disk, which compiling it writes."""
+    _, model, _, _, _ = device_case()
+    monkeypatch.delenv(codegen.ENV, raising=False)
+    codegen.generated_evaluator(model)
+    _, name, _ = codegen._generated_source(model)
+    assert (codegen.source_folder() / f"{name}.compiled").exists()
+    assert codegen.evaluator_for(model) is codegen.generated_evaluator(model)
+    monkeypatch.setattr(codegen, "_LOADED", {})            # a new process ...
+    monkeypatch.setattr(codegen, "source_folder", lambda: tmp_path)   # ... on a cache without it
+    assert not codegen.is_compiled(model)
+    assert codegen.evaluator_for(model) is codegen.generic_evaluator()
+    (tmp_path / f"{name}.compiled").touch()
+    assert codegen.is_compiled(model)
+
+
+def test_a_study_command_asks_for_the_generated_evaluation(monkeypatch):
+    from nsd_cli.main import main
+    monkeypatch.delenv(codegen.ENV, raising=False)
+    assert main(["cycle", "--amplitude", "-1", "--frequency", "1", "--out", "x"]) == 2
+    assert codegen.ENV not in os.environ
+    assert main(["sweep", "--param", "rod_length", "--values", "abc", "--out", "x"]) == 2
+    assert os.environ[codegen.ENV] == "generated"
+
+
+def test_a_bad_evaluator_choice_is_one_line_and_exit_2(tmp_path):
+    r = subprocess.run([sys.executable, "-m", "nsd_cli.main", "cycle", "--amplitude", "0.01", "--frequency", "1",
+                        "--out", str(tmp_path / "o")], capture_output=True, text=True,
+                       env={**os.environ, codegen.ENV: "fast"})
+    assert r.returncode == 2 and r.stderr.count("\n") == 1, r.stderr
+    assert "NSD_EVALUATOR = 'fast'" in r.stderr and "'auto'" in r.stderr
+    assert not (tmp_path / "o").exists()
 
 
 def _runs(monkeypatch, fn):

@@ -8,11 +8,14 @@ given (the study and comparison layers build those: this layer knows only the in
 """
 from __future__ import annotations
 
+from functools import partial
+
 from nsd_core.device import ground
 from nsd_core.device.model import DEFAULT_SOLVER, simulate
 from nsd_core.device.seismic import simulate_seismic
 from nsd_core.device.warmup import PATHS, warm
-from nsd_core.engine.rk import compile_engine
+from nsd_core.engine.compile_once import compile_once, share_work
+from nsd_core.engine.rk import engine_units
 
 
 def kind(mode: str, settings: dict | None = None, path: str = "line") -> tuple:
@@ -24,20 +27,35 @@ def kind(mode: str, settings: dict | None = None, path: str = "line") -> tuple:
 
 def warm_worker(kinds=(), record_sets=(), calls=()) -> None:
     """A pool worker's warm-up (``worker_pool``'s ``warm``), once per worker before its first job:
-    import the in-house model, run each ``kind``'s tiny problem (its kernels loaded from numba's cache
-    or compiled), read the files of each FEMA P695 set named in ``record_sets``, and call each of
-    ``calls`` (picklable; a peer engine's tiny run, its import and compiled callbacks). A failure is
-    left to the job that meets it, with its own inputs."""
+    import the in-house model, make its shared kernels ready (``engine_units``), call each
+    of ``calls`` (picklable; a peer engine's tiny run, its import and compiled callbacks), run each
+    ``kind``'s tiny problem (its kernels loaded from numba's cache or compiled), and read the files
+    of each FEMA P695 set named in ``record_sets``. On a cold cache the workers share the compiling
+    (``share_work``): while one compiles an item the others take the next ones instead of waiting,
+    so two workers are ready in about half the time one would take. A failure is left to the job
+    that meets it, with its own inputs."""
+    items = []
     if kinds:
-        compile_engine()   # the shared units first, under their locks (nsd_core.engine.compile_once)
+        items += [(f"warm-unit-{u}", partial(compile_once, u)) for u in engine_units()]
+    items += [(f"warm-call-{i}-{_name(call)}", partial(_quietly, call)) for i, call in enumerate(calls)]
     fns = {"drive": simulate, "seismic": simulate_seismic}
-    for mode, method, backend, path in kinds:
-        warm(mode, fns[mode], method, backend, path)
+    items += [(f"warm-kind-{'-'.join(k)}", partial(warm, k[0], fns[k[0]], *k[1:])) for k in kinds]
+    share_work(items)
     for name in record_sets:
         for f in ground.SETS[ground.set_name(name)][0]:
             ground._package_file(f)   # cached per process: the set's HDF5 file read once
-    for call in calls:
-        try:
-            call()
-        except Exception:  # noqa: BLE001 (the job reports its own error)
-            pass
+
+
+def _name(call) -> str:
+    """A lock name's part for a warm-up call: its function and its arguments' types (file-safe)."""
+    func = getattr(call, "func", call)
+    args = getattr(call, "args", ())
+    text = getattr(func, "__name__", "call") + "-" + "-".join(str(a) for a in args if isinstance(a, (str, int, float)))
+    return "".join(c if c.isalnum() or c in "._-" else "_" for c in text)[:80]
+
+
+def _quietly(call) -> None:
+    try:
+        call()
+    except Exception:  # noqa: BLE001 (the job reports its own error)
+        pass

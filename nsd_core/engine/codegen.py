@@ -15,8 +15,16 @@ two agree to round-off (tests/test_codegen.py); the generic kernels stay the spe
 
 The source goes to the numba cache folder (nsd_core.numba_cache), named by the hash of its text, and
 is compiled with an explicit signature and cache=True: a second process loads the machine code from
-disk. NSD_EVALUATOR=generic selects the generic evaluator everywhere the device's runs would use
-the generated one (``evaluator_for``).
+disk.
+
+Which evaluation a run uses (``evaluator_for``, NSD_EVALUATOR): compiling a structure's generated
+evaluation costs 12-25 s CPU on a cold cache, against one compilation of the generic kernels for
+every structure; it pays back over a study (thousands of runs of one structure: 3-6x less CPU per
+evaluation) but not over the gate's one short run per case and structure. So "auto" (the default)
+uses the generated evaluation where it is already compiled (its ``.compiled`` mark beside the
+source) and the generic one otherwise; the study commands (sweep, polar, calibration, seismic record
+sets, IDA) ask for "generated", which compiles it. The two give the same numbers, bit for bit
+(tests/test_codegen.py), so the choice changes only the time.
 """
 from __future__ import annotations
 
@@ -33,7 +41,8 @@ from nsd_core.engine.codegen_main import generate_source
 from nsd_core.engine.compile_once import _locked, compile_once
 from nsd_core.engine.errors import InputError
 
-ENV = "NSD_EVALUATOR"  # "generic": the generic kernels; anything else (default "generated"): this module
+ENV = "NSD_EVALUATOR"  # "auto" (default), "generated" or "generic": see the module's docstring
+KINDS = ("auto", "generated", "generic")
 _LOADED: dict[str, object] = {}
 
 
@@ -72,15 +81,30 @@ def structure_key(model) -> bytes:
     return h.digest()
 
 
+_SOURCES: dict[bytes, tuple[str, str]] = {}  # structure key -> (module name, source)
+
+
+def _generated_source(model) -> tuple[bytes, str, str]:
+    """(structure key, module name, source) of ``model``'s generated evaluation (memoized)."""
+    skey = structure_key(model)
+    if skey not in _SOURCES:
+        source = generate_source(model)
+        _SOURCES[skey] = (f"nsd_eval_{hashlib.sha256(source.encode()).hexdigest()[:20]}", source)
+    return (skey, *_SOURCES[skey])
+
+
+def is_compiled(model) -> bool:
+    """Whether ``model``'s generated evaluation is in this process or compiled on disk (its mark)."""
+    skey, name, _ = _generated_source(model)
+    return skey in _LOADED or (source_folder() / f"{name}.compiled").exists()
+
+
 def generated_evaluator(model):
     """The compiled generated evaluation for ``model``'s structure (one per structure and process)."""
-    skey = structure_key(model)
+    skey, name, source = _generated_source(model)
     if skey in _LOADED:
         return _LOADED[skey]
-    source = generate_source(model)
-    key = hashlib.sha256(source.encode()).hexdigest()[:20]
-    path = source_folder() / f"nsd_eval_{key}.py"
-    name = f"nsd_eval_{key}"
+    path = source_folder() / f"{name}.py"
     path.parent.mkdir(parents=True, exist_ok=True)
     with _locked(name, True):  # processes started together write and compile it once; the others load it
         if not path.exists() or path.read_text() != source:
@@ -89,6 +113,9 @@ def generated_evaluator(model):
         module = importlib.util.module_from_spec(spec)
         sys.modules[name] = module  # before it runs: numba's cache records the module by name, to import it
         spec.loader.exec_module(module)  # njit with a signature: compiled (or loaded) here
+        mark = path.with_suffix(".compiled")
+        if not mark.exists():
+            _write_atomic(mark, "")  # "auto" uses it from now on (numba has written its cache)
     _LOADED[skey] = module.evaluate
     return module.evaluate
 
@@ -100,12 +127,26 @@ def generic_evaluator():
     return generic
 
 
+def evaluator_kind() -> str:
+    """NSD_EVALUATOR checked: "auto" (unset), "generated" or "generic"."""
+    kind = os.environ.get(ENV) or "auto"
+    if kind not in KINDS:
+        raise InputError(f"{ENV} = {kind!r}: allowed 'auto' (the default), 'generated' or 'generic'")
+    return kind
+
+
 def evaluator_for(model, kind: str | None = None):
-    """The evaluator a run uses: ``kind`` "generated" or "generic"; None reads NSD_EVALUATOR
-    (default generated)."""
-    kind = kind or os.environ.get(ENV, "generated")
-    if kind == "generic":
+    """The evaluator a run uses: ``kind`` "auto", "generated" or "generic"; None reads NSD_EVALUATOR.
+    "auto": the generated evaluation where it is already compiled, else the generic one."""
+    kind = kind or evaluator_kind()
+    if kind not in KINDS:
+        raise InputError(f"evaluator = {kind!r}: allowed 'auto', 'generated' or 'generic'")
+    if kind == "generic" or (kind == "auto" and not is_compiled(model)):
         return generic_evaluator()
-    if kind != "generated":
-        raise InputError(f"{ENV} = {kind!r}: allowed 'generated' (the default) or 'generic'")
     return generated_evaluator(model)
+
+
+def prefer_generated() -> None:
+    """For a study (many runs of one structure): NSD_EVALUATOR=generated unless the user chose one.
+    Set in the environment, so a pool's workers (started after this) inherit it."""
+    os.environ.setdefault(ENV, "generated")

@@ -127,6 +127,27 @@ def compile_once(*names: str) -> None:
             _compile_unit(needed.pop(0), block=True)
 
 
+def share_work(items) -> None:
+    """Run every ``(lock, fn)`` of ``items`` once in this process, sharing the first runs with processes
+    doing the same (a pool's workers warming up): an item whose lock another process holds (it is
+    compiling what the item needs) is put off, and this process goes on with the next one; it waits
+    only when every item left is held, and then runs it on what the other one left in the cache."""
+    left = list(items)
+    while left:
+        held_elsewhere = []
+        for lock, fn in left:
+            with _locked(lock, block=False) as held:
+                if held:
+                    fn()
+                else:
+                    held_elsewhere.append((lock, fn))
+        if held_elsewhere and len(held_elsewhere) == len(left):
+            lock, fn = held_elsewhere.pop(0)
+            with _locked(lock, block=True):
+                fn()
+        left = held_elsewhere
+
+
 class _CompileClock:
     """Seconds (wall, CPU) this process has spent in numba compilations, outermost ones only: a run
     that compiles something its warm-up did not (another mechanism's generated evaluation, a kernel

@@ -12,7 +12,6 @@ generic_evaluator, or a mechanism's own), called through a function pointer.
 from __future__ import annotations
 
 import math
-import time
 from collections import namedtuple
 
 import numpy as np
@@ -295,15 +294,12 @@ STEP_LOOP = unit("step_loop", ((_step_loop, STEP_LOOP_SIG),))
 RHS = unit("rhs_entry", ((_rhs, RHS_SIG),), shared=False)  # scipy's solvers and the tests only
 
 
-def compile_engine() -> float:
-    """Make the units every in-house run needs ready in this process (the step loop; the generic
-    evaluation only where NSD_EVALUATOR=generic selects it: the device's runs use their generated
-    evaluation, which their warm-up runs compile; compiled, or loaded from the cache), sharing the
-    work with processes doing the same (compile_once); the seconds it took. For a pool initializer."""
+def engine_units() -> tuple:
+    """The units every in-house run needs (nsd_core.engine.compile_once): the step loop, and the generic
+    evaluation unless NSD_EVALUATOR=generated (with "auto" a structure whose evaluation is not yet
+    generated runs on it). A pool's warm-up makes them ready first (device.worker_warmup)."""
     import os
-    start = time.perf_counter()
-    compile_once(*((EVALUATE,) if os.environ.get("NSD_EVALUATOR") == "generic" else ()), STEP_LOOP)
-    return time.perf_counter() - start
+    return (() if os.environ.get("NSD_EVALUATOR") == "generated" else (EVALUATE,)) + (STEP_LOOP,)
 
 
 def _units(evaluator, *units):
