@@ -120,3 +120,42 @@ def test_a_unit_another_process_compiles_is_waited_for_and_the_rest_done_meanwhi
     assert list(seen) == ["test_b", "test_a"], seen  # the free unit meanwhile, then the one waited for
     assert seen["test_a"] > 1.0, seen  # after the other process let go of a's lock
     assert a(2.0) == 4.0 and b(2.0) == 6.0 and co.DONE == {"test_a", "test_b"}
+
+
+def _hold(lock_file, seconds: float) -> subprocess.Popen:
+    """Another process holding ``lock_file`` for ``seconds`` (returns once it holds it)."""
+    p = subprocess.Popen([sys.executable, "-c", textwrap.dedent(f"""
+        import fcntl, os, time
+        fd = os.open({str(lock_file)!r}, os.O_RDWR | os.O_CREAT)
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        print("held", flush=True)
+        time.sleep({seconds})
+    """)], stdout=subprocess.PIPE, text=True)
+    assert p.stdout.readline().strip() == "held"
+    return p
+
+
+def test_shared_work_puts_off_an_item_another_process_holds(tmp_path, monkeypatch):
+    """A pool's warm-up (share_work): while another process holds item a's lock, items b and c run
+    first; a runs last, once the other process has let go (then it only loads what that one left)."""
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    holder = _hold(tmp_path / ".warm-a.lock", 2.0)
+    t0, ran = time.perf_counter(), []
+    try:
+        co.share_work([(f"warm-{n}", lambda n=n: ran.append((n, time.perf_counter() - t0))) for n in "abc"])
+    finally:
+        holder.wait(timeout=30)
+    assert [n for n, _ in ran] == ["b", "c", "a"], ran
+    assert ran[0][1] < 1.0 and ran[2][1] > 1.0, ran
+
+
+def test_the_notice_is_printed_by_one_process_of_those_compiling_together(tmp_path, monkeypatch):
+    """Two workers compiling at once on a cold cache: one line for the user, not one per worker."""
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    holder = _hold(tmp_path / ".notice.lock", 30.0)   # the other worker, which printed it
+    try:
+        assert co._first_to_announce() is False
+    finally:
+        holder.kill()
+        holder.wait(timeout=30)
+    assert co._first_to_announce() is True   # alone: this process prints it

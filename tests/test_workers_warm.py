@@ -118,3 +118,14 @@ def test_warm_ups_pickle():
     assert pickle.loads(pickle.dumps(warm)).args[2][0].args[0] == "exudyn"
     assert pickle.loads(pickle.dumps(sweep_warmup([]))).args == ((), (), ())
     assert pickle.loads(pickle.dumps(partial(_slow_warm)))
+
+
+def test_a_peers_warm_up_runs_at_its_named_choices_not_at_the_cases_step():
+    """What compiles depends on the named choices (MuJoCo's integrator); a case's own fine step
+    (Exudyn at 6.25e-6 s for A25.5mm_f1Hz) made each worker's tiny run cost 2.5 s."""
+    from comparisons.warmup import job_warmup, spec
+    from nsd_core.device.drive import Drive
+    warm = job_warmup([spec("exudyn", False, Drive(0.0255, 1.0), {"step_size": 6.25e-6}),
+                       spec("mujoco", False, Drive(0.0255, 1.0), {"integrator": "RK4", "timestep": 2.5e-5})])
+    assert [c.args[0] for c in warm.args[2]] == ["exudyn", "mujoco"]
+    assert [c.args[3] for c in warm.args[2]] == [{}, {"integrator": "RK4"}]

@@ -29,7 +29,9 @@ _WARM: set = set()   # (mode, engine, path kind, the settings' choices) compiled
 def _warm_peer(mode: str, name: str, line: bool, settings: dict | None, tiny) -> float:
     """A peer engine's numba code (MuJoCo's callback and step loop, Exudyn's step) compiles on its first
     call: run ``tiny`` once per process and kind of run first, and return its seconds, so that the real
-    run's wall_time is its integration (the in-house engine does this in nsd_core.device.warmup)."""
+    run's wall_time is its integration (the in-house engine does this in nsd_core.device.warmup).
+    ``tiny`` is given the settings' named choices alone (they decide what compiles; a case's own step,
+    e.g. Exudyn's 6.25e-6 s, would make the tiny run cost seconds)."""
     choices = tuple(sorted((k, v) for k, v in (settings or {}).items() if isinstance(v, str)))
     key = (mode, name, line, choices)
     if name == REFERENCE or key in _WARM:
@@ -37,7 +39,7 @@ def _warm_peer(mode: str, name: str, line: bool, settings: dict | None, tiny) ->
     _WARM.add(key)
     start = time.perf_counter()
     try:
-        tiny()
+        tiny(dict(choices) or None)
     except Exception:  # noqa: BLE001 (the real run reports its own error)
         pass
     return time.perf_counter() - start
@@ -51,9 +53,9 @@ def run_engine(name: str, params: Params, drive, settings: dict | None = None):
     from nsd_core.engine.workers import stdout_to_stderr
     engine = get_engine(name)
     with stdout_to_stderr():
-        warm = _warm_peer("drive", name, drive.is_line, settings, lambda: engine.run(
+        warm = _warm_peer("drive", name, drive.is_line, settings, lambda choices: engine.run(
             Params(), Drive(0.001, 20.0, cycles=1, samples_per_cycle=16, path="line" if drive.is_line else "circle"),
-            settings or None))
+            choices))
         c0 = time.process_time()
         result = engine.run(params, drive, settings or None)
     return _with_times(name, result, warm, time.process_time() - c0)
@@ -85,9 +87,9 @@ def run_seismic_engine(name: str, params: Params, structure, ground, duration=No
     from nsd_core.engine.workers import stdout_to_stderr
     engine = get_engine(name)
     with stdout_to_stderr():
-        warm = _warm_peer("seismic", name, True, settings, lambda: engine.run_seismic(
+        warm = _warm_peer("seismic", name, True, settings, lambda choices: engine.run_seismic(
             params, structure, Harmonic(0.1, 2.0, duration=0.02), duration=0.02, dt_out=1e-3,
-            settings=settings or None))
+            settings=choices))
         c0 = time.process_time()
         result = engine.run_seismic(params, structure, ground, duration=duration, dt_out=dt_out,
                                     settings=settings or None)

@@ -31,7 +31,21 @@ def _notice(stream=None) -> None:
     global _announced
     if not _announced:
         _announced = True
-        print(NOTICE.format(seconds=NOTICE_SECONDS), file=stream or sys.stderr, flush=True)
+        if _first_to_announce():
+            print(NOTICE.format(seconds=NOTICE_SECONDS), file=stream or sys.stderr, flush=True)
+
+
+_NOTICE_LOCK: list = []  # the open lock file, held until the process ends
+
+
+def _first_to_announce() -> bool:
+    """True unless another live process has printed the notice (a pool's other worker): the first
+    keeps a lock file in the cache folder until it ends, so a user sees one line, not one per worker."""
+    ctx = _locked("notice", block=False)
+    held = ctx.__enter__()
+    if held:
+        _NOTICE_LOCK.append(ctx)   # never exited: the lock goes with the process
+    return held
 
 
 def announce_compilation() -> None:
