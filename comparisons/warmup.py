@@ -12,7 +12,7 @@ from nsd_core.device.params import Params
 from nsd_core.device.warmup import tiny_drive, tiny_ground
 from nsd_core.device.worker_warmup import kind, warm_worker
 
-from comparisons.engines import REFERENCE, run_job, run_seismic_job
+from comparisons.engines import REFERENCE, run_job, run_seismic_job, tiny_settings
 
 
 def spec(engine: str, seismic: bool, drive=None, settings: dict | None = None) -> tuple:
@@ -41,7 +41,7 @@ def job_warmup(specs) -> partial:
             seen.add((engine, mode, path, key))
             # the named choices alone: they decide what compiles; a case's step (A25.5mm_f1Hz: Exudyn
             # at 6.25e-6 s) would make the tiny run cost 2.5 s in each worker
-            settings = dict(key)
+            settings = tiny_settings(engine, mode, settings)
             if mode == "seismic":
                 calls.append(partial(run_seismic_job, engine, Params(), default_structure(Params()), tiny_ground(),
                                      0.02, 1e-3, settings))

@@ -40,3 +40,17 @@ def test_steady_needs_a_frequency_when_the_result_has_none(tmp_path):
     with pytest.raises(ValueError, match="frequency"):
         back.steady()
     assert len(back.steady(10.0)["t"]) == 51
+
+
+def test_columns_are_written_as_ten_significant_digits_every_value(tmp_path):
+    """The row-at-once formatting writes what formatting each value with .10g writes (special values too)."""
+    import numpy as np
+    from nsd_core.device.results import write_columns
+    rng = np.random.default_rng(1)
+    a = rng.standard_normal(50) * 10.0 ** rng.integers(-300, 300, 50)
+    a[:6] = [np.nan, -0.0, np.inf, -np.inf, 5e-324, 1.0]
+    b = np.arange(50)
+    write_columns(tmp_path / "c.csv", {"a": ("m", a), "b": ("-", b)})
+    lines = (tmp_path / "c.csv").read_text().splitlines()
+    assert lines[0] == "a [m],b [-]"
+    assert lines[1:] == [f"{x:.10g},{y:.10g}" for x, y in zip(a, b)]

@@ -142,7 +142,7 @@ def test_shared_work_puts_off_an_item_another_process_holds(tmp_path, monkeypatc
     holder = _hold(tmp_path / ".warm-a.lock", 2.0)
     t0, ran = time.perf_counter(), []
     try:
-        co.share_work([(f"warm-{n}", lambda n=n: ran.append((n, time.perf_counter() - t0))) for n in "abc"])
+        co.share_work([(f"warm-{n}", lambda block, n=n: ran.append((n, time.perf_counter() - t0))) for n in "abc"])
     finally:
         holder.wait(timeout=30)
     assert [n for n, _ in ran] == ["b", "c", "a"], ran
@@ -159,3 +159,26 @@ def test_the_notice_is_printed_by_one_process_of_those_compiling_together(tmp_pa
         holder.kill()
         holder.wait(timeout=30)
     assert co._first_to_announce() is True   # alone: this process prints it
+
+
+def test_a_unit_is_put_off_while_another_process_compiles_what_it_needs(tmp_path, monkeypatch):
+    """compile_now (a warm-up item): unit a needs unit b, which another process is compiling: False,
+    nothing waited for and nothing compiled; once b's lock is free, b then a, True."""
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    sig = types.float64(types.float64)
+    a, b = njit(cache=False)(_twice), njit(cache=False)(_thrice)
+    monkeypatch.setattr(co, "UNITS", {})
+    monkeypatch.setattr(co, "NEEDS", {})
+    monkeypatch.setattr(co, "DONE", set())
+    co.unit("test_b", ((b, sig),))
+    co.unit("test_a", ((a, sig),), needs=("test_b",))
+    holder = _hold(tmp_path / ".test_b.lock", 30.0)
+    try:
+        t0 = time.perf_counter()
+        assert co.compile_now("test_a") is False
+        assert time.perf_counter() - t0 < 1.0 and co.DONE == set() and not a.overloads and not b.overloads
+    finally:
+        holder.kill()
+        holder.wait(timeout=30)
+    assert co.compile_now("test_a") is True and co.DONE == {"test_a", "test_b"}
+    assert a(2.0) == 4.0 and b(2.0) == 6.0

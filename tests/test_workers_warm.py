@@ -128,4 +128,4 @@ def test_a_peers_warm_up_runs_at_its_named_choices_not_at_the_cases_step():
     warm = job_warmup([spec("exudyn", False, Drive(0.0255, 1.0), {"step_size": 6.25e-6}),
                        spec("mujoco", False, Drive(0.0255, 1.0), {"integrator": "RK4", "timestep": 2.5e-5})])
     assert [c.args[0] for c in warm.args[2]] == ["exudyn", "mujoco"]
-    assert [c.args[3] for c in warm.args[2]] == [{}, {"integrator": "RK4"}]
+    assert [c.args[3] for c in warm.args[2]] == [{"min_steps_per_cycle": 100}, {"integrator": "RK4"}]

@@ -26,12 +26,20 @@ def get_engine(name: str):
 _WARM: set = set()   # (mode, engine, path kind, the settings' choices) compiled in this process
 
 
+def tiny_settings(name: str, mode: str, settings: dict | None) -> dict | None:
+    """A peer's settings for a warm-up's tiny run: the named choices of ``settings`` (what compiles),
+    over the engine's ``warm_settings`` in the drive mode (Exudyn: fewer steps a cycle)."""
+    choices = {k: v for k, v in (settings or {}).items() if isinstance(v, str)}
+    warm = getattr(get_engine(name), "warm_settings", {}) if mode == "drive" else {}
+    return {**warm, **choices} or None
+
+
 def _warm_peer(mode: str, name: str, line: bool, settings: dict | None, tiny) -> float:
     """A peer engine's numba code (MuJoCo's callback and step loop, Exudyn's step) compiles on its first
     call: run ``tiny`` once per process and kind of run first, and return its seconds, so that the real
     run's wall_time is its integration (the in-house engine does this in nsd_core.device.warmup).
     ``tiny`` is given the settings' named choices alone (they decide what compiles; a case's own step,
-    e.g. Exudyn's 6.25e-6 s, would make the tiny run cost seconds)."""
+    e.g. Exudyn's 6.25e-6 s, would make the tiny run cost seconds), over the engine's ``warm_settings``."""
     choices = tuple(sorted((k, v) for k, v in (settings or {}).items() if isinstance(v, str)))
     key = (mode, name, line, choices)
     if name == REFERENCE or key in _WARM:
@@ -39,7 +47,7 @@ def _warm_peer(mode: str, name: str, line: bool, settings: dict | None, tiny) ->
     _WARM.add(key)
     start = time.perf_counter()
     try:
-        tiny(dict(choices) or None)
+        tiny(tiny_settings(name, mode, settings))
     except Exception:  # noqa: BLE001 (the real run reports its own error)
         pass
     return time.perf_counter() - start

@@ -232,6 +232,10 @@ class ExudynEngine:
         "linear_solver": "eigen_dense",  # Exudyn's linear solver: exudyn_dense | eigen_dense | eigen_sparse
     }
 
+    # a warm-up's tiny run (comparisons.engines._warm_peer) compiles what a run does without the
+    # 20000 steps a cycle of the default (2.5 s in each pool worker, for nothing)
+    warm_settings = {"min_steps_per_cycle": 100}
+
     @staticmethod
     def steps_per_output(drive: Drive, settings: dict) -> int:
         """Steps per output interval: the largest step <= min(step_size, 1/(f min_steps_per_cycle))

@@ -166,7 +166,10 @@ def write_columns(path: str | Path, columns: dict[str, tuple[str, np.ndarray]]) 
     """Numeric columns {name: (unit, values)} as CSV with "name [unit]" headers, atomically."""
     header = ",".join(f"{n} [{u}]" for n, (u, _) in columns.items())
     data = np.column_stack([v for _, v in columns.values()])
-    lines = [header] + [",".join(f"{v:.10g}" for v in row) for row in data]
+    # one %-format a row (the same text as f"{v:.10g}" a value, half the CPU: the gate's main process
+    # writes ~7 million numbers while the workers run)
+    row_format = ",".join(["%.10g"] * data.shape[1])
+    lines = [header] + [row_format % tuple(row) for row in data.astype(float).tolist()]
     atomic_write_text(path, "\n".join(lines) + "\n")
 
 

@@ -14,7 +14,7 @@ from nsd_core.device import ground
 from nsd_core.device.model import DEFAULT_SOLVER, simulate
 from nsd_core.device.seismic import simulate_seismic
 from nsd_core.device.warmup import PATHS, warm
-from nsd_core.engine.compile_once import compile_once, share_work
+from nsd_core.engine.compile_once import compile_now, share_work
 from nsd_core.engine.rk import engine_units
 
 
@@ -36,10 +36,12 @@ def warm_worker(kinds=(), record_sets=(), calls=()) -> None:
     that meets it, with its own inputs."""
     items = []
     if kinds:
-        items += [(f"warm-unit-{u}", partial(compile_once, u)) for u in engine_units()]
-    items += [(f"warm-call-{i}-{_name(call)}", partial(_quietly, call)) for i, call in enumerate(calls)]
+        items += [(f"warm-unit-{u}", partial(compile_now, u)) for u in engine_units()]
+    # one lock per peer engine and one per in-house mode: the runs under one lock compile the same
+    # kernels (MuJoCo's step loop for a line and a circle), so two workers never take two of them at once
+    items += [(f"warm-call-{_name(call)}", partial(_quietly, call)) for call in calls]
     fns = {"drive": simulate, "seismic": simulate_seismic}
-    items += [(f"warm-kind-{'-'.join(k)}", partial(warm, k[0], fns[k[0]], *k[1:])) for k in kinds]
+    items += [(f"warm-kind-{k[0]}", partial(_quietly, partial(warm, k[0], fns[k[0]], *k[1:]))) for k in kinds]
     share_work(items)
     for name in record_sets:
         for f in ground.SETS[ground.set_name(name)][0]:
@@ -47,14 +49,13 @@ def warm_worker(kinds=(), record_sets=(), calls=()) -> None:
 
 
 def _name(call) -> str:
-    """A lock name's part for a warm-up call: its function and its arguments' types (file-safe)."""
-    func = getattr(call, "func", call)
-    args = getattr(call, "args", ())
-    text = getattr(func, "__name__", "call") + "-" + "-".join(str(a) for a in args if isinstance(a, (str, int, float)))
-    return "".join(c if c.isalnum() or c in "._-" else "_" for c in text)[:80]
+    """A warm-up call's lock name: the engine it runs (its first argument, a name), file-safe."""
+    engine = next((a for a in getattr(call, "args", ()) if isinstance(a, str)), "call")
+    return "".join(c if c.isalnum() or c in "._-" else "_" for c in engine)[:40]
 
 
-def _quietly(call) -> None:
+def _quietly(call, block: bool = True) -> None:
+    """``call()`` as a share_work item (it always runs: ``block`` is not needed)."""
     try:
         call()
     except Exception:  # noqa: BLE001 (the job reports its own error)

@@ -97,15 +97,18 @@ def _locked(name: str, block: bool):
 
 
 UNITS: dict[str, tuple] = {}  # name -> (((dispatcher, signature), ...), lock name, shared)
+NEEDS: dict[str, tuple] = {}  # name -> the units made ready before it (kernels it calls, compiled apart)
 DONE: set[str] = set()
 
 
-def unit(name: str, kernels, lock: str | None = None, shared: bool = True) -> str:
+def unit(name: str, kernels, lock: str | None = None, shared: bool = True, needs=()) -> str:
     """Register a unit: kernels compiled together, in order (a kernel after the ones it calls, so that
     it links them instead of compiling them again), under the lock ``lock`` (default: the name; units
     that hold the same kernel share one). ``shared``: a process waiting for another unit compiles this
-    one meanwhile (every run needs it). Returns the name."""
+    one meanwhile (every run needs it). ``needs``: units of kernels it calls, made ready first (so two
+    processes can compile the parts of a long chain side by side). Returns the name."""
     UNITS[name] = (tuple(kernels), lock or name, shared)
+    NEEDS[name] = tuple(needs)
     return name
 
 
@@ -113,6 +116,8 @@ def _compile_unit(name: str, block: bool) -> bool:
     """Compile (or load) the unit under its lock; False when ``block`` is False and another process
     holds the lock (it is compiling the unit now)."""
     kernels, lock, _ = UNITS[name]
+    if any(n not in DONE for n in NEEDS.get(name, ())):
+        compile_once(*NEEDS[name])   # loaded from the cache where another process compiled them
     with _locked(lock, block) as held:
         if not held:
             return False
@@ -141,25 +146,34 @@ def compile_once(*names: str) -> None:
             _compile_unit(needed.pop(0), block=True)
 
 
+def compile_now(name: str, block: bool = False) -> bool:
+    """Make the unit ``name`` ready (its needs first) unless another process holds one of their locks:
+    then False, and nothing waited for (``block``: wait, as compile_once does)."""
+    if block:
+        compile_once(name)
+        return True
+    return all(n in DONE or compile_now(n) for n in NEEDS.get(name, ())) and (
+        name in DONE or _compile_unit(name, block=False))
+
+
 def share_work(items) -> None:
     """Run every ``(lock, fn)`` of ``items`` once in this process, sharing the first runs with processes
-    doing the same (a pool's workers warming up): an item whose lock another process holds (it is
-    compiling what the item needs) is put off, and this process goes on with the next one; it waits
-    only when every item left is held, and then runs it on what the other one left in the cache."""
+    doing the same (a pool's workers warming up). ``fn(block)`` does the item; with ``block`` False it
+    may return False, meaning another process is on it (compile_now). An item whose lock another
+    process holds, or that returns False, is put off and this process goes on with the next one; it
+    waits only when every item left is taken, and then does it on what the other left in the cache."""
     left = list(items)
     while left:
-        held_elsewhere = []
+        put_off = []
         for lock, fn in left:
             with _locked(lock, block=False) as held:
-                if held:
-                    fn()
-                else:
-                    held_elsewhere.append((lock, fn))
-        if held_elsewhere and len(held_elsewhere) == len(left):
-            lock, fn = held_elsewhere.pop(0)
+                if not (held and fn(False) is not False):
+                    put_off.append((lock, fn))
+        if put_off and len(put_off) == len(left):
+            lock, fn = put_off.pop(0)
             with _locked(lock, block=True):
-                fn()
-        left = held_elsewhere
+                fn(True)
+        left = put_off
 
 
 class _CompileClock:

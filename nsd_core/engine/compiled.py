@@ -363,7 +363,11 @@ def _generic_evaluator(t, y, m, w, forces, motion, reactions):
 # a start state, unit ASSEMBLE), so that the evaluation links it instead of compiling it again.
 generic_evaluator = _generic_evaluator
 ASSEMBLE_SIG = types.int64(MODEL_TYPE, WORK_TYPE, types.float64, ARRAY)
-EVALUATE = unit("evaluate", ((_assemble, ASSEMBLE_SIG), (generic_evaluator, EVAL_SIG)))
+# the chain's two longest parts (~4 and ~5 s of its ~18 s on a cold cache) are units of their own,
+# so that a pool's two workers compile them side by side (worker_warmup); the evaluation links them
+DYNAMICS = unit("dynamics", ((reduced_dynamics, types.int64(MODEL_TYPE, WORK_TYPE, types.boolean)),))
+VELOCITIES = unit("velocities", ((velocities_and_predictor, types.int64(MODEL_TYPE, WORK_TYPE, ARRAY)),))
+EVALUATE = unit("evaluate", ((_assemble, ASSEMBLE_SIG), (generic_evaluator, EVAL_SIG)), needs=(DYNAMICS, VELOCITIES))
 ASSEMBLE = unit("assemble", ((_assemble, ASSEMBLE_SIG),), lock="evaluate")  # one lock: one _assemble
 
 

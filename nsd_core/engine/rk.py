@@ -21,7 +21,7 @@ from scipy.integrate import RK45 as _SciRK45
 
 from numba import typeof, types
 
-from nsd_core.engine.compiled import EVALUATE, OK, copy_into, derivatives, generic_evaluator
+from nsd_core.engine.compiled import DYNAMICS, EVALUATE, OK, VELOCITIES, copy_into, derivatives, generic_evaluator
 from nsd_core.engine.compiled_model import EVAL_FN, FORCE_FN, MODEL_TYPE, MOTION_FN, WORK_TYPE
 from nsd_core.engine.compile_once import compile_once, unit
 
@@ -299,7 +299,8 @@ def engine_units() -> tuple:
     evaluation unless NSD_EVALUATOR=generated (with "auto" a structure whose evaluation is not yet
     generated runs on it). A pool's warm-up makes them ready first (device.worker_warmup)."""
     import os
-    return (() if os.environ.get("NSD_EVALUATOR") == "generated" else (EVALUATE,)) + (STEP_LOOP,)
+    generic = (VELOCITIES, DYNAMICS, EVALUATE)  # its parts first: two workers take one each
+    return (() if os.environ.get("NSD_EVALUATOR") == "generated" else generic) + (STEP_LOOP,)
 
 
 def _units(evaluator, *units):
