@@ -32,6 +32,8 @@ from refcompare import discrepancy, in_house_reference  # noqa: E402
 
 import numpy as np  # noqa: E402
 
+from nsd_core.engine.codegen import prefer_generated  # noqa: E402
+prefer_generated()  # the in-house engine as the studies run it (the generated evaluation)
 from nsd_core.device.drive import Drive  # noqa: E402
 from nsd_core.device.model import DEFAULT_SOLVER, simulate  # noqa: E402
 from nsd_core.device.params import Params

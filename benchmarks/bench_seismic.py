@@ -24,6 +24,8 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from compile_time import compile_times  # noqa: E402
 
+from nsd_core.engine.codegen import prefer_generated
+prefer_generated()  # the in-house engine as the studies run it (the generated evaluation)
 from nsd_core.device.ground import fema_record
 from nsd_core.device.isolation import default_structure
 from nsd_core.device.params import Params

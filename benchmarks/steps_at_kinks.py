@@ -56,6 +56,8 @@ from pathlib import Path
 import numpy as np
 from numba import njit, types
 
+from nsd_core.engine.codegen import prefer_generated
+prefer_generated()  # the in-house engine as the studies run it (the generated evaluation)
 from comparisons.config import SeismicCase, load_cases
 from nsd_core.device.results import atomic_write_json, atomic_write_text
 from nsd_core.engine import rk

@@ -45,6 +45,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from nsd_core.engine.codegen import prefer_generated
+prefer_generated()  # the in-house engine as the studies run it (the generated evaluation)
 from comparisons.config import SeismicCase, load_cases
 from comparisons.engines import get_engine
 from comparisons.engines.base import EngineError
