@@ -150,9 +150,16 @@ def cost_rows(data) -> list[list[str]]:
 
 
 def cost_figure(data):
+    names = [c.get("name") for c in [*data.cases, *(data.summary.get("seismic_cases") or [])] if isinstance(c, dict)]
+    runs = [data.summary["runs"].get(n) for n in names if isinstance(n, str)]
+    stats = [p[data.reference].get("stats") for p in runs
+             if isinstance(p, dict) and isinstance(p.get(data.reference), dict)]
+    used = sorted({s.get("evaluation") for s in stats if isinstance(s, dict)} & {"generated", "generic"})
+    evaluation = f"; the {data.reference} runs used the {' and the '.join(used)} evaluation" if used else ""
     fig = new_figure(LANDSCAPE, "Cost: warm wall and CPU time per cycle, and accuracy against cost",
                      "integration only: compilation (a tiny warm-up run in each worker) and the workers' start-up are "
-                     "timed apart and never counted; engines ran in parallel worker processes on a shared machine")
+                     "timed apart and never counted; engines ran in parallel worker processes on a shared machine"
+                     + evaluation + " (NSD_EVALUATOR, docs/engine-codegen.md)" * bool(used))
     many = len(data.cases) > 6
     gs = fig.add_gridspec(1, 2, left=0.07, right=0.88, top=0.86, bottom=0.5 if many else 0.42, wspace=0.25,
                           width_ratios=[1.15, 1])

@@ -183,6 +183,7 @@ def test_whole_drive_run_equals_the_generic_one(monkeypatch):
     """The Figure 6 drive A = 15 mm at 1 Hz, one cycle at the default accuracy: the force on the plate
     from the generated evaluation against the generic one (bit-identical arithmetic: measured 0)."""
     g, r = _runs(monkeypatch, lambda: simulate(Params(), Drive(0.015, 1.0, cycles=1)))
+    assert (g.stats["evaluation"], r.stats["evaluation"]) == ("generated", "generic")  # the cost page names it
     assert g.stats["steps"] == r.stats["steps"]
     for k in ("F", "F_rod", "F_ropes", "F_wires"):
         assert np.max(np.abs(g[k] - r[k])) <= 1e-9 * np.max(np.abs(r[k])), k
@@ -193,6 +194,7 @@ def test_whole_seismic_run_equals_the_generic_one(monkeypatch):
     run = lambda: simulate_seismic(Params(), structure, Harmonic(0.8, 2.0, 30.0, duration=0.3), duration=0.3,  # noqa: E731
                                    dt_out=2e-3)
     g, r = _runs(monkeypatch, run)
+    assert (g.stats["evaluation"], r.stats["evaluation"]) == ("generated", "generic")
     assert g.stats["steps"] == r.stats["steps"]
     for k in ("x", "y", "device_Fx", "device_Fy", "ax_abs"):
         assert np.max(np.abs(g[k] - r[k])) <= 1e-9 * np.max(np.abs(r[k])), k

@@ -333,6 +333,10 @@ def test_the_in_house_cost_on_the_cost_page_is_its_warm_integration(run_dir, rep
     cycles = s["cases"][0]["cycles"]
     page = _page_text(paths["pdf"], EXPECTED.index("cost"))
     assert f"{fmt(run['wall_time'] / cycles)} / {fmt(run['cpu_time'] / cycles)}" in page
+    # which in-house evaluation ran (NSD_EVALUATOR): the subtitle names every one the runs' stats name
+    used = sorted({r["semirecursive"]["stats"]["evaluation"] for r in s["runs"].values() if "semirecursive" in r})
+    assert used and set(used) <= {"generated", "generic"}
+    assert f"runs used the {' and the '.join(used)} evaluation" in " ".join(page.split())
     case = next(c for c in load_cases(run_dir[0].parent / "cases.toml") if c.name == "A15mm_f10Hz")
     simulate(case.params, case.drive)   # warm
     start = time.process_time()

@@ -146,6 +146,12 @@ def evaluator_for(model, kind: str | None = None):
     return generated_evaluator(model)
 
 
+def evaluation_used(model, kind: str | None = None) -> str:
+    """"generated" or "generic": what ``evaluator_for(model, kind)`` runs (for a run's stats)."""
+    kind = kind or evaluator_kind()
+    return "generated" if kind == "generated" or (kind == "auto" and is_compiled(model)) else "generic"
+
+
 def prefer_generated() -> None:
     """For a study (many runs of one structure): NSD_EVALUATOR=generated unless the user chose one.
     Set in the environment, so a pool's workers (started after this) inherit it."""
