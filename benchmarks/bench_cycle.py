@@ -118,7 +118,7 @@ def main() -> None:
         st = results[i].stats
         row = {"amplitude": A, "frequency": f, "median_s_per_cycle": statistics.median(times[i]),
                "min_s_per_cycle": min(times[i]), "median_cpu_s_per_cycle": statistics.median(cpu[i]),
-               "runs": len(times[i]), "steps": st["steps"], "nfev": st["nfev"],
+               "runs": len(times[i]), "steps": st["steps"], "nfev": st["nfev"], "evaluation": st.get("evaluation"),
                "dF": acc["dF"], "dA": acc["dA"]}
         rows.append(row)
         print(f"A = {A} m, f = {f:4.1f} Hz: median {1e3 * row['median_s_per_cycle']:.1f} ms/cycle wall "
