@@ -1,4 +1,4 @@
-"""The tables of docs/validation.md and docs/performance.md, generated from benchmarks/results/*.json.
+"""The tables of docs/validation.md, docs/performance.md and docs/engine-codegen.md, generated from benchmarks/results/*.json.
 
     python -m benchmarks.docs            rewrite every generated block from the JSON
     python -m benchmarks.docs --check    exit 1 if a block differs from what the JSON gives
@@ -17,7 +17,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results"
-DOCS = (ROOT / "docs" / "validation.md", ROOT / "docs" / "performance.md")
+DOCS = (ROOT / "docs" / "validation.md", ROOT / "docs" / "performance.md", ROOT / "docs" / "engine-codegen.md")
 BLOCK = re.compile(r"(<!-- generated: (?P<name>[a-z0-9_-]+) -->\n)(?P<body>.*?)(<!-- end generated: (?P=name) -->)", re.S)
 
 
@@ -41,13 +41,19 @@ def load(name: str) -> dict:
     return json.loads((RESULTS / f"{name}.json").read_text())
 
 
+def loaded(m: dict) -> bool:
+    """Other work shared the CPUs: the load average before the command above the CPU count, or after it
+    above the CPU count + 1 (the load after counts the command's own processes, up to 2 workers)."""
+    return m["load_average_before"][0] > m["cpus"] or m["load_average_after"][0] > m["cpus"] + 1
+
+
 def provenance(rec: dict) -> str:
     m = rec["measured"]
     v = m["versions"]
     vers = ", ".join(f"{k} {v[k]}" for k in ("python", "numpy", "scipy", "numba", "mujoco", "exudyn") if k in v)
     load_text = (f"load average {m['load_average_before'][0]:g} before, {m['load_average_after'][0]:g} after"
                  + (" (**loaded**: other jobs shared the CPUs, so times are longer than on a quiet machine)"
-                    if m["loaded"] else ""))
+                    if loaded(m) else ""))
     return (f"*Measured {m['date_utc']} UTC by `{rec['command']}` (exit {rec['exit_code']}, {m['wall_s']:.0f} s), "
             f"`python -m benchmarks.measure {rec['name']}`; {m['machine']}, {m['cpus']} CPUs, {load_text}; "
             f"{vers}; commit {m['git_commit'][:12]}{m['git_commit'][40:]}.*\n")
@@ -196,10 +202,24 @@ def bench_cycle() -> str:
     rows = [[f"line, A = {g(c['amplitude'] * 1e3)} mm, {g(c['frequency'])} Hz", g(1e3 * c["median_s_per_cycle"]),
              g(1e3 * c["median_cpu_s_per_cycle"]), str(c["steps"]), str(c["nfev"]), g(c["dF"])] for c in d["cases"]]
     return (provenance(rec) + "\n"
-            + f"In-house engine, {d['solver'].get('method')} rtol {g(d['solver'].get('rtol'))}, 2 cycles of 2000 samples, "
+            + f"In-house engine, {d['solver'].get('method')} rtol {g(d['solver'].get('rtol'))}"
+            + "".join(sorted({f", the {c['evaluation']} evaluation" for c in d["cases"] if c.get("evaluation")}))
+            + ", 2 cycles of 2000 samples, "
               f"median of {d['cases'][0]['runs']} runs after a warm-up (compilation excluded):\n\n"
             + table(["case", "ms per cycle, wall", "ms per cycle, CPU", "steps / 2 cycles", "rhs / 2 cycles",
                      "max\\|ΔF\\|/max\\|F\\| vs rtol 1e-10"], rows))
+
+
+def bench_rhs() -> str:
+    rec = load("bench_rhs")
+    d = rec["data"]
+    rows = [[part, g(1e6 * s)] for part, s in d["seconds"].items()]
+    return (provenance(rec) + "\n"
+            + f"One evaluation of the device model (the Figure 6 drive A = 15 mm, 1 Hz, near its start), the least "
+              f"of {d['repeats']} loops of {d['loops']} calls each in a compiled loop; the parts on the same state. "
+              f"Newton iterations per assembly: {g(d['newton_iterations_per_assembly'])} (generic), "
+              f"{g(d['newton_iterations_per_assembly_generated'])} (generated).\n\n"
+            + table(["what", "µs a call"], rows))
 
 
 def bench_seismic() -> str:
@@ -234,6 +254,11 @@ def bench_start() -> str:
             rows.append([f"{state}" + (f" ({i})" if len(d["pairs"]) > 1 else ""), g(r["command_wall_s"]),
                          g(r["command_cpu_s"]), g(r.get("compare_wall_s")), g(r.get("worker_ready_s")),
                          g(r.get("worker_warm_s")), comp, f"{r.get('verdict', r.get('error'))} (exit {r['exit_code']})"])
+    if len(d["pairs"]) > 1:   # the figure to quote: the median of the pairs, each column on its own
+        for state in ("cold", "warm"):
+            m = d["median"][state]
+            rows.append([f"**{state}, median**", g(m["command_wall_s"]), g(m["command_cpu_s"]),
+                         g(m.get("compare_wall_s")), g(m.get("worker_ready_s")), g(m.get("worker_warm_s")), "", ""])
     return (provenance(rec) + "\n"
             + f"`{d['command']}` in a fresh process, cold (an empty cache folder: every kernel compiled) then warm "
               "(the same command again); wall and CPU seconds of the whole command, the compare's own wall seconds, "
@@ -241,6 +266,18 @@ def bench_start() -> str:
               "warm-up alone, and compilation left inside the runs:\n\n"
             + table(["cache", "command wall s", "command CPU s", "compare wall s", "worker ready s", "of which warm-up s",
                      "compile in runs s", "verdict"], rows))
+
+
+def compile_units() -> str:
+    rec = load("compile_units")
+    d = rec["data"]
+    rows = [[" ".join([r["item"], r.get("what", "")]).strip(), g(r["cold_cpu_s"]), g(r["warm_cpu_s"]), g(r["cold_cpu_s"] - r["warm_cpu_s"])] for r in d["rows"]]
+    rows.append(["**sum**", g(d["cold_cpu_s"]), g(d["warm_cpu_s"]), g(d["cold_cpu_s"] - d["warm_cpu_s"])])
+    return (provenance(rec) + "\n"
+            + "The gate's worker warm-up for the default cases, each item alone in one process, on an empty cache "
+              "folder (cold) and on the cache it left (warm); CPU seconds. In the gate two workers share the "
+              "compiling; the peers' tiny runs (warm-call) run in each worker.\n\n"
+            + table(["item", "cold CPU s", "warm CPU s", "compilation CPU s"], rows))
 
 
 def bench_record_set() -> str:
@@ -291,8 +328,10 @@ def work_precision() -> str:
 
 
 RENDER = {"compare-gate": compare_gate, "convergence": convergence, "tables-5-6": tables_5_6,
-          "engine-benchmarks": engine_benchmarks, "direction-study": direction_study, "bench-cycle": bench_cycle, "bench-seismic": bench_seismic,
-          "gate-times": gate_times, "bench-start": bench_start, "bench-record-set": bench_record_set,
+          "engine-benchmarks": engine_benchmarks, "direction-study": direction_study, "bench-cycle": bench_cycle,
+          "bench-rhs": bench_rhs, "bench-seismic": bench_seismic,
+          "gate-times": gate_times, "bench-start": bench_start, "compile-units": compile_units,
+          "bench-record-set": bench_record_set,
           "work-precision": work_precision}
 
 

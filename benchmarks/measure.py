@@ -7,7 +7,8 @@ Each measurement is a project command run as a user runs it, in a fresh process,
 folder; what the documents need is kept in ``benchmarks/results/NAME.json`` together with the
 command, the date (UTC), the machine, its CPU count and load average before and after, the installed
 versions and the git commit. ``python -m benchmarks.docs`` then regenerates the documents' tables
-from these files. A run on a machine whose load average exceeded its CPU count is marked "loaded"
+from these files. A run on a machine whose load average exceeded its CPU count (before the command; after
+it, the CPU count + 1, the command's own processes counting there) is marked "loaded"
 (its times are then longer than on a quiet machine; its accuracy figures are not affected).
 """
 from __future__ import annotations
@@ -41,6 +42,7 @@ MEASUREMENTS = {
     # issue 26: one evaluation (generated and generic) and its parts; the cold and the warm gate, a record set on warm workers, the ratios at the 1e-4 aim
     "bench_rhs": (PY + ["benchmarks/bench_rhs.py", "--out", "OUT"], "bench_rhs.json", "json"),
     "bench_start": (PY + ["benchmarks/bench_start.py", "--repeats", "3", "--out", "OUT"], "bench_start.json", "json"),
+    "compile_units": (PY + ["benchmarks/compile_units.py", "--out", "OUT"], "compile_units.json", "json"),
     "bench_record_set": (PY + ["benchmarks/bench_record_set.py", "--repeats", "3", "--out", "OUT"],
                          "bench_record_set.json", "json"),
     "work_precision": (PY + ["benchmarks/work_precision.py", "--to-aim", "--no-compile", "--repeats", "3", "--out",
@@ -101,15 +103,18 @@ def measure(name: str, short: bool = False) -> dict:
     from nsd_core.device.results import versions
     cpus = os.cpu_count() or 1
     shown = " ".join("python" if a == sys.executable else a for a in cmd[:1]) + " " + " ".join(cmd[1:])
-    return {"name": name, "command": shown.replace("python -m nsd_cli.main", "nsd").replace("OUT", "DIR"),
+    rec = {"name": name, "command": shown.replace("python -m nsd_cli.main", "nsd").replace("OUT", "DIR"),
             "exit_code": p.returncode,
             "measured": {"date_utc": dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%d %H:%M"),
                          "machine": platform.platform(), "processor": platform.machine(), "cpus": cpus,
                          "load_average_before": [round(x, 2) for x in load0],
                          "load_average_after": [round(x, 2) for x in load1],
-                         "loaded": max(load0[0], load1[0]) > cpus, "wall_s": wall,
+                         "wall_s": wall,
                          "versions": versions(), "git_commit": commit},
             "data": data}
+    from benchmarks.docs import loaded
+    rec["measured"]["loaded"] = loaded(rec["measured"])
+    return rec
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -9,7 +9,7 @@ from functools import partial
 
 from nsd_core.device.isolation import default_structure
 from nsd_core.device.params import Params
-from nsd_core.device.warmup import tiny_drive, tiny_ground
+from nsd_core.device.warmup import TINY_DT_OUT, TINY_DURATION, tiny_drive, tiny_ground
 from nsd_core.device.worker_warmup import kind, warm_worker
 
 from comparisons.engines import REFERENCE, run_job, run_seismic_job, tiny_settings
@@ -44,7 +44,7 @@ def job_warmup(specs) -> partial:
             settings = tiny_settings(engine, mode, settings)
             if mode == "seismic":
                 calls.append(partial(run_seismic_job, engine, Params(), default_structure(Params()), tiny_ground(),
-                                     0.02, 1e-3, settings))
+                                     TINY_DURATION, TINY_DT_OUT, settings))
             else:
                 calls.append(partial(run_job, engine, Params(), tiny_drive(path), settings))
     return partial(warm_worker, tuple(sorted(kinds)), (), tuple(calls))

@@ -57,13 +57,12 @@ def run_engine(name: str, params: Params, drive, settings: dict | None = None):
     """Run one engine by name: the runner the study layer is given to sweep any engine. Whatever the
     engine prints (Exudyn's memory-allocation warnings) goes to stderr, never into stdout's table.
     The run's stats carry ``compile_time`` (a first, tiny run of the same kind) apart from its cost."""
-    from nsd_core.device.drive import Drive
+    from nsd_core.device.warmup import tiny_drive
     from nsd_core.engine.workers import stdout_to_stderr
     engine = get_engine(name)
     with stdout_to_stderr():
         warm = _warm_peer("drive", name, drive.is_line, settings, lambda choices: engine.run(
-            Params(), Drive(0.001, 20.0, cycles=1, samples_per_cycle=16, path="line" if drive.is_line else "circle"),
-            choices))
+            Params(), tiny_drive("line" if drive.is_line else "circle"), choices))
         c0 = time.process_time()
         result = engine.run(params, drive, settings or None)
     return _with_times(name, result, warm, time.process_time() - c0)
@@ -91,13 +90,12 @@ def parse_engine_list(text: str, option: str = "--engines") -> list[str]:
 def run_seismic_engine(name: str, params: Params, structure, ground, duration=None, dt_out=1e-3,
                        settings: dict | None = None):
     """One engine's seismic run by name (Exudyn's prints go to stderr, as in ``run_engine``)."""
-    from nsd_core.device.ground import Harmonic
+    from nsd_core.device.warmup import TINY_DT_OUT, TINY_DURATION, tiny_ground
     from nsd_core.engine.workers import stdout_to_stderr
     engine = get_engine(name)
     with stdout_to_stderr():
         warm = _warm_peer("seismic", name, True, settings, lambda choices: engine.run_seismic(
-            params, structure, Harmonic(0.1, 2.0, duration=0.02), duration=0.02, dt_out=1e-3,
-            settings=choices))
+            params, structure, tiny_ground(), duration=TINY_DURATION, dt_out=TINY_DT_OUT, settings=choices))
         c0 = time.process_time()
         result = engine.run_seismic(params, structure, ground, duration=duration, dt_out=dt_out,
                                     settings=settings or None)

@@ -198,13 +198,13 @@ def set_warmup(runs: list[RecordRun], run_engine: Callable | None = None):
     kernels of each solver setting, the record sets' files, and a tiny run of each peer engine."""
     from nsd_core.device.isolation import default_structure
     from nsd_core.device.params import Params
-    from nsd_core.device.warmup import tiny_ground
+    from nsd_core.device.warmup import TINY_DT_OUT, TINY_DURATION, tiny_ground
     from nsd_core.device.worker_warmup import kind, warm_worker
     kinds = sorted({kind("seismic", r.settings) for r in runs if r.engine == "semirecursive"})
     peers = {(r.engine, repr(sorted(r.settings.items()))): (r.engine, r.settings) for r in runs
              if r.engine != "semirecursive" and run_engine is not None}
-    calls = [partial(run_engine, e, Params(), default_structure(Params()), tiny_ground(), duration=0.02, dt_out=1e-3,
-                     settings=s or None) for e, s in peers.values()]
+    calls = [partial(run_engine, e, Params(), default_structure(Params()), tiny_ground(), duration=TINY_DURATION,
+                     dt_out=TINY_DT_OUT, settings=s or None) for e, s in peers.values()]
     return partial(warm_worker, tuple(kinds), tuple(sorted({r.set for r in runs})), tuple(calls))
 
 
