@@ -42,7 +42,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="hunt and fill: bracket the limit until hi - lo <= resolution hi (default 0.1)")
     p.add_argument("--limit", required=True, metavar="stroke=VALUE|restrainer|drift=VALUE",
                    help="limit state: stroke=VALUE peak |u| >= VALUE m; restrainer: the displacement restrainer "
-                        "engages (runs with it); the rod's length reached counts for both; drift needs a building")
+                        "engages (runs with it); drift=VALUE the peak story drift ratio of the building >= VALUE "
+                        "(needs --building); the rod's length reached counts for every one")
+    p.add_argument("--building", action="append", default=[], metavar="NAME=VALUE",
+                   help="a shear building on the slab, as nsd seismic --building (docs/building.md); "
+                        "--building stories=3 gives the default building")
     p.add_argument("--restrainer", action="store_true",
                    help="run with the displacement restrainer (always with --limit restrainer); its constants by "
                         "--structure restrainer_gap=, restrainer_stiffness=, restrainer_exponent=, restrainer_damping=")
@@ -97,6 +101,7 @@ def run(args) -> int:
     from nsd_cli.options import WORKERS_MAX, whole
     from nsd_cli.sweep import check_scheduler
     from nsd_core.device.ground import SIMILITUDE_TIME_FACTOR, fema_record
+    from nsd_cli.seismic_building import with_building
     from nsd_cli.seismic_extras import isolated_structure
     from nsd_core.device.model import DEFAULT_SOLVER
     from nsd_core.study.ida import make_traces, trace_all
@@ -111,12 +116,14 @@ def run(args) -> int:
     whole("--workers", workers, 1, WORKERS_MAX)
     params = base_params(args)
     args.restrainer = args.restrainer or limit.kind == "restrainer"
-    structure = isolated_structure(args, params)
+    structure = with_building(args, isolated_structure(args, params))
+    if limit.kind == "drift" and structure.building is None:
+        raise ParameterError(f"--limit {args.limit!r}: drift needs a building on the slab (--building stories=N)")
     solver = {**DEFAULT_SOLVER, **solver_settings(args)}
     check_scheduler(args.scheduler)
     ground = {"scale": 1.0, "time_factor": SIMILITUDE_TIME_FACTOR, "window": None, "rotate_deg": 0.0,
               "normalised": True}
-    period = structure.period
+    period = structure.first_period   # the supports alone (and the building on them, if any)
     im = {rid: record_intensity(fema_record(set_, rid, **ground), args.measure, period) for rid in records}
     out = check_out_dir("--out", args.out)
     numbers = {k: v for k, v in structure.to_dict().items() if k != "provenance"}

@@ -25,7 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
-from comparisons.seismic import seismic_metrics
+from comparisons.seismic import building_metrics, seismic_metrics
+from nsd_core.device.isolation import Structure
 from nsd_core.device.results import RunResult, read_csv, write_columns
 from nsd_core.study.ida import Trace, run_ida_point
 from nsd_core.study.store import Store
@@ -66,7 +67,6 @@ def run_peer(r, run_engine) -> dict:
     start = time.perf_counter()
     try:
         from nsd_core.device.ground import fema_record
-        from nsd_core.device.isolation import Structure
         from nsd_core.device.params import Params
         motion = fema_record(r.set, r.record, **r.ground)
         result = run_engine(r.engine, Params(**r.params), Structure(**r.structure), motion, duration=r.duration,
@@ -93,7 +93,6 @@ def exact_supports_alone(run: RunResult, trace: Trace, level: float) -> tuple[di
     from eqsig import sdof
     from scipy.interpolate import CubicHermiteSpline
     from nsd_core.device.ground import fema_record
-    from nsd_core.device.isolation import Structure
     p = trace.point(level)
     s = Structure(**p.structure)
     motion = fema_record(p.set, p.record, **p.ground)
@@ -172,8 +171,14 @@ def cross_check(traces: list[Trace], store: Store, frag: dict, peers: list[str],
                     entry["engines"][e] = {"status": "failed", "error": (rec or {}).get("error")}
                     continue
                 _copy(store.folder(key) / "seismic.csv", folder / f"seismic_{e}.csv")
-                entry["engines"][e] = {**seismic_metrics(ref, read_csv(folder / f"seismic_{e}.csv", e)),
-                                       "wall_time": rec["wall_time"]}
+                peer = read_csv(folder / f"seismic_{e}.csv", e)
+                entry["engines"][e] = {**seismic_metrics(ref, peer), "wall_time": rec["wall_time"]}
+                if "floor1_x" in ref.columns:   # a building on the slab: its floors and stories too
+                    entry["engines"][e]["building"] = building_metrics(ref, peer)
+        elif Structure(**tr.point(level).structure).building is not None:
+            entry["engines"]["exact"] = {"engine": "exact (eqsig, Nigam-Jennings)", "status": "not applicable",
+                                         "error": "a building on the slab: the exact solution here is the single "
+                                                  "oscillator's (the building's is checked in tests/test_building.py)"}
         else:
             metrics, cols = exact_supports_alone(ref, tr, level)
             write_columns(folder / "exact.csv", cols)

@@ -1,6 +1,7 @@
 """Report pages of an incremental dynamic analysis (``nsd ida --out DIR``; issue 23, items 4-5):
 
-- the IDA curves: intensity against peak |u| per record, with the device and on the supports alone,
+- the IDA curves: intensity against peak |u| (or, for a drift limit, the peak story drift ratio) per record,
+  with the device and on the supports alone,
   the limit marked (runs stopped by the rod's length drawn at the rod's length);
 - the fragility: each record's limit intensity as an empirical distribution and the fitted lognormal
   per configuration (median, dispersion, censored records named);
@@ -45,6 +46,7 @@ def load_ida(folder) -> tuple[dict, dict, list[dict]]:
         index["traces"], frag["configurations"]  # noqa: B018 - the keys the pages need
         for r in rows:
             r["im"], r["peak_u"] = _num(r["im [m/s^2]"]), _num(r["peak_u [m]"])
+            r["peak_drift_ratio"] = _num(r.get("peak_drift_ratio [-]"))   # older folders lack the column
     except (OSError, ValueError, KeyError, TypeError) as e:
         raise ParameterError(f"{root}: not a readable nsd ida folder ({' '.join(str(e).split())[:120]})") from None
     return index, frag, rows
@@ -54,31 +56,31 @@ def ida_curves_figure(index: dict, rows: list[dict]):
     fig = new_figure(LANDSCAPE, f"Incremental dynamic analysis: record set {index.get('set')}",
                      f"IM = {_im_text(index)}; filled: limit reached; X at the right edge: the run stopped "
                      "(rod's length or wire strain)")
-    limit_u = _stroke(index)
+    key, unit, xlabel, limit_u = _edp(index)   # the response the limit reads: |u| [mm], or the drift ratio [%]
     for k, (name, (label, _)) in enumerate(CONFIG_STYLE.items()):
         ax = fig.add_axes([0.07 + k * 0.47, 0.1, 0.42, 0.75])
         mine = [r for r in rows if (r["device"] == "yes") == (name == "device")]
         if not mine:
             no_data(ax, "no runs")
             continue
-        finite = [r["peak_u"] for r in mine if r["peak_u"] is not None]
+        finite = [r[key] for r in mine if r[key] is not None]
         right = max(finite + [limit_u or 0.0]) * 1.15 if finite else 0.03
         cmap = __import__("matplotlib").colormaps["tab20"]
         for j, rid in enumerate(sorted({int(r["record"]) for r in mine})):
             rr = sorted((r for r in mine if int(r["record"]) == rid), key=lambda r: r["im"])
             col = cmap(j % 20)
-            ok = [r for r in rr if r["peak_u"] is not None]
-            ax.plot([0.0] + [r["peak_u"] * 1e3 for r in ok], [0.0] + [r["im"] for r in ok], "-", color=col, lw=1,
+            ok = [r for r in rr if r[key] is not None]
+            ax.plot([0.0] + [r[key] * unit for r in ok], [0.0] + [r["im"] for r in ok], "-", color=col, lw=1,
                     label=str(rid))
             for r in rr:
-                x = r["peak_u"] * 1e3 if r["peak_u"] is not None else right * 1e3
+                x = r[key] * unit if r[key] is not None else right * unit
                 reached = r["limit_reached"] == "yes"
-                ax.plot(x, r["im"], "X" if r["peak_u"] is None else "o", color=col, ms=5,
+                ax.plot(x, r["im"], "X" if r[key] is None else "o", color=col, ms=5,
                         mfc=col if reached else "white")
         if limit_u:
-            ax.axvline(limit_u * 1e3, color="#c0001a", lw=1, ls="--", label="limit")
-        ax.set(xlabel="peak |u| [mm]", ylabel=f"IM [{index.get('measure', {}).get('unit', 'm/s^2')}]",
-               title=label, xlim=(0, right * 1e3 * 1.03))
+            ax.axvline(limit_u * unit, color="#c0001a", lw=1, ls="--", label="limit")
+        ax.set(xlabel=xlabel, ylabel=f"IM [{index.get('measure', {}).get('unit', 'm/s^2')}]",
+               title=label, xlim=(0, right * unit * 1.03))
         ax.legend(loc="lower right", ncol=2, fontsize=6, title="record")
     return fig
 
@@ -141,6 +143,10 @@ def cross_check_figure(index: dict, root: Path):
                                          + (f", dF {m['dF']:.3e}, da {m['da']:.3e}" if "dF" in m else "")
                                          + (f", {m['wall_time']:.1f} s" if m.get("wall_time") else "")
                                          if "du" in m else f"{m.get('status')}: {m.get('error')}"))
+            b = m.get("building")
+            if isinstance(b, dict) and {"dfloor", "ddrift", "dfloor_a"} <= set(b):   # the worst floor / story
+                lines.append(f"    {' ' * len(e)}  building: floors {b['dfloor']:.3e}, drifts {b['ddrift']:.3e}, "
+                             f"floor accelerations {b['dfloor_a']:.3e}")
     fig.text(0.04, 0.86, "\n".join(lines), fontsize=7.5, va="top", family="monospace")
     folder = root / "cross_check" / "nodevice"
     ax = fig.add_axes([0.07, 0.1, 0.88, 0.4])
@@ -171,14 +177,18 @@ def ida_plan(folder) -> tuple[list[tuple[str, Callable]], str]:
     return plan, f"NSD IDA report  |  record set {index.get('set')}"
 
 
-def _stroke(index: dict):
+def _edp(index: dict) -> tuple[str, float, str, float | None]:
+    """(row key, factor to the axis unit, axis label, the limit's value or None) of the response the
+    IDA's limit state reads: the story drift ratio for drift=VALUE, else the plate's |u|."""
     opt = str(index.get("limit_option", ""))
-    if opt.startswith("stroke="):
-        try:
-            return float(opt.partition("=")[2])
-        except ValueError:
-            return None
-    return None
+    kind, _, value = opt.partition("=")
+    try:
+        limit = float(value) if kind in ("stroke", "drift") else None
+    except ValueError:
+        limit = None
+    if kind == "drift":
+        return "peak_drift_ratio", 100.0, "peak story drift ratio [%] (worst story)", limit
+    return "peak_u", 1e3, "peak |u| [mm]", limit
 
 
 def _im_text(index: dict) -> str:

@@ -136,7 +136,10 @@ BAD = [
     ["--measure", "sv"], ["--levels", "a,1"], ["--levels", "-1"], ["--levels", "1,1"], ["--start", "0"],
     ["--step", "-0.1"], ["--max-runs", "1"], ["--resolution", "1.5"], ["--start", "x"],
     ["--levels", "1,2", "--max-runs", "4"], ["--limit", "speed=1"], ["--limit", "stroke"],
-    ["--limit", "stroke=-0.01"], ["--limit", "drift=0.01"], ["--limit", "restrainer=0.02"], ["--structure", "restrainer_gap=0.05"], ["--records", "99"],
+    ["--limit", "stroke=-0.01"], ["--limit", "drift=0.01"], ["--limit", "drift=0", "--building", "stories=3"],
+    ["--limit", "drift=1.5", "--building", "stories=3"], ["--limit", "drift", "--building", "stories=3"],
+    ["--limit", "drift=0.01", "--building", "stories=0"], ["--limit", "drift=0.01", "--building", "floors=3"],
+    ["--limit", "restrainer=0.02"], ["--structure", "restrainer_gap=0.05"], ["--records", "99"],
     ["--records", "2-1"], ["--workers", "0"], ["--engines", "mujoco"], ["--engines", "bogus"],
     ["--scheduler", "nowhere"], ["--set", "nowhere"], ["--record-set", "farfield"],
 ]
@@ -256,3 +259,87 @@ def test_ida_on_a_dask_cluster_stores_what_a_local_run_reuses(tmp_path, capsys):
     assert main(argv + ["--workers", "1"]) == 0
     assert "0 with runs to do" in capsys.readouterr().err
     assert _csv(out / "ida.csv") == rows
+
+
+def _run(status="ok", drifts=None, reason=None):
+    """A stored run as the IDA reads it: its status and summary (the building's peaks, if any)."""
+    metrics = {"peak_displacement": {"value": 0.01}}
+    if drifts is not None:
+        metrics["building"] = {"peak_drift_ratio": [{"value": d, "t": 1.0} for d in drifts]}
+    if status != "ok":
+        metrics = {"reason": reason, "t": 2.0}
+    return {"status": status, "metrics": metrics, "error": "stopped"}
+
+
+def test_drift_limit_reads_the_worst_story():
+    from nsd_core.study.ida import parse_limit
+    lim = parse_limit("drift=0.005")
+    assert (lim.kind, lim.value) == ("drift", 0.005)
+    assert lim.evaluate(_run(drifts=[0.004, 0.0051, 0.002])) == (True, "drift")
+    assert lim.evaluate(_run(drifts=[0.004, 0.0049, 0.002])) == (False, "")
+    assert lim.evaluate(_run(drifts=None))[0] is None            # no building: the run cannot tell
+    assert lim.evaluate(_run("failed", reason="rod_reach")) == (True, "rod_reach")   # the device is spent
+    assert lim.evaluate(_run("failed", reason="solver_failure"))[0] is None
+
+
+def test_first_period_with_a_building_is_the_chain_s_first_mode():
+    """Structure.first_period against the generalized eigenproblem K v = w^2 M v assembled here by hand:
+    ground - k_b - slab M - k_1 - m_1 - k_2 - m_2 - k_3 - m_3."""
+    from nsd_core.device.building import building_from
+    from nsd_core.device.isolation import default_structure
+    from nsd_core.device.params import Params
+    s = default_structure(Params())
+    assert s.first_period == s.period == pytest.approx(1.0, rel=1e-12)
+    b = building_from(s.mass, {"stories": 3, "stiffness": "2e5,1.5e5,1e5"})
+    expected = _chain_period([s.mass, *b.masses], [s.stiffness, *b.stiffnesses])
+    assert s.with_building(b).first_period == pytest.approx(expected, rel=1e-10)
+    assert s.with_building(b).first_period > s.period   # the building's mass lengthens it
+
+
+def _chain_period(masses, springs) -> float:
+    """First period of a chain of masses on springs, spring i joining mass i-1 (the ground for i = 0)
+    and mass i: the generalized eigenproblem K v = w^2 M v, assembled here."""
+    from scipy.linalg import eigh
+    n = len(masses)
+    K = np.zeros((n, n))
+    for i, k in enumerate(springs):
+        K[i, i] += k
+        if i:
+            K[i - 1, i - 1] += k
+            K[i - 1, i] -= k
+            K[i, i - 1] -= k
+    return 2 * math.pi / math.sqrt(eigh(K, np.diag(masses), eigvals_only=True)[0])
+
+
+@pytest.mark.slow
+def test_drift_limit_ida_with_a_building(tmp_path):
+    """--building stories=3 --limit drift=VALUE on one record: every row's verdict is its worst story's
+    drift ratio against VALUE; on the supports alone the whole structure is linear, so the drift ratio
+    scales with the level exactly; the IM is Sa at the building's first period on the supports."""
+    from nsd_cli.main import main
+    out = tmp_path / "ida"
+    limit = 2e-4   # the isolated building's stories drift ~1e-4..3e-4 of their height at these levels
+    assert main(["ida", "--set", "nearfield-pulse", "--records", "9", "--levels", "0.2,0.45", "--limit",
+                 f"drift={limit}", "--building", "stories=3", "--engines", "semirecursive", "--workers", "1",
+                 "--out", str(out)]) == 0
+    rows = _csv(out / "ida.csv")
+    assert [(r["device"], float(r["im [m/s^2]"])) for r in rows] == [("yes", 0.2), ("yes", 0.45), ("no", 0.2),
+                                                                      ("no", 0.45)]
+    for r in rows:
+        if r["status"] != "ok":   # the device spent (the rod's length): every limit counts as reached
+            assert (r["limit_reached"], r["why"]) == ("yes", "rod_reach"), r
+            continue
+        drift = float(r["peak_drift_ratio [-]"])
+        assert (r["limit_reached"] == "yes") == (drift >= limit), r
+        assert r["why"] == ("drift" if drift >= limit else "")
+        assert float(r["peak_floor_a_abs [m/s^2]"]) > 0
+    assert {r["limit_reached"] for r in rows} == {"yes", "no"}   # the limit lies between the two levels
+    nod = [r for r in rows if r["device"] == "no"]
+    for col in ("peak_drift_ratio [-]", "peak_floor_a_abs [m/s^2]", "peak_u [m]"):
+        assert float(nod[1][col]) / float(nod[0][col]) == pytest.approx(0.45 / 0.2, rel=1e-6), col
+    index = json.loads((out / "ida.json").read_text())
+    st = index["structure"]
+    expected = _chain_period([st["mass"], *st["building"]["masses"]], [st["stiffness"], *st["building"]["stiffnesses"]])
+    assert index["measure"]["period"] == pytest.approx(expected, rel=1e-10) and expected > 1.2
+    assert index["cross_check"]["nodevice"].get("engines", {}).get("exact", {}).get("status") in (None, "not applicable")
+

@@ -117,6 +117,17 @@ class Structure:
         return 2.0 * math.pi * math.sqrt(self.mass / self.stiffness)
 
     @property
+    def first_period(self) -> float:
+        """The first period of the structure on the supports alone [s]: 2 pi sqrt(M / k_b) without a
+        building; with one, the first mode of the chain ground - k_b - slab M - story 1 - floor 1 ...
+        (nsd_core.device.building.fixed_base_modes with the supports as a story below the slab)."""
+        if self.building is None:
+            return self.period
+        from nsd_core.device.building import fixed_base_modes
+        omega, _ = fixed_base_modes((self.mass, *self.building.masses), (self.stiffness, *self.building.stiffnesses))
+        return 2.0 * math.pi / float(omega[0])
+
+    @property
     def damping_ratio(self) -> float:
         return self.damping / (2.0 * math.sqrt(self.stiffness * self.mass))
 

@@ -10,7 +10,9 @@ ask for them (a trace waits for its own last run only, so every worker stays bus
 
 Limit states (``Limit``): ``stroke=VALUE`` peak |u| >= VALUE [m] (|u| the plate's displacement
 relative to the base); ``restrainer`` the displacement restrainer engages (its force is positive at
-some output time: |u| > u_gap; nsd_core.device.restrainer, the runs carry it); a run that stops because the rod cannot reach (|u| >= l_d) or a wire leaves
+some output time: |u| > u_gap; nsd_core.device.restrainer, the runs carry it); ``drift=VALUE`` the
+peak story drift ratio of a building on the slab (any story, |drift| / story height, -) >= VALUE
+(the runs carry the building: nsd_core.device.building); a run that stops because the rod cannot reach (|u| >= l_d) or a wire leaves
 the SMA law's validity counts as reaching every limit (the device is spent). A solver failure ends
 that record's trace undetermined (listed, left out of the fit).
 """
@@ -26,7 +28,7 @@ from typing import Callable
 
 from nsd_core.device.params import ParameterError
 from nsd_core.study.hunt import Hunt, next_hunt_level, next_stripe_level
-from nsd_core.study.seismic_set import RecordRun, run_record, set_warmup
+from nsd_core.study.seismic_set import RecordRun, peak_drift_ratio, run_record, set_warmup
 from nsd_core.study.store import Store
 
 SPENT = ("rod_reach", "outside_validity")  # a run stopped by these reached every limit state
@@ -35,13 +37,15 @@ LIMITS = ("stroke", "restrainer", "drift")
 
 @dataclass(frozen=True)
 class Limit:
-    """The limit state: kind (stroke, restrainer) and its threshold (m; stroke only)."""
+    """The limit state: kind (stroke, restrainer, drift) and its threshold (stroke: m; drift: -)."""
     kind: str
     value: float | None = None
 
     def describe(self) -> str:
         if self.kind == "stroke":
             return f"peak |u| >= {self.value:g} m (or the rod's length reached)"
+        if self.kind == "drift":
+            return f"peak story drift ratio >= {self.value:g} (any story; or the rod's length reached)"
         return "the displacement restrainer engages, |u| > u_gap (or the rod's length reached)"
 
     def evaluate(self, rec: dict) -> tuple[bool | None, str]:
@@ -54,20 +58,32 @@ class Limit:
         if self.kind == "restrainer":
             engaged = (rec["metrics"].get("peak_restrainer_force") or {}).get("value", 0.0) > 0.0
             return engaged, "restrainer" if engaged else ""
+        if self.kind == "drift":
+            peak = peak_drift_ratio(rec["metrics"])
+            if peak is None:
+                return None, "the run has no building (drift needs one)"
+            return (peak >= self.value), "drift" if peak >= self.value else ""
         peak = rec["metrics"]["peak_displacement"]["value"]
         return (peak >= self.value), "stroke" if peak >= self.value else ""
 
 
 def parse_limit(text: str) -> Limit:
-    """'stroke=0.02' or 'restrainer' -> Limit; ParameterError (one line) otherwise. ``drift`` needs a building."""
+    """'stroke=0.02', 'restrainer' or 'drift=0.005' -> Limit; ParameterError (one line) otherwise.
+    ``drift`` needs a building (the command checks that)."""
     kind, sep, value = str(text).partition("=")
     kind = kind.strip()
-    allowed = "stroke=VALUE (m, 0 < VALUE), restrainer, drift=VALUE"
+    allowed = "stroke=VALUE (m, 0 < VALUE), restrainer, drift=VALUE (-, 0 < VALUE <= 1; with --building)"
     if kind not in LIMITS:
         raise ParameterError(f"--limit {text!r}: unknown limit state; allowed: {allowed}")
     if kind == "drift":
-        raise ParameterError(f"--limit {text!r}: drift needs a building, which nsd ida does not "
-                             "take yet (nsd seismic --building does); allowed now: stroke=VALUE, restrainer")
+        try:
+            v = float(value) if sep else math.nan
+        except ValueError:
+            v = math.nan
+        if not (math.isfinite(v) and 0 < v <= 1):
+            raise ParameterError(f"--limit {text!r}: drift needs a value, drift=VALUE with 0 < VALUE <= 1 (a story "
+                                 "drift over the story's height, -)")
+        return Limit(kind, v)
     if kind == "restrainer":
         if sep:
             raise ParameterError(f"--limit {text!r}: restrainer takes no value (its gap is the structure's "

@@ -15,12 +15,14 @@ import io
 from nsd_core.device.results import atomic_write_json, atomic_write_text
 from nsd_core.study.fragility import fit_lognormal
 from nsd_core.study.ida import Trace, trace_result
+from nsd_core.study.seismic_set import peak_drift_ratio
 from nsd_core.study.store import Store
 
 CONFIGS = {True: "device", False: "nodevice"}
 IDA_COLUMNS = [  # name, unit ("" for text)
     ("set", ""), ("record", ""), ("device", ""), ("order", ""), ("im", "m/s^2"), ("scale", "-"),
     ("peak_u", "m"), ("peak_a_abs", "m/s^2"), ("peak_base_shear", "N"), ("residual_u", "m"),
+    ("peak_drift_ratio", "-"), ("peak_floor_a_abs", "m/s^2"),   # the worst story / floor of a building, if any
     ("stop_t", "s"), ("limit_reached", ""), ("why", ""), ("status", ""), ("key", ""),
 ]
 
@@ -46,7 +48,10 @@ def ida_rows(traces: list[Trace], store: Store) -> list[dict]:
             m = rec.get("metrics") or {}
             if rec["status"] == "ok":
                 row.update(peak_u=m["peak_displacement"]["value"], peak_a_abs=m["peak_absolute_acceleration"]["value"],
-                           peak_base_shear=m["peak_base_shear"]["value"], residual_u=m["residual_displacement"]["u"])
+                           peak_base_shear=m["peak_base_shear"]["value"], residual_u=m["residual_displacement"]["u"],
+                           peak_drift_ratio=peak_drift_ratio(m))
+                if isinstance(m.get("building"), dict):
+                    row["peak_floor_a_abs"] = max(p["value"] for p in m["building"]["peak_floor_acceleration"])
             else:
                 row["stop_t"] = m.get("t")
             rows.append(row)
