@@ -53,8 +53,9 @@ SHORT = ("bench_start", "bench_record_set", "work_precision")   # their --short:
 
 def _git_commit() -> str:
     p = subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True)
-    dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=ROOT,
-                           capture_output=True, text=True).stdout.strip()
+    # the measurements' own JSON (written one after another by `measure A B ...`) is not code
+    dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no", "--", ".",
+                            ":(exclude)benchmarks/results"], cwd=ROOT, capture_output=True, text=True).stdout.strip()
     return p.stdout.strip() + (" (with uncommitted changes)" if dirty else "")
 
 
