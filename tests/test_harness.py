@@ -89,3 +89,33 @@ def test_bad_input_exits_2_and_writes_nothing(tmp_path, args, fragment):
     assert p.returncode == 2
     assert fragment in p.stderr and len(p.stderr.strip().splitlines()) == 1
     assert not out.exists()
+
+
+@pytest.mark.parametrize("seismic", [False, True], ids=["drive", "seismic"])
+def test_a_non_finite_output_is_that_engine_s_failure_not_a_result(monkeypatch, seismic):
+    """A real MuJoCo run whose output gets one NaN (a fault injected after the engine ran): the job
+    comes back as that engine's error naming the column and sample, never as a result to measure."""
+    import comparisons.engines as E
+    from nsd_core.device.drive import Drive
+    from nsd_core.device.isolation import default_structure
+    from nsd_core.device.params import Params
+    from nsd_core.device.warmup import tiny_ground
+    real = E.run_seismic_engine if seismic else E.run_engine
+
+    def poisoned(*args, **kwargs):
+        result = real(*args, **kwargs)
+        result.columns["t"] = result.columns["t"].copy()
+        result.columns["t"][3] = float("nan")
+        return result
+
+    monkeypatch.setattr(E, "run_seismic_engine" if seismic else "run_engine", poisoned)
+    if seismic:
+        job = E.run_seismic_job("mujoco", Params(), default_structure(Params()), tiny_ground(), 0.004, 1e-3, {})
+    else:
+        job = E.run_job("mujoco", Params(), Drive(0.002, 10.0, cycles=1, samples_per_cycle=20), {})
+    assert job["status"] == "error", job
+    assert job["message"].startswith("SolverError: a non-finite output: t[3] = nan"), job["message"]
+    monkeypatch.undo()   # the same run unpoisoned is a result
+    job = (E.run_seismic_job("mujoco", Params(), default_structure(Params()), tiny_ground(), 0.004, 1e-3, {})
+           if seismic else E.run_job("mujoco", Params(), Drive(0.002, 10.0, cycles=1, samples_per_cycle=20), {}))
+    assert job["status"] == "ok", job

@@ -123,11 +123,22 @@ def _with_ground(result, ground):
     return result
 
 
+def _finite(result):
+    """``result``, or SolverError naming the first NaN or inf in its outputs: a non-finite output is that
+    engine's failure on that case (reported for it, exit 3), never a result to measure (issue 22)."""
+    from nsd_core.device.results import first_nonfinite
+    from nsd_core.engine.errors import SolverError
+    bad = first_nonfinite(result)
+    if bad:
+        raise SolverError(f"a non-finite output: {bad}")
+    return result
+
+
 def run_seismic_job(engine: str, params: Params, structure, ground, duration, dt_out, settings: dict) -> dict[str, Any]:
     """One engine on one seismic case, in a worker process. Never raises: failures come back as data."""
     start, started = time.perf_counter(), time.time()  # started: the pool's start-up ends here (issue 20)
     try:
-        result = run_seismic_engine(engine, params, structure, ground, duration, dt_out, settings)
+        result = _finite(run_seismic_engine(engine, params, structure, ground, duration, dt_out, settings))
         return {"status": "ok", "result": result, "wall_time": time.perf_counter() - start, "started": started}
     except Exception as e:  # an engine's failure is reported for its case; the others go on
         msg = " ".join(f"{type(e).__name__}: {e}".split())
@@ -138,7 +149,7 @@ def run_job(engine: str, params: Params, drive, settings: dict) -> dict[str, Any
     """One engine on one case, in a worker process. Never raises: failures come back as data."""
     start, started = time.perf_counter(), time.time()  # started: the pool's start-up ends here (issue 20)
     try:
-        result = run_engine(engine, params, drive, settings)
+        result = _finite(run_engine(engine, params, drive, settings))
         return {"status": "ok", "result": result, "wall_time": time.perf_counter() - start, "started": started}
     except Exception as e:  # an engine's failure is reported for its case; the others go on
         msg = " ".join(f"{type(e).__name__}: {e}".split())
