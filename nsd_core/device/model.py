@@ -225,11 +225,12 @@ def _check_lengths(t, lengths, forces: DeviceForces) -> None:
 def _simulate_compiled(system, g, drive, z_rest, y0, t_eval, method, rtol, atol, max_step, start):
     check_tolerances(rtol, atol, max_step)  # the bounds of the scipy path, the same way
     from nsd_core.device.compiled import compiled_model, run
-    from nsd_core.engine.codegen import evaluation_used
+    from nsd_core.engine.codegen import evaluation_used, evaluator_for
     from nsd_core.engine.rk import TOO_MANY_STEPS
     model = compiled_model(system, g, drive, system.forces.elements)
+    used = evaluation_used(model)   # decided once: the run and its stats name the same evaluation
     out, (steps, nfev, status, n_done) = run(model, z_rest, y0, t_eval, method, rtol, atol, max_step,
-                                             MAX_STEPS_PER_CYCLE * drive.cycles)
+                                             MAX_STEPS_PER_CYCLE * drive.cycles, evaluator_for(model, used))
     _check_lengths(t_eval[:n_done], out.lengths[:n_done], system.forces)
     if status == TOO_MANY_STEPS:
         raise SolverError(f"exceeded {MAX_STEPS_PER_CYCLE * drive.cycles} steps at t = "
@@ -243,7 +244,7 @@ def _simulate_compiled(system, g, drive, z_rest, y0, t_eval, method, rtol, atol,
     lam[:, system.partition.rows] = out.lam
     F = out.tau[:, :2]  # the multipliers of the plate's X and Y: the force vector
     stats = {"engine": "semirecursive", "version": __version__, "method": method, "backend": "compiled",
-             "evaluation": evaluation_used(model),
+             "evaluation": used,
              "rtol": rtol, "atol": atol, "max_step": None if max_step == np.inf else max_step,
              "steps": int(steps), "nfev": int(nfev),
              "wall_time": time.perf_counter() - start, "tracking_error": 0.0,

@@ -370,11 +370,13 @@ def _simulate_compiled(system, g, structure, ground, device, y0, t_eval, method,
                        progress, start, fixed_base=False):
     """The seismic run on the compiled path (nsd_core.device.compiled_seismic): the same columns."""
     from nsd_core.device import compiled_seismic as cs
-    from nsd_core.engine.codegen import evaluation_used
+    from nsd_core.engine.codegen import evaluation_used, evaluator_for
     from nsd_core.engine.rk import TOO_MANY_STEPS
     check_tolerances(rtol, atol, max_step)  # the bounds of the scipy path, the same way
     model = cs.seismic_model(system, g, structure, ground, device)
-    res = cs.run(model, system.z_ref, y0, t_eval, method, rtol, atol, max_step, first_step, progress)
+    used = evaluation_used(model)   # decided once: the run and its stats name the same evaluation
+    res = cs.run(model, system.z_ref, y0, t_eval, method, rtol, atol, max_step, first_step, progress,
+                 evaluator_for(model, used))
     keep, error = res["done"], None
     if device:
         try:
@@ -394,7 +396,7 @@ def _simulate_compiled(system, g, structure, ground, device, y0, t_eval, method,
             raise SolverError(f"{method} (compiled) failed at t = {t_fail:.6g} s: status {res['status']} "
                               "(nsd_core.engine.compiled, nsd_core.engine.rk)")
     stats = {"engine": "semirecursive", "mode": "seismic", "device": device, "fixed_base": fixed_base,
-             "version": __version__, "backend": "compiled", "evaluation": evaluation_used(model),
+             "version": __version__, "backend": "compiled", "evaluation": used,
              "method": method, "rtol": rtol, "atol": atol, "max_step": max_step, "steps": res["steps"],
              "nfev": res["nfev"], "wall_time": time.perf_counter() - start,
              "model_time": float(t_eval[-1]), "dt_out": float(t_eval[1] - t_eval[0]), "ground": ground.describe(),

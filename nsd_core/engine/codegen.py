@@ -138,18 +138,15 @@ def evaluator_kind() -> str:
 def evaluator_for(model, kind: str | None = None):
     """The evaluator a run uses: ``kind`` "auto", "generated" or "generic"; None reads NSD_EVALUATOR.
     "auto": the generated evaluation where it is already compiled, else the generic one."""
-    kind = kind or evaluator_kind()
-    if kind not in KINDS:
-        raise InputError(f"evaluator = {kind!r}: allowed 'auto', 'generated' or 'generic'")
-    if kind == "generic" or (kind == "auto" and not is_compiled(model)):
-        return generic_evaluator()
-    return generated_evaluator(model)
+    return generic_evaluator() if evaluation_used(model, kind) == "generic" else generated_evaluator(model)
 
 
 def evaluation_used(model, kind: str | None = None) -> str:
-    """"generated" or "generic": what ``evaluator_for(model, kind)`` runs (for a run's stats)."""
+    """"generated" or "generic": what ``evaluator_for(model, kind)`` runs (also a run's stats)."""
     kind = kind or evaluator_kind()
-    return "generated" if kind == "generated" or (kind == "auto" and is_compiled(model)) else "generic"
+    if kind not in KINDS:
+        raise InputError(f"evaluator = {kind!r}: allowed 'auto', 'generated' or 'generic'")
+    return "generic" if kind == "generic" or (kind == "auto" and not is_compiled(model)) else "generated"
 
 
 def prefer_generated() -> None:

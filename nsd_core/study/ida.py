@@ -33,6 +33,10 @@ from nsd_core.study.store import Store
 
 SPENT = ("rod_reach", "outside_validity")  # a run stopped by these reached every limit state
 LIMITS = ("stroke", "restrainer", "drift")
+VALUES = {  # the limits with a threshold: its upper bound (the lower is 0, excluded) and how to say it
+    "stroke": (math.inf, "stroke=VALUE with VALUE > 0 (m)"),
+    "drift": (1.0, "drift=VALUE with 0 < VALUE <= 1 (a story drift over the story's height, -)"),
+}
 
 
 @dataclass(frozen=True)
@@ -75,26 +79,18 @@ def parse_limit(text: str) -> Limit:
     allowed = "stroke=VALUE (m, 0 < VALUE), restrainer, drift=VALUE (-, 0 < VALUE <= 1; with --building)"
     if kind not in LIMITS:
         raise ParameterError(f"--limit {text!r}: unknown limit state; allowed: {allowed}")
-    if kind == "drift":
-        try:
-            v = float(value) if sep else math.nan
-        except ValueError:
-            v = math.nan
-        if not (math.isfinite(v) and 0 < v <= 1):
-            raise ParameterError(f"--limit {text!r}: drift needs a value, drift=VALUE with 0 < VALUE <= 1 (a story "
-                                 "drift over the story's height, -)")
-        return Limit(kind, v)
     if kind == "restrainer":
         if sep:
             raise ParameterError(f"--limit {text!r}: restrainer takes no value (its gap is the structure's "
                                  "restrainer_gap)")
         return Limit(kind)
+    upper, wanted = VALUES[kind]
     try:
         v = float(value) if sep else math.nan
     except ValueError:
         v = math.nan
-    if not (math.isfinite(v) and v > 0):
-        raise ParameterError(f"--limit {text!r}: stroke needs a value, stroke=VALUE with VALUE > 0 (m)")
+    if not (math.isfinite(v) and 0 < v <= upper):
+        raise ParameterError(f"--limit {text!r}: {kind} needs a value, {wanted}")
     return Limit(kind, v)
 
 

@@ -15,7 +15,7 @@ import io
 from nsd_core.device.results import atomic_write_json, atomic_write_text
 from nsd_core.study.fragility import fit_lognormal
 from nsd_core.study.ida import Trace, trace_result
-from nsd_core.study.seismic_set import peak_drift_ratio
+from nsd_core.study.seismic_set import peak_drift_ratio, worst_building_peak
 from nsd_core.study.store import Store
 
 CONFIGS = {True: "device", False: "nodevice"}
@@ -49,9 +49,8 @@ def ida_rows(traces: list[Trace], store: Store) -> list[dict]:
             if rec["status"] == "ok":
                 row.update(peak_u=m["peak_displacement"]["value"], peak_a_abs=m["peak_absolute_acceleration"]["value"],
                            peak_base_shear=m["peak_base_shear"]["value"], residual_u=m["residual_displacement"]["u"],
-                           peak_drift_ratio=peak_drift_ratio(m))
-                if isinstance(m.get("building"), dict):
-                    row["peak_floor_a_abs"] = max(p["value"] for p in m["building"]["peak_floor_acceleration"])
+                           peak_drift_ratio=peak_drift_ratio(m),
+                           peak_floor_a_abs=worst_building_peak(m, "peak_floor_acceleration"))
             else:
                 row["stop_t"] = m.get("t")
             rows.append(row)

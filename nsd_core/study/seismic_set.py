@@ -120,12 +120,18 @@ def record_runs(set_: str, records: list[int], ground: dict, params: dict, struc
     return runs
 
 
+def worst_building_peak(summary: dict, key: str) -> float | None:
+    """The worst story's or floor's peak ``key`` (peak_drift_ratio, peak_floor_acceleration) in a run's
+    summary (None: no building on the slab)."""
+    b = summary.get("building")
+    if not isinstance(b, dict) or not b.get(key):
+        return None
+    return max(p["value"] for p in b[key])
+
+
 def peak_drift_ratio(summary: dict) -> float | None:
     """The worst story's peak drift ratio in a run's summary (None: no building on the slab)."""
-    b = summary.get("building")
-    if not isinstance(b, dict) or not b.get("peak_drift_ratio"):
-        return None
-    return max(p["value"] for p in b["peak_drift_ratio"])
+    return worst_building_peak(summary, "peak_drift_ratio")
 
 
 def _failure(err: Exception) -> tuple[str, float | None]:
@@ -333,7 +339,7 @@ def _row(set_: str, rid: int, group: dict, recs: dict, peers: list[str]) -> tupl
     for s, suffix in ((s_dev, ""), (s_nod, "_nodevice")):  # a building on the slab (docs/building.md)
         if s and isinstance(s.get("building"), dict):
             row["peak_drift_ratio" + suffix] = peak_drift_ratio(s)
-            row["peak_floor_a_abs" + suffix] = max(p["value"] for p in s["building"]["peak_floor_acceleration"])
+            row["peak_floor_a_abs" + suffix] = worst_building_peak(s, "peak_floor_acceleration")
     if "peak_drift_ratio" in row and "peak_drift_ratio_nodevice" in row:
         row["peak_drift_ratio_ratio"] = row["peak_drift_ratio"] / max(row["peak_drift_ratio_nodevice"], 1e-300)
     residuals = [s["energy"]["relative_residual"] for s in (s_dev, s_nod) if s]
