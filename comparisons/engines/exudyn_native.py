@@ -6,12 +6,19 @@ computation on the shared scalar laws of ``nsd_core.device.forces`` (rope_tensio
 wire_tension_scalar, spring_push_scalar and the strain integrators advance_*_scalar, the one
 implementation each array law is built from): commit the hysteretic states at the converged
 configuration, predict them at the end of the next step, and return the loads there.
+
+``pre_step`` is the whole pre-step of a drive run in one call: from Exudyn's ODE2 vectors (three
+fetches instead of six node outputs), the plate's position at the end of the step, the second-order
+Taylor prediction and ``step``. The arithmetic is the numpy form's, operation for operation (position
+= reference + coordinate, as Exudyn's node output; p + h v + ((h/2) h) a), so the loads are the same
+numbers bit for bit (tests/test_exudyn_prestep.py).
 """
 from __future__ import annotations
 
 import numpy as np
 from numba import njit
 
+from nsd_core.device.drive import plate_motion
 from nsd_core.device.forces import (advance_spring_zeta_scalar, advance_wire_stress_scalar, rope_tension_scalar,
                              spring_push_scalar, wire_tension_scalar)
 
@@ -69,3 +76,27 @@ def step(cap, wz, cap_p, wall_p, eps, sigma, x, zeta, rope_off, rope_l0, rope_k,
     out[3], out[4] = fwx, fwy
     out[5] = fwz + spring_push_scalar(wall_p, zeta_p, spring[0], spring[5])
     return x_n, zeta_n
+
+
+@njit(cache=True)
+def pre_step(q, q_t, q_tt, at, ref, h, t, path, eps, sigma, xz, rope_off, rope_l0, rope_k, wire_off, wire, spring,
+             order, work, out):
+    """One pre-step of a drive run (exudyn_engine, forces = per_step): ``q``, ``q_t``, ``q_tt`` are
+    Exudyn's ODE2 coordinates and their rates at the converged state (the start of the step), ``at``
+    the first ODE2 index of the cap's node and of the wall's, ``ref`` the cap's reference position and
+    the wall's reference height, ``t`` the end of the step, ``path`` the drive's packed path.
+    Commits the states (``eps``, ``sigma`` in place, ``xz`` = [x_s, zeta]), writes the loads at the
+    predicted end of the step into out[0:6] (as ``step``) and the plate's x, y at ``t`` into
+    out[6:8]; ``work`` (6) holds the cap's position and its prediction."""
+    m = plate_motion(t, path)
+    c, w = at[0], at[1]
+    hh = 0.5 * h * h
+    for i in range(3):
+        work[i] = ref[i] + q[c + i]
+        work[3 + i] = (work[i] + h * q_t[c + i]) + hh * q_tt[c + i]
+    work[3], work[4] = m[0], m[1]   # the horizontal end-of-step position is prescribed: exact
+    wz = ref[3] + q[w + 2]
+    wall_p = (wz + h * q_t[w + 2]) + hh * q_tt[w + 2]
+    xz[0], xz[1] = step(work[0:3], wz, work[3:6], wall_p, eps, sigma, xz[0], xz[1], rope_off, rope_l0, rope_k,
+                        wire_off, wire, spring, order, out)
+    out[6], out[7] = m[0], m[1]
