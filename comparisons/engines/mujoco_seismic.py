@@ -30,7 +30,7 @@ import numpy as np
 
 from nsd_core.device.forces import (advance_spring_zeta, advance_wire_stress, restrainer_force_scalar,
                                     restrainer_forces, restrainer_stored_scalar, rope_tension, spring_push,
-                                    wire_tension)
+                                    spring_push_scalar, wire_tension)
 from nsd_core.device.geometry import device_geometry
 from nsd_core.device.ground import GroundMotion
 from nsd_core.device.isolation import Structure
@@ -96,18 +96,28 @@ class _Forces:
         self.T = np.zeros(self.nr + self.nw)
         self.eps_c, self.x_c = None, None
         self.energy = None
+        self._at, self._geometry = None, None
 
     def geometry(self, q):
-        """Cap attachment points (world), element vectors and lengths, wall height."""
-        c, s = math.cos(q[self.PR]), math.sin(q[self.PR])
+        """Cap attachment points (world), element vectors and lengths, wall height (read-only arrays).
+
+        Kept for the last configuration: the commit after a step and the passive force of the next
+        step see the same coordinates, so each step computes it once."""
+        at = (q[self.PX], q[self.PY], q[self.PR], q[self.CZ], q[self.WZ])
+        if at == self._at:
+            return self._geometry
+        c, s = math.cos(at[2]), math.sin(at[2])
         p = self.cap_pts
-        cap = np.column_stack([q[self.PX] + c * p[:, 0] - s * p[:, 1], q[self.PY] + s * p[:, 0] + c * p[:, 1],
-                               self.g.cap_rest_z + q[self.CZ] + p[:, 2]])
-        wz = self.g.wall_rest_z + q[self.WZ]
+        cap = np.empty_like(p)
+        cap[:, 0] = at[0] + c * p[:, 0] - s * p[:, 1]
+        cap[:, 1] = at[1] + s * p[:, 0] + c * p[:, 1]
+        cap[:, 2] = self.g.cap_rest_z + at[3] + p[:, 2]
+        wz = self.g.wall_rest_z + at[4]
         low = self.low_pts.copy()
         low[self.nr:, 2] += wz
         v = cap - low
-        return cap, v, np.sqrt(np.einsum("ij,ij->i", v, v)), wz
+        self._at, self._geometry = at, (cap, v, np.sqrt(np.einsum("ij,ij->i", v, v)), wz)
+        return self._geometry
 
     def strains(self, q):
         _, _, L, wz = self.geometry(q)
@@ -132,7 +142,7 @@ class _Forces:
         f = -(T / L)[:, None] * v  # every element pulls its cap end towards its lower end
         arm = cap[:, :2] - np.array([q[self.PX], q[self.PY]])
         moment = float(np.sum(arm[:, 0] * f[:, 1] - arm[:, 1] * f[:, 0]))
-        wall = -float(np.sum(f[nr:, 2])) + float(spring_push(wz, 0.0, self.zeta, g.spring)[0])
+        wall = -float(np.sum(f[nr:, 2])) + spring_push_scalar(wz, self.zeta, g.spring.kse, g.spring.free_length)
         return f.sum(0), moment, wall
 
     def support(self, q, v):

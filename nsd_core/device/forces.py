@@ -143,14 +143,21 @@ def advance_spring_zeta_scalar(x0, x1, zeta, ksd, beta, gamma, n, substeps, orde
 
 
 _F8 = "float64"
-_sma_slope = vectorize([f"{_F8}({', '.join([_F8] * 12)})"], cache=True)(sma_slope_scalar.py_func)
-_bouc_wen_slope = vectorize([f"{_F8}({', '.join([_F8] * 6)})"], cache=True)(bouc_wen_slope_scalar.py_func)
-_advance_wire = vectorize([f"{_F8}({', '.join([_F8] * 12)}, int64, int64)"], cache=True)(
-    advance_wire_stress_scalar.py_func)
-_advance_spring = vectorize([f"{_F8}({', '.join([_F8] * 7)}, int64, int64)"], cache=True)(
-    advance_spring_zeta_scalar.py_func)
-_rope = vectorize([f"{_F8}({_F8}, {_F8}, {_F8})"], cache=True)(rope_tension_scalar.py_func)
-_wire = vectorize([f"{_F8}({_F8}, {_F8})"], cache=True)(wire_tension_scalar.py_func)
+
+
+def _ufunc(scalar_law, *types: str):
+    """The scalar law as a numpy ufunc, compiled once for its one signature. The plain ufunc is
+    called, not numba's DUFunc wrapper around it (same machine code: ~0.55 us a call on 4 elements
+    against ~1.7 us, and the peers' Python callbacks call these laws several times a step)."""
+    return vectorize([f"{_F8}({', '.join(types)})"], cache=True)(scalar_law.py_func).ufunc
+
+
+_sma_slope = _ufunc(sma_slope_scalar, *[_F8] * 12)
+_bouc_wen_slope = _ufunc(bouc_wen_slope_scalar, *[_F8] * 6)
+_advance_wire = _ufunc(advance_wire_stress_scalar, *[_F8] * 12, "int64", "int64")
+_advance_spring = _ufunc(advance_spring_zeta_scalar, *[_F8] * 7, "int64", "int64")
+_rope = _ufunc(rope_tension_scalar, _F8, _F8, _F8)
+_wire = _ufunc(wire_tension_scalar, _F8, _F8)
 
 
 # ---- Array forms (numpy arrays, one entry per element, or floats) ----------------------------------
