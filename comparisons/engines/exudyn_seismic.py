@@ -38,7 +38,7 @@ from comparisons.engines.exudyn_quiet import quiet_allocation_warning
 from comparisons.engines.perturb import perturbed, perturbed_structure
 from nsd_core.device.forces import (advance_spring_zeta, advance_wire_stress, restrainer_force_scalar,
                                     restrainer_forces, restrainer_stored_scalar, rope_tension, spring_push,
-                                    wire_tension)
+                                    spring_push_scalar, wire_tension)
 from nsd_core.device.geometry import device_geometry
 from nsd_core.device.ground import GroundMotion
 from nsd_core.device.isolation import Structure
@@ -52,6 +52,16 @@ DEFAULTS = {"step_size": 1e-5, "spectral_radius": 0.8, "newton_rel_tol": 1e-12, 
             "rod_axial_inertia": 1e-3, "perturb": None}  # perturb: an error in this model only (engines/perturb.py)
 
 
+def _cross(a, b):
+    """Row-wise a x b of two (n, 3) arrays: numpy.cross's operations (a_1 b_2 - a_2 b_1, ...), the
+    same numbers, without its axis handling (a third of this engine's pre-step)."""
+    c = np.empty_like(a)
+    c[:, 0] = a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]
+    c[:, 1] = a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]
+    c[:, 2] = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    return c
+
+
 class _Elements:
     """Ropes, wires, spring on the cap (pose: position, rotation about Z) and the wall (height)."""
 
@@ -60,16 +70,28 @@ class _Elements:
         self.cap_pts = np.vstack([g.rope_cap_points, g.wire_cap_points])
         self.low_pts = np.vstack([g.rope_base_points, g.wire_wall_points])
         self.sigma, self.zeta = np.array(g.initial_wire_stress(), dtype=float), float(g.spring_zeta0)
+        self._at, self._geometry = None, None
         self.eps, self.x = self.strains(np.array([0.0, 0.0, g.cap_rest_z]), 0.0, g.wall_rest_z)
 
     def geometry(self, cap, theta, wz):
+        """Arms of the cap's attachment points, element vectors and lengths (read-only arrays).
+
+        Kept for the last pose: each step asks twice for the converged pose (commit, energy rates)
+        and twice for the predicted one (strains, loads)."""
+        at = (cap[0], cap[1], cap[2], theta, wz)
+        if at == self._at:
+            return self._geometry
         c, s = math.cos(theta), math.sin(theta)
         p = self.cap_pts
-        arm = np.column_stack([c * p[:, 0] - s * p[:, 1], s * p[:, 0] + c * p[:, 1], p[:, 2]])
+        arm = np.empty_like(p)
+        arm[:, 0] = c * p[:, 0] - s * p[:, 1]
+        arm[:, 1] = s * p[:, 0] + c * p[:, 1]
+        arm[:, 2] = p[:, 2]
         low = self.low_pts.copy()
         low[self.nr:, 2] += wz
         v = cap + arm - low
-        return arm, v, np.sqrt(np.einsum("ij,ij->i", v, v))
+        self._at, self._geometry = at, (arm, v, np.sqrt(np.einsum("ij,ij->i", v, v)))
+        return self._geometry
 
     def strains(self, cap, theta, wz):
         L = self.geometry(cap, theta, wz)[2]
@@ -92,8 +114,8 @@ class _Elements:
         T = np.concatenate([rope_tension(L[:nr], g.rope_natural_length, g.rope_stiffness),
                             wire_tension(self.sigma if sigma is None else sigma, g.wire)])
         f = -(T / L)[:, None] * v
-        push = float(spring_push(wz, 0.0, self.zeta if zeta is None else zeta, g.spring)[0])
-        return f.sum(0), np.cross(arm, f).sum(0), -float(f[nr:, 2].sum()) + push
+        push = spring_push_scalar(wz, self.zeta if zeta is None else zeta, g.spring.kse, g.spring.free_length)
+        return f.sum(0), _cross(arm, f).sum(0), -float(f[nr:, 2].sum()) + push
 
     def predicted_loads(self, cap, theta, wz):
         eps, x = self.strains(cap, theta, wz)
