@@ -145,19 +145,30 @@ def advance_spring_zeta_scalar(x0, x1, zeta, ksd, beta, gamma, n, substeps, orde
 _F8 = "float64"
 
 
-def _ufunc(scalar_law, *types: str):
-    """The scalar law as a numpy ufunc, compiled once for its one signature. The plain ufunc is
-    called, not numba's DUFunc wrapper around it (same machine code: ~0.55 us a call on 4 elements
-    against ~1.7 us, and the peers' Python callbacks call these laws several times a step)."""
-    return vectorize([f"{_F8}({', '.join(types)})"], cache=True)(scalar_law.py_func).ufunc
+class _Ufunc:
+    """The scalar law as a numpy ufunc for its one signature, made at its first call.
+
+    Made lazily because numba builds a ufunc's wrapper in every process even when its kernel comes
+    from the cache (~0.14 s CPU each: 0.8 s for the six at every import, in the gate's main process
+    and in each worker, most of which never call them). The plain ufunc is called, not numba's
+    DUFunc wrapper around it: the same machine code, ~0.55 us a call on 4 elements against ~1.7 us
+    (the peers' Python callbacks call these laws several times a step)."""
+
+    def __init__(self, scalar_law, *types: str):
+        self.law, self.signature, self.ufunc = scalar_law, f"{_F8}({', '.join(types)})", None
+
+    def __call__(self, *args):
+        if self.ufunc is None:
+            self.ufunc = vectorize([self.signature], cache=True)(self.law.py_func).ufunc
+        return self.ufunc(*args)
 
 
-_sma_slope = _ufunc(sma_slope_scalar, *[_F8] * 12)
-_bouc_wen_slope = _ufunc(bouc_wen_slope_scalar, *[_F8] * 6)
-_advance_wire = _ufunc(advance_wire_stress_scalar, *[_F8] * 12, "int64", "int64")
-_advance_spring = _ufunc(advance_spring_zeta_scalar, *[_F8] * 7, "int64", "int64")
-_rope = _ufunc(rope_tension_scalar, _F8, _F8, _F8)
-_wire = _ufunc(wire_tension_scalar, _F8, _F8)
+_sma_slope = _Ufunc(sma_slope_scalar, *[_F8] * 12)
+_bouc_wen_slope = _Ufunc(bouc_wen_slope_scalar, *[_F8] * 6)
+_advance_wire = _Ufunc(advance_wire_stress_scalar, *[_F8] * 12, "int64", "int64")
+_advance_spring = _Ufunc(advance_spring_zeta_scalar, *[_F8] * 7, "int64", "int64")
+_rope = _Ufunc(rope_tension_scalar, _F8, _F8, _F8)
+_wire = _Ufunc(wire_tension_scalar, _F8, _F8)
 
 
 # ---- Array forms (numpy arrays, one entry per element, or floats) ----------------------------------
