@@ -237,9 +237,13 @@ def gate_times() -> str:
     d = rec["data"]
     engines = sorted({e for per in d["runs"].values() for e in per}, key=["semirecursive", "mujoco", "exudyn"].index)
     rows = [[case] + [g(per[e].get("wall_time")) if e in per else "–" for e in engines] for case, per in d["runs"].items()]
+    used = sorted({per[e].get("evaluation") for per in d["runs"].values() for e in per if per[e].get("evaluation")})
+    evaluation = (f" The in-house runs used the {' and the '.join(used)} evaluation (NSD_EVALUATOR=auto: the generic "
+                  "kernels unless a structure's generated evaluation was already compiled, docs/compilation.md)."
+                  if used else "")
     return (provenance(rec) + "\n"
             + "Wall seconds of each engine's run of each default case in the gate (the run alone: start-up and "
-              "imports excluded; the cases run in parallel on the workers):\n\n"
+              "imports excluded; the cases run in parallel on the workers)." + evaluation + "\n\n"
             + table(["case"] + engines, rows))
 
 

@@ -60,8 +60,10 @@ def _git_commit() -> str:
 
 
 def _keep_compare(data: dict) -> dict:
-    """The gate's verdict, every metric with its limit, each run's status and time, the convergence."""
-    runs = {c: {e: {k: r.get(k) for k in ("status", "message", "wall_time", "cpu_time")} for e, r in per.items()}
+    """The gate's verdict, every metric with its limit, each run's status, time and (in-house) evaluation,
+    the convergence."""
+    runs = {c: {e: {**{k: r.get(k) for k in ("status", "message", "wall_time", "cpu_time")},
+                    "evaluation": (r.get("stats") or {}).get("evaluation")} for e, r in per.items()}
             for c, per in data["runs"].items()}
     keep = {"verdict": data.get("verdict"), "exit_code": data.get("exit_code"),
             "total_wall_time": data.get("total_wall_time"), "metrics": data["metrics"], "runs": runs,
