@@ -236,10 +236,14 @@ def gate_times() -> str:
     rec = load("compare")
     d = rec["data"]
     engines = sorted({e for per in d["runs"].values() for e in per}, key=["semirecursive", "mujoco", "exudyn"].index)
-    rows = [[case] + [g(per[e].get("wall_time")) if e in per else "–" for e in engines] for case, per in d["runs"].items()]
-    used = sorted({per[e].get("evaluation") for per in d["runs"].values() for e in per if per[e].get("evaluation")})
-    evaluation = (f" The in-house runs used the {' and the '.join(used)} evaluation (NSD_EVALUATOR=auto: the generic "
-                  "kernels unless a structure's generated evaluation was already compiled, docs/compilation.md)."
+
+    def cell(r):   # an in-house run names its evaluation (generated or generic)
+        return g(r.get("wall_time")) + (f" ({r['evaluation']})" if r.get("evaluation") else "")
+
+    rows = [[case] + [cell(per[e]) if e in per else "–" for e in engines] for case, per in d["runs"].items()]
+    used = any(per[e].get("evaluation") for per in d["runs"].values() for e in per)
+    evaluation = (" In brackets, the evaluation each in-house run used (NSD_EVALUATOR=auto: the generic kernels "
+                  "unless that structure's generated evaluation was already compiled, docs/compilation.md)."
                   if used else "")
     return (provenance(rec) + "\n"
             + "Wall seconds of each engine's run of each default case in the gate (the run alone: start-up and "
