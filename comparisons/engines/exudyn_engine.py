@@ -138,22 +138,6 @@ class _Elements:
         """Eq. 18b integrated in the compression x_s from x0 to x1."""
         return advance_spring_zeta(x0, x1, zeta, self.g.spring, order=self.order)
 
-    def pre_step(self, sd, at, ref, h, t, path, work, out):
-        """The compiled pre-step (exudyn_native.pre_step) from Exudyn's system data ``sd``: commits
-        the states and writes the loads at the predicted end of the step into out[0:6], the plate's
-        x, y at the end of the step ``t`` into out[6:8]. The same numbers as ``step`` bit for bit."""
-        ro, rl0, rk, wo, wire, spring = self._consts
-        xz = self._xz
-        exudyn_native.pre_step(sd.GetODE2Coordinates(), sd.GetODE2Coordinates_t(), sd.GetODE2Coordinates_tt(), at,
-                               ref, h, t, path, self.eps, self.sigma, xz, ro, rl0, rk, wo, wire, spring, self.order,
-                               work, out)
-        self.x, self.zeta = xz[0], xz[1]
-
-    def prepare_compiled(self):
-        """Own float arrays for the states the compiled pre-step updates in place."""
-        self.eps, self.sigma = np.array(self.eps, dtype=float), np.array(self.sigma, dtype=float)
-        self._xz = np.array([self.x, self.zeta], dtype=float)
-
     # ---- "per_iteration": a pure function of the configuration, from the committed states ----
     def states(self, cap, wall_z):
         g = self.g
@@ -376,25 +360,9 @@ class ExudynEngine:
                                     math.hypot(wp[0], wp[1]))
 
         native = per_step and el.compiled and s["drive_offsets"] == "prestep"
-        if native:  # the whole pre-step in one compiled call (exudyn_native.pre_step): same numbers
-            el.prepare_compiled()
-            sd, path = mbs.systemData, drive.motion_params
-            ref = np.array([0.0, 0.0, cap_z, wall_z])   # the nodes' reference positions (as created)
-            at, work, out = np.zeros(2, dtype=np.int64), np.zeros(6), np.zeros(8)
-            set_load, set_offset = mbs.SetLoadParameter, mbs.SetObjectParameter
-
-        def pre_step_native(mbs_, t):
-            """As pre_step below, in one compiled call; t is the END of the step."""
-            n = counter[0]
-            counter[0] += 1
-            el.pre_step(sd, at, ref, h, t, path, work, out)
-            set_load(loads[0], "loadVector", out[0:3])
-            set_load(loads[1], "loadVector", out[3:6])
-            if n % per_out == 0:
-                record(n // per_out)
-            set_offset(drives[0], "offset", out[6])
-            set_offset(drives[1], "offset", out[7])
-            return True
+        if native:  # the whole pre-step in one compiled call: the same numbers as pre_step below
+            native = exudyn_native.PreStep(mbs, el, (cap_n, wall_n), [0.0, 0.0, cap_z, wall_z], h, drive.motion_params,
+                                           loads, drives, per_out, record)
 
         def pre_step(mbs_, t):
             """t is the END of the step (Exudyn's convention); the state is the converged one at t - h."""
@@ -420,10 +388,10 @@ class ExudynEngine:
                     mbs_.SetObjectParameter(cc, "offset", off)
             return True
 
-        mbs.SetPreStepUserFunction(pre_step_native if native else pre_step)
+        mbs.SetPreStepUserFunction(native or pre_step)
         mbs.Assemble()
         if native:
-            at[:] = mbs.GetNodeODE2Index(cap_n), mbs.GetNodeODE2Index(wall_n)
+            native.assembled()
 
         ss = exu.SimulationSettings()
         ti = ss.timeIntegration
@@ -451,8 +419,9 @@ class ExudynEngine:
         except Exception as err:  # Exudyn's solver error carries no detail beyond "terminated"
             ok, why = False, " ".join(str(err).split())[:200]
         wall_time, cpu_time = time.perf_counter() - t0, time.process_time() - c0
-        if not ok or counter[0] != n_steps:
-            raise EngineError(f"exudyn: solver failed in step {counter[0]} of {n_steps} (t = {counter[0] * h:.6g} s,"
+        done = native.count if native else counter[0]
+        if not ok or done != n_steps:
+            raise EngineError(f"exudyn: solver failed in step {done} of {n_steps} (t = {done * h:.6g} s,"
                               f" h = {h:.3g} s): {why}")
         el.commit(mbs.GetNodeOutput(cap_n, OV.Position), mbs.GetNodeOutput(wall_n, OV.Position)[2])
         record(n_out - 1)

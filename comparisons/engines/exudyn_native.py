@@ -100,3 +100,43 @@ def pre_step(q, q_t, q_tt, at, ref, h, t, path, eps, sigma, xz, rope_off, rope_l
     xz[0], xz[1] = step(work[0:3], wz, work[3:6], wall_p, eps, sigma, xz[0], xz[1], rope_off, rope_l0, rope_k,
                         wire_off, wire, spring, order, out)
     out[6], out[7] = m[0], m[1]
+
+
+class PreStep:
+    """Exudyn's pre-step function of a drive run (exudyn_engine, forces = per_step, drive offsets set
+    in the pre-step) as one compiled call a step: ``pre_step`` from the ODE2 vectors, then the two
+    loads, a sample at output steps (``record(k)``) and the two drive offsets. ``el`` is the run's
+    exudyn_engine._Elements (its committed states are updated in place); ``ref`` the cap's reference
+    position and the wall's reference height. Call ``assembled()`` after mbs.Assemble()."""
+
+    def __init__(self, mbs, el, nodes, ref, h, path, loads, drives, per_out, record):
+        self.mbs, self.el, self.nodes, self.h, self.path = mbs, el, nodes, float(h), path
+        self.ref = np.array(ref, dtype=float)
+        self.loads, self.drives, self.per_out, self.record = loads, drives, per_out, record
+        self.at, self.work, self.out = np.zeros(2, dtype=np.int64), np.zeros(6), np.zeros(8)
+        self.sd, self.count = mbs.systemData, 0
+        # own float arrays for the states the compiled call updates in place
+        el.eps, el.sigma = np.array(el.eps, dtype=float), np.array(el.sigma, dtype=float)
+        self.xz = np.array([el.x, el.zeta], dtype=float)
+
+    def assembled(self) -> None:
+        """The nodes' first ODE2 indices (known once the system is assembled)."""
+        self.at[:] = [self.mbs.GetNodeODE2Index(n) for n in self.nodes]
+
+    def __call__(self, mbs_, t):
+        """t is the END of the step (Exudyn's convention); the state is the converged one at t - h."""
+        n, el, sd, out = self.count, self.el, self.sd, self.out
+        self.count += 1
+        ro, rl0, rk, wo, wire, spring = el._consts
+        pre_step(sd.GetODE2Coordinates(), sd.GetODE2Coordinates_t(), sd.GetODE2Coordinates_tt(), self.at, self.ref,
+                 self.h, t, self.path, el.eps, el.sigma, self.xz, ro, rl0, rk, wo, wire, spring, el.order, self.work,
+                 out)
+        el.x, el.zeta = self.xz[0], self.xz[1]
+        set_load = mbs_.SetLoadParameter
+        set_load(self.loads[0], "loadVector", out[0:3])
+        set_load(self.loads[1], "loadVector", out[3:6])
+        if n % self.per_out == 0:
+            self.record(n // self.per_out)
+        mbs_.SetObjectParameter(self.drives[0], "offset", out[6])
+        mbs_.SetObjectParameter(self.drives[1], "offset", out[7])
+        return True
