@@ -105,8 +105,8 @@ class _Elements:
         self.compiled = compiled   # step() through exudyn_native (same laws, one compiled call)
         # one stiffness for every rope (the compiled step's); a per-rope array runs the Python path only
         k_rope = float(g.rope_stiffness) if np.ndim(g.rope_stiffness) == 0 else np.asarray(g.rope_stiffness, float)
-        self._consts = (g.rope_offsets, np.asarray(g.rope_natural_length, dtype=float), k_rope,
-                        g.wire_offsets, np.array(tuple(g.wire), dtype=float), np.array(tuple(g.spring), dtype=float))
+        self.consts = (g.rope_offsets, np.asarray(g.rope_natural_length, dtype=float), k_rope,
+                       g.wire_offsets, np.array(tuple(g.wire), dtype=float), np.array(tuple(g.spring), dtype=float))
         self._out = np.zeros(6)
         self.sigma = g.initial_wire_stress().astype(float)
         self.zeta = float(g.spring_zeta0)
@@ -166,7 +166,7 @@ class _Elements:
         path eps_c -> eps_p would miss the turn, so that prediction is redone from (eps_n, sigma_n).
         """
         if self.compiled:
-            ro, rl0, rk, wo, wire, spring = self._consts
+            ro, rl0, rk, wo, wire, spring = self.consts
             self.eps, self.sigma = np.array(self.eps, dtype=float), np.array(self.sigma, dtype=float)
             self.x, self.zeta = exudyn_native.step(np.asarray(cap, dtype=float), float(wall_z), cap_p, float(wall_p),
                                                    self.eps, self.sigma, self.x, self.zeta, ro, rl0, rk, wo, wire,
@@ -362,7 +362,7 @@ class ExudynEngine:
         native = per_step and el.compiled and s["drive_offsets"] == "prestep"
         if native:  # the whole pre-step in one compiled call: the same numbers as pre_step below
             native = exudyn_native.PreStep(mbs, el, (cap_n, wall_n), [0.0, 0.0, cap_z, wall_z], h, drive.motion_params,
-                                           loads, drives, per_out, record)
+                                           loads, drives, per_out, record, counter)
 
         def pre_step(mbs_, t):
             """t is the END of the step (Exudyn's convention); the state is the converged one at t - h."""
@@ -419,9 +419,8 @@ class ExudynEngine:
         except Exception as err:  # Exudyn's solver error carries no detail beyond "terminated"
             ok, why = False, " ".join(str(err).split())[:200]
         wall_time, cpu_time = time.perf_counter() - t0, time.process_time() - c0
-        done = native.count if native else counter[0]
-        if not ok or done != n_steps:
-            raise EngineError(f"exudyn: solver failed in step {done} of {n_steps} (t = {done * h:.6g} s,"
+        if not ok or counter[0] != n_steps:
+            raise EngineError(f"exudyn: solver failed in step {counter[0]} of {n_steps} (t = {counter[0] * h:.6g} s,"
                               f" h = {h:.3g} s): {why}")
         el.commit(mbs.GetNodeOutput(cap_n, OV.Position), mbs.GetNodeOutput(wall_n, OV.Position)[2])
         record(n_out - 1)

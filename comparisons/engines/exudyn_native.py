@@ -93,8 +93,8 @@ def pre_step(q, q_t, q_tt, at, ref, h, t, path, eps, sigma, xz, rope_off, rope_l
     hh = 0.5 * h * h
     for i in range(3):
         work[i] = ref[i] + q[c + i]
-        work[3 + i] = (work[i] + h * q_t[c + i]) + hh * q_tt[c + i]
     work[3], work[4] = m[0], m[1]   # the horizontal end-of-step position is prescribed: exact
+    work[5] = (work[2] + h * q_t[c + 2]) + hh * q_tt[c + 2]
     wz = ref[3] + q[w + 2]
     wall_p = (wz + h * q_t[w + 2]) + hh * q_tt[w + 2]
     xz[0], xz[1] = step(work[0:3], wz, work[3:6], wall_p, eps, sigma, xz[0], xz[1], rope_off, rope_l0, rope_k,
@@ -107,14 +107,15 @@ class PreStep:
     in the pre-step) as one compiled call a step: ``pre_step`` from the ODE2 vectors, then the two
     loads, a sample at output steps (``record(k)``) and the two drive offsets. ``el`` is the run's
     exudyn_engine._Elements (its committed states are updated in place); ``ref`` the cap's reference
-    position and the wall's reference height. Call ``assembled()`` after mbs.Assemble()."""
+    position and the wall's reference height; ``counter`` the run's step count ([n], advanced here, as
+    the Python pre-step does). Call ``assembled()`` after mbs.Assemble()."""
 
-    def __init__(self, mbs, el, nodes, ref, h, path, loads, drives, per_out, record):
+    def __init__(self, mbs, el, nodes, ref, h, path, loads, drives, per_out, record, counter):
         self.mbs, self.el, self.nodes, self.h, self.path = mbs, el, nodes, float(h), path
         self.ref = np.array(ref, dtype=float)
-        self.loads, self.drives, self.per_out, self.record = loads, drives, per_out, record
+        self.loads, self.drives, self.per_out, self.record, self.counter = loads, drives, per_out, record, counter
         self.at, self.work, self.out = np.zeros(2, dtype=np.int64), np.zeros(6), np.zeros(8)
-        self.sd, self.count = mbs.systemData, 0
+        self.sd = mbs.systemData
         # own float arrays for the states the compiled call updates in place
         el.eps, el.sigma = np.array(el.eps, dtype=float), np.array(el.sigma, dtype=float)
         self.xz = np.array([el.x, el.zeta], dtype=float)
@@ -125,9 +126,9 @@ class PreStep:
 
     def __call__(self, mbs_, t):
         """t is the END of the step (Exudyn's convention); the state is the converged one at t - h."""
-        n, el, sd, out = self.count, self.el, self.sd, self.out
-        self.count += 1
-        ro, rl0, rk, wo, wire, spring = el._consts
+        n, el, sd, out = self.counter[0], self.el, self.sd, self.out
+        self.counter[0] += 1
+        ro, rl0, rk, wo, wire, spring = el.consts
         pre_step(sd.GetODE2Coordinates(), sd.GetODE2Coordinates_t(), sd.GetODE2Coordinates_tt(), self.at, self.ref,
                  self.h, t, self.path, el.eps, el.sigma, self.xz, ro, rl0, rk, wo, wire, spring, el.order, self.work,
                  out)
