@@ -41,3 +41,17 @@ def test_linear_solvers_agree_and_bad_names_are_refused():
         ExudynEngine().run(P, d, {"linear_solver": "lapack"})
     with pytest.raises(ParameterError, match="exudyn.force_code"):
         ExudynEngine().run(P, d, {"force_code": "c++"})
+
+
+def test_compiled_prestep_takes_a_per_rope_stiffness():
+    """A modelling error in one rope's stiffness (engines/perturb.py) runs on the compiled pre-step,
+    equal to the numpy one, and moves the force (it used to stop the solver in its first step)."""
+    d = Drive(0.015, 10.0, cycles=1, samples_per_cycle=100)
+    base = {"step_size": 2e-4, "min_steps_per_cycle": 1}
+    stiffer = {**base, "perturb": {"what": "rope_stiffness", "index": 0, "by": 0.05}}
+    ref = ExudynEngine().run(P, d, {**stiffer, "force_code": "python"})
+    r = ExudynEngine().run(P, d, {**stiffer, "force_code": "compiled"})
+    for col in ref.columns:
+        assert np.array_equal(r[col], ref[col]), col
+    nominal = ExudynEngine().run(P, d, base)
+    assert np.max(np.abs(r["F"] - nominal["F"])) > 1e-3 * np.max(np.abs(nominal["F"]))

@@ -103,8 +103,8 @@ class _Elements:
         self.g = g
         self.order = 2 if integrator == "heun" else 4  # Heun or RK4 along the strain (nsd_core.forces)
         self.compiled = compiled   # step() through exudyn_native (same laws, one compiled call)
-        # one stiffness for every rope (the compiled step's); a per-rope array runs the Python path only
-        k_rope = float(g.rope_stiffness) if np.ndim(g.rope_stiffness) == 0 else np.asarray(g.rope_stiffness, float)
+        # the compiled step's constants: a stiffness per rope (one value, or a perturbed rope's own)
+        k_rope = np.broadcast_to(np.asarray(g.rope_stiffness, dtype=float), (g.n_ropes,)).copy()
         self.consts = (g.rope_offsets, np.asarray(g.rope_natural_length, dtype=float), k_rope,
                        g.wire_offsets, np.array(tuple(g.wire), dtype=float), np.array(tuple(g.spring), dtype=float))
         self._out = np.zeros(6)

@@ -68,7 +68,7 @@ def step(cap, wz, cap_p, wall_p, eps, sigma, x, zeta, rope_off, rope_l0, rope_k,
     for i in range(nr):
         rx, ry, rz = rope_off[i, 0] + cap_p[0], rope_off[i, 1] + cap_p[1], rope_off[i, 2] + cap_p[2]
         rl = np.sqrt(rx * rx + ry * ry + rz * rz)
-        t = rope_tension_scalar(rl, rope_l0[i], rope_k) / rl
+        t = rope_tension_scalar(rl, rope_l0[i], rope_k[i]) / rl
         frx += t * rx
         fry += t * ry
         frz += t * rz
