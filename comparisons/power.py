@@ -60,11 +60,6 @@ def scaled(spec: dict, size: float) -> dict:
     return {**spec, "by": size if by > 0 else -size}
 
 
-# the compiled force paths take one stiffness for every rope; a per-rope error runs on the engines'
-# Python paths (the same equations, kept equal to the compiled ones by their own tests)
-PER_ROPE_SETTINGS = {"mujoco": {"passive": "python", "step_loop": "python"}, "exudyn": {"force_code": "python"}}
-
-
 def _verdict(case: Case, engine: str, tolerances, run, ref, run_summary, ref_summary) -> dict[str, Any]:
     values = pair_metrics(run, ref, run_summary, ref_summary, case.drive.amplitude, case.drive.frequency)
     values.update(own_metrics(run))
@@ -93,9 +88,8 @@ def power_study(cases: list[Case], engines: list[str], tolerances, out_dir: str 
 
         def submit(spec, scale):
             s = {k: v * scale if k == "by" else v for k, v in spec.items()}
-            extra = lambda e: PER_ROPE_SETTINGS.get(e, {}) if s["what"] == "rope_stiffness" else {}  # noqa: E731
             return [(c, e, spec, s, scale, pool.submit(run_job, e, c.params_for(e), c.drive,
-                                                       {**c.settings.get(e, {}), "perturb": s, **extra(e)}))
+                                                       {**c.settings.get(e, {}), "perturb": s}))
                     for c in cases for e in engines]
 
         pending = [j for spec in injections for j in submit(spec, 1.0)]

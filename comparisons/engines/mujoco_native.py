@@ -39,15 +39,16 @@ from nsd_core.device.forces import (advance_spring_zeta_scalar, advance_wire_str
                              rope_tension_scalar, sma_slope_scalar, spring_push_scalar, wire_tension_scalar)
 
 # ---- userdata layout (float64 indices) ----------------------------------------------------------
-E0, E1, ZC0, ZW0, NR, NW, PREDICT, SUBSTEPS, ROPE_K = range(9)
+E0, E1, ZC0, ZW0, NR, NW, PREDICT, SUBSTEPS = range(8)   # 8: unused (the stiffnesses are per rope)
 WIRE = 9            # 11 values: E, Y, alpha, n, fT, a, Em, eps_t, c, area, natural_length
 SPRING = 20         # 6 values: kse, ksd, beta, gamma, n, free_length
 ZETA, X_C, Z_UP, Z_DN = 26, 27, 28, 29
-HEADER = 30         # then: D (n_r + n_w, 3), rope L0 (n_r), sigma, eps_c, s_up, s_dn (n_w each)
+HEADER = 30         # then: D (n_r + n_w, 3), rope L0 and k_r (n_r each), sigma, eps_c, s_up, s_dn (n_w each)
 
 
-def userdata_size(n_ropes: int, n_wires: int) -> int:
-    return HEADER + 3 * (n_ropes + n_wires) + n_ropes + 4 * n_wires
+@njit(cache=True, inline="always")
+def userdata_size(n_ropes, n_wires):
+    return HEADER + 3 * (n_ropes + n_wires) + 2 * n_ropes + 4 * n_wires
 
 
 @njit(cache=True, inline="always")
@@ -55,7 +56,7 @@ def _blocks(ud):
     nr, nw = int(ud[NR]), int(ud[NW])
     d0 = HEADER
     l0 = d0 + 3 * (nr + nw)
-    sg = l0 + nr
+    sg = l0 + 2 * nr      # rope L0 at l0 + i, rope stiffness at l0 + nr + i
     return nr, nw, d0, l0, sg, sg + nw, sg + 2 * nw, sg + 3 * nw   # ..., sigma, eps_c, s_up, s_dn
 
 
@@ -70,13 +71,14 @@ def pack_userdata(ud: np.ndarray, g, unit_vector, sigma, zeta, eps_c, x_c, predi
     nr, nw = g.n_ropes, g.n_wires
     ud[:] = 0.0
     ud[E0], ud[E1], ud[ZC0], ud[ZW0] = float(unit_vector[0]), float(unit_vector[1]), g.cap_rest_z, g.wall_rest_z
-    ud[NR], ud[NW], ud[PREDICT], ud[SUBSTEPS], ud[ROPE_K] = nr, nw, float(predict), substeps, g.rope_stiffness
+    ud[NR], ud[NW], ud[PREDICT], ud[SUBSTEPS] = nr, nw, float(predict), substeps
     ud[WIRE:WIRE + 11] = tuple(g.wire)
     ud[SPRING:SPRING + 6] = tuple(g.spring)
     ud[ZETA], ud[X_C] = zeta, x_c
     _, _, d0, l0, sg, ec, _, _ = _blocks(ud)
     ud[d0:l0] = np.vstack([g.rope_offsets, g.wire_offsets]).ravel()
-    ud[l0:sg] = g.rope_natural_length
+    ud[l0:l0 + nr] = g.rope_natural_length
+    ud[l0 + nr:sg] = g.rope_stiffness   # one value, or a perturbed rope's own (engines/perturb.py)
     ud[sg:sg + nw], ud[ec:ec + nw] = sigma, eps_c
     refresh_slopes(ud)
 
@@ -153,7 +155,7 @@ def passive_forces(q, qfrc, ud):
     for i in range(nr + nw):
         vx, vy, vz, L = _element(ud, d0, i, nr, cx, cy, cz, wz)
         if i < nr:
-            T = rope_tension_scalar(L, ud[l0 + i], ud[ROPE_K])
+            T = rope_tension_scalar(L, ud[l0 + i], ud[l0 + nr + i])
         else:
             j = i - nr
             sigma = ud[sg + j]
@@ -243,7 +245,7 @@ def passive_callback():
         words = carray(d, (o_usr + 1,), dtype=np.uint64)
         ud = carray(_as_double_ptr(words[o_usr]), (HEADER,))
         nr, nw = int(ud[NR]), int(ud[NW])
-        ud = carray(_as_double_ptr(words[o_usr]), (HEADER + 3 * (nr + nw) + nr + 4 * nw,))
+        ud = carray(_as_double_ptr(words[o_usr]), (userdata_size(nr, nw),))
         passive_forces(carray(_as_double_ptr(words[o_qpos]), (4,)),
                        carray(_as_double_ptr(words[o_frc]), (4,)), ud)
     return mjcb_passive
