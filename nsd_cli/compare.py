@@ -70,12 +70,21 @@ def check_settings(cases, engines, convergence=None) -> None:
     from comparisons.config import SeismicCase
     from comparisons.engines import get_engine
     from comparisons.engines.base import SeismicSettings, check_settings as check
+    from comparisons.engines.perturb import perturbed
+    from nsd_core.device.geometry import device_geometry
     named = set(engines) | {e for c in cases for e in c.settings}
     for e in sorted(named):
         eng = get_engine(e)
         for c in cases:
             seismic = isinstance(c, SeismicCase)
-            check(SeismicSettings(eng) if seismic else eng, c.settings.get(e), f"case {c.name}: settings.{e}")
+            where = f"case {c.name}: settings.{e}"
+            check(SeismicSettings(eng) if seismic else eng, c.settings.get(e), where)
+            perturbation = (c.settings.get(e) or {}).get("perturb")
+            if perturbation is not None:   # what needs the case's device (an index in range): applied once here
+                try:
+                    perturbed(device_geometry(c.params_for(e)), perturbation, seismic=seismic)
+                except ParameterError as err:
+                    raise ParameterError(f"{where}.{err}") from None
             if seismic and not c.device and e != REFERENCE and e in engines:
                 raise ParameterError(f"case {c.name}.device = false: the supports alone run on the in-house engine "
                                      f"only; run it with --engines {REFERENCE}")

@@ -288,6 +288,19 @@ SEISMIC = {
 }
 for name, (text, frag) in SEISMIC.items():
     add(f"seismic-case-{name}", COMPARE + ["--cases", "{d}/c.toml"], {"c.toml": text}, frag)
+# an injected modelling error (engines/perturb.py) out of its bounds, found before anything runs
+for name, perturbation, frag in (
+        ("rope-index-range", 'what = "rope_stiffness", index = 9, by = 0.01', "settings.exudyn.perturb.index = 9"),
+        ("point-index-range", 'what = "rope_cap_point", index = 7, by = 2e-4', "perturb.index = 7"),
+        ("index-negative", 'what = "rope_stiffness", index = -1, by = 0.01', "perturb.index = -1"),
+        ("index-fraction", 'what = "rope_stiffness", index = 0.5, by = 0.01', "perturb.index = 0.5"),
+        ("index-bool", 'what = "rope_stiffness", index = true, by = 0.01', "perturb.index"),
+        ("stiffness-negative", 'what = "rope_stiffness", index = 0, by = -1.5', "perturb.by = -1.5"),
+        ("mass-zero", 'what = "cap_mass", by = -1.0', "perturb.by = -1.0"),
+        ("factor-huge", 'what = "spring_kse", by = 1e300', "perturb.by"),
+        ("shift-huge", 'what = "wire_wall_point", by = 0.5', "a length in m")):
+    add(f"perturb-{name}", COMPARE + ["--cases", "{d}/c.toml"],
+        {"c.toml": CASE + f"settings.exudyn = {{ perturb = {{ {perturbation} }} }}\n"}, frag)
 # ---- nsd sweep
 for argv, frag in ((["sweep", "--out", "{out}"], "--param"), (SWEEP + ["--paper"], "exactly one"),
                    (["sweep", "--param", "bogus", "--values", "1", "--out", "{out}"], "bogus"),

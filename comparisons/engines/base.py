@@ -85,7 +85,10 @@ def check_settings(engine, settings: dict[str, Any] | None, where: str) -> dict[
         name = f"{where}.{k} = {v!r}"
         if k == "perturb":   # an injected modelling error (nsd compare --power): its own checks
             from comparisons.engines.perturb import check as check_perturbation
-            check_perturbation(v)
+            try:
+                check_perturbation(v)
+            except ParameterError as err:
+                raise ParameterError(f"{where}.{err}") from None
             continue
         if isinstance(d, bool):
             if not isinstance(v, bool):

@@ -42,6 +42,11 @@ KINDS = {  # what -> (unit of "by", description)
     "isolated_mass": ("-", "seismic mode: the isolated mass M (and its polar inertia) x (1 + by)"),
 }
 AXES = {"x": 0, "y": 1, "z": 2}
+# Bounds of "by": an injected error is a modelling slip, not another device; beyond these a run fails
+# or overflows instead of showing the gate's response (the power study's ladder tops at 100x its
+# listed sizes: 1.0 relative, 0.02 m)
+MAX_FACTOR = 101.0   # a relative change multiplies by 1 + by <= MAX_FACTOR
+MAX_SHIFT = 0.05     # m, a moved point or a longer/shorter rod
 
 
 def describe(spec: dict) -> str:
@@ -69,6 +74,15 @@ def check(spec) -> dict | None:
     by = spec.get("by", 0.0)
     if isinstance(by, bool) or not isinstance(by, (int, float)) or not np.isfinite(by):
         raise ParameterError(f"perturb.by = {by!r}: must be a finite number")
+    if KINDS[spec["what"]][0] == "m":
+        if not abs(by) <= MAX_SHIFT:
+            raise ParameterError(f"perturb.by = {by!r}: a length in m, allowed -{MAX_SHIFT} .. {MAX_SHIFT}")
+    elif not (-1.0 <= by if spec["what"] == "gravity" else -1.0 < by) or not by <= MAX_FACTOR - 1.0:
+        low = "-1 (off)" if spec["what"] == "gravity" else "above -1 (a factor 1 + by > 0)"
+        raise ParameterError(f"perturb.by = {by!r}: a relative change, allowed {low} .. {MAX_FACTOR - 1.0:g}")
+    index = spec.get("index", 0)
+    if isinstance(index, bool) or not isinstance(index, int) or index < 0:
+        raise ParameterError(f"perturb.index = {index!r}: must be a whole number >= 0")
     if spec.get("axis", "z") not in AXES:
         raise ParameterError(f"perturb.axis = {spec.get('axis')!r}: allowed x, y, z")
     return dict(spec)
