@@ -110,7 +110,7 @@ def _with_ground(result, ground):
     (x_g, y_g, ax_g, ay_g) where the engine did not write them: a peer's seismic_<engine>.csv then has
     the in-house columns, and its summary (nsd_core.device.seismic_summary: the peak ground
     acceleration) can be made from it, as a record set does for every run."""
-    from nsd_core.device.seismic import seismic_units
+    from nsd_core.device.columns import units_of
     missing = [c for c in GROUND_COLUMNS if c not in result.columns]
     if missing:
         d, _, a = ground(result["t"])
@@ -119,7 +119,7 @@ def _with_ground(result, ground):
                 **{k: v for k, v in result.columns.items() if k != "t"}}
         result.columns.clear()
         result.columns.update(cols)
-        result.units.update(seismic_units(dict.fromkeys(missing)))
+        result.units.update(units_of(dict.fromkeys(missing)))
     return result
 
 

@@ -44,7 +44,8 @@ from nsd_core.device.ground import GroundMotion
 from nsd_core.device.isolation import Structure
 from nsd_core.device.params import Params
 from nsd_core.device.results import RunResult
-from nsd_core.device.seismic import output_times, seismic_units
+from nsd_core.device.columns import units_of
+from nsd_core.device.seismic import output_times
 
 quiet_allocation_warning()
 
@@ -359,6 +360,4 @@ class ExudynSeismic:
             cols["base_shear_x"], cols["base_shear_y"] = cols["base_shear_x"] + fx, cols["base_shear_y"] + fy
         stats = {"engine": "exudyn", "mode": "seismic", "wall_time": time.perf_counter() - t0, "steps": n_steps,
                  "step_size": h, "settings": dict(s)}
-        units = seismic_units(cols)
-        units["omega"] = "rad/s"
-        return RunResult("exudyn", cols, units, stats)
+        return RunResult("exudyn", cols, units_of(cols), stats)

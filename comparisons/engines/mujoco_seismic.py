@@ -36,7 +36,8 @@ from nsd_core.device.ground import GroundMotion
 from nsd_core.device.isolation import Structure
 from nsd_core.device.params import Params
 from nsd_core.device.results import RunResult
-from nsd_core.device.seismic import output_times, seismic_units
+from nsd_core.device.columns import units_of
+from nsd_core.device.seismic import output_times
 
 from comparisons.engines.base import EngineError, check_step_count, merged_settings
 from comparisons.engines.mujoco_building import Floors, floors_mjcf, tendons_mjcf
@@ -301,7 +302,7 @@ class MujocoSeismic:
             cols["base_shear_x"], cols["base_shear_y"] = cols["base_shear_x"] + fx, cols["base_shear_y"] + fy
         stats = {"engine": "mujoco", "mode": "seismic", "wall_time": time.perf_counter() - t0,
                  "steps": n_out * n_sub, "timestep": h, "settings": s, "mujoco_version": mujoco.__version__}
-        return RunResult("mujoco", cols, seismic_units(cols), stats)
+        return RunResult("mujoco", cols, units_of(cols), stats)
 
     @staticmethod
     def _row(t, data, dev: _Forces, a_g, tip, cap_id) -> dict:

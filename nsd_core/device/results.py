@@ -23,25 +23,21 @@ from typing import Any
 
 import numpy as np
 
-BASE_COLUMNS = {
-    "t": "s", "u": "m", "F": "N", "F_device": "N", "F_rod": "N", "F_ropes": "N", "F_wires": "N",
-    "spring_push": "N", "spring_zeta": "N", "cap_z": "m", "wall_z": "m", "closure": "m",
-    "x": "m", "y": "m", "F_x": "N", "F_y": "N", "F_tangent": "N", "F_radial": "N",
-}
+from nsd_core.device.columns import units_of
+
+BASE_COLUMNS = ("t", "u", "F", "F_device", "F_rod", "F_ropes", "F_wires", "spring_push", "spring_zeta", "cap_z",
+                "wall_z", "closure", "x", "y", "F_x", "F_y", "F_tangent", "F_radial")
 
 
 def column_units(n_ropes: int, n_wires: int) -> dict[str, str]:
-    """Ordered column names with units for a device with n_ropes ropes and n_wires wires."""
-    cols = dict(BASE_COLUMNS)
+    """Ordered column names with units (nsd_core.device.columns) for a device with n_ropes ropes and
+    n_wires wires."""
+    names = list(BASE_COLUMNS)
     for i in range(n_ropes):
-        cols[f"rope{i}_tension"] = "N"
-        cols[f"rope{i}_F"] = "N"
+        names += [f"rope{i}_tension", f"rope{i}_F"]
     for j in range(n_wires):
-        cols[f"wire{j}_tension"] = "N"
-        cols[f"wire{j}_F"] = "N"
-        cols[f"wire{j}_strain"] = "-"
-        cols[f"wire{j}_stress"] = "Pa"
-    return cols
+        names += [f"wire{j}_tension", f"wire{j}_F", f"wire{j}_strain", f"wire{j}_stress"]
+    return units_of(names)
 
 
 @dataclass

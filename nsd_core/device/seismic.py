@@ -39,6 +39,7 @@ from nsd_core.device.forces import (restrainer_force_scalar, restrainer_forces, 
                                     wire_tension)
 from nsd_core.device.geometry import device_geometry
 from nsd_core.device.building import building_columns, building_dissipation_rate
+from nsd_core.device.columns import units_of
 from nsd_core.device.building_tree import BuildingIndex, floor_names, with_floors
 from nsd_core.device.ground import GroundMotion
 from nsd_core.device.isolation import Structure
@@ -329,6 +330,8 @@ def simulate_seismic(params: Params, structure: Structure, ground: GroundMotion,
             row.update({k: float(val[0]) for k, val in cols.items()})
             row["E_building_dissipated"] = E_bld
             stored += row["E_building_stored"] + E_bld
+            if fixed_base:  # the slab is the ground: the base shear is story 1's (docs/building.md)
+                row["base_shear_x"], row["base_shear_y"] = row["story_shear1_x"], row["story_shear1_y"]
         row["E_residual"] = E_in - (kinetic + row["E_gravity"] + stored + E_sup_diss + E_dev + E_res)
         rows.append(row)
 
@@ -342,7 +345,7 @@ def simulate_seismic(params: Params, structure: Structure, ground: GroundMotion,
     def result(st):
         cols = {k: np.array([r[k] for r in rows]) for k in rows[0]}
         cols["u"] = np.hypot(cols["x"], cols["y"])  # radial relative displacement (events use it)
-        return RunResult("semirecursive", cols, seismic_units(cols), st)
+        return RunResult("semirecursive", cols, units_of(cols), st)
 
     try:
         try:
@@ -447,10 +450,12 @@ def _compiled_result(res, keep, t_eval, system, g, structure, device, stats) -> 
         cols.update(_compiled_building_columns(res["y"], system, s.building, tab))
         cols["E_building_dissipated"] = E_bld
         stored = stored + cols["E_building_stored"] + E_bld
+        if stats.get("fixed_base"):  # the slab is the ground: the base shear is story 1's (docs/building.md)
+            cols["base_shear_x"], cols["base_shear_y"] = cols["story_shear1_x"], cols["story_shear1_y"]
     cols["E_residual"] = E_in - (tab["kinetic"] + gravity + stored + E_sup_diss + E_dev + E_res)
     cols["u"] = np.hypot(x, y)
     cols = {k: np.array(v, dtype=float) for k, v in cols.items()}
-    return RunResult("semirecursive", cols, seismic_units(cols), stats)
+    return RunResult("semirecursive", cols, units_of(cols), stats)
 
 
 def _compiled_building_columns(Y, system, building, tab) -> dict:
@@ -506,22 +511,3 @@ def _device_outputs(row, ev, y, g, forces, system):
         row[f"rope{i}_tension"] = T
     for j in range(nw):
         row[f"wire{j}_tension"], row[f"wire{j}_strain"], row[f"wire{j}_stress"] = t_wire[j], strain[j], sigma[j]
-
-
-_UNITS = {"t": "s", "x_g": "m", "y_g": "m", "ax_g": "m/s^2", "ay_g": "m/s^2", "x": "m", "y": "m", "u": "m",
-          "theta": "rad", "vx": "m/s", "vy": "m/s", "ax_abs": "m/s^2", "ay_abs": "m/s^2", "support_torque": "N m",
-          "cap_z": "m", "wall_z": "m", "closure": "m", "theta_": "rad", "restrainer_indentation": "m"}
-
-
-def seismic_units(cols: dict) -> dict:
-    def unit(name):
-        if name in _UNITS:
-            return _UNITS[name]
-        if name.startswith("E_"):
-            return "J"
-        if name.endswith("_strain"):
-            return "-"
-        if name.endswith("_stress"):
-            return "Pa"
-        return "N"
-    return {name: unit(name) for name in cols}
