@@ -182,3 +182,45 @@ def test_a_unit_is_put_off_while_another_process_compiles_what_it_needs(tmp_path
         holder.wait(timeout=30)
     assert co.compile_now("test_a") is True and co.DONE == {"test_a", "test_b"}
     assert a(2.0) == 4.0 and b(2.0) == 6.0
+
+
+def test_a_unit_whose_needs_another_process_holds_is_waited_for_not_recursed_into(tmp_path, monkeypatch):
+    """compile_once of a unit whose needed unit another process is compiling (issue 34: a RecursionError
+    in 1.4 s, the loop over the shared units came back to the same unit through its needs): the free
+    unit is done meanwhile, then the needed one is waited for and loaded, then the unit itself."""
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    sig = types.float64(types.float64)
+    a, b, c = njit(cache=False)(_twice), njit(cache=False)(_thrice), njit(cache=False)(_twice)
+    monkeypatch.setattr(co, "UNITS", {})
+    monkeypatch.setattr(co, "NEEDS", {})
+    monkeypatch.setattr(co, "DONE", set())
+    co.unit("test_b", ((b, sig),))
+    co.unit("test_a", ((a, sig),), needs=("test_b",))
+    co.unit("test_c", ((c, sig),))
+    holder = _hold(tmp_path / ".test_b.lock", 2.0)
+    try:
+        t0 = time.perf_counter()
+        co.compile_once("test_a", "test_c")
+        waited = time.perf_counter() - t0
+    finally:
+        holder.wait(timeout=30)
+    assert waited > 1.0 and co.DONE == {"test_a", "test_b", "test_c"}
+    assert a(2.0) == 4.0 and b(2.0) == 6.0 and c(1.0) == 2.0
+
+
+@pytest.mark.slow
+def test_a_generic_seismic_run_waits_for_a_compile_lock_another_process_holds(tmp_path):
+    """Two real processes on a cold cache: one holds the lock of a unit the evaluation needs; the
+    generic seismic run compiles what it can, waits, then runs (exit 0, no traceback)."""
+    cache = tmp_path / "numba"
+    cache.mkdir()
+    holder = _hold(cache / ".dynamics.lock", 8.0)
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache), "NSD_EVALUATOR": "generic"}
+    try:
+        p = subprocess.run([sys.executable, "-m", "nsd_cli.main", "seismic", "--ground",
+                            "harmonic:amplitude=1,frequency=2,duration=0.2", "--out", str(tmp_path / "out")],
+                           env=env, capture_output=True, text=True, timeout=900)
+    finally:
+        holder.wait(timeout=60)
+    assert p.returncode == 0 and "Traceback" not in p.stderr, p.stderr[-2000:]
+    assert (tmp_path / "out" / "seismic.csv").is_file()

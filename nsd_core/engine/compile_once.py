@@ -114,10 +114,16 @@ def unit(name: str, kernels, lock: str | None = None, shared: bool = True, needs
 
 def _compile_unit(name: str, block: bool) -> bool:
     """Compile (or load) the unit under its lock; False when ``block`` is False and another process
-    holds the lock (it is compiling the unit now)."""
+    holds the lock of the unit or of one it needs (it is compiling that now). Without ``block`` this
+    never waits and never calls compile_once: a unit whose needs another process holds is put off
+    (before, it waited for them through compile_once, whose loop over the shared units came back
+    here for the same unit: a RecursionError while another process held a needed unit's lock)."""
     kernels, lock, _ = UNITS[name]
     if any(n not in DONE for n in NEEDS.get(name, ())):
-        compile_once(*NEEDS[name])   # loaded from the cache where another process compiled them
+        if block:
+            compile_once(*NEEDS[name])   # waits for the others, then loads what they compiled
+        elif not all(n in DONE or _compile_unit(n, block=False) for n in NEEDS[name]):
+            return False
     with _locked(lock, block) as held:
         if not held:
             return False
