@@ -295,7 +295,8 @@ def run_set(args) -> int:
         ratio = ("" if row.get("peak_u_ratio") is None else
                  f", peak |u| {row['peak_u'] * 1e3:.2f} / {row['peak_u_nodevice'] * 1e3:.2f} mm (ratio "
                  f"{row['peak_u_ratio']:.3f}), peak |a_abs| ratio {row['peak_a_abs_ratio']:.3f}")
-        print(f"  {row['set']}:{row['id']} {row['earthquake']}: {row['status']}{ratio}"
+        status = row["status"] + (" (outside the working range)" if row.get("outside_working_range") == "yes" else "")
+        print(f"  {row['set']}:{row['id']} {row['earthquake']}: {status}{ratio}"
               + (f" [{row['reason']}]" if row["reason"] else ""))
     print(f"{len(index['rows'])} records: " + ", ".join(f"{c[k]} {k}" for k in c if k == "ok" or c[k])
           + f"; {index['elapsed_this_run_s']:.1f} s; wrote {out / 'set.csv'} and {out / 'set.json'}")

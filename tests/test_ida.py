@@ -327,6 +327,7 @@ def test_drift_limit_ida_with_a_building(tmp_path):
                                                                       ("no", 0.45)]
     for r in rows:
         if r["status"] != "ok":   # the device spent (the rod's length): every limit counts as reached
+            assert r["status"] == "stopped", r
             assert (r["limit_reached"], r["why"]) == ("yes", "rod_reach"), r
             continue
         drift = float(r["peak_drift_ratio [-]"])

@@ -36,7 +36,9 @@ def _neg_log_likelihood(x, ln_im: np.ndarray, ln_cens: np.ndarray) -> float:
 def fit_lognormal(limit_im, censored_im=()) -> dict:
     """The fit (see the module docstring): {"median", "dispersion", "method", "n_reached", "n_censored",
     "log_likelihood", "baker2015": {"median", "dispersion"}} with median/dispersion None (and a
-    "note") where the data cannot determine them (fewer than two reached records, or all equal)."""
+    "note") where the data cannot determine them: fewer than two reached records, or the reached
+    records all at one level with no censored record above it (with one above, the fit is the
+    likelihood's maximum, which is then finite)."""
     ln_im = np.log(np.asarray(limit_im, dtype=float))
     ln_c = np.log(np.asarray(censored_im, dtype=float))
     if np.any(~np.isfinite(ln_im)) or np.any(~np.isfinite(ln_c)):
@@ -45,11 +47,19 @@ def fit_lognormal(limit_im, censored_im=()) -> dict:
            "dispersion": None, "log_likelihood": None, "baker2015": {"median": None, "dispersion": None}}
     if ln_im.size >= 2:
         out["baker2015"] = {"median": float(np.exp(np.mean(ln_im))), "dispersion": float(np.std(ln_im, ddof=1))}
-    if ln_im.size < 2 or np.ptp(ln_im) == 0.0:
-        out["note"] = ("fewer than two records reached the limit: median and dispersion undetermined"
-                       if ln_im.size < 2 else "every record reached the limit at the same level: dispersion 0")
+    if ln_im.size < 2:
+        out["note"] = (f"{'no record' if ln_im.size == 0 else 'one record'} reached the limit (fewer than two): "
+                       "median and dispersion undetermined")
         return out
     mu0, s0 = float(np.mean(ln_im)), float(np.std(ln_im))
+    if s0 == 0.0 and not np.any(ln_c > mu0):
+        # every reached record at one level, and no record known to survive above it: the likelihood
+        # grows without bound as the dispersion goes to 0
+        out["note"] = (f"the {ln_im.size} records that reached the limit all reached it at the same level "
+                       f"(IM = {math.exp(mu0):.4g} m/s^2) and no record is known to survive above it: "
+                       "median and dispersion undetermined")
+        return out
+    s0 = s0 or 0.3  # a start for the censored records to resolve (their levels lie above the common level)
     if ln_c.size == 0:  # the closed form of the maximum
         mu, beta = mu0, s0
     else:

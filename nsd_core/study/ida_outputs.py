@@ -14,7 +14,7 @@ import io
 
 from nsd_core.device.results import atomic_write_json, atomic_write_text
 from nsd_core.study.fragility import fit_lognormal
-from nsd_core.study.ida import Trace, trace_result
+from nsd_core.study.ida import SPENT, Trace, trace_result
 from nsd_core.study.seismic_set import peak_drift_ratio, worst_building_peak
 from nsd_core.study.store import Store
 
@@ -35,6 +35,15 @@ def _cell(v) -> str:
     return str(v)
 
 
+def row_status(rec: dict) -> str:
+    """ida.csv's status of a stored run: ``ok`` (the whole record ran), ``stopped`` (the device was
+    spent, the rod's reach or a wire's validity: the limit is reached), ``failed`` (a solver failure:
+    the run cannot tell)."""
+    if rec["status"] == "ok":
+        return "ok"
+    return "stopped" if (rec.get("metrics") or {}).get("reason") in SPENT else "failed"
+
+
 def ida_rows(traces: list[Trace], store: Store) -> list[dict]:
     """One row per run, by record, configuration and level."""
     rows = []
@@ -44,7 +53,7 @@ def ida_rows(traces: list[Trace], store: Store) -> list[dict]:
             row = {"set": tr.common["set"], "record": tr.record, "device": "yes" if tr.device else "no",
                    "order": order, "im": level, "scale": rec["design"]["ground"]["scale"],
                    "limit_reached": {True: "yes", False: "no", None: "unknown"}[reached], "why": why,
-                   "status": rec["status"], "key": key}
+                   "status": row_status(rec), "key": key}
             m = rec.get("metrics") or {}
             if rec["status"] == "ok":
                 row.update(peak_u=m["peak_displacement"]["value"], peak_a_abs=m["peak_absolute_acceleration"]["value"],

@@ -344,5 +344,13 @@ def _row(set_: str, rid: int, group: dict, recs: dict, peers: list[str]) -> tupl
         row["peak_drift_ratio_ratio"] = row["peak_drift_ratio"] / max(row["peak_drift_ratio_nodevice"], 1e-300)
     residuals = [s["energy"]["relative_residual"] for s in (s_dev, s_nod) if s]
     row["energy_residual"] = max(residuals) if residuals else None
+    if s_dev and s_dev["outside_working_range"]:  # complete, but not in the device's working range
+        rod = {p["name"]: p["value"] for p in s_dev.get("params") or []}.get("rod_length")
+        reasons.append(f"device: outside the working range (the ropes went slack; peak |u| "
+                       f"{s_dev['peak_displacement']['value'] * 1e3:.3g} mm"
+                       + (f" of the {rod * 1e3:.3g} mm rod)" if rod else ")"))
+    for s, name in ((s_dev, "device"), (s_nod, "nodevice")):
+        if s and s.get("peaks_at_last_sample"):
+            reasons.append(f"{name}: {', '.join(s['peaks_at_last_sample'])} at the last sample")
     row["status"], row["reason"] = worst, "; ".join(reasons)
     return row, entry
