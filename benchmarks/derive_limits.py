@@ -3,7 +3,7 @@
     nsd compare --out out/derive                     # runs (or resumes) the default cases
     python benchmarks/derive_limits.py out/derive    # prints the tables; --write replaces them
     python benchmarks/derive_limits.py out/strict --cases comparisons/cases_strict.toml \\
-        --write comparisons/tolerances_strict.toml  # the strict profile, the same way
+        --write comparisons/limits_regression_strict.toml  # the strict profile, the same way
 
 Rule. Every gated value of the run is an engine's error against the converged reference (the
 in-house engine at rtol 1e-10, comparisons/reference.py). The reference's own error on the same
@@ -190,8 +190,8 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("out", help="the --out folder of an nsd compare run (its results.json and runs)")
     ap.add_argument("--cases", default=None, help="the case file of that run (default: comparisons/cases.toml)")
-    ap.add_argument("--write", nargs="?", const=str(ROOT / "comparisons" / "tolerances.toml"), default=None,
-                    help="replace the derived tables of this tolerance file (default: comparisons/tolerances.toml)")
+    ap.add_argument("--write", nargs="?", const=str(ROOT / "comparisons" / "limits_regression.toml"), default=None,
+                    help="replace the derived tables of this tolerance file (default: comparisons/limits_regression.toml)")
     a = ap.parse_args(argv)
     out = Path(a.out)
     summary = json.loads((out / "results.json").read_text())

@@ -14,8 +14,12 @@ HERE = Path(__file__).resolve().parent
 DEFAULT_CASES = HERE / "cases.toml"
 DEFAULT_TOLERANCES = HERE / "tolerances.toml"
 # nsd compare --profile: (case file, tolerance file)
+# default and strict: the estimated rule (comparisons/verdict.py) on the default and on finer peer steps;
+# regression: the fixed limits derived on the nominal device (comparisons/limits_regression*.toml)
 PROFILES = {"default": (DEFAULT_CASES, DEFAULT_TOLERANCES),
-            "strict": (HERE / "cases_strict.toml", HERE / "tolerances_strict.toml")}
+            "strict": (HERE / "cases_strict.toml", DEFAULT_TOLERANCES),
+            "regression": (DEFAULT_CASES, HERE / "limits_regression.toml"),
+            "regression-strict": (HERE / "cases_strict.toml", HERE / "limits_regression_strict.toml")}
 
 METRICS = {  # name -> (unit, description)
     "max_dF_rel": ("-", "max |F - F_ref| / max |F_ref|, F the force vector (F_x, F_y)"),
@@ -402,6 +406,7 @@ class Limits(dict):
     nothing is dropped silently); ``engines`` holds overrides per engine and per engine and case, and
     ``limit(engine, case, metric)`` takes the most specific one."""
     defaulted: tuple[str, ...] = ()
+    rule = None   # comparisons.verdict.Rule for a file of engineering tolerances; None: fixed limits
 
     def __init__(self, *args, engines: dict[str, dict] | None = None, derived: dict | None = None):
         super().__init__(*args)
@@ -437,12 +442,48 @@ def _engine_limits(limits: dict) -> dict[str, dict]:
     return engines
 
 
+def _load_engineering(data: dict, what: str) -> Limits:
+    """[verdict] k, beta and [engineering] metric = tolerance: the rule of comparisons/verdict.py. A
+    metric the file leaves out takes the rule's default (named in ``defaulted``)."""
+    from comparisons.verdict import BETA, ENGINEERING, K, Rule
+    extra = sorted(set(data) - {"engineering", "verdict"})
+    if extra:
+        raise ParameterError(f"{what}: {extra[0]!r} beside [engineering] and [verdict]; allowed: those two "
+                             "(fixed [limits] are a file of their own: the regression profile)")
+    verdict = _table("verdict", data.get("verdict", {}))
+    for k in verdict:
+        if k not in ("rule", "k", "beta"):
+            raise ParameterError(f"{what}: verdict.{k}: unknown; allowed: rule, k, beta")
+    if verdict.get("rule", "estimated") != "estimated":
+        raise ParameterError(f"{what}: verdict.rule = {verdict['rule']!r}: allowed: \"estimated\"")
+    k = _number("verdict.k", verdict.get("k", K))
+    beta = _number("verdict.beta", verdict.get("beta", BETA), positive=False)
+    if not (1.0 <= k <= 100.0):
+        raise ParameterError(f"{what}: verdict.k = {k!r}: allowed: 1 to 100 (the margin over the estimated error)")
+    if not (0.0 <= beta <= 1.0):
+        raise ParameterError(f"{what}: verdict.beta = {beta!r}: allowed: 0 to 1")
+    eng = _table("engineering", data.get("engineering", {}))
+    for m, v in eng.items():
+        if m not in ENGINEERING:
+            raise ParameterError(f"{what}: engineering.{m}: unknown metric; allowed: {', '.join(ENGINEERING)}")
+        if not (isinstance(v, (int, float)) and not isinstance(v, bool) and 0.0 < float(v) <= 1.0):
+            raise ParameterError(f"{what}: engineering.{m} = {v!r}: allowed: a number in (0, 1] (a fraction of the "
+                                 "quantity's peak; m for closure_max and tracking_error)")
+    rule = Rule({m: float(v) for m, v in eng.items()}, k=k, beta=beta)
+    out = Limits(rule.engineering)
+    out.rule = rule
+    out.defaulted = tuple(m for m in ENGINEERING if m not in eng)
+    return out
+
+
 def load_tolerances(path: str | Path | None = None) -> Limits:
     """[limits] metric = value (or bare metric = value lines), optionally per engine
     [limits.ENGINE] and per engine and case [limits.ENGINE.case."CASE"] (the most specific wins)."""
     what = "--tolerances"
     data = _read(Path(path or DEFAULT_TOLERANCES), what)
     derived = {}
+    if "engineering" in data or "verdict" in data:
+        return _load_engineering(data, what)
     if "limits" in data:
         extra = sorted(set(data) - {"limits", "derived"})
         if extra:
@@ -458,7 +499,8 @@ def load_tolerances(path: str | Path | None = None) -> Limits:
                  engines=_engine_limits(limits), derived=derived)
     missing = [k for k in METRICS if k not in out]
     if missing:
-        defaults = load_tolerances(DEFAULT_TOLERANCES) if path and Path(path) != DEFAULT_TOLERANCES else {}
+        regression = HERE / "limits_regression.toml"   # a fixed-limit file's defaults are the regression profile's
+        defaults = load_tolerances(regression) if path and Path(path) != regression else {}
         for k in missing:
             if k in defaults:
                 out[k] = defaults[k]

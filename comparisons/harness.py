@@ -28,6 +28,11 @@ from comparisons.convergence import convergence_study
 from comparisons.metrics import own_metrics, pair_metrics
 from comparisons.energy import energy_balance_rel
 from comparisons.reference import CONVERGED, CONVERGED_SETTINGS, order_labels, order_rows, run_spec, version_warnings, warn
+from comparisons.judge import judge_case
+from comparisons.verdict import estimate_labels
+
+LIMITS_TEXT = ("PASS means every gated metric is within the tolerance file's fixed limits (a regression "
+               "profile: limits derived on one device tell nothing of another)")
 from nsd_core.device.geometry import device_geometry
 from nsd_core.numba_cache import source_fingerprint
 
@@ -114,8 +119,11 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
     for line in warnings:
         warn(line)
     by_name = {c.name: c for c in cases}
+    rule = getattr(tolerances, "rule", None)   # None: the regression profile's fixed limits
     extra = [(c, CONVERGED) for c in cases] + [(by_name[n], lab) for n, lab in order_labels(order, engines)
                                                 if n in by_name]
+    if rule is not None:   # each peer at h/2 and the reference's own check: the engines' error estimates
+        extra += [j for j in estimate_labels(cases, engines) if j not in extra]
     jobs = [(c, e) for c in cases for e in engines] + extra
     # longest first: seismic runs cost ~10x a drive run per model second (loaded 2-core machine)
     jobs.sort(key=lambda j: -_cost(j[1]) * _model_time(j[0]) * (10.0 if isinstance(j[0], SeismicCase) else 1.0))
@@ -194,20 +202,36 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
                 keep(case, engine, job)
             warmup = pool.startup.summary()   # each worker's spawn and warm-up, before its first job
     summaries = {c: {**reference_runs[c], **runs[c]} for c in runs}
-    metrics = _metrics(cases, engines, tolerances, summaries, results)
+    verdicts: dict[str, dict] = {}
+    if rule is None:
+        metrics = _metrics(cases, engines, tolerances, summaries, results)
+    else:
+        metrics = []
+        for c in cases:
+            rows, verdicts[c.name] = judge_case(c, engines, results, summaries[c.name], rule)
+            metrics += rows
     order_evidence = {}
     if order:
         rows, order_evidence = _order_rows(order, engines, by_name, results, tolerances)
+        for r in rows:   # under the estimated rule the observed order is evidence, each case has its own
+            r["gated"] = r["gated"] and rule is None
         metrics += rows
-    failed_engines = [(c, e) for c in runs for e, r in summaries[c].items() if r["status"] != "ok"]
+    failed_engines = [(c, e) for c in runs for e, r in summaries[c].items()
+                      if r["status"] != "ok" and (rule is None or e in engines or e == CONVERGED)]
     failed_metrics = [m for m in metrics if m["gated"] and not m["pass"]]
     nothing_gated = not any(m["gated"] for m in metrics)  # never a vacuous PASS
     exit_code = 3 if failed_engines or nothing_gated else (1 if failed_metrics else 0)
+    if rule is None:
+        failures = [f"{m['case']}: {m['engine']} {m['metric']} = {m['value']:.3g} > {m['limit']:.3g}"
+                    for m in failed_metrics]
+    else:
+        failures = [f"{c}: {e} {v['text']}" for c, per in verdicts.items() for e, v in per.items() if not v["pass"]]
     summary = {
         "verdict": {0: "PASS", 1: "FAIL", 3: "ERROR"}[exit_code], "exit_code": exit_code,
-        "failures": [f"{m['case']}: {m['engine']} {m['metric']} = {m['value']:.3g} > {m['limit']:.3g}"
-                     for m in failed_metrics] + [f"{c}: {e} failed: {summaries[c][e]['message']}" for c, e in failed_engines]
+        "failures": failures + [f"{c}: {e} failed: {summaries[c][e]['message']}" for c, e in failed_engines]
         + (["nothing was gated: no metric of the tolerance file was measured"] if nothing_gated else []),
+        "rule": rule.describe() if rule is not None else {"name": "limits", "text": LIMITS_TEXT},
+        "verdicts": verdicts,
         "date": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds"), "git_revision": git_revision(),
         "reference": REFERENCE, "engines": engines,
         "cases": [c.describe() for c in cases if not isinstance(c, SeismicCase)],

@@ -22,6 +22,7 @@ CONVERGED = "converged"
 CONVERGED_SETTINGS = {"method": "DOP853", "rtol": 1e-10, "atol": 1e-12, "max_step": 1e-3}
 # the reference's own error is measured against this (derive_limits; the floor of every limit)
 CHECK_SETTINGS = {**CONVERGED_SETTINGS, "rtol": 1e-11, "atol": 1e-13}
+CHECK = "converged_check"   # the run label of the reference's own check (its error estimate)
 HALVED = re.compile(r"([a-z]+)_h(\d+)")
 ORDER_METRIC = "max_dF_rel"   # the error whose fall with the step gives the observed order
 ORDER_DIVISORS = (2, 4)       # the step halved twice
@@ -32,18 +33,24 @@ def run_spec(case, label: str, order: dict | None = None) -> tuple[str, object, 
     runs on the case's nominal parameters (engine_params change one engine's own model only)."""
     if label == CONVERGED:
         return REFERENCE, case.params, dict(CONVERGED_SETTINGS)
+    if label == CHECK:
+        return REFERENCE, case.params, dict(CHECK_SETTINGS)
     m = HALVED.fullmatch(label)
     if m:
         engine, div = m.group(1), int(m.group(2))
-        return engine, case.params_for(engine), halved_settings(case, engine, order[engine]["setting"], div)
+        return engine, case.params_for(engine), halved_settings(case, engine, div)
     return label, case.params_for(label), case.settings.get(label, {})
 
 
-def halved_settings(case, engine: str, setting: str, div: int) -> dict:
-    """The case's settings of ``engine`` with ``setting`` (a step) divided by ``div``."""
+def halved_settings(case, engine: str, div: int) -> dict:
+    """The case's settings of ``engine`` with its step (and every cap on it) divided by ``div``."""
+    from comparisons.config import SeismicCase
     from comparisons.engines import get_engine
-    s = {**get_engine(engine).default_settings, **case.settings.get(engine, {})}
-    return {**case.settings.get(engine, {}), setting: s[setting] / div}
+    from comparisons.estimate import refined_settings
+    eng = get_engine(engine)
+    own = case.settings.get(engine, {})
+    defaults = eng.seismic_default_settings if isinstance(case, SeismicCase) else eng.default_settings
+    return refined_settings(engine, {**defaults, **own}, own, div)
 
 
 def order_labels(order: dict | None, engines: list[str]) -> list[tuple[str, str]]:

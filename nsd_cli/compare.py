@@ -102,6 +102,9 @@ def check_settings(cases, engines, convergence=None) -> None:
 
 
 def format_table(summary: dict) -> str:
+    if summary.get("rule", {}).get("name") == "estimated":
+        from comparisons.report_text import format_estimated
+        return format_estimated(summary)
     lines = [f"{'case':16s} {'engine':14s} {'vs':14s} {'metric':18s} {'value':>11s} {'limit':>11s}  verdict"]
     defaulted = set(summary.get("tolerances_defaulted", ()))
     for m in summary["metrics"]:
@@ -184,6 +187,7 @@ def run(args) -> int:
               f"gated against the converged reference (in-house {summary['converged_reference']['settings']})")
     for line in summary["failures"]:
         print(f"FAILED {line}")
+    print(summary["rule"]["text"])
     print(f"verdict: {summary['verdict']} ({summary['total_wall_time']:.1f} s); wrote {out / 'results.json'}")
     if args.report:
         from reports.build import build_report

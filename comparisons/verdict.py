@@ -1,0 +1,233 @@
+"""The gate's rule: two verdicts per case and engine, from the engines' own error estimates.
+
+- **consistent**: the engine's difference from the converged reference is within k x (its own
+  estimated numerical error + the reference's own error), metric by metric. Otherwise it *disagrees
+  beyond numerical error*: the engines differ about the model (a modelling or implementation
+  difference), whatever their steps.
+- **accurate enough**: the engine's error, the larger of its own estimate and its difference from
+  the converged reference, is within the engineering tolerance of each metric (the tolerance file's
+  ``[engineering]`` table: a fraction of the reference's peak force, peak displacement, ...).
+  Otherwise it is *not converged at these settings*, and the step its estimate asks for is given.
+
+PASS = every engine consistent and accurate enough on every case. The estimates are made in the run
+(``comparisons.estimate``): nothing here was derived on the nominal device, so a variant of the
+device, a user's case file or another mechanism gets a verdict of the same meaning.
+
+A scalar difference (a peak, the loop work) can cancel by chance between the h and h/2 runs; its
+estimate is at least ``beta`` x the estimate of the max-norm difference of the same quantity
+(``SCALAR_OF``). A floor below which differences are round-off (``FLOOR``) keeps two equal runs
+from failing on 0 <= 0.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from comparisons.engines import REFERENCE, get_engine
+from comparisons.estimate import (STEP_SETTING, nominal_order, observed_order, richardson_factor, step_needed,
+                                  step_ratio)
+
+CONVERGED, CHECK = "converged", "converged_check"
+FLOOR = 1e-12                      # relative differences below this are round-off
+OWN = ("closure_max", "tracking_error", "energy_balance_rel", "energy_residual_rel")   # an engine's own checks
+# scalar differences that can cancel by chance -> the max-norm difference that bounds their estimate
+SCALAR_OF = {"peak_force_rel": "max_dF_rel", "loop_area_rel": "max_dF_rel", "peak_u_rel": "max_du_rel",
+             "peak_a_rel": "max_da_rel"}
+PRIMARY = {"drive": "max_dF_rel", "seismic": "max_du_rel"}   # the metric whose fall gives the observed order
+# the engineering tolerance's default (fraction of the quantity's peak; m for closure and tracking)
+ENGINEERING = {"max_dF_rel": 1e-3, "rms_dF_rel": 1e-3, "loop_area_rel": 1e-3, "peak_force_rel": 1e-3,
+               "region_shift_rel": 2e-2, "closure_max": 1e-6, "tracking_error": 1e-6, "energy_balance_rel": 1e-2,
+               "max_du_rel": 1e-3, "max_dF_device_rel": 1e-3, "peak_u_rel": 1e-3, "peak_a_rel": 1e-3,
+               "energy_residual_rel": 1e-2, "max_dfloor_rel": 1e-3, "max_ddrift_rel": 1e-3, "max_dfloor_a_rel": 1e-3}
+K, BETA = 3.0, 0.1
+
+
+def peer_label(engine: str) -> str:
+    """The run label of a peer's step halved (the second run of its estimate)."""
+    return f"{engine}_h2"
+
+
+def estimate_labels(cases, engines) -> list[tuple]:
+    """The extra runs the estimates need: each peer at h/2 on each case, the reference's check."""
+    peers = [e for e in engines if e in STEP_SETTING]
+    return [(c, peer_label(e)) for c in cases for e in peers] + [(c, CHECK) for c in cases]
+
+
+class Rule:
+    """The rule's constants as the tolerance file states them (``[engineering]``, ``[verdict]``)."""
+
+    def __init__(self, engineering: dict | None = None, k: float = K, beta: float = BETA):
+        self.engineering = {**ENGINEERING, **(engineering or {})}
+        self.k, self.beta = float(k), float(beta)
+
+    def describe(self) -> dict:
+        return {"name": "estimated", "k": self.k, "beta": self.beta, "engineering": dict(self.engineering),
+                "text": pass_sentence(self.k)}
+
+
+def pass_sentence(k: float = K) -> str:
+    """What PASS means, in one sentence (page 1 of the report, the command's last lines)."""
+    return (f"PASS means every engine agrees with the converged in-house reference to within {k:g} x the "
+            "numerical error estimated from its own runs (so any remaining difference is numerical, not a "
+            "difference in the model), and that error is within the engineering tolerance of every metric.")
+
+
+def _finite(x) -> float:
+    return float(x) if x is not None and math.isfinite(float(x)) else math.inf
+
+
+def case_verdicts(case, kind: str, engines: list[str], values: dict, estimates: dict, ref_error: dict,
+                  scales: dict, evidence: dict, rule: Rule) -> tuple[list[dict], dict]:
+    """Rows (one per engine and metric) and verdicts (one per engine) of one case.
+
+    values[e]: metric -> e's difference from the converged reference (own checks: their value);
+    estimates[e]: metric -> e's estimated error (None: not estimated); ref_error: metric -> the
+    reference's own error; scales: metric -> (scale, unit) to state a tolerance in units;
+    evidence[e]: step, order, observed order, ratio, setting (for the step needed)."""
+    rows, verdicts = [], {}
+    for e in engines:
+        if e not in values:
+            continue
+        ev = evidence.get(e, {})
+        erows = []
+        for metric, value in values[e].items():
+            if metric not in rule.engineering:
+                continue
+            tol = rule.engineering[metric]
+            value = _finite(value)
+            if metric in OWN:
+                erows.append(_row(case, e, None, metric, value, None, None, None, tol, None, value <= tol, scales))
+                continue
+            est = estimates.get(e, {}).get(metric)
+            ref = ref_error.get(metric, 0.0) or 0.0
+            est = _finite(est) if est is not None else math.inf
+            bound = rule.k * (est + ref) + FLOOR
+            err = max(est, value)
+            erows.append(_row(case, e, CONVERGED, metric, value, est, ref, bound, tol, value <= bound, err <= tol,
+                              scales))
+        rows += erows
+        verdicts[e] = _verdict(e, erows, ev, rule)
+    return rows, verdicts
+
+
+def _row(case, engine, reference, metric, value, est, ref, bound, tol, consistent, accurate, scales) -> dict:
+    scale, unit = scales.get(metric, (None, None))
+    return {"case": case, "engine": engine, "reference": reference, "metric": metric, "value": value,
+            "estimate": est, "reference_error": ref, "bound": bound, "tolerance": tol,
+            "tolerance_abs": tol * scale if scale else None, "scale": scale, "unit": unit,
+            "consistent": consistent, "accurate": bool(accurate),
+            "limit": bound if bound is not None else tol, "limit_source": "estimate" if bound is not None else "tolerance",
+            "pass": bool((consistent is not False) and accurate), "gated": True}
+
+
+def _verdict(engine: str, rows: list[dict], ev: dict, rule: Rule) -> dict:
+    """One engine's verdict on one case, in words."""
+    incons = [r for r in rows if r["consistent"] is False]
+    inacc = [r for r in rows if not r["accurate"]]
+    out = {"consistent": not incons, "accurate": not inacc, "pass": not incons and not inacc,
+           "order": ev.get("order"), "observed_order": ev.get("observed_order"), "step": ev.get("step"),
+           "setting": ev.get("setting"), "k": rule.k, "needs": None, "uncertain": None}
+    parts = []
+    missing = ev.get("note", "") if ev.get("note", "").startswith("no error estimate") else ""
+    if missing:
+        incons, inacc = [], [r for r in rows if r["estimate"] is None or not math.isfinite(r["estimate"] or 0.0)
+                             or not r["accurate"]]
+        out.update(consistent=None, accurate=False, **{"pass": False})
+        parts.append(missing)
+    if incons:
+        r = max(incons, key=lambda r: r["value"] / r["bound"] if r["bound"] else math.inf)
+        ratio = r["value"] / r["bound"]
+        out["worst_consistency"] = {"metric": r["metric"], "ratio": ratio}
+        parts.append(f"disagrees beyond numerical error: {r['metric']} = {r['value']:.3g} is {ratio:.3g}x its bound "
+                     f"{rule.k:g} x (estimated error {r['estimate']:.2g} + reference's {r['reference_error']:.2g})")
+    if inacc and not missing:
+        r = max(inacc, key=lambda r: max(r["estimate"] or 0.0, r["value"]) / r["tolerance"])
+        err = max(r["estimate"] or 0.0, r["value"])
+        text = f"not converged at these settings: {r['metric']} error {err:.3g} > tolerance {r['tolerance']:.3g}"
+        if r["tolerance_abs"] is not None:
+            text += f" ({_units(err * r['scale'], r['unit'])} > {_units(r['tolerance_abs'], r['unit'])})"
+        if ev.get("setting") and ev.get("step") and r["metric"] not in OWN:
+            need = step_needed(ev["step"], err, r["tolerance"], ev["order"])
+            out["needs"] = {ev["setting"]: need}
+            text += f"; needs {ev['setting']} <= {need:.3g} s"
+        elif engine == REFERENCE and r["metric"] not in OWN:
+            text += "; needs a smaller rtol"
+        parts.append(text)
+    p_obs, p = ev.get("observed_order"), ev.get("order")
+    if not incons and p and p_obs is not None and math.isfinite(p_obs) and p_obs < p - 1.0 \
+            and ev.get("primary_error", 0.0) > FLOOR * 1e3:
+        out["uncertain"] = (f"estimate uncertain: observed order {p_obs:.2f} against the assumed {p:g} "
+                            "(the steps may not be asymptotic; --refine checks at a finer step)")
+    if not parts:
+        rs = [r for r in rows if r["bound"]]
+        worst = max(rs, key=lambda r: r["value"] / r["bound"]) if rs else None
+        parts.append("consistent and accurate enough" + (
+            f" (largest: {worst['metric']} at {worst['value'] / worst['bound']:.2g} of its bound)" if worst else ""))
+    if engine == REFERENCE:
+        parts.append("its estimate is its difference from the converged reference (the same code at rtol 1e-10), "
+                     "so it is consistent by construction")
+    out["text"] = "; ".join(parts + ([out["uncertain"]] if out["uncertain"] else []))
+    return out
+
+
+def _units(value: float, unit: str) -> str:
+    if unit == "m":
+        return f"{value * 1e3:.3g} mm"
+    return f"{value:.3g} {unit}"
+
+
+def peer_evidence(engine: str, case_settings: dict, stats_h: dict, stats_h2: dict, e_h: float, e_h2: float,
+                  seismic: bool) -> dict:
+    """The step, order and observed order of a peer's two runs on one case."""
+    eng = get_engine(engine)
+    merged = {**(eng.seismic_default_settings if seismic else eng.default_settings), **(case_settings or {})}
+    p = nominal_order(engine, merged)
+    ratio = step_ratio(stats_h, stats_h2)
+    setting = STEP_SETTING[engine]
+    step = stats_h.get(setting) or merged[setting]
+    return {"order": p, "ratio": ratio, "factor": richardson_factor(p, ratio), "setting": setting, "step": float(step),
+            "observed_order": observed_order(e_h, e_h2, ratio), "primary_error": e_h}
+
+
+def estimate_from_pair(diff_h_h2: dict, factor: float, beta: float) -> dict:
+    """Each metric's estimated error from its difference between the h and h/2 runs; a scalar one at
+    least beta x the estimate of the max-norm difference it derives from."""
+    out = {k: factor * _finite(v) for k, v in diff_h_h2.items()}
+    for k, base in SCALAR_OF.items():
+        if k in out and base in out:
+            out[k] = max(out[k], beta * out[base])
+    return out
+
+
+def drive_scales(ref, frequency: float, amplitude: float) -> dict:
+    """metric -> (the quantity's peak in the reference, unit): the tolerance in units."""
+    from comparisons.metrics import _work
+    from nsd_core.device.cycle import phase_resample
+    F = np.column_stack([phase_resample(ref, frequency, c) for c in ("F_x", "F_y")])
+    peak = float(np.max(np.linalg.norm(F, axis=1)))
+    work = abs(_work(ref, frequency))
+    return {"max_dF_rel": (peak, "N"), "rms_dF_rel": (peak, "N"), "peak_force_rel": (peak, "N"),
+            "loop_area_rel": (work, "J"), "region_shift_rel": (amplitude, "m"),
+            "closure_max": (1.0, "m"), "tracking_error": (1.0, "m"), "energy_balance_rel": (work, "J")}
+
+
+def seismic_scales(ref) -> dict:
+    """metric -> (the quantity's peak in the reference, unit) for a seismic case."""
+    def peak(a, b):
+        return float(np.max(np.hypot(ref[a], ref[b])))
+    out = {"max_du_rel": (peak("x", "y"), "m"), "peak_u_rel": (peak("x", "y"), "m"),
+           "max_dF_device_rel": (peak("device_Fx", "device_Fy"), "N"),
+           "peak_a_rel": (peak("ax_abs", "ay_abs"), "m/s^2"), "closure_max": (1.0, "m")}
+    if "E_input" in ref.columns:
+        out["energy_residual_rel"] = (float(np.max(np.abs(ref["E_input"]))), "J")
+    if "floor1_x" in ref.columns:
+        n = 1
+        while f"floor{n + 1}_x" in ref.columns:
+            n += 1
+        for key, (cx, cy, unit) in {"max_dfloor_rel": ("floor{}_x", "floor{}_y", "m"),
+                                    "max_ddrift_rel": ("drift{}_x", "drift{}_y", "m"),
+                                    "max_dfloor_a_rel": ("floor{}_ax_abs", "floor{}_ay_abs", "m/s^2")}.items():
+            # the largest floor's peak: the worst floor's relative difference is in units at most this large
+            out[key] = (max(peak(cx.format(i), cy.format(i)) for i in range(1, n + 1)), unit)
+    return out
