@@ -38,7 +38,14 @@ def tangent_stiffness(u: np.ndarray, F: np.ndarray) -> np.ndarray:
 
 
 def stiffness_regions(u: np.ndarray, k: np.ndarray, min_width: float) -> list[dict]:
-    """Runs of constant sign of k along u, runs narrower than min_width merged into neighbours."""
+    """Regions of one sign of the tangent stiffness k along an ascending u: runs of constant sign,
+    runs narrower than min_width (numerical noise) merged, the narrowest first, into its wider
+    neighbour. Each region's
+    ``mean_stiffness`` is k's mean over u in it (trapezoids; a sample where u does not advance, as at a
+    turning point, weighs nothing) and its ``sign`` is that mean's: after a merge the region is
+    labelled by its mean and neighbours of one sign are joined, until no region is narrower than
+    min_width (or one is left). Sign and mean therefore always agree ("+" for a mean >= 0)."""
+    u, k = np.asarray(u, float), np.asarray(k, float)
     sign = np.where(k >= 0, 1, -1)
     runs = []
     start = 0
@@ -46,27 +53,43 @@ def stiffness_regions(u: np.ndarray, k: np.ndarray, min_width: float) -> list[di
         if i == len(sign) or sign[i] != sign[start]:
             runs.append([start, i - 1, int(sign[start])])
             start = i
-    merged = True
-    while merged and len(runs) > 1:  # absorb slivers (numerical noise) into the neighbour
-        merged = False
-        for j, (a, b, s) in enumerate(runs):
-            if u[b] - u[a] < min_width:
-                k_into = j - 1 if j > 0 else j + 1
-                runs[k_into][0] = min(runs[k_into][0], a)
-                runs[k_into][1] = max(runs[k_into][1], b)
-                del runs[j]
-                merged = True
+    while True:
+        while True:  # label by the mean, join neighbours of one sign, until no two neighbours share one
+            for r in runs:
+                r[2] = 1 if _mean_over_u(u, k, r[0], r[1]) >= 0 else -1
+            out = [runs[0]]
+            for r in runs[1:]:
+                if r[2] == out[-1][2]:
+                    out[-1][1] = r[1]
+                else:
+                    out.append(r)
+            if len(out) == len(runs):
                 break
-        # join neighbours of equal sign
-        out = [runs[0]]
-        for r in runs[1:]:
-            if r[2] == out[-1][2]:
-                out[-1][1] = r[1]
-            else:
-                out.append(r)
-        runs = out
+            runs = out
+        slivers = [j for j, (a, b, _) in enumerate(runs) if u[b] - u[a] < min_width]
+        if not slivers or len(runs) == 1:
+            break
+        widths = [u[b] - u[a] for a, b, _ in runs]
+        j = min(slivers, key=lambda i: widths[i])  # the narrowest sliver into its wider neighbour
+        into = max((i for i in (j - 1, j + 1) if 0 <= i < len(runs)), key=lambda i: widths[i])
+        runs[into][0], runs[into][1] = min(runs[into][0], runs[j][0]), max(runs[into][1], runs[j][1])
+        del runs[j]
     return [{"from": float(u[a]), "to": float(u[b]), "sign": "+" if s > 0 else "-",
-             "mean_stiffness": float(np.mean(k[a:b + 1]))} for a, b, s in runs]
+             "mean_stiffness": _mean_over_u(u, k, a, b)} for a, b, s in runs]
+
+
+def _mean_over_u(u: np.ndarray, k: np.ndarray, a: int, b: int) -> float:
+    """The mean of k over u in samples a..b (trapezoids over the finite samples; a region of one
+    point, or where u does not advance: the samples' mean)."""
+    uu, kk = u[a:b + 1], k[a:b + 1]
+    ok = np.isfinite(kk)
+    uu, kk = uu[ok], kk[ok]
+    if len(kk) == 0:
+        return 0.0
+    width = uu[-1] - uu[0]
+    if len(kk) < 2 or not width > 0:
+        return float(np.mean(kk))
+    return float(np.sum(0.5 * (kk[1:] + kk[:-1]) * np.diff(uu)) / width)
 
 
 def events(result: RunResult) -> list[dict]:
