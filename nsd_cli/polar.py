@@ -1,4 +1,4 @@
-"""``nsd polar``: the direction study (issue 13). For n_w = n_r = n in --wires, versus the drive's
+"""``nsd polar``: the direction study. For n_w = n_r = n in --wires, versus the drive's
 azimuth over a full turn: X_max, K0, K_min, loop area and peak force at --amplitude (quasi-static,
 nsd_core.study.polar). Writes DIR/polar.json, DIR/polar.csv and DIR/polar.png.
 

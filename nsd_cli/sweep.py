@@ -51,6 +51,19 @@ def scheduler_timeout(args) -> float:
     return lim.in_range("--scheduler-timeout", t, lim.SCHEDULER_TIMEOUT, "s")
 
 
+def start_scheduler_hint() -> str:
+    """How to start a Dask scheduler with what this Python has: the `dask` command beside it, or the
+    `[dask]` extra to install first (README, Quick start)."""
+    import importlib.util
+    import sys
+    from pathlib import Path
+    here = Path(sys.executable).parent / "dask"
+    if importlib.util.find_spec("distributed") is not None and here.exists():
+        return f"start one with `{here} scheduler` and its workers with `{here} worker tcp://HOST:PORT`"
+    return (f"Dask is not installed here: `{sys.executable} -m pip install -e '.[dask]'` from the repository "
+            "adds it (then `dask scheduler`, `dask worker tcp://HOST:PORT`)")
+
+
 def check_scheduler(address: str | None, timeout: float = 10.0) -> None:
     """--scheduler: tcp://HOST:PORT (or HOST:PORT) where a Dask scheduler answers, checked in at most
     2 x ``timeout`` seconds before anything is written: the connection, then the scheduler's own
@@ -68,8 +81,8 @@ def check_scheduler(address: str | None, timeout: float = 10.0) -> None:
         sock = socket.create_connection((host, int(m.group(2))), timeout=timeout)
     except (OSError, UnicodeError) as e:
         why = "no answer" if isinstance(e, socket.timeout) else (getattr(e, "strerror", None) or e)
-        raise ParameterError(f"--scheduler {address}: nothing answers there within {timeout:g} s ({why}); start "
-                             "`dask scheduler` first or leave --scheduler out for local workers") from None
+        raise ParameterError(f"--scheduler {address}: nothing answers there within {timeout:g} s ({why}); "
+                             f"{start_scheduler_hint()}, or leave --scheduler out for local workers") from None
     try:
         sock.settimeout(timeout)
         first = sock.recv(1, socket.MSG_PEEK)
