@@ -4,7 +4,7 @@ and without the device, on 2 local workers (issue 23, item 6):
     python benchmarks/bench_ida.py [--limit stroke=0.025] [--workers 2] [--records 1-14]
                                    [--out benchmarks/results/bench_ida.json]
 
-runs ``nsd ida --set nearfield-pulse --records 1-14 --limit stroke=0.025 --engines semirecursive
+runs ``nsd ida --record-set nearfield-pulse --records 1-14 --limit stroke=0.025 --engines semirecursive
 --workers 2 --out <fresh temporary folder>`` (the default hunt and fill; the cross-check engines left
 out: this times the IDA itself) in a child process after a warm-up child that loads the compiled
 engine from numba's cache, so no compilation is in the number. Recorded beside the wall seconds:
@@ -49,7 +49,7 @@ def main() -> None:
     subprocess.run([sys.executable, "-c", WARM], check=True, cwd=ROOT)  # numba's cache loaded/filled, untimed
     nsd = [sys.executable, "-m", "nsd_cli"]
     with tempfile.TemporaryDirectory(prefix="bench_ida_") as tmp:
-        cmd = ["ida", "--set", "nearfield-pulse", "--records", args.records, "--limit", args.limit,
+        cmd = ["ida", "--record-set", "nearfield-pulse", "--records", args.records, "--limit", args.limit,
                "--engines", "semirecursive", "--workers", args.workers, "--out", tmp] + args.extra.split()
         from benchmarks.measure import _git_commit
         commit = _git_commit()  # the code that runs

@@ -25,7 +25,7 @@ HUNT_FLAGS = ("start", "step", "max_runs", "resolution")
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--record-set", default=None, metavar="SET",
-                   help="farfield, nearfield, nearfield-pulse, nearfield-no-pulse (or --set SET, without '=')")
+                   help="the record set: farfield, nearfield, nearfield-pulse, nearfield-no-pulse")
     p.add_argument("--records", default=None, metavar="1,3,5-7", help="these records of the set only (default all)")
     p.add_argument("--measure", default="sa",
                    help="intensity measure: sa (5%%-damped Sa at the supports-alone period, geometric mean of "
@@ -60,10 +60,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--scheduler", default=None, help="address of a running Dask scheduler")
     p.add_argument("--retry-failed", action="store_true", help="run levels stored as failed again")
     add_param_arguments(p)
-    for action in p._actions:
-        if action.dest == "set":
-            action.metavar, action.help = "NAME=VALUE|SET", ("override one parameter (NAME=VALUE); or, without '=', "
-                                                             "the record set (as --record-set)")
     add_solver_arguments(p)
     p.add_argument("--out", required=True, help="output folder (resumable)")
 
@@ -75,12 +71,11 @@ def _options(args):
     from nsd_core.study.ida import parse_limit
     from nsd_core.study.intensity import MEASURES
     from nsd_core.study.seismic_set import parse_records
-    sets = [v for v in args.set if "=" not in v] + ([args.record_set] if args.record_set is not None else [])
-    args.set = [v for v in args.set if "=" in v]
-    if len(sets) != 1:
-        raise ParameterError(f"--set/--record-set {', '.join(sets) or '(none)'}: give exactly one record set; "
-                             f"allowed: {', '.join(SETS)}")
-    set_ = set_name(sets[0])
+    from nsd_cli.options import reject_record_set_in_set
+    reject_record_set_in_set(args.set)
+    if args.record_set is None:
+        raise ParameterError(f"--record-set: give the record set; allowed: {', '.join(SETS)}")
+    set_ = set_name(args.record_set)
     records = parse_records(args.records, set_)
     if args.measure not in MEASURES:
         raise ParameterError(f"--measure {args.measure!r}: unknown; allowed: {', '.join(MEASURES)}")

@@ -43,6 +43,15 @@ def add_param_arguments(p: argparse.ArgumentParser, what: str = "parameter overr
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="override one parameter (every name, unit and bound: nsd params)")
 
 
+def reject_record_set_in_set(values: list[str]) -> None:
+    """``--set`` is a parameter override (NAME=VALUE) in every command; a value without '=' (the record
+    set's old spelling) is pointed to --record-set in one line."""
+    for v in values:
+        if "=" not in v:
+            raise ParameterError(f"--set {v!r}: expected NAME=VALUE (a parameter override); a record set is "
+                                 f"--record-set {v}")
+
+
 def base_params(args) -> Params:
     """The parameter set that --params and --set describe (checked: exit 2 on bad input)."""
     return load_params(args.params, parse_set(args.set))

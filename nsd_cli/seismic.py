@@ -117,10 +117,8 @@ def ground_motion(args):
 def check_source(args) -> None:
     """Exactly one input: --record, --ground or --record-set. ``--set`` is a parameter override here as
     in every command; a value without '=' (the record set's spelling before --record-set) is pointed there."""
-    for v in args.set:
-        if "=" not in v:
-            raise ParameterError(f"--set {v!r}: expected NAME=VALUE (a parameter override); a record set is "
-                                 f"--record-set {v}")
+    from nsd_cli.options import reject_record_set_in_set
+    reject_record_set_in_set(args.set)
     if not (args.record or args.ground or args.record_set):
         raise ParameterError("input: give exactly one of --record SET:ID, --ground KIND:K=V,... or --record-set SET")
 

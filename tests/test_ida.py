@@ -141,7 +141,8 @@ BAD = [
     ["--limit", "drift=0.01", "--building", "stories=0"], ["--limit", "drift=0.01", "--building", "floors=3"],
     ["--limit", "restrainer=0.02"], ["--structure", "restrainer_gap=0.05"], ["--records", "99"],
     ["--records", "2-1"], ["--workers", "0"], ["--engines", "mujoco"], ["--engines", "bogus"],
-    ["--scheduler", "nowhere"], ["--set", "nowhere"], ["--record-set", "farfield"],
+    ["--scheduler", "nowhere"], ["--set", "nowhere"], ["--record-set", "nowhere"],
+    ["--set", "farfield"],   # the record set's old spelling: --set is a parameter override only
 ]
 
 
@@ -149,7 +150,7 @@ def _argv(extra):
     """nsd ida with a valid command line, the options in ``extra`` replacing or adding to it."""
     pairs = dict(zip(extra[::2], extra[1::2]))
     argv = ["ida"]
-    for k, v in {"--set": "nearfield-pulse", "--limit": "stroke=0.02", "--records": "1"}.items():
+    for k, v in {"--record-set": "nearfield-pulse", "--limit": "stroke=0.02", "--records": "1"}.items():
         argv += [k, pairs.pop(k, v)]
     return argv + [x for kv in pairs.items() for x in kv]
 
@@ -169,6 +170,16 @@ def test_bad_input_is_one_line_exit_2_nothing_written(extra, tmp_path, capsys):
     assert not out.exists()
 
 
+def test_set_without_equals_points_to_record_set(tmp_path, capsys):
+    """--set is a parameter (NAME=VALUE) only; the old record-set form is one line naming --record-set."""
+    from nsd_cli.main import main
+    code = main(["ida", "--set", "farfield", "--records", "1", "--limit", "stroke=0.02", "--out", str(tmp_path / "i")])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and err == ("nsd: error: --set 'farfield': expected NAME=VALUE (a parameter override); "
+                                 "a record set is --record-set farfield")
+    assert not (tmp_path / "i").exists()
+
+
 def _csv(path):
     with open(path) as f:
         return list(csv.DictReader(f))
@@ -182,7 +193,7 @@ def test_small_ida_on_one_record(tmp_path, capsys):
     linear solution."""
     from nsd_cli.main import main
     out = tmp_path / "ida"
-    argv = ["ida", "--set", "nearfield-pulse", "--records", "9", "--levels", "0.5,0.9", "--limit", "stroke=0.02",
+    argv = ["ida", "--record-set", "nearfield-pulse", "--records", "9", "--levels", "0.5,0.9", "--limit", "stroke=0.02",
             "--engines", "semirecursive", "--workers", "1", "--out", str(out)]
     assert main(argv) == 0
     assert sorted(p.name for p in out.glob("*.png")) == ["01_ida_curves.png", "02_fragility.png",
@@ -229,7 +240,7 @@ def test_restrainer_limit_on_one_record(tmp_path):
     from nsd_core.device.restrainer import default_restrainer
     gap = default_restrainer(Params(), default_structure()).gap
     out = tmp_path / "ida"
-    assert main(["ida", "--set", "nearfield-pulse", "--records", "9", "--levels", "0.5,1.0", "--limit", "restrainer",
+    assert main(["ida", "--record-set", "nearfield-pulse", "--records", "9", "--levels", "0.5,1.0", "--limit", "restrainer",
                  "--engines", "semirecursive", "--workers", "1", "--out", str(out)]) == 0
     rows = _csv(out / "ida.csv")
     assert [(r["device"], r["limit_reached"], r["why"]) for r in rows] == [
@@ -248,7 +259,7 @@ def test_ida_on_a_dask_cluster_stores_what_a_local_run_reuses(tmp_path, capsys):
     distributed = pytest.importorskip("distributed")
     from nsd_cli.main import main
     out = tmp_path / "ida"
-    argv = ["ida", "--set", "nearfield-pulse", "--records", "9", "--levels", "0.5", "--limit", "stroke=0.02",
+    argv = ["ida", "--record-set", "nearfield-pulse", "--records", "9", "--levels", "0.5", "--limit", "stroke=0.02",
             "--engines", "semirecursive", "--out", str(out)]
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   dashboard_address=None) as cluster:
@@ -319,7 +330,7 @@ def test_drift_limit_ida_with_a_building(tmp_path):
     from nsd_cli.main import main
     out = tmp_path / "ida"
     limit = 2e-4   # the isolated building's stories drift ~1e-4..3e-4 of their height at these levels
-    assert main(["ida", "--set", "nearfield-pulse", "--records", "9", "--levels", "0.2,0.45", "--limit",
+    assert main(["ida", "--record-set", "nearfield-pulse", "--records", "9", "--levels", "0.2,0.45", "--limit",
                  f"drift={limit}", "--building", "stories=3", "--engines", "semirecursive", "--workers", "1",
                  "--out", str(out)]) == 0
     rows = _csv(out / "ida.csv")
