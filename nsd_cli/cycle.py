@@ -1,4 +1,5 @@
-"""``nsd cycle``: one drive on the in-house model -> DIR/cycle.csv and DIR/summary.json."""
+"""``nsd cycle``: one drive on the in-house model -> DIR/cycle.csv, DIR/summary.json and the
+force-displacement loop DIR/01_cycle_loop.png (``nsd report --from DIR`` draws it as a PDF too)."""
 from __future__ import annotations
 
 import argparse
@@ -85,4 +86,6 @@ def run(args) -> int:
     if summary["outside_working_range"]:
         print("  WARNING: the ropes went slack: part of this cycle lies outside the working range")
     print(f"wrote {out / 'cycle.csv'} and {out / 'summary.json'}")
+    from reports.build import draw_study  # the force-displacement loop as a PNG into the same folder
+    draw_study(out)
     return 0

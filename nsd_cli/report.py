@@ -15,7 +15,7 @@ HELP = "write the validation report (PDF and PNGs) from a results folder"
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--from", dest="source", required=True, metavar="DIR",
-                   help="results folder written by nsd compare --out DIR or nsd seismic --out DIR")
+                   help="results folder written by nsd compare, seismic, ida, sweep, polar or cycle (--out DIR)")
     p.add_argument("--out", required=True, metavar="DIR2", help="folder for validation.pdf and the PNGs")
 
 

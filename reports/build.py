@@ -243,7 +243,7 @@ def _study_plan(root: Path) -> tuple[list[tuple[str, Callable]], str]:
 
 def source_kind(results_dir: str | Path) -> str:
     """compare (results.json), ida (ida.json), seismic (nsd seismic, single or --set), sweep (sweep.json),
-    polar (polar.json)."""
+    polar (polar.json), cycle (nsd cycle: cycle.csv and summary.json)."""
     from reports.seismic_report import is_seismic
     from reports.ida_pages import is_ida
     root = Path(results_dir)
@@ -257,6 +257,9 @@ def source_kind(results_dir: str | Path) -> str:
         return "polar"
     if (root / "sweep.json").is_file():
         return "sweep"
+    from reports.cycle_pages import is_cycle
+    if is_cycle(root):
+        return "cycle"
     return "compare"  # load() says what is missing
 
 
@@ -275,13 +278,18 @@ def source_plan(results_dir: str | Path) -> tuple[list[tuple[str, Callable]], st
     if kind in ("sweep", "polar"):
         plan, title = _study_plan(Path(results_dir))
         return plan, f"{title}  |  {time.strftime('%Y-%m-%d')}"
+    if kind == "cycle":
+        from reports.cycle_pages import cycle_plan
+        plan, title = cycle_plan(results_dir)
+        return plan, f"{title}  |  {time.strftime('%Y-%m-%d')}"
     data = load(results_dir)
     title = "NSD cross-validation report"
     return pages(data), f"{title}  |  {data.summary.get('date', '')}  |  revision {data.summary.get('git_revision', '?')}"
 
 
 def check_source(results_dir: str | Path) -> None:
-    """Read and check --from (an nsd compare, seismic, sweep or polar folder) before anything is written."""
+    """Read and check --from (an nsd compare, seismic, ida, sweep, polar or cycle folder) before anything is
+    written."""
     checked_plan(results_dir)
 
 

@@ -157,7 +157,7 @@ def test_a_stale_lock_is_taken_over(tmp_path, capsys):
     assert main([*CYCLE, "--out", str(out)]) == 0
     err = capsys.readouterr().err
     assert "pid 999999" in err and "taken over" in err
-    assert sorted(os.listdir(out)) == ["cycle.csv", "summary.json"]
+    assert sorted(os.listdir(out)) == ["01_cycle_loop.png", "cycle.csv", "summary.json"]
 
 
 @pytest.fixture
