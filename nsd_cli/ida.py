@@ -93,6 +93,7 @@ def _options(args):
 def run(args) -> int:
     from comparisons.engines import parse_engine_list, run_seismic_engine
     from comparisons.harness import code_fingerprint
+    from nsd_cli.limits import check_ida_scales, check_ida_work
     from nsd_cli.options import WORKERS_MAX, whole
     from nsd_cli.sweep import check_scheduler
     from nsd_core.device.ground import SIMILITUDE_TIME_FACTOR, fema_record
@@ -119,7 +120,12 @@ def run(args) -> int:
     ground = {"scale": 1.0, "time_factor": SIMILITUDE_TIME_FACTOR, "window": None, "rotate_deg": 0.0,
               "normalised": True}
     period = structure.first_period   # the supports alone (and the building on them, if any)
-    im = {rid: record_intensity(fema_record(set_, rid, **ground), args.measure, period) for rid in records}
+    motions = {rid: fema_record(set_, rid, **ground) for rid in records}
+    flag = "--levels" if levels is not None else "--max-runs"
+    check_ida_work({r: motions[r].duration for r in records}, len(levels or []) or hunt.max_runs, flag)
+    im = {rid: record_intensity(motions[rid], args.measure, period) for rid in records}
+    check_ida_scales({r: im[r]["value"] for r in records}, levels or [hunt.start], flag if levels else "--start",
+                     args.measure)
     out = check_out_dir("--out", args.out)
     numbers = {k: v for k, v in structure.to_dict().items() if k != "provenance"}
     common = dict(ground=ground, params=params.to_dict(), structure=numbers, duration=None, dt_out=1e-3,

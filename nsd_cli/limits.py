@@ -30,6 +30,9 @@ DRIVE_STEPS_PER_SECOND = 1100     # measured at max_step 1e-3 s (module docstrin
 STEPS_MAX = 2_000_000             # one run: about 15 min of wall time on the 2-core machine
 SWEEP_STEPS_MAX = 20_000_000      # a whole sweep, every design together
 
+# ---- nsd ida: every run of every trace, estimated as nsd seismic's runs
+IDA_STEPS_MAX = SWEEP_STEPS_MAX   # the whole study (about 2 h of CPU at ~2500 steps per wall second)
+
 # ---- nsd polar
 POLAR_STEP = (0.1, 90.0)          # deg, dividing 360
 POLAR_POINTS = (64, 10_000)       # per cycle: below 64 the hysteresis steps overflow (NaN at 48, A = 25 mm)
@@ -110,3 +113,28 @@ def check_polar_work(wires, step: float, points: int) -> None:
     if work > POLAR_WORK_MAX:
         raise ParameterError(f"--step {step:g} x --points-per-cycle {points} x {len(wires)} designs: {work} "
                              f"quasi-static points (~{work * 1.5e-3:.0f} s of CPU); at most {POLAR_WORK_MAX}")
+
+
+def check_ida_work(durations: dict, runs: int, flag: str) -> float:
+    """Before any run of ``nsd ida``: the study's estimated steps (records x 2 configurations x ``runs``
+    runs x the record's model seconds x the seismic rate) within IDA_STEPS_MAX. Returns the steps."""
+    steps = sum(2 * runs * d * SEISMIC_STEPS_PER_SECOND for d in durations.values())
+    if steps > IDA_STEPS_MAX:
+        raise ParameterError(f"{flag}: {len(durations)} records x 2 configurations x {runs} runs of "
+                             f"{sum(durations.values()) / len(durations):.3g} model s on average would take about "
+                             f"{steps:.3g} solver steps; at most {IDA_STEPS_MAX:.0e} (fewer --records, levels or "
+                             "--max-runs)")
+    return steps
+
+
+def check_ida_scales(im1: dict, first: list[float], flag: str, measure: str) -> None:
+    """Each record's first levels (``first``: --levels, or [--start]) scale it within the record scale
+    bound (nsd seismic --scale's)."""
+    from nsd_core.study.hunt import SCALE_RANGE
+    lo, hi = SCALE_RANGE
+    for rid, value in im1.items():
+        for level in first:
+            scale = level / value if value > 0 else math.inf
+            if not lo <= scale <= hi:
+                raise ParameterError(f"{flag} {level:g}: record {rid} would be scaled by {scale:.3g} (its {measure} at "
+                                     f"scale 1 is {value:.4g} m/s^2); allowed: a scale in [{lo:g}, {hi:g}]")

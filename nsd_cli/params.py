@@ -27,7 +27,7 @@ def _table(title: str, rows: list[dict]) -> str:
     cols = [("name", "name"), ("value", "value"), ("unit", "unit"), ("bounds", "bounds"),
             ("provenance", "provenance"), ("doc", "description")]
     cells = [[repr(r[k]) if isinstance(r[k], float) else str(r[k]) for k, _ in cols] for r in rows]  # every digit
-    width = [max(len(h), *(len(c[i]) for c in cells)) for i, (_, h) in enumerate(cols)]
+    width = [max([len(h)] + [len(c[i]) for c in cells]) for i, (_, h) in enumerate(cols)]  # (no rows: headers)
     line = lambda vals: "  ".join(v.ljust(w) for v, w in zip(vals, width)).rstrip()  # noqa: E731
     return "\n".join([title, line([h for _, h in cols]), line(["-" * w for w in width]), *map(line, cells)])
 
@@ -68,7 +68,7 @@ def run(args) -> int:
     try:
         structure = default_structure(params)
     except ParameterError as e:  # a variant without negative stiffness has no default structure
-        structure, note = None, f"# no default isolated structure for this device: {e}\n"
+        structure, note = None, f"# no default isolated structure: {e}\n"
     rows_p = param_rows(params)
     rows_s = structure_rows(structure, params) if structure is not None else []
     text = (toml_text if fmt == "toml" else table_text)(rows_p, rows_s)

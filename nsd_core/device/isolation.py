@@ -167,11 +167,49 @@ def device_min_stiffness(params: Params, directions_deg=DIRECTIONS_DEG, points_p
             "per_direction": {str(d): v for d, v in per.items()}}
 
 
+NO_DEFAULT = ("{changed}: the default isolated structure cannot be sized for this device ({why}); give the structure "
+              "yourself: --structure mass=VALUE --structure stiffness=VALUE (damping defaults to 5 % of critical)")
+
+
+def _min_stiffness_or_input_error(params: Params) -> dict:
+    """device_min_stiffness, or ParameterError (one line) where the device has no working range
+    (no slack point within the rod's reach, a spring that never lets go): the rule needs one."""
+    from nsd_core.device.working_range import SlackPointError
+    changed = ", ".join(f"{r['name']} = {r['value']!r}" for r in params.describe() if r["source"] == "override")
+    try:
+        with np.errstate(all="ignore"):  # a device the quasi-static path cannot follow: said below, not warned
+            k = device_min_stiffness(params)
+    except SlackPointError as e:
+        raise ParameterError(NO_DEFAULT.format(changed=changed or "the device", why=e)) from None
+    if not math.isfinite(k["K_dev"]):
+        raise ParameterError(NO_DEFAULT.format(changed=changed or "the device", why=f"K_dev = {k['K_dev']}: the "
+                                               "quasi-static cycle over X_max has no finite stiffness"))
+    return k
+
+
+def structure_without_default(own: dict) -> "Structure":
+    """A structure from --structure values alone (mass and stiffness given) for a device whose default
+    cannot be sized: damping 5 % of critical unless given, r_g and r_b of the default slab."""
+    values = {"radius_of_gyration": SLAB_SIDE / math.sqrt(6.0), "support_radius": SLAB_SIDE / 2.0}
+    for name, value in own.items():
+        try:
+            values[name] = float(value)
+        except (TypeError, ValueError):
+            raise ParameterError(f"structure {name} = {value!r}: not a number") from None
+    m, k = values["mass"], values["stiffness"]
+    if "damping" not in values and m > 0 and k > 0:
+        values["damping"] = 2.0 * DAMPING_RATIO * math.sqrt(k * m)
+    prov = {n: "override" for n in own}
+    prov.update({n: "assumed: no default for this device" for n in values if n not in own})
+    return Structure(**{n: values.get(n, 0.0) for n in ("mass", "radius_of_gyration", "stiffness", "damping",
+                                                        "support_radius")}, provenance=prov)
+
+
 def default_structure(params: Params | None = None, k_dev: dict | None = None) -> Structure:
     """The default isolated structure by the model document's rules (k_dev: a precomputed
     ``device_min_stiffness`` result; the nominal device uses the recorded NOMINAL_K_DEV)."""
     params = params or Params()
-    k_dev = k_dev or (NOMINAL_K_DEV if params == Params() else device_min_stiffness(params))
+    k_dev = k_dev or (NOMINAL_K_DEV if params == Params() else _min_stiffness_or_input_error(params))
     K = k_dev["K_dev"]
     if K >= 0:
         raise ParameterError(f"K_dev = {K:.4g} N/m: the device shows no negative stiffness; "

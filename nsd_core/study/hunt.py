@@ -28,6 +28,13 @@ from dataclasses import dataclass
 from nsd_core.device.params import ParameterError
 
 GROWTH = 0.5  # step increment / step (Vamvatsikos and Cornell 2002: 0.1 g step, 0.05 g increment)
+# Bounds (docs/limits.md, nsd ida): an intensity level lies in IM_RANGE m/s^2 (100 m/s^2 ~ 10 g, beyond any
+# recorded motion); a record is scaled by level / IM at scale 1 within SCALE_RANGE (nsd seismic --scale's
+# bounds): --levels and --start beyond it are refused, a hunt stops (the record censored) where its next
+# level would leave either range. At most LEVELS_MAX levels (the bound of --max-runs).
+IM_RANGE = (1e-3, 100.0)
+SCALE_RANGE = (1e-6, 100.0)
+LEVELS_MAX = 100
 
 
 def tidy(level: float) -> float:
@@ -45,10 +52,13 @@ class Hunt:
     resolution: float = 0.1  # bracket until (hi - lo) <= resolution * hi
 
     def __post_init__(self):
+        lo, hi = IM_RANGE
         for name in ("start", "step"):
             v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-                raise ParameterError(f"--{name} = {v!r}: must be a finite number > 0 (m/s^2)")
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and (lo if name == "start" else 0) <= v <= hi
+                    and v > 0):
+                allowed = f"[{lo:g}, {hi:g}]" if name == "start" else f"(0, {hi:g}]"
+                raise ParameterError(f"--{name} = {v!r}: must be a finite number in {allowed} m/s^2")
         if not (isinstance(self.max_runs, int) and 2 <= self.max_runs <= 100):
             raise ParameterError(f"--max-runs = {self.max_runs!r}: must be a whole number in 2..100")
         r = self.resolution
@@ -74,7 +84,8 @@ def next_hunt_level(h: Hunt, history: list[tuple[float, bool]]) -> float | None:
     lo, hi = bracket(history)
     if hi is None:  # hunt: step up from the last level, each step GROWTH * step longer than the one before
         k = len(history)
-        return tidy(history[-1][0] + h.step * (1.0 + GROWTH * (k - 1)))
+        level = tidy(history[-1][0] + h.step * (1.0 + GROWTH * (k - 1)))
+        return level if level <= IM_RANGE[1] else None  # beyond the bound: the record is censored there
     if hi - lo > h.resolution * hi:  # bracket
         return tidy(0.5 * (lo + hi))
     safe = sorted({0.0, *(lv for lv, r in history if not r and lv < hi)})  # fill below the limit
@@ -99,15 +110,20 @@ def next_stripe_level(levels: list[float], history: list[tuple[float, bool]]) ->
 def parse_levels(text: str) -> list[float]:
     """'0.5,1,2' -> [0.5, 1.0, 2.0] (> 0, finite, distinct); ParameterError otherwise."""
     out = []
-    for item in text.split(","):
+    items = text.split(",")
+    if len(items) > LEVELS_MAX:
+        raise ParameterError(f"--levels: {len(items)} levels; at most {LEVELS_MAX} (each a run per record and "
+                             "configuration)")
+    for item in items:
         try:
             v = float(item)
         except ValueError:
-            raise ParameterError(f"--levels {text!r}: {item.strip()!r} is not a number; allowed: "
-                                 "levels > 0 in m/s^2, as a list like 0.5,1,2") from None
-        if not (math.isfinite(v) and v > 0):
-            raise ParameterError(f"--levels {text!r}: {item.strip()} must be a finite number > 0 (m/s^2)")
+            raise ParameterError(f"--levels {text[:60]!r}: {item.strip()!r} is not a number; allowed: "
+                                 f"levels in [{IM_RANGE[0]:g}, {IM_RANGE[1]:g}] m/s^2, as a list like 0.5,1,2") from None
+        if not (math.isfinite(v) and IM_RANGE[0] <= v <= IM_RANGE[1]):
+            raise ParameterError(f"--levels {text[:60]!r}: {item.strip()} must be a finite number in "
+                                 f"[{IM_RANGE[0]:g}, {IM_RANGE[1]:g}] m/s^2")
         if tidy(v) in out:
-            raise ParameterError(f"--levels {text!r}: {item.strip()} is given twice")
+            raise ParameterError(f"--levels {text[:60]!r}: {item.strip()} is given twice")
         out.append(tidy(v))
     return sorted(out)

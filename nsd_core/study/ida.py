@@ -27,7 +27,7 @@ from functools import partial
 from typing import Callable
 
 from nsd_core.device.params import ParameterError
-from nsd_core.study.hunt import Hunt, next_hunt_level, next_stripe_level
+from nsd_core.study.hunt import SCALE_RANGE, Hunt, next_hunt_level, next_stripe_level
 from nsd_core.study.seismic_set import RecordRun, peak_drift_ratio, run_record, set_warmup
 from nsd_core.study.store import Store
 
@@ -139,7 +139,10 @@ class Trace:
         if self.stopped:
             return None
         hist = [(lv, r) for lv, r, _, _ in self.history]
-        return next_stripe_level(self.levels, hist) if self.levels is not None else next_hunt_level(self.hunt, hist)
+        level = next_stripe_level(self.levels, hist) if self.levels is not None else next_hunt_level(self.hunt, hist)
+        if level is not None and level / self.im1 > SCALE_RANGE[1]:
+            return None  # the record would be scaled beyond nsd seismic's --scale bound: censored here
+        return level
 
     def add(self, level: float, rec: dict, key: str) -> None:
         reached, why = self.limit.evaluate(rec)
