@@ -11,6 +11,7 @@ profiles (default, strict) side by side, one line per error.
 """
 from __future__ import annotations
 
+import dataclasses
 import os
 import time
 from pathlib import Path
@@ -21,14 +22,15 @@ from nsd_core.device.geometry import device_geometry
 from nsd_core.device.results import atomic_write_json
 from nsd_core.engine.workers import worker_pool
 
-from comparisons.config import Case
-from comparisons.energy import energy_balance_rel
-from comparisons.engines import REFERENCE, run_job
-from comparisons.engines.perturb import KINDS, describe
-from comparisons.reference import CONVERGED_SETTINGS
-from comparisons.warmup import job_warmup, spec as warm_spec
+from comparisons.config import SeismicCase
+from comparisons.engines import REFERENCE, run_job, run_seismic_job
+from comparisons.engines.perturb import KINDS, check, describe, perturbed
 from comparisons.harness import limit_for
-from comparisons.metrics import own_metrics, pair_metrics
+from comparisons.judge import differences, judge_case, own_checks
+from comparisons.reference import CHECK, CONVERGED, CONVERGED_SETTINGS, halved_settings, run_spec
+from comparisons.verdict import peer_label
+from comparisons.warmup import job_warmup, spec as warm_spec
+from nsd_core.device.params import ParameterError
 
 # the issue's list: each body's mass +-1 %, each kind of attachment point moved 0.2 mm (up and
 # radially), the rod +-0.2 mm, gravity off, one rope's stiffness +-1 %, the spring's constants
@@ -60,64 +62,125 @@ def scaled(spec: dict, size: float) -> dict:
     return {**spec, "by": size if by > 0 else -size}
 
 
-def _verdict(case: Case, engine: str, tolerances, run, ref, run_summary, ref_summary) -> dict[str, Any]:
-    values = pair_metrics(run, ref, run_summary, ref_summary, case.drive.amplitude, case.drive.frequency)
-    values.update(own_metrics(run))
-    values["energy_balance_rel"] = energy_balance_rel(run, device_geometry(case.params), case.drive.frequency,
-                                                      case.drive.unit_vector)
+def _limits_verdict(case, engine: str, tolerances, run, ref, run_summary, ref_summary) -> dict[str, Any]:
+    """The regression profile's fixed limits: the largest value/limit ratio of the run's metrics."""
+    values = {**differences(case, run, ref, run_summary, ref_summary), **own_checks(case, run)}
     ratios = {k: v / lim for k, v in values.items() if (lim := limit_for(tolerances, engine, case.name, k))}
     worst = max(ratios, key=ratios.get)
     return {"failed": any(r > 1.0 for r in ratios.values()), "metric": worst, "ratio": ratios[worst],
             "value": values[worst], "values": values, "failing": sorted(k for k, r in ratios.items() if r > 1.0)}
 
 
-def power_study(cases: list[Case], engines: list[str], tolerances, out_dir: str | Path,
+def _rule_verdict(case, engine: str, rule, jobs: dict, refs: dict) -> dict[str, Any]:
+    """The estimated rule on one perturbed engine: its runs at h and h/2 against the nominal converged
+    reference and its check (comparisons.judge); seen when the verdict fails."""
+    results, entries = {}, {}
+    for label, job in {**refs, **jobs}.items():
+        if job["status"] == "ok":
+            results[(case.name, label)] = job["result"]
+        entries[label] = {"status": job["status"], "stats": job["result"].stats if job["status"] == "ok" else {},
+                          "summary": job.get("summary"), "message": job.get("message")}
+    rows, verdicts = judge_case(case, [engine], results, entries, rule)
+    v = verdicts[engine]
+    gated = [r for r in rows if r["gated"] and r["engine"] == engine]
+    ratios = {r["metric"]: (r["value"] / r["bound"] if r.get("bound") else r["value"] / r["tolerance"]) for r in gated}
+    worst = max(ratios, key=ratios.get)
+    kind = "disagrees" if v["consistent"] is False else ("not converged" if not v["pass"] else "-")
+    return {"failed": not v["pass"], "metric": worst, "ratio": ratios[worst],
+            "value": next(r["value"] for r in gated if r["metric"] == worst), "verdict": v["text"], "kind": kind,
+            "failing": sorted(r["metric"] for r in gated if not r["pass"])}
+
+
+def _submit(pool, case, engine: str, params, settings: dict):
+    if isinstance(case, SeismicCase):
+        return pool.submit(run_seismic_job, engine, params, case.isolated_structure(), case.ground, case.duration,
+                           case.dt_out, settings)
+    return pool.submit(run_job, engine, params, case.drive, settings)
+
+
+def _result(case, fut) -> dict:
+    job = fut.result()
+    if job["status"] == "ok" and not isinstance(case, SeismicCase):
+        job["summary"] = analyse(job["result"], case.drive.amplitude, case.drive.frequency)
+    return job
+
+
+def _applies(case, spec: dict) -> bool:
+    """An injection the case's mode can take (isolated_mass: seismic only)."""
+    try:
+        check(spec)
+        perturbed(device_geometry(case.params), spec, seismic=isinstance(case, SeismicCase))
+        return True
+    except ParameterError:
+        return False
+
+
+def power_study(cases: list, engines: list[str], tolerances, out_dir: str | Path,
                 injections: list[dict] | None = None, workers: int | None = None, ladder: bool = True,
                 log: Callable[[str], None] = print) -> dict[str, Any]:
-    """Run every injection on every engine and case; write ``out_dir/power.json``; return the summary."""
+    """Run every injection on every engine and case; write ``out_dir/power.json``; return the summary.
+    Under the estimated rule (a tolerance file with [engineering]) each perturbed engine also runs at
+    h/2, so its estimate is its own; under fixed limits the run alone is measured."""
     injections = INJECTIONS if injections is None else injections
+    rule = getattr(tolerances, "rule", None)
     started = time.perf_counter()
     workers = workers or os.cpu_count() or 1
-    refs: dict[str, tuple] = {}
     rows: list[dict] = []
-    warm = job_warmup([warm_spec(REFERENCE, False, c.drive, CONVERGED_SETTINGS) for c in cases]
-                      + [warm_spec(e, False, c.drive, c.settings.get(e, {})) for c in cases for e in engines])
+    ref_labels = [CONVERGED] + ([CHECK] if rule is not None else [])
+    warm = job_warmup([warm_spec(REFERENCE, isinstance(c, SeismicCase), getattr(c, "drive", None), CONVERGED_SETTINGS)
+                       for c in cases]
+                      + [warm_spec(e, isinstance(c, SeismicCase), getattr(c, "drive", None), c.settings.get(e, {}))
+                         for c in cases for e in engines])
     with worker_pool(workers, warm=warm) as pool:  # spawn; workers end with their parent, warm (issue 26)
-        ref_jobs = {c.name: pool.submit(run_job, REFERENCE, c.params, c.drive, dict(CONVERGED_SETTINGS))
-                    for c in cases}
+        ref_jobs = {(c.name, lab): _submit(pool, c, *run_spec(c, lab)) for c in cases for lab in ref_labels}
 
         def submit(spec, scale):
             s = {k: v * scale if k == "by" else v for k, v in spec.items()}
-            return [(c, e, spec, s, scale, pool.submit(run_job, e, c.params_for(e), c.drive,
-                                                       {**c.settings.get(e, {}), "perturb": s}))
-                    for c in cases for e in engines]
+            out = []
+            for c in cases:
+                for e in engines:
+                    if not _applies(c, s):
+                        continue
+                    settings = {**c.settings.get(e, {}), "perturb": s}
+                    futs = {e: _submit(pool, c, e, c.params_for(e), settings)}
+                    if rule is not None:
+                        pc = dataclasses.replace(c, settings={**c.settings, e: settings})
+                        futs[peer_label(e)] = _submit(pool, c, e, c.params_for(e), halved_settings(pc, e, 2))
+                    out.append((c, e, spec, s, scale, futs))
+            return out
 
         pending = [j for spec in injections for j in submit(spec, 1.0)]
-        for name, fut in ref_jobs.items():
-            job = fut.result()
+        refs: dict[str, dict] = {}
+        for (name, lab), fut in ref_jobs.items():
+            case = next(c for c in cases if c.name == name)
+            job = _result(case, fut)
             if job["status"] != "ok":
                 raise RuntimeError(f"reference failed on {name}: {job['message']}")
-            case = next(c for c in cases if c.name == name)
-            refs[name] = (job["result"], analyse(job["result"], case.drive.amplitude, case.drive.frequency))
+            refs.setdefault(name, {})[lab] = job
         while pending:
-            c, e, spec, s, scale, fut = pending.pop(0)
-            job = fut.result()
+            c, e, spec, s, scale, futs = pending.pop(0)
+            jobs = {lab: _result(c, f) for lab, f in futs.items()}
             row = {"case": c.name, "engine": e, "injection": describe(spec), "applied": describe(s),
                    "perturb": s, "scale": scale}
-            if job["status"] != "ok":   # a run that fails has not detected anything: reported, never "seen"
-                row.update(failed=False, metric="run error", ratio=0.0, value=None, error=job["message"])
+            bad = [j for j in jobs.values() if j["status"] != "ok"]
+            if bad:   # a run that fails has not detected anything: reported, never "seen"
+                row.update(failed=False, metric="run error", ratio=0.0, value=None, error=bad[0]["message"])
+            elif rule is not None:
+                row.update(_rule_verdict(c, e, rule, jobs, refs[c.name]))
             else:
-                ref, ref_summary = refs[c.name]
-                summary = analyse(job["result"], c.drive.amplitude, c.drive.frequency)
-                row.update(_verdict(c, e, tolerances, job["result"], ref, summary, ref_summary))
+                ref = refs[c.name][CONVERGED]
+                row.update(_limits_verdict(c, e, tolerances, jobs[e]["result"], ref["result"], jobs[e].get("summary"),
+                                           ref.get("summary")))
             rows.append(row)
-            log(f"  {row['applied']:32s} {e:8s} {c.name:14s} {'FAIL' if row['failed'] else 'pass'} "
+            log(f"  {row['applied']:32s} {e:8s} {c.name:22s} {'FAIL' if row['failed'] else 'pass'} "
                 f"{row['metric']} x{row['ratio']:.3g}")
             seen = [r for r in rows if r["injection"] == row["injection"] and r["scale"] == scale]
-            if ladder and scale < 100 and len(seen) == len(cases) * len(engines) and not any(r["failed"] for r in seen):
+            expected = sum(1 for c2 in cases for _ in engines if _applies(c2, s))
+            if ladder and scale < 100 and len(seen) == expected and not any(r["failed"] for r in seen):
                 pending += submit(spec, scale * 10)   # not seen at this size: try 10x larger
     table = summarise(rows, injections)
     out = {"cases": [c.describe() for c in cases], "engines": engines, "rows": rows, "table": table,
+           "rule": rule.describe() if rule is not None else {"name": "limits"},
            "all_seen": all(t["seen_at_nominal"] for t in table), "wall_time": time.perf_counter() - started}
     atomic_write_json(Path(out_dir) / "power.json", out)
     return out

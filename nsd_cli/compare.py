@@ -43,6 +43,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--convergence", action="store_true",
                    help="also run the case file's [convergence] study (discrepancy vs step size per engine)")
     p.add_argument("--report", action="store_true", help="also write the validation report into OUT/report")
+    p.add_argument("--refine", action="store_true",
+                   help="re-run each peer that is 'not converged at these settings' once at the step its own error "
+                        "estimate asks for (at most 8x its steps) and judge again; the settings used are reported")
     p.add_argument("--power", action="store_true",
                    help="measure the gate's detection power instead: inject small modelling errors into one "
                         "engine's own model at a time (OUT/power.json; exit 1 if one is not seen)")
@@ -119,6 +122,27 @@ def format_table(summary: dict) -> str:
     return "\n".join(lines)
 
 
+def _refine(cases, engines, tolerances, out, args, conv, order, summary) -> dict:
+    """--refine: the not-converged peers once more at the step their estimates ask for."""
+    from comparisons.harness import compare
+    from comparisons.refine import refine_text, refinements
+    from nsd_core.device.results import atomic_write_json
+    refined, changes = refinements(cases, summary)
+    if not changes:
+        print("--refine: no peer is 'not converged at these settings' or has an uncertain estimate; nothing to re-run")
+        summary["refined"] = []
+        atomic_write_json(out / "results.json", summary)
+        return summary
+    for line in refine_text(changes):
+        print(line)
+    check_settings(refined, engines, None)
+    summary = compare(refined, engines, tolerances, out, workers=args.workers, convergence=conv,
+                      tally=args.tally, order=order)
+    summary["refined"] = changes
+    atomic_write_json(out / "results.json", summary)
+    return summary
+
+
 def _failure_text(m: dict) -> str:
     vs = m["reference"] or "own bound"
     return f"{m['metric']} = {m['value']:.4g} > {m['limit']:.4g} (vs {vs})"
@@ -156,6 +180,9 @@ def run(args) -> int:
     base = base_params(args)
     cases = load_cases(args.cases, base)
     tolerances = load_tolerances(args.tolerances)
+    if getattr(args, "refine", False) and getattr(tolerances, "rule", None) is None:
+        raise ParameterError(f"--refine: {args.tolerances} holds fixed limits (the regression profile); --refine needs "
+                             "a tolerance file with [engineering] tolerances, whose estimates give the step to refine to")
     conv = load_convergence(args.cases, cases) if args.convergence else None
     if args.convergence and conv is None:
         raise ParameterError("--convergence: the case file has no [convergence] table")
@@ -178,6 +205,8 @@ def run(args) -> int:
     print(f"nsd compare: {len(cases)} cases x {len(engines)} engines -> {out}")
     summary = compare(cases, engines, tolerances, out, workers=args.workers, convergence=conv, tally=args.tally,
                       order=order)
+    if args.refine:
+        summary = _refine(cases, engines, tolerances, out, args, conv, order, summary)
     print(format_table(summary))
     if args.junit:
         atomic_write_text(args.junit, junit_xml(summary))

@@ -57,9 +57,61 @@ COLUMNS = [("case", "l"), ("engine", "l"), ("compared with", "l"), ("metric", "l
            ("result", "l")]
 
 
+EST_COLUMNS = [("case", "l"), ("engine", "l"), ("compared with", "l"), ("metric", "l"), ("difference", "r"),
+               ("estimated\nerror", "r"), ("reference's\nerror", "r"), ("bound k x\n(est. + ref.)", "r"),
+               ("difference /\nbound", "r"), ("engineering\ntolerance", "r"), ("tolerance\nin units", "r"),
+               ("result", "l")]
+
+
+def estimated(summary: dict) -> bool:
+    """The results were judged by the estimated rule (comparisons/verdict.py), not by fixed limits."""
+    return (summary.get("rule") or {}).get("name") == "estimated"
+
+
+def in_units(tol, unit) -> str:
+    if tol is None or unit is None:
+        return "-"
+    return f"{tol * 1e3:.3g} mm" if unit == "m" else f"{tol:.3g} {unit}"
+
+
+def _est_result(r: dict) -> tuple[str, str | None]:
+    if not r["gated"]:
+        return ("within tolerance (not gated)", None) if r["pass"] else ("over tolerance (not gated)", ORANGE)
+    if r.get("consistent") is False:
+        return "DISAGREES beyond numerical error", RED
+    if not r.get("accurate", True):
+        return "NOT CONVERGED (error > tolerance)", RED
+    return "PASS", GREEN
+
+
+def estimated_rows(data) -> tuple[list, list[list[str]], list[list]]:
+    """The metric table under the estimated rule: the difference from the converged reference, the
+    engine's estimated error, the reference's, the bound, the engineering tolerance in units."""
+    s = data.summary
+    rows, colors = [], []
+    for r in sorted(s["metrics"], key=_order(s)):
+        res, col = _est_result(r)
+        b = r.get("bound")
+        rows.append([r["case"], r["engine"], r.get("reference") or "(own check)", r["metric"], fmt(r["value"], 3),
+                     fmt(r.get("estimate"), 3) if r.get("estimate") is not None else "-",
+                     fmt(r.get("reference_error"), 3) if r.get("reference_error") is not None else "-",
+                     fmt(b, 3) if b is not None else "-", fmt(r["value"] / b, 3) if b else "-",
+                     fmt(r.get("tolerance"), 3), in_units(r.get("tolerance_abs"), r.get("unit")), res])
+        colors.append([None] * 8 + [col if col == RED and r.get("consistent") is False else None, None, None, col])
+    for case, per in s["runs"].items():
+        for engine, run in per.items():
+            if run.get("status") != "ok":
+                rows.append([case, engine, "-", "the run failed"] + [""] * 7 + ["ERROR"])
+                colors.append([RED] * len(EST_COLUMNS))
+    cols = natural([(h, 10, a) for h, a in EST_COLUMNS], rows, flex=-1, fontsize=FS)
+    return cols, rows, colors
+
+
 def metric_rows(data) -> tuple[list, list[list[str]], list[list]]:
     """(columns, rows, colours) of the complete metric table; failed runs add an ERROR row."""
     s = data.summary
+    if estimated(s):
+        return estimated_rows(data)
     units = s.get("metric_units", {})
     rows, colors = [], []
     for r in sorted(s["metrics"], key=_order(s)):
@@ -87,11 +139,19 @@ def metric_table_pages(data) -> list:
     figs = []
     for k, (chunk, cchunk) in enumerate(chunks):
         def page(chunk=chunk, cchunk=cchunk, k=k):
-            f = new_figure(LANDSCAPE, "Metrics against the limits applied to them"
-                           + (f" (part {k + 1} of {len(chunks)})" if len(chunks) > 1 else ""),
-                           "the value in full and the limit applied to it; limit from: default = [limits], engine = "
-                           "[limits.ENGINE], case = [limits.ENGINE.case] of the tolerance file; (own check): an "
-                           "engine's own bound; not gated: two peers compared, reported only")
+            part = f" (part {k + 1} of {len(chunks)})" if len(chunks) > 1 else ""
+            if estimated(s):
+                f = new_figure(LANDSCAPE, "Metrics: each engine's difference from the converged reference against its "
+                               "own estimated error" + part,
+                               f"consistent: difference <= bound = k x (estimated error + reference's), k = "
+                               f"{s['rule'].get('k', '?')}; accurate enough: max(estimated error, difference) <= "
+                               "engineering tolerance; (own check): the engine's own value against the tolerance; "
+                               "not gated: two engines compared, reported only")
+            else:
+                f = new_figure(LANDSCAPE, "Metrics against the limits applied to them" + part,
+                               "the value in full and the limit applied to it; limit from: default = [limits], engine = "
+                               "[limits.ENGINE], case = [limits.ENGINE.case] of the tolerance file; (own check): an "
+                               "engine's own bound; not gated: two peers compared, reported only")
             f.text(0.985, 0.99, f"verdict {s['verdict']}\n(exit code {s['exit_code']})", ha="right", va="top",
                    fontsize=8, color=GREEN if s["verdict"] == "PASS" else RED, weight="bold")
             if chunk:
@@ -114,6 +174,23 @@ def worst_cells(summary: dict) -> dict[tuple[str, str], dict]:
         if k not in out or ratio(r) > ratio(out[k]):
             out[k] = r
     return out
+
+
+def verdict_cell(s: dict, case: str, engine: str, v: dict) -> tuple[str, float]:
+    """A cell of the matrix under the estimated rule: the verdict in words and the larger of the two
+    ratios (difference / bound, error / tolerance) that shades it."""
+    rows = [r for r in s["metrics"] if r["case"] == case and r["engine"] == engine and r["gated"]]
+    agree = max((r["value"] / r["bound"] for r in rows if r.get("bound")), default=0.0)
+    acc = max((max(r.get("estimate") or 0.0, r["value"]) / r["tolerance"] for r in rows if r.get("tolerance")),
+              default=0.0)
+    if v.get("consistent") is False:
+        w = v.get("worst_consistency") or {}
+        return f"DISAGREES {w.get('metric', '')} {fmt(w.get('ratio'), 3)}x bound", 2.0
+    if not v["pass"]:
+        need = v.get("needs") or {}
+        tail = "".join(f" needs {k} {fmt(x, 2)} s" for k, x in need.items())
+        return f"NOT CONVERGED{tail}", 2.0
+    return f"PASS  {fmt(agree, 2)} of bound, {fmt(acc, 2)} of tol", max(agree, acc)
 
 
 def _shade(q: float) -> str:
@@ -150,8 +227,12 @@ def draw_matrix(fig, top: float, data, left: float = 0.06, right: float = 0.94, 
             x0 = left + first + j * width
             run = s["runs"].get(case, {}).get(e, {})
             r = worst.get((case, e))
+            v = (s.get("verdicts") or {}).get(case, {}).get(e)
             if run.get("status") not in (None, "ok"):
                 text, face, color = "ERROR: the run failed", "#f4b6b6", RED
+            elif v is not None:
+                text, q = verdict_cell(s, case, e, v)
+                face, color = _shade(q), (RED if not v["pass"] else "black")
             elif r is None:
                 text, face, color = "no gated metric", "white", GREY
             else:

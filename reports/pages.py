@@ -7,7 +7,8 @@ from __future__ import annotations
 
 import json
 
-from reports.metric_tables import SOURCES, draw_matrix, metric_rows, metric_table_pages  # noqa: F401
+from reports.metric_tables import (SOURCES, draw_matrix, estimated, in_units, metric_rows,  # noqa: F401
+                                   metric_table_pages)
 from reports.style import (GREEN, GREY, LANDSCAPE, RED, fit_columns, fmt, fmt_full, new_figure, rows_per_page, table,
                            wrap_rows, wrap_width)
 
@@ -87,14 +88,29 @@ def page_one(data):
         if len(lines) > 10:
             lines = lines[:9] + [f"   (and {len(lines) - 9} more line(s): every failure is in the metric tables)"]
         y = _text(fig, y, "\n".join(lines), size=8.0, color=RED)
+    elif estimated(s):
+        y = _text(fig, y - 0.004, "Every engine agrees with the reference within its own numerical error, that error is "
+                  "within the engineering tolerances, and every engine ran.", size=9, color=GREEN, weight="bold")
     else:
         y = _text(fig, y - 0.004, "Every gated metric is within the limit applied to it, and every engine ran.",
                   size=9, color=GREEN, weight="bold")
-    y = _heading(fig, y - 0.004, "What passed, against which limit: the worst value / limit per case and engine")
-    y = _text(fig, y, "Each cell: the largest ratio of a gated metric's value to the limit applied to it, and that "
-              "metric (a ratio below 1 passes). Green: far within; yellow: near the limit; red: over it. Every "
-              "value, limit and where the limit came from: the metric tables; the definitions: the metrics page.",
-              size=7.5, color=GREY)
+    rule = s.get("rule") or {}
+    if rule.get("text"):
+        y = _text(fig, y - 0.002, "What PASS means: " + rule["text"], size=8, weight="bold")
+    if estimated(s):
+        y = _text(fig, y, tolerance_line(s), size=7.5)
+        y = _heading(fig, y - 0.004, "The verdict per case and engine")
+        y = _text(fig, y, "Each cell: PASS, with the largest difference / bound and the largest error / tolerance over "
+                  "the metrics; DISAGREES (a difference beyond k x the estimated numerical errors: the engines differ "
+                  "about the model); NOT CONVERGED (the engine's error exceeds a tolerance at its settings, with the "
+                  "step its estimate asks for). Every number: the metric tables; the rule: the metrics page.",
+                  size=7.5, color=GREY)
+    else:
+        y = _heading(fig, y - 0.004, "What passed, against which limit: the worst value / limit per case and engine")
+        y = _text(fig, y, "Each cell: the largest ratio of a gated metric's value to the limit applied to it, and that "
+                  "metric (a ratio below 1 passes). Green: far within; yellow: near the limit; red: over it. Every "
+                  "value, limit and where the limit came from: the metric tables; the definitions: the metrics page.",
+                  size=7.5, color=GREY)
     y = draw_matrix(fig, y - 0.004, data)
     seis = [_seismic_line(c) for c in s.get("seismic_cases", [])]
     if seis:
@@ -103,6 +119,25 @@ def page_one(data):
     y = _heading(fig, y - 0.008, "Software and cost")
     _text(fig, y, "\n".join(_versions(data) + [_cost_line(data)]), size=7.5)
     return fig
+
+
+def tolerance_line(s: dict) -> str:
+    """The engineering tolerances in words and in units (their range over the cases)."""
+    by_metric: dict[str, list] = {}
+    for r in s["metrics"]:
+        if r["gated"] and r.get("tolerance_abs") is not None and r.get("reference"):
+            by_metric.setdefault(r["metric"], []).append(r)
+    parts = []
+    for m, rows in by_metric.items():
+        lo, hi = min(r["tolerance_abs"] for r in rows), max(r["tolerance_abs"] for r in rows)
+        unit = rows[0]["unit"]
+        span = in_units(lo, unit) if lo == hi else f"{in_units(lo, unit)} to {in_units(hi, unit)}"
+        parts.append(f"{m} {fmt(rows[0]['tolerance'], 2)} ({span})")
+    own = (s["rule"].get("engineering") or {})
+    return ("Engineering tolerances (a fraction of the reference's peak; in units over the cases): " + "; ".join(parts)
+            + f"; own checks: closure {in_units(own.get('closure_max'), 'm')}, tracking "
+              f"{in_units(own.get('tracking_error'), 'm')}, energy balance {fmt(own.get('energy_balance_rel'), 2)} "
+              f"of the work.")
 
 
 def _closed_form(g: dict) -> str:

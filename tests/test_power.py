@@ -62,8 +62,9 @@ def test_limits_per_engine_and_case(tmp_path):
     assert load_tolerances(f)["max_dF_rel"] == 1e-3
 
 
-def test_default_limits_sit_near_1e_4():
-    t = load_tolerances()
+def test_regression_limits_sit_near_1e_4():
+    t = load_tolerances("comparisons/limits_regression.toml")
+    assert t.rule is None   # fixed limits: the regression profile, not the default verdict
     for e in ("mujoco", "exudyn"):
         assert t.limit(e, "any other case", "max_dF_rel") <= 1.5e-4
         assert t.limit(e, "A15mm_f1Hz", "max_dF_rel") <= 1e-4
