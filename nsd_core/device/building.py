@@ -40,6 +40,15 @@ DAMPING_RATIO = 0.05                         # Rayleigh, on the first two fixed-
 STORIES = 3
 MAX_STORIES = 50
 KEYS = ("stories", "mass", "stiffness", "height", "damping_ratio", "damping", "period")
+# Bounds (docs/limits.md): each value, and the dynamics they make with the slab on its supports (the
+# chain ground - k_b - slab - story 1 - floor 1 ...): its highest mode and its damping's fastest rate
+# bound the steps a run takes (an explicit step resolves ~3 rad of the highest mode and ~6 of decay:
+# 500 Hz and 1e4 1/s stay near the measured ~1400 steps per model second). The defaults: 40-45 Hz,
+# rates 27-411 1/s from 1 to 50 stories.
+BOUNDS = {"mass": (1e-3, 1e7, "kg"), "stiffness": (1e-3, 1e10, "N/m"), "damping": (0.0, 1e9, "N s/m"),
+          "height": (1e-3, 100.0, "m"), "period": (1e-3, 100.0, "s")}
+FREQUENCY_MAX = 500.0   # Hz, the highest mode of the building on the supports
+RATE_MAX = 1e4          # 1/s, the largest eigenvalue of M^-1/2 C M^-1/2 of that chain
 
 
 @dataclass(frozen=True)
@@ -127,7 +136,34 @@ def _number(name, value, low_ok, allowed):
         raise ParameterError(f"building {name} = {value!r}: not a number ({allowed})") from None
     if isinstance(value, bool) or not math.isfinite(v) or not low_ok(v):
         raise ParameterError(f"building {name} = {value!r}: must be a finite number {allowed}")
+    if name in BOUNDS:
+        lo, hi, unit = BOUNDS[name]
+        if not lo <= v <= hi:
+            raise ParameterError(f"building {name} = {value!r}: must be in [{lo:g}, {hi:g}] {unit}")
     return v
+
+
+def check_dynamics(slab_mass: float, k_b: float, c_b: float, b: "Building") -> None:
+    """The building on the slab on its supports: highest mode <= FREQUENCY_MAX, damping's fastest rate
+    <= RATE_MAX (ParameterError, one line, otherwise)."""
+    m = np.array((slab_mass, *b.masses), float)
+    for name, values in (("stiffness", b.stiffnesses), ("damping", b.story_damping)):
+        lo, hi, unit = BOUNDS[name]
+        bad = [v for v in values if not lo <= v <= hi]
+        if bad:
+            raise ParameterError(f"building {name} (derived) = {float(bad[0]):.4g}: must be in [{lo:g}, {hi:g}] {unit} "
+                                 f"(another period, mass or damping_ratio)")
+    w = fixed_base_modes(m, (k_b, *b.stiffnesses))[0]
+    f_max = float(w[-1]) / (2.0 * math.pi)
+    if f_max > FREQUENCY_MAX:
+        raise ParameterError(f"building stiffness / mass: the floors on the supports ring at up to {f_max:.4g} Hz; "
+                             f"at most {FREQUENCY_MAX:g} Hz (softer stories, heavier floors or a longer period)")
+    C = stiffness_matrix((c_b, *b.story_damping)) + np.diag((0.0, *b.slab_damping))
+    s = 1.0 / np.sqrt(m)
+    rate = float(np.linalg.eigvalsh(C * s[:, None] * s[None, :])[-1])
+    if rate > RATE_MAX:
+        raise ParameterError(f"building damping: its fastest decay rate is {rate:.4g} 1/s; at most {RATE_MAX:g} 1/s "
+                             "(less damping, a smaller damping_ratio or heavier floors)")
 
 
 def _per_story(name, value, n, low_ok, allowed) -> list[float]:

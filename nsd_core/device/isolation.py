@@ -79,6 +79,9 @@ class Structure:
             raise ParameterError(f"structure stiffness / mass: the supports alone ring at {f_b:.4g} Hz; at most "
                                  f"{SUPPORT_FREQUENCY_MAX:g} Hz (a stiffer or lighter structure needs a step count "
                                  "no run here can afford)")
+        if self.building is not None:
+            from nsd_core.device.building import check_dynamics
+            check_dynamics(self.mass, self.stiffness, self.damping, self.building)
 
     def replace(self, **changes) -> "Structure":
         """A copy with some fields changed (values may be strings from the command line)."""

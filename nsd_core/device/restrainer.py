@@ -40,6 +40,12 @@ E_REF = 0.5          # restitution at V_REF
 ROOM_FRACTION = 0.5  # DELTA_REF / (l_d - u_gap)
 
 FIELDS = ("gap", "stiffness", "exponent", "damping")
+# Upper bounds (docs/limits.md; the defaults: k ~ 8.5e8 N/m^1.5, n = 1.5, alpha = 2.5 s/m): alpha = 20 s/m
+# already stops every impact faster than 5 cm/s dead (e = 1 - 2/3 alpha v); beyond n = 3 the law is no
+# contact model in use. The contact's tangent stiffness n k (l_d - u_gap)^(n-1) on the isolated mass
+# must ring at most at FREQUENCY_MAX (the default: 26 Hz), so that a run's steps stay bounded.
+UPPER = {"stiffness": (1e13, "N/m^n"), "exponent": (3.0, "-"), "damping": (20.0, "s/m")}
+FREQUENCY_MAX = 500.0  # Hz
 KEYS = tuple(f"restrainer_{f}" for f in FIELDS)   # names in --structure and a case's structure table
 
 
@@ -59,6 +65,9 @@ class Restrainer:
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or not low_ok:
                 allowed = {"damping": ">= 0 s/m", "exponent": ">= 1"}.get(name, "> 0")
                 raise ParameterError(f"structure restrainer_{name} = {v!r}: must be a finite number {allowed}")
+            if name in UPPER and v > UPPER[name][0]:
+                raise ParameterError(f"structure restrainer_{name} = {v!r}: must be <= {UPPER[name][0]:g} "
+                                     f"{UPPER[name][1]}")
 
     def block(self) -> np.ndarray:
         """[u_gap, k, n, alpha]: what the compiled path reads."""
@@ -120,6 +129,11 @@ def with_restrainer(structure, params, on: bool, overrides: dict | None = None):
     r = Restrainer(**values, provenance=prov)
     if r.gap >= params.rod_length:
         raise ParameterError(f"structure restrainer_gap = {r.gap!r}: must be < rod_length = {params.rod_length} m")
+    room = params.rod_length - r.gap
+    f_c = math.sqrt(r.exponent * r.stiffness * room ** (r.exponent - 1.0) / structure.mass) / (2.0 * math.pi)
+    if f_c > FREQUENCY_MAX:
+        raise ParameterError(f"structure restrainer_stiffness = {r.stiffness:.4g}: the contact on the isolated mass "
+                             f"would ring at up to {f_c:.4g} Hz; at most {FREQUENCY_MAX:g} Hz (a softer restrainer)")
     return structure.with_restrainer(r)
 
 
