@@ -163,10 +163,20 @@ def _advance(tr: Trace, store: Store, retry_failed: bool, tried: set) -> tuple[I
     while (level := tr.next_level()) is not None:
         p = tr.point(level)
         rec = store.load(p.key)
+        if rec is not None and not _readable(tr.limit, rec):
+            rec = None   # a stored run whose metrics the limit cannot read (damaged): run it again
         if rec is None or (retry_failed and rec["status"] == "failed" and p.key not in tried):
             return p, level
         tr.add(level, rec, p.key)
     return None
+
+
+def _readable(limit: Limit, rec: dict) -> bool:
+    try:
+        limit.evaluate(rec)
+        return True
+    except (KeyError, TypeError, ValueError, AttributeError, IndexError):
+        return False
 
 
 class _Local:

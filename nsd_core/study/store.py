@@ -13,6 +13,7 @@ presence marks a design as finished, ok or failed):
 from __future__ import annotations
 
 import json
+import os
 import time
 from dataclasses import asdict
 from pathlib import Path
@@ -45,10 +46,17 @@ class Store:
         return n
 
     def load(self, key: str) -> dict | None:
+        """The stored result of job ``key``; None when there is none or it is damaged (not JSON, not an
+        object, a field missing or of the wrong type: a half-copied or edited folder), so the job runs
+        again and its result.json is written anew. A FIFO or device there is bad input (InputError)."""
         path = self.folder(key) / "result.json"
-        if not path.exists():
+        if not os.path.lexists(path):
             return None
-        return json.loads(read_regular_text(path, "stored result"))
+        try:
+            rec = json.loads(read_regular_text(path, "stored result"))
+        except (json.JSONDecodeError, UnicodeDecodeError, RecursionError):
+            return None
+        return rec if _intact(rec) else None
 
     def save(self, d: Design, out: dict) -> dict:
         """Store one finished job (a Design or any frozen dataclass with ``key``): its files, then result.json."""
@@ -67,3 +75,10 @@ class Store:
             rec["traceback"] = out.get("traceback")
         atomic_write_json(folder / "result.json", rec)  # last: marks the design finished
         return rec
+
+
+def _intact(rec) -> bool:
+    """A stored result as ``save`` writes it: status ok or failed, design and metrics objects, an error."""
+    return (isinstance(rec, dict) and rec.get("status") in ("ok", "failed") and isinstance(rec.get("design"), dict)
+            and isinstance(rec.get("metrics"), dict) and "error" in rec
+            and (rec["status"] == "failed" or isinstance(rec.get("files", {}), dict)))
