@@ -154,6 +154,34 @@ def _writable_folder(option: str, value: str, folder: Path) -> None:
                              f"({e.strerror or e})") from None
 
 
+SCAN_MAX = 20_000  # entries of an existing --out folder looked at (a resumed study holds a few thousand)
+
+
+def _no_special_files(option: str, value: str, folder: Path) -> None:
+    """An existing --out folder holds no FIFO, device or socket where a command would write (outputs
+    replace regular files only, nsd_core.device.results.check_output_target): refused before any work,
+    so that nothing is written. Folders inside are looked into (not through links), up to SCAN_MAX."""
+    from nsd_core.device.inputs import _kind
+    todo, seen = [folder], 0
+    while todo and seen < SCAN_MAX:
+        try:
+            entries = list(os.scandir(todo.pop()))
+        except OSError:
+            continue
+        for e in entries:
+            seen += 1
+            try:
+                if e.is_dir(follow_symlinks=False):
+                    todo.append(Path(e.path))
+                    continue
+                mode = os.stat(e.path).st_mode
+            except OSError:
+                continue   # a dangling link: the write replaces it
+            if not stat.S_ISREG(mode) and not stat.S_ISDIR(mode):
+                raise ParameterError(f"{option} {printable(value)}: {printable(e.path)} is {_kind(mode)}; outputs are "
+                                     "written only over regular files (remove it or choose another folder)")
+
+
 def check_out_dir(option: str, value: str | None, lock: bool = True) -> Path | None:
     """--out must name a folder (existing or to be made) that can be written, checked before any
     computation so that a run never fails at the end for want of a place to put its results; then
@@ -164,6 +192,7 @@ def check_out_dir(option: str, value: str | None, lock: bool = True) -> Path | N
         raise ParameterError(f"{option} '': name an output folder")
     path = Path(value)
     _writable_folder(option, value, path)
+    _no_special_files(option, value, path)
     if lock:
         from nsd_cli.outlock import acquire
         try:
@@ -186,6 +215,8 @@ def check_out_file(option: str, value: str | None) -> Path | None:
         raise ParameterError(f"{option} {printable(value)}: name too long (at most {NAME_MAX - TMP_AFFIX} bytes for "
                              "a file name)")
     _writable_folder(option, value, path.parent)
+    from nsd_core.device.results import check_output_target
+    check_output_target(path, option)  # a FIFO or a device there is refused, never replaced
     return path
 
 

@@ -12,6 +12,7 @@ from pathlib import Path
 
 from nsd_cli import limits as lim
 from nsd_cli.options import add_param_arguments, base_params, check_finite, check_out_dir
+from nsd_core.device.drive import Drive
 from nsd_core.device.params import ParameterError
 
 HELP = "the device's response versus drive direction, per number of wires"
@@ -43,7 +44,7 @@ def run(args) -> int:
     if not 1 <= args.workers <= 64:
         raise ParameterError(f"--workers = {args.workers}: must be in [1, 64]")
     base = base_params(args)
-    lim.in_range("--amplitude", args.amplitude, (0.0, base.rod_length * (1 - 1e-12)), "m (0, rod_length)", low_open=True)
+    lim.in_range("--amplitude", args.amplitude, (Drive.A_MIN, base.rod_length * (1 - 1e-12)), "m (below rod_length)")
     for n in wires:
         base.replace(n_wires=n, n_ropes=n)  # each design's parameters checked (one line) before any work
     from nsd_core.device.results import atomic_write_json, atomic_write_text
@@ -66,13 +67,16 @@ def _png(result: dict, path: Path) -> None:
     import matplotlib.pyplot as plt
     from reports import style
     from reports.polar import polar_figure
+    from nsd_core.device.results import check_output_target
+    from reports.build import naming
+    check_output_target(path)
     tmp = path.parent / f".{path.name}.{os.getpid()}.tmp.png"
     try:
-        with plt.rc_context(style.RC):
+        with plt.rc_context(style.RC), naming(path):
             fig = polar_figure(result)
             fig.savefig(tmp)
             plt.close(fig)
-        os.replace(tmp, path)
+            os.replace(tmp, path)
     except BaseException:
         tmp.unlink(missing_ok=True)  # a full disk leaves no half-written figure behind
         raise

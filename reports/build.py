@@ -9,6 +9,7 @@ input (raised as ParameterError, one line) leaves nothing behind.
 """
 from __future__ import annotations
 
+import contextlib
 import csv
 import json
 import os
@@ -21,7 +22,7 @@ import numpy as np
 
 from nsd_core.device.inputs import check_regular, printable, read_regular_text
 from nsd_core.device.params import ParameterError
-from nsd_core.device.results import RunResult, read_csv
+from nsd_core.device.results import RunResult, check_output_target, read_csv
 
 from reports import style  # noqa: F401  (selects the Agg backend before pyplot is imported anywhere)
 
@@ -323,14 +324,28 @@ def draw_pngs(folder: str | Path) -> list[str]:
             png = out / f"{n:02d}_{stem}.png"
             tmp = out / f".{png.name}.{os.getpid()}.tmp.png"
             try:
-                fig.savefig(tmp)
-                os.replace(tmp, png)
+                check_output_target(png)
+                with naming(png):
+                    fig.savefig(tmp)
+                    os.replace(tmp, png)
             finally:
                 plt.close(fig)
                 if tmp.exists():
                     tmp.unlink()
             written.append(str(png))
     return written
+
+
+@contextlib.contextmanager
+def naming(path):
+    """An OSError inside (a full disk while a figure is written) names ``path``, the file the user
+    gets, not a temporary name or none at all (matplotlib's writers raise it without a name)."""
+    try:
+        yield
+    except OSError as e:
+        if e.errno is None:
+            raise
+        raise OSError(e.errno, e.strerror or str(e), str(path)) from None
 
 
 def draw_study(folder, log=print) -> list[str]:
@@ -358,20 +373,25 @@ def build_report(results_dir: str | Path, out_dir: str | Path) -> dict[str, Any]
     pdf_path = out / "validation.pdf"
     tmp_pdf = out / f".validation.pdf.{os.getpid()}.tmp"
     written: list[tuple[Path, Path]] = []
+    for target in [pdf_path] + [out / f"{n:02d}_{stem}.png" for n, (stem, _) in enumerate(plan, start=1)]:
+        check_output_target(target)   # a FIFO or a device where a page goes: refused before drawing
     try:
-        with plt.rc_context(style.RC), PdfPages(tmp_pdf, metadata={"Title": title}) as pdf:
+        with plt.rc_context(style.RC), naming(pdf_path), PdfPages(tmp_pdf, metadata={"Title": title}) as pdf:
             for n, (stem, make) in enumerate(plan, start=1):
                 fig = make()
                 style.footer(fig, f"{footer}  |  page {n} of {len(plan)}")
                 pdf.savefig(fig)
                 png = out / f"{n:02d}_{stem}.png"
                 tmp = out / f".{png.name}.{os.getpid()}.tmp.png"
-                fig.savefig(tmp)
+                with naming(png):
+                    fig.savefig(tmp)
                 written.append((tmp, png))
                 plt.close(fig)
         for tmp, png in written:
-            os.replace(tmp, png)
-        os.replace(tmp_pdf, pdf_path)
+            with naming(png):
+                os.replace(tmp, png)
+        with naming(pdf_path):
+            os.replace(tmp_pdf, pdf_path)
         keep = {png.name for _, png in written}
         for old in out.glob("[0-9][0-9]_*.png"):  # pages of an earlier report that this one no longer has
             if old.name not in keep:

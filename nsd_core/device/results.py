@@ -104,11 +104,30 @@ def last_cycle(t: np.ndarray, frequency: float) -> np.ndarray:
     return t >= t[-1] - 1.0 / frequency - 1e-9 / frequency
 
 
+def check_output_target(path: str | Path, what: str = "output") -> None:
+    """An output is written only where nothing is, or over a regular file (or a link to one): a FIFO,
+    a device, a socket or a folder there is bad input (InputError, exit 2), never replaced."""
+    import stat
+    from nsd_core.device.inputs import _kind, printable
+    from nsd_core.engine.errors import InputError
+    try:
+        st = os.stat(path)
+    except (FileNotFoundError, NotADirectoryError):
+        return
+    except OSError:
+        return  # (a link loop, no permission: the write itself says so, naming the file)
+    if not stat.S_ISREG(st.st_mode):
+        raise InputError(f"{what} {printable(path)}: is {_kind(st.st_mode) or 'not a regular file'}; an output is "
+                         "written only where no file is or over a regular file")
+
+
 def atomic_write_text(path: str | Path, text: str) -> None:
     """Write to a temporary file in the same folder, then rename: readers never see half a file.
     A failed write (a full disk) removes the temporary file and raises OSError naming ``path``;
-    the file that was there before stays as it was."""
+    the file that was there before stays as it was. Only a regular file is replaced
+    (check_output_target: a FIFO or a device there is InputError, nothing written)."""
     path = Path(path)
+    check_output_target(path)
     tmp = None
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -128,6 +147,7 @@ def atomic_write_text(path: str | Path, text: str) -> None:
 def atomic_copy(src: str | Path, dest: str | Path) -> None:
     """Copy a file atomically (temporary file, then rename); a failed copy leaves ``dest`` as it was."""
     dest = Path(dest)
+    check_output_target(dest)
     dest.parent.mkdir(parents=True, exist_ok=True)
     tmp = dest.with_name(f".{dest.name}.tmp")
     try:
