@@ -15,7 +15,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--path", default="line", metavar="line|circle|ellipse|figure8|FILE",
                    help="the plate's path in the plane; FILE: a CSV table of t [s], x [m], y [m] (default line)")
     p.add_argument("--amplitude", type=float, default=None,
-                   help="A [m] >= 0: amplitude, circle radius or major semi-axis (required, except for a FILE path, "
+                   help="A [m] >= 1e-6: amplitude, circle radius or major semi-axis (required, except for a FILE path, "
                         "which refuses it); |u| >= rod_length is exit 4")
     p.add_argument("--minor", type=float, default=None,
                    help="B [m] >= 0: ellipse (required), figure8 (default A/2); refused for line, circle and FILE")

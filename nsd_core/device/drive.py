@@ -184,6 +184,7 @@ class Drive:
     # 250 Hz vertical mode must be resolved over minutes of simulated time; above F_MAX the drive's
     # inertia force m_c A (2 pi f)^2 leaves the range any force law here was written for.
     F_MIN, F_MAX = 0.05, 100.0   # Hz
+    A_MIN = 1e-6                 # m, a named path's amplitude (1 um: 4e-5 of the 25 mm working range)
     CYCLES_MAX = 1000
     SAMPLES_MAX = 200_000        # per cycle
     TOTAL_SAMPLES_MAX = 2_000_000
@@ -194,7 +195,10 @@ class Drive:
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
                 raise ParameterError(f"{name} = {v!r}: must be a finite number")
         if self.amplitude < 0:
-            raise ParameterError(f"amplitude = {self.amplitude}: must be >= 0 m (0 holds the device at rest)")
+            raise ParameterError(f"amplitude = {self.amplitude}: must be >= 0 m (0 for a table path)")
+        if self.path in PATHS and self.amplitude < self.A_MIN:
+            raise ParameterError(f"amplitude = {self.amplitude:g}: must be >= {self.A_MIN:g} m for the {self.path} path "
+                                 "(a smaller cycle has no loop or stiffness to measure: its forces are round-off)")
         if not self.F_MIN <= self.frequency <= self.F_MAX:
             raise ParameterError(f"frequency = {self.frequency}: must be in [{self.F_MIN}, {self.F_MAX}] Hz")
         if not -360.0 <= self.direction_deg <= 360.0:
