@@ -14,12 +14,14 @@ Everything is read and checked before anything is written (ParameterError, one l
 from __future__ import annotations
 
 import csv
+import io
 import json
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
 
+from nsd_core.device.inputs import read_regular_text
 from nsd_core.device.params import ParameterError
 from nsd_core.device.results import read_csv
 from reports.style import GREY, LANDSCAPE, new_figure, no_data
@@ -38,16 +40,15 @@ def _num(v: str):
 def load_ida(folder) -> tuple[dict, dict, list[dict]]:
     """(ida.json, fragility.json, ida.csv rows), checked."""
     root = Path(folder)
-    try:
-        index = json.loads((root / "ida.json").read_text())
-        frag = json.loads((root / "fragility.json").read_text())
-        with open(root / "ida.csv", newline="") as f:
-            rows = list(csv.DictReader(f))
+    try:  # regular files only (a FIFO would block), read whole; NUL bytes or a damaged field: one line
+        index = json.loads(read_regular_text(root / "ida.json", "ida.json"))
+        frag = json.loads(read_regular_text(root / "fragility.json", "fragility.json"))
+        rows = list(csv.DictReader(io.StringIO(read_regular_text(root / "ida.csv", "ida.csv"), newline="")))
         index["traces"], frag["configurations"]  # noqa: B018 - the keys the pages need
         for r in rows:
             r["im"], r["peak_u"] = _num(r["im [m/s^2]"]), _num(r["peak_u [m]"])
             r["peak_drift_ratio"] = _num(r.get("peak_drift_ratio [-]"))   # older folders lack the column
-    except (OSError, ValueError, KeyError, TypeError) as e:
+    except (OSError, ValueError, KeyError, TypeError, AttributeError, csv.Error) as e:
         raise ParameterError(f"{root}: not a readable nsd ida folder ({' '.join(str(e).split())[:120]})") from None
     return index, frag, rows
 
