@@ -23,17 +23,21 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", default=None, metavar="FILE", help="write to FILE instead of printing")
 
 
+DIGITS = 5  # the table's values: 5 significant digits (a parameter file, --format toml, holds every digit)
+
+
 def _table(title: str, rows: list[dict]) -> str:
     cols = [("name", "name"), ("value", "value"), ("unit", "unit"), ("bounds", "bounds"),
             ("provenance", "provenance"), ("doc", "description")]
-    cells = [[repr(r[k]) if isinstance(r[k], float) else str(r[k]) for k, _ in cols] for r in rows]  # every digit
+    cells = [[f"{r[k]:.{DIGITS}g}" if isinstance(r[k], float) else str(r[k]) for k, _ in cols] for r in rows]
     width = [max([len(h)] + [len(c[i]) for c in cells]) for i, (_, h) in enumerate(cols)]  # (no rows: headers)
     line = lambda vals: "  ".join(v.ljust(w) for v, w in zip(vals, width)).rstrip()  # noqa: E731
     return "\n".join([title, line([h for _, h in cols]), line(["-" * w for w in width]), *map(line, cells)])
 
 
 def table_text(params_rows: list[dict], structure_rows: list[dict]) -> str:
-    return (_table("device parameters (--params FILE, --set NAME=VALUE; a case's params = {...})", params_rows)
+    return (f"values to {DIGITS} significant digits; every digit: --format toml\n\n"
+            + _table("device parameters (--params FILE, --set NAME=VALUE; a case's params = {...})", params_rows)
             + "\n\n" + _table("isolated structure of nsd seismic (--structure NAME=VALUE; a seismic case's "
                               "structure = {...})", structure_rows) + "\n")
 

@@ -1,11 +1,11 @@
-"""Report pages of the building above the isolation level (issue 24; docs/building.md).
+"""Report pages of the building above the isolation level (docs/building.md).
 
 * ``nsd seismic --compare-building`` folders (fixed_base/, supports/, device/ and summary.json): the
   peak drift ratio and peak floor acceleration profiles over height for the three configurations
   (the plot isolation engineers know) and the ratio table;
 * any seismic run whose columns hold floors: the floors' time histories per engine (X displacement
-  relative to the ground, story drift, absolute acceleration) and each engine's difference from the
-  in-house engine.
+  relative to the ground, story drift, absolute acceleration) and, with more than one engine, each
+  engine's difference from the in-house engine.
 """
 from __future__ import annotations
 
@@ -117,8 +117,10 @@ def configurations_figure(label: str, runs: dict):
 def floors_figure(title: str, runs: dict):
     """Every floor's X displacement, drift and absolute acceleration per engine, and each engine's
     difference from the in-house engine (the first run)."""
-    fig = new_figure(LANDSCAPE, title, "X components; right: engine - in-house engine")
     names = list(runs)
+    peers = len(names) > 1   # one engine alone: no difference panels (they would be empty)
+    fig = new_figure(LANDSCAPE, title, "X components" + ("; right: engine - in-house engine" if peers else
+                                                          ", in-house engine"))
     ref = runs[names[0]]
     n = stories(ref)
     cols = [("floor{}_x", "floor {}\nx [m]"), ("drift{}_x", "drift {}\nx [m]"), ("floor{}_ax_abs", "floor {}\na_abs x\n[m/s^2]")]
@@ -128,20 +130,21 @@ def floors_figure(title: str, runs: dict):
         for col, text in cols:
             c = col.format(i)
             y0 = 0.9 - (k + 1) * height
-            ax = fig.add_axes([0.07, y0 + 0.012, 0.42, height - 0.024])
-            axd = fig.add_axes([0.56, y0 + 0.012, 0.4, height - 0.024])
+            ax = fig.add_axes([0.1, y0 + 0.012, 0.39 if peers else 0.86, height - 0.024])
+            axd = fig.add_axes([0.56, y0 + 0.012, 0.4, height - 0.024]) if peers else None
             for e in names:
                 ax.plot(runs[e]["t"], runs[e][c], label=e, **ENGINE_STYLE.get(e, {}))
-                if e != names[0] and len(runs[e]["t"]) == len(ref["t"]):
+                if axd is not None and e != names[0] and len(runs[e]["t"]) == len(ref["t"]):
                     axd.plot(ref["t"], runs[e][c] - ref[c], label=e, **ENGINE_STYLE.get(e, {}))
             ax.set_ylabel(text.format(i), fontsize=6)
-            axd.set_ylabel("difference", fontsize=6)
-            for a in (ax, axd):
+            if axd is not None:
+                axd.set_ylabel("difference", fontsize=6)
+            for a in [a for a in (ax, axd) if a is not None]:
                 a.tick_params(labelsize=6, labelbottom=k == 3 * n - 1)  # time labels on the bottom row only:
                 a.grid(alpha=0.3)                                         # each panel's scale sits in that gap
             if k == 3 * n - 1:
-                ax.set_xlabel("t [s]", fontsize=6)
-                axd.set_xlabel("t [s]", fontsize=6)
+                for a in [a for a in (ax, axd) if a is not None]:
+                    a.set_xlabel("t [s]", fontsize=6)
             if k == 0:  # above the first panel, over no data
                 ax.legend(loc="lower right", bbox_to_anchor=(1.0, 1.15), ncol=len(names), fontsize=6, frameon=False)
             k += 1

@@ -1,4 +1,4 @@
-"""Report pages of an incremental dynamic analysis (``nsd ida --out DIR``; issue 23, items 4-5):
+"""Report pages of an incremental dynamic analysis (``nsd ida --out DIR``; docs/ida.md):
 
 - the IDA curves: intensity against peak |u| (or, for a drift limit, the peak story drift ratio) per record,
   with the device and on the supports alone,
@@ -16,6 +16,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import textwrap
 from pathlib import Path
 from typing import Callable
 
@@ -24,7 +25,7 @@ import numpy as np
 from nsd_core.device.inputs import read_regular_text
 from nsd_core.device.params import ParameterError
 from nsd_core.device.results import read_csv
-from reports.style import GREY, LANDSCAPE, new_figure, no_data
+from reports.style import GREY, LANDSCAPE, distinct, fmt, new_figure, no_data, wrap_width
 
 CONFIG_STYLE = {"device": ("with the device", "#1f4e9c"), "nodevice": ("supports alone", "#d95f02")}
 
@@ -66,13 +67,14 @@ def ida_curves_figure(index: dict, rows: list[dict]):
             continue
         finite = [r[key] for r in mine if r[key] is not None]
         right = max(finite + [limit_u or 0.0]) * 1.15 if finite else 0.03
-        cmap = __import__("matplotlib").colormaps["tab20"]
-        for j, rid in enumerate(sorted({int(r["record"]) for r in mine})):
+        for j, rid in enumerate(sorted({int(r["record"]) for r in rows})):   # one style per record, both panels
             rr = sorted((r for r in mine if int(r["record"]) == rid), key=lambda r: r["im"])
-            col = cmap(j % 20)
+            if not rr:
+                continue
+            line = distinct(j)
+            col = line["color"]
             ok = [r for r in rr if r[key] is not None]
-            ax.plot([0.0] + [r[key] * unit for r in ok], [0.0] + [r["im"] for r in ok], "-", color=col, lw=1,
-                    label=str(rid))
+            ax.plot([0.0] + [r[key] * unit for r in ok], [0.0] + [r["im"] for r in ok], lw=1.1, label=str(rid), **line)
             for r in rr:
                 x = r[key] * unit if r[key] is not None else right * unit
                 reached = r["limit_reached"] == "yes"
@@ -104,21 +106,25 @@ def fragility_figure(index: dict, frag: dict):
         if c.get("median"):
             x = np.linspace(1e-6, max(top, c["median"] * 3), 300)
             ax.plot(x, fragility_curve(c["median"], c["dispersion"], x), color=col, lw=2,
-                    label=f"{label}: median {c['median']:.4g}, β {c['dispersion']:.3f}")
-        texts.append(f"{label}: {c.get('n_reached', 0)} reached, {c.get('n_censored', 0)} never reached"
-                     + ("".join(f"\n  record {r['record']} censored at {r['censored_at']:.4g}"
-                                for r in c.get("never_reached", [])))
-                     + ("".join(f"\n  record {r['record']} undetermined: {str(r['why'])[:60]}"
-                                for r in c.get("undetermined", [])))
-                     + (f"\n  {c['note']}" if c.get("note") else "")
-                     + (f"\n  Baker (2015) moments: median {c['baker2015']['median']:.4g}, β "
-                        f"{c['baker2015']['dispersion']:.3f}" if (c.get("baker2015") or {}).get("median") else ""))
+                    label=f"{label}: median {fmt(c['median'], 4)}, β {fmt(c['dispersion'], 3)}")
+        texts.append([f"{label}: {c.get('n_reached', 0)} reached, {c.get('n_censored', 0)} never reached"]
+                     + [f"record {r['record']} censored at {fmt(r['censored_at'], 4)}"
+                        for r in c.get("never_reached", [])]
+                     + [f"record {r['record']} undetermined: {str(r['why'])[:60]}" for r in c.get("undetermined", [])]
+                     + ([c["note"]] if c.get("note") else [])
+                     + ([f"Baker (2015) moments: median {fmt(c['baker2015']['median'], 4)}, β "
+                         f"{fmt(c['baker2015']['dispersion'], 3)}"] if (c.get("baker2015") or {}).get("median") else []))
     ax.set(xlabel=f"IM [{index.get('measure', {}).get('unit', 'm/s^2')}]", ylabel="P(limit reached | IM)",
            ylim=(0, 1.02), xlim=(0, max(top, 1e-9) * 1.6))
     ax.axhline(0.5, color=GREY, lw=0.6)
     if ax.get_legend_handles_labels()[0]:
         ax.legend(loc="lower right")
-    fig.text(0.65, 0.84, "\n\n".join(texts), fontsize=7.5, va="top", wrap=True)
+    width = (0.97 - 0.65) * LANDSCAPE[0] * 72   # the side column, to the page's right margin
+    lines = []
+    for block in texts:   # the first line of a configuration flush, the rest indented under it
+        lines += wrap_width(block[0], width, 7.5) + [w for ln in block[1:] for w in wrap_width("  " + ln, width, 7.5, "  ")]
+        lines.append("")
+    fig.text(0.65, 0.84, "\n".join(lines[:-1]), fontsize=7.5, va="top")
     return fig
 
 
@@ -137,10 +143,10 @@ def cross_check_figure(index: dict, root: Path):
         if "engines" not in c:
             lines.append(f"{label}: {c.get('skipped') or c.get('error')}")
             continue
-        lines.append(f"{label}: record {c['record']} at IM {c['level']:.6g} (scale {c['scale']:.6g}; limit at "
-                     f"{c['limit_im']:.6g}, median {c['median']:.6g}) {c['note']}")
+        lines.append(f"{label}: record {c['record']} at IM {fmt(c['level'], 4)} (scale {fmt(c['scale'], 4)}; limit "
+                     f"at {fmt(c['limit_im'], 4)}, median {fmt(c['median'], 4)}) {c['note']}")
         for e, m in c["engines"].items():
-            lines.append(f"    {e}: " + (f"du {m['du']:.3e}, peak u {m['peak_displacement']:+.3e}"
+            lines.append(f"    {e}: " + (f"du {m['du']:.3e}, peak |u| rel. difference {m['peak_displacement']:+.3e}"
                                          + (f", dF {m['dF']:.3e}, da {m['da']:.3e}" if "dF" in m else "")
                                          + (f", {m['wall_time']:.1f} s" if m.get("wall_time") else "")
                                          if "du" in m else f"{m.get('status')}: {m.get('error')}"))
@@ -148,7 +154,10 @@ def cross_check_figure(index: dict, root: Path):
             if isinstance(b, dict) and {"dfloor", "ddrift", "dfloor_a"} <= set(b):   # the worst floor / story
                 lines.append(f"    {' ' * len(e)}  building: floors {b['dfloor']:.3e}, drifts {b['ddrift']:.3e}, "
                              f"floor accelerations {b['dfloor_a']:.3e}")
-    fig.text(0.04, 0.86, "\n".join(lines), fontsize=7.5, va="top", family="monospace")
+    chars = int(0.92 * LANDSCAPE[0] * 72 / (0.62 * 7.5))   # monospace: 0.6 em a glyph, a little spare
+    wrapped = [w for ln in lines for w in textwrap.wrap(ln, chars, subsequent_indent=" " * (len(ln) - len(ln.lstrip())
+                                                                                         + 4)) or [""]]
+    fig.text(0.04, min(0.86, fig._nsd_top - 0.01), "\n".join(wrapped), fontsize=7.5, va="top", family="monospace")
     folder = root / "cross_check" / "nodevice"
     ax = fig.add_axes([0.07, 0.1, 0.88, 0.4])
     if (folder / "seismic.csv").is_file() and (folder / "exact.csv").is_file():
@@ -173,7 +182,7 @@ def ida_plan(folder) -> tuple[list[tuple[str, Callable]], str]:
     if (dev / "seismic.csv").is_file() and list(dev.glob("seismic_*.csv")):
         from reports.seismic_report import _run_pages, _runs
         c = (index.get("cross_check") or {}).get("device", {})
-        plan += _run_pages(f"IDA cross-check {index.get('set')}:{c.get('record')} at IM {c.get('level', 0):.4g}",
+        plan += _run_pages(f"IDA cross-check {index.get('set')}:{c.get('record')} at IM {fmt(c.get('level', 0), 4)}",
                            _runs(dev))
     return plan, f"NSD IDA report  |  record set {index.get('set')}"
 

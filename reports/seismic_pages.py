@@ -15,7 +15,7 @@ import numpy as np
 from matplotlib.lines import Line2D
 from matplotlib.ticker import FuncFormatter, MaxNLocator
 
-from reports.style import GREY, LANDSCAPE, RED, fmt, fmt_full, natural, new_figure, no_data, style, table, wrap_rows
+from reports.style import GREY, LANDSCAPE, RED, fmt, natural, new_figure, no_data, style, table, wrap_rows
 
 REFERENCE = "semirecursive"
 NODEVICE = {"color": "#888888", "linestyle": "-", "linewidth": 0.9}
@@ -195,9 +195,9 @@ def _fmt(v, f):
 
 def _ground_text(g: dict) -> str:
     w = g.get("window")
-    return (f"scale {fmt_full(g.get('scale', 1))}, time factor {fmt_full(g.get('time_factor'))}, "
-            + (f"window {fmt_full(w[0])} to {fmt_full(w[1])} s (record time)" if w else "whole records")
-            + f", rotated {fmt_full(g.get('rotate_deg', 0))} deg" + ("" if g.get("normalised", True) else ", as recorded"))
+    return (f"scale {fmt(g.get('scale', 1), 5)}, time factor {fmt(g.get('time_factor'), 5)}, "
+            + (f"window {fmt(w[0], 5)} to {fmt(w[1], 5)} s (record time)" if w else "whole records")
+            + f", rotated {fmt(g.get('rotate_deg', 0), 5)} deg" + ("" if g.get("normalised", True) else ", as recorded"))
 
 
 def set_table_figure(index: dict):

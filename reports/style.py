@@ -29,6 +29,18 @@ RC = {"font.size": 8.5, "axes.titlesize": 9.5, "axes.labelsize": 8.5, "legend.fo
       "savefig.dpi": 130, "axes.formatter.useoffset": False}
 
 
+# Series that must be told apart (one per record): ten hues far apart (matplotlib's tab10), then the
+# same hues dashed, dotted, dash-dotted: no two of the first 40 share colour and line style.
+DISTINCT = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22",
+            "#17becf"]
+DISTINCT_LS = ["-", "--", ":", "-."]
+
+
+def distinct(j: int) -> dict:
+    """Colour and line style of series j (0-based) of many that must be told apart."""
+    return {"color": DISTINCT[j % len(DISTINCT)], "linestyle": DISTINCT_LS[(j // len(DISTINCT)) % len(DISTINCT_LS)]}
+
+
 def style(engine: str) -> dict:
     if engine in ENGINE_STYLE:
         s = ENGINE_STYLE[engine]

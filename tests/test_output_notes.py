@@ -74,10 +74,10 @@ def test_record_set_row_says_it_left_the_working_range():
     group = {n: SimpleNamespace(key=n, folder=n, engine="semirecursive") for n in ("semirecursive", "nodevice")}
     recs = {"semirecursive": {"status": "ok", "summary": _summary(True)},
             "nodevice": {"status": "ok", "summary": _summary(False, ["building.peak_drift_ratio[story 1]"])}}
-    row, _ = _row("nearfield-pulse", 1, group, recs, [])
+    row, entry = _row("nearfield-pulse", 1, group, recs, [])
     assert row["status"] == "ok" and row["outside_working_range"] == "yes"
     assert "outside the working range" in row["reason"] and "28.7 mm of the 30 mm rod" in row["reason"]
-    assert "nodevice: building.peak_drift_ratio[story 1] at the last sample" in row["reason"]
+    assert entry["warnings"] == ["nodevice: building.peak_drift_ratio[story 1] at the last sample"]
     recs["semirecursive"]["summary"] = _summary(False)
     recs["nodevice"]["summary"] = _summary(False)
     row, _ = _row("nearfield-pulse", 1, group, recs, [])

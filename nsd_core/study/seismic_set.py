@@ -349,8 +349,9 @@ def _row(set_: str, rid: int, group: dict, recs: dict, peers: list[str]) -> tupl
         reasons.append(f"device: outside the working range (the ropes went slack; peak |u| "
                        f"{s_dev['peak_displacement']['value'] * 1e3:.3g} mm"
                        + (f" of the {rod * 1e3:.3g} mm rod)" if rod else ")"))
-    for s, name in ((s_dev, "device"), (s_nod, "nodevice")):
+    for s, name in ((s_dev, "device"), (s_nod, "nodevice")):  # set.json: the true peak may lie beyond the window
         if s and s.get("peaks_at_last_sample"):
-            reasons.append(f"{name}: {', '.join(s['peaks_at_last_sample'])} at the last sample")
+            entry.setdefault("warnings", []).append(f"{name}: {', '.join(s['peaks_at_last_sample'])} at the last "
+                                                    "sample")
     row["status"], row["reason"] = worst, "; ".join(reasons)
     return row, entry
