@@ -116,7 +116,8 @@ def run(args) -> int:
     kw = dict(base=base, amplitude=args.amplitude, frequency=args.frequency, engines=engines,
               settings=settings, cycles=args.cycles, samples_per_cycle=args.samples_per_cycle,
               direction_deg=args.direction)
-    Drive(args.amplitude or 0.0, args.frequency, args.direction, args.cycles, args.samples_per_cycle)
+    Drive(Drive.A_MIN if args.amplitude is None else args.amplitude, args.frequency, args.direction, args.cycles,
+          args.samples_per_cycle)  # (no --amplitude: each design its own)
     if args.paper:
         designs = paper_designs(**kw)
     else:
