@@ -114,19 +114,32 @@ def configurations_figure(label: str, runs: dict):
     return fig
 
 
+FLOORS_SHOWN = 4  # floors drawn on the page (3 panels each): more would leave each panel too thin to read
+
+
+def shown_floors(n: int) -> list[int]:
+    """The floors the floors page draws: every one up to FLOORS_SHOWN, else the first, two between and
+    the top (a 12-story building's 36 panels left no height for one: matplotlib refused the page)."""
+    if n <= FLOORS_SHOWN:
+        return list(range(1, n + 1))
+    return sorted({1, *(round(1 + k * (n - 1) / (FLOORS_SHOWN - 1)) for k in range(1, FLOORS_SHOWN - 1)), n})
+
+
 def floors_figure(title: str, runs: dict):
     """Every floor's X displacement, drift and absolute acceleration per engine, and each engine's
     difference from the in-house engine (the first run)."""
     names = list(runs)
     peers = len(names) > 1   # one engine alone: no difference panels (they would be empty)
-    fig = new_figure(LANDSCAPE, title, "X components" + ("; right: engine - in-house engine" if peers else
-                                                          ", in-house engine"))
     ref = runs[names[0]]
     n = stories(ref)
+    shown = shown_floors(n)
+    which = "" if len(shown) == n else f"; floors {', '.join(map(str, shown))} of {n}"
+    fig = new_figure(LANDSCAPE, title, "X components" + ("; right: engine - in-house engine" if peers else
+                                                          ", in-house engine") + which)
     cols = [("floor{}_x", "floor {}\nx [m]"), ("drift{}_x", "drift {}\nx [m]"), ("floor{}_ax_abs", "floor {}\na_abs x\n[m/s^2]")]
-    height = 0.84 / (3 * n)
+    height = 0.84 / (3 * len(shown))
     k = 0
-    for i in range(1, n + 1):
+    for i in shown:
         for col, text in cols:
             c = col.format(i)
             y0 = 0.9 - (k + 1) * height
@@ -140,9 +153,9 @@ def floors_figure(title: str, runs: dict):
             if axd is not None:
                 axd.set_ylabel("difference", fontsize=6)
             for a in [a for a in (ax, axd) if a is not None]:
-                a.tick_params(labelsize=6, labelbottom=k == 3 * n - 1)  # time labels on the bottom row only:
+                a.tick_params(labelsize=6, labelbottom=k == 3 * len(shown) - 1)  # time labels on the bottom row only:
                 a.grid(alpha=0.3)                                         # each panel's scale sits in that gap
-            if k == 3 * n - 1:
+            if k == 3 * len(shown) - 1:
                 for a in [a for a in (ax, axd) if a is not None]:
                     a.set_xlabel("t [s]", fontsize=6)
             if k == 0:  # above the first panel, over no data
