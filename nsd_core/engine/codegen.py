@@ -141,11 +141,21 @@ def evaluator_for(model, kind: str | None = None):
     return generic_evaluator() if evaluation_used(model, kind) == "generic" else generated_evaluator(model)
 
 
+# The largest tree whose evaluation is generated: the unrolled source grows about as the cube of the
+# bodies (the seismic device with a building of N stories has 10 + 2N bodies: 0.1 MB of source at 3
+# stories, 0.2 MB at 6, 0.8 MB at 12, 37 MB at 50); 12 stories made numba's compilation fail
+# (MemoryError under 4 GB, RecursionError after ~140 s). A larger tree runs the generic evaluation,
+# which gives the same numbers (a structure-independent compilation), whatever NSD_EVALUATOR says.
+GENERATED_MAX_BODIES = 16   # the default building (3 stories) on the device
+
+
 def evaluation_used(model, kind: str | None = None) -> str:
     """"generated" or "generic": what ``evaluator_for(model, kind)`` runs (also a run's stats)."""
     kind = kind or evaluator_kind()
     if kind not in KINDS:
         raise InputError(f"evaluator = {kind!r}: allowed 'auto', 'generated' or 'generic'")
+    if len(model.parent) > GENERATED_MAX_BODIES:
+        return "generic"
     return "generic" if kind == "generic" or (kind == "auto" and not is_compiled(model)) else "generated"
 
 
