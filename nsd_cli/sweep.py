@@ -84,10 +84,7 @@ def check_scheduler(address: str | None, timeout: float = 10.0) -> None:
         raise ParameterError(f"--scheduler {address}: nothing answers there within {timeout:g} s ({why}); "
                              f"{start_scheduler_hint()}, or leave --scheduler out for local workers") from None
     try:
-        sock.settimeout(timeout)
-        first = sock.recv(1, socket.MSG_PEEK)
-    except OSError:
-        first = None
+        first = _peek_handshake(sock, timeout)
     finally:
         sock.close()
     if not first:
@@ -95,6 +92,42 @@ def check_scheduler(address: str | None, timeout: float = 10.0) -> None:
                              + ("closed without a handshake" if first == b"" else
                                 f"sent no Dask handshake within {timeout:g} s")
                              + "; not a Dask scheduler, or it is hung (see --scheduler-timeout)")
+    if not _is_dask_header(first):
+        raise ParameterError(f"--scheduler {address}: accepts connections but what it sends "
+                             f"({printable(repr(first[:16]))}) is not a Dask handshake; not a Dask scheduler")
+
+
+HANDSHAKE_MAX = 1 << 20  # bytes: a scheduler's handshake is a few hundred
+
+
+def _peek_handshake(sock, timeout: float) -> bytes | None:
+    """The first 16 bytes the peer sends (fewer if it stops or closes; b"" closed at once, None nothing
+    within ``timeout``), left unread."""
+    import time
+    deadline, data = time.monotonic() + timeout, None
+    while True:
+        left = deadline - time.monotonic()
+        if left <= 0:
+            return data
+        try:
+            sock.settimeout(left)
+            data = sock.recv(16, socket.MSG_PEEK)
+        except OSError:
+            return data
+        if len(data) >= 16 or data == b"":
+            return data
+        time.sleep(0.02)
+
+
+def _is_dask_header(data: bytes) -> bool:
+    """Dask's TCP framing (distributed.comm.tcp): the message's byte count, then its frame count, each
+    a little-endian uint64. Anything else (a web server, garbage) would make the client allocate what
+    those bytes say (2.8 EiB for one such listener): refused here instead."""
+    import struct
+    if len(data) < 16:
+        return False
+    total, frames = struct.unpack("<QQ", data[:16])
+    return 16 <= total <= HANDSHAKE_MAX and 1 <= frames <= 64 and 8 * (1 + frames) <= total
 
 
 def run(args) -> int:
