@@ -338,6 +338,10 @@ def _seismic_case(i: int, raw: dict, d_params: dict, base_params: Params | None)
             raise ParameterError(f"{w}.record = {rec!r}: expected \"SET:ID\", e.g. \"nearfield-pulse:1\"")
         scale = _number(f"{w}.scale", raw.get("scale", 1.0))
         rotate = _number(f"{w}.rotate_deg", raw.get("rotate_deg", 0.0), positive=False)
+        for key, value, (lo, hi), unit in (("scale", scale, gm.SCALE_RANGE, ""), ("rotate_deg", rotate, gm.ROTATE_RANGE,
+                                                                                 " deg")):
+            if not lo <= value <= hi:   # nsd seismic --scale / --rotate's bounds (docs/limits.md)
+                raise ParameterError(f"{w}.{key} = {value!r}: must be in [{lo:g}, {hi:g}]{unit}")
         window = raw.get("window")
         if window is not None:
             if not isinstance(window, list) or len(window) != 2:

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 
+from nsd_core.device.ground import ROTATE_RANGE, SCALE_RANGE
 from nsd_core.device.params import ParameterError
 
 # ---- nsd seismic (and --set): the request's own flags
@@ -19,8 +20,8 @@ SEISMIC_DURATION_MAX = 300.0      # model seconds of one run (default: the input
 SEISMIC_SAMPLES_MAX = 2_000_000   # duration / dt_out: the output rows (the drive's cap too)
 DT_OUT = (1e-6, 1.0)              # s
 TIME_FACTOR = (0.01, 100.0)       # model seconds per record second
-SCALE = (1e-6, 100.0)             # factor on the record's acceleration
-ROTATE = (-360.0, 360.0)          # deg
+SCALE = SCALE_RANGE               # factor on the record's acceleration
+ROTATE = ROTATE_RANGE             # deg
 SCHEDULER_TIMEOUT = (0.1, 600.0)  # s, connect and handshake each
 SCHEDULER_TIMEOUT_DEFAULT = 10.0
 
@@ -130,8 +131,7 @@ def check_ida_work(durations: dict, runs: int, flag: str) -> float:
 def check_ida_scales(im1: dict, first: list[float], flag: str, measure: str) -> None:
     """Each record's first levels (``first``: --levels, or [--start]) scale it within the record scale
     bound (nsd seismic --scale's)."""
-    from nsd_core.study.hunt import SCALE_RANGE
-    lo, hi = SCALE_RANGE
+    lo, hi = SCALE
     for rid, value in im1.items():
         for level in first:
             scale = level / value if value > 0 else math.inf

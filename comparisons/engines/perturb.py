@@ -65,9 +65,11 @@ def check(spec) -> dict | None:
     """Validate a perturbation (None: none); one-line ParameterError naming the field otherwise."""
     if spec is None:
         return None
-    if not isinstance(spec, dict) or spec.get("what") not in KINDS:
-        what = spec.get("what") if isinstance(spec, dict) else spec
-        raise ParameterError(f"perturb.what = {what!r}: unknown; allowed: {', '.join(KINDS)}")
+    if not isinstance(spec, dict):
+        raise ParameterError(f"perturb = {spec!r}: must be a table, e.g. {{ what = \"cap_mass\", by = 0.01 }} "
+                             f"(what: {', '.join(KINDS)})")
+    if spec.get("what") not in KINDS:
+        raise ParameterError(f"perturb.what = {spec.get('what')!r}: unknown; allowed: {', '.join(KINDS)}")
     bad = set(spec) - {"what", "by", "index", "axis"}
     if bad:
         raise ParameterError(f"perturb.{sorted(bad)[0]}: unknown key; allowed: what, by, index, axis")

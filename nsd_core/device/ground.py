@@ -36,6 +36,8 @@ from nsd_core.device.params import ParameterError
 
 STANDARD_GRAVITY = 9.80665  # m/s^2: the records' unit g
 SIMILITUDE_TIME_FACTOR = math.sqrt(0.1)  # Froude 1:10: time x sqrt(length scale)
+SCALE_RANGE = (1e-6, 100.0)    # a record's scale (nsd seismic --scale, a case's scale, each IDA level's)
+ROTATE_RANGE = (-360.0, 360.0)  # deg, a record's rotation in plan
 
 # set name -> (package files, IDs of the set, pulse-like?)
 SETS = {

@@ -33,7 +33,6 @@ GROWTH = 0.5  # step increment / step (Vamvatsikos and Cornell 2002: 0.1 g step,
 # bounds): --levels and --start beyond it are refused, a hunt stops (the record censored) where its next
 # level would leave either range. At most LEVELS_MAX levels (the bound of --max-runs).
 IM_RANGE = (1e-3, 100.0)
-SCALE_RANGE = (1e-6, 100.0)
 LEVELS_MAX = 100
 
 

@@ -27,7 +27,8 @@ from functools import partial
 from typing import Callable
 
 from nsd_core.device.params import ParameterError
-from nsd_core.study.hunt import SCALE_RANGE, Hunt, next_hunt_level, next_stripe_level
+from nsd_core.device.ground import SCALE_RANGE
+from nsd_core.study.hunt import Hunt, next_hunt_level, next_stripe_level
 from nsd_core.study.seismic_set import RecordRun, peak_drift_ratio, run_record, set_warmup
 from nsd_core.study.store import Store
 
