@@ -119,11 +119,11 @@ def exact_supports_alone(run: RunResult, trace: Trace, level: float) -> tuple[di
     diff = np.hypot(run["x"] - ux, run["y"] - uy)
     if "restrainer_F" in run.columns and np.max(run["restrainer_F"]) > 0:
         return _not_applicable("the restrainer engaged: the exact linear solution holds without contact"), \
-            {"t": ("s", t_out), "x": ("m", ux), "y": ("m", uy), "u": ("m", ref)}
+            {"t": t_out, "x": ux, "y": uy, "u": ref}
     metrics = {"engine": "exact (eqsig, Nigam-Jennings)", "du": float(np.max(diff) / max(np.max(ref), 1e-300)),
                "peak_displacement": float((np.max(run["u"]) - np.max(ref)) / max(np.max(ref), 1e-300)),
                "period_s": period, "damping_ratio": s.damping_ratio}
-    return metrics, {"t": ("s", t_out), "x": ("m", ux), "y": ("m", uy), "u": ("m", ref)}
+    return metrics, {"t": t_out, "x": ux, "y": uy, "u": ref}
 
 
 def cross_check(traces: list[Trace], store: Store, frag: dict, peers: list[str], workers: int, scheduler,

@@ -50,7 +50,7 @@ def test_columns_are_written_as_ten_significant_digits_every_value(tmp_path):
     a = rng.standard_normal(50) * 10.0 ** rng.integers(-300, 300, 50)
     a[:6] = [np.nan, -0.0, np.inf, -np.inf, 5e-324, 1.0]
     b = np.arange(50)
-    write_columns(tmp_path / "c.csv", {"a": ("m", a), "b": ("-", b)})
+    write_columns(tmp_path / "c.csv", {"x": a, "wire0_strain": b})   # units from nsd_core.device.columns
     lines = (tmp_path / "c.csv").read_text().splitlines()
-    assert lines[0] == "a [m],b [-]"
+    assert lines[0] == "x [m],wire0_strain [-]"
     assert lines[1:] == [f"{x:.10g},{y:.10g}" for x, y in zip(a, b)]

@@ -1,6 +1,7 @@
 """The unit of every time-series column any engine writes (drive and seismic runs, the building
 above the slab, the restrainer): one table, read by every writer of ``cycle.csv``, ``seismic.csv``
-and the peers' CSVs (``nsd_core.device.results.write_csv`` writes ``RunResult.units``, made here).
+and the peers' CSVs, a sweep's steady.csv, an IDA's exact.csv (``nsd_core.device.results.write_columns``
+looks every header's unit up here).
 
 Indexed families (``rope{i}_tension``, ``floor{j}_x``, ``story_shear{j}_y`` ...) are one row each,
 with ``{i}`` for the index. A column that is not in the table is an error (``KeyError``), never a
@@ -16,6 +17,8 @@ COLUMN_UNITS = {
     "t": "s", "u": "m", "x": "m", "y": "m",
     "F": "N", "F_device": "N", "F_rod": "N", "F_ropes": "N", "F_wires": "N",
     "F_x": "N", "F_y": "N", "F_tangent": "N", "F_radial": "N",
+    # a sweep's steady cycle (steady.csv): the tangent stiffness dF/du, the wires' elongations
+    "stiffness": "N/m", "wire{i}_elongation": "m",
     # the cap, the spring's wall, the loop's closure
     "spring_push": "N", "spring_zeta": "N", "cap_z": "m", "wall_z": "m", "closure": "m",
     # elements

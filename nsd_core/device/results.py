@@ -178,10 +178,11 @@ def _json_default(o):
     raise TypeError(f"not JSON serialisable: {type(o).__name__}")
 
 
-def write_columns(path: str | Path, columns: dict[str, tuple[str, np.ndarray]]) -> None:
-    """Numeric columns {name: (unit, values)} as CSV with "name [unit]" headers, atomically."""
-    header = ",".join(f"{n} [{u}]" for n, (u, _) in columns.items())
-    data = np.column_stack([v for _, v in columns.values()])
+def write_columns(path: str | Path, columns: dict[str, np.ndarray]) -> None:
+    """Numeric columns {name: values} as CSV with "name [unit]" headers, every unit from the one table
+    (nsd_core.device.columns; a column it does not know is a KeyError), atomically."""
+    header = ",".join(f"{n} [{u}]" for n, u in units_of(columns).items())
+    data = np.column_stack(list(columns.values()))
     # one %-format a row (the same text as f"{v:.10g}" a value, half the CPU: the gate's main process
     # writes ~7 million numbers while the workers run)
     row_format = ",".join(["%.10g"] * data.shape[1])
@@ -191,7 +192,7 @@ def write_columns(path: str | Path, columns: dict[str, tuple[str, np.ndarray]]) 
 
 def write_csv(path: str | Path, result: RunResult) -> None:
     """A run's time series, every column with its unit (read back by ``read_csv``)."""
-    write_columns(path, {n: (result.units[n], result.columns[n]) for n in result.units})
+    write_columns(path, {n: result.columns[n] for n in result.units})
 
 
 def read_csv(path: str | Path, engine: str = "") -> RunResult:

@@ -16,7 +16,7 @@ from nsd_core.study.designs import Design
 EngineRunner = Callable[..., RunResult]
 
 
-def steady_table(result: RunResult, d: Design, wire_length: float) -> dict[str, tuple[str, np.ndarray]]:
+def steady_table(result: RunResult, d: Design, wire_length: float) -> dict[str, np.ndarray]:
     """The last cycle: u, F, tangent stiffness dF/du (Figures 8-17 B), wire elongations (15, 18)."""
     from nsd_core.device.cycle import steady_cycle
     m = steady_cycle(result, d.frequency)
@@ -25,12 +25,10 @@ def steady_table(result: RunResult, d: Design, wire_length: float) -> dict[str, 
     udot = d.amplitude * w * np.cos(w * t)
     # dF/du = (dF/dt)/(du/dt): undefined at the turning points, where du/dt vanishes
     k = np.gradient(result["F"][m], t) / np.where(np.abs(udot) > 0.05 * d.amplitude * w, udot, np.nan)
-    cols = {"t": ("s", t), "u": ("m", result["u"][m]), "F": ("N", result["F"][m]),
-            "F_device": ("N", result["F_device"][m]), "stiffness": ("N/m", k),
-            "F_rod": ("N", result["F_rod"][m]), "F_ropes": ("N", result["F_ropes"][m]),
-            "F_wires": ("N", result["F_wires"][m]), "spring_push": ("N", result["spring_push"][m])}
+    cols = {"t": t, **{n: result[n][m] for n in ("u", "F", "F_device")}, "stiffness": k,
+            **{n: result[n][m] for n in ("F_rod", "F_ropes", "F_wires", "spring_push")}}
     for j in range(int(d.params["n_wires"])):
-        cols[f"wire{j}_elongation"] = ("m", result[f"wire{j}_strain"][m] * wire_length)
+        cols[f"wire{j}_elongation"] = result[f"wire{j}_strain"][m] * wire_length
     return cols
 
 

@@ -66,7 +66,7 @@ class Store:
                "stored_at": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
         if out["status"] == "ok":
             # a sweep's design: its run and steady cycle; other jobs (a record of a seismic set) name
-            # their own files, {file name: RunResult or {column: (unit, values)}}, possibly none
+            # their own files, {file name: RunResult or {column: values} (units from nsd_core.device.columns)}, possibly none
             files = out["files"] if "files" in out else {"cycle.csv": out["result"], "steady.csv": out["steady"]}
             for name, data in files.items():
                 (write_csv if isinstance(data, RunResult) else write_columns)(folder / name, data)
