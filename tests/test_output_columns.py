@@ -95,3 +95,18 @@ def test_building_peaks_on_the_last_sample_are_warned(runs):
     s["building"]["peak_drift_ratio"][1]["t"] = 0.05  # a peak inside the window is not listed
     from nsd_core.device.seismic_summary import peaks_at_last_sample
     assert "building.peak_drift_ratio[story 2]" not in peaks_at_last_sample(s, float(device["t"][-1]))
+
+
+def test_nsd_seismic_warns_of_the_building_s_peaks_on_the_last_sample(tmp_path):
+    """stderr and summary.json's warnings name the building's peaks that fall on the last sample."""
+    import json
+    import subprocess
+    import sys
+    out = tmp_path / "run"
+    p = subprocess.run([sys.executable, "-m", "nsd_cli.main", "seismic", "--ground", GROUND, "--dt-out", "0.002",
+                        "--building", "stories=2", "--out", str(out)], capture_output=True, text=True, timeout=600)
+    assert p.returncode == 0, p.stderr
+    warning = [line for line in p.stderr.splitlines() if "at the last sample" in line]
+    assert len(warning) == 1 and "building.peak_drift_ratio[story 2]" in warning[0], p.stderr
+    s = json.loads((out / "summary.json").read_text())
+    assert any("building.peak_floor_acceleration[floor 2]" in w for w in s["warnings"])

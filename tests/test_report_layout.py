@@ -111,3 +111,14 @@ def test_record_set_pages_inside_apart_and_at_a_stated_precision(set_folder):
     assert figure_problems(set_folder) == {}
     for stem, fig in _pages(set_folder):
         assert not [t for t in _texts(fig) if LONG_DIGITS.search(t)], stem
+
+
+def test_nsd_params_table_prints_values_to_a_stated_precision(capsys):
+    """The isolated mass was printed as 3743.7968184920674 kg: the table says its precision (5
+    significant digits) and where every digit is (the TOML file)."""
+    from nsd_cli.main import main
+    assert main(["params"]) == 0
+    text = capsys.readouterr().out
+    assert text.startswith("values to 5 significant digits; every digit: --format toml")
+    assert re.search(r"\nmass +3743\.8 +kg", text)
+    assert not LONG_DIGITS.search(text)
