@@ -38,13 +38,20 @@ def _num(v: str):
     return float(v) if v not in ("", None) else None
 
 
+CSV_NEEDS = ("record", "device", "im [m/s^2]", "peak_u [m]", "limit_reached")  # ida.csv's columns the pages read
+
+
 def load_ida(folder) -> tuple[dict, dict, list[dict]]:
     """(ida.json, fragility.json, ida.csv rows), checked."""
     root = Path(folder)
     try:  # regular files only (a FIFO would block), read whole; NUL bytes or a damaged field: one line
         index = json.loads(read_regular_text(root / "ida.json", "ida.json"))
         frag = json.loads(read_regular_text(root / "fragility.json", "fragility.json"))
-        rows = list(csv.DictReader(io.StringIO(read_regular_text(root / "ida.csv", "ida.csv"), newline="")))
+        reader = csv.DictReader(io.StringIO(read_regular_text(root / "ida.csv", "ida.csv"), newline=""))
+        missing = [c for c in CSV_NEEDS if c not in (reader.fieldnames or [])]
+        if missing:  # a truncated or foreign file: no rows to draw is no report
+            raise ValueError(f"ida.csv has no column {missing[0]!r}")
+        rows = list(reader)
         index["traces"], frag["configurations"]  # noqa: B018 - the keys the pages need
         for r in rows:
             r["im"], r["peak_u"] = _num(r["im [m/s^2]"]), _num(r["peak_u [m]"])

@@ -20,7 +20,7 @@ from pathlib import Path
 
 
 from nsd_core import __version__
-from nsd_core.device.inputs import read_regular_text
+from nsd_core.device.inputs import read_input_bytes
 from nsd_core.device.results import RunResult, atomic_write_json, write_columns, write_csv
 from nsd_core.study.designs import Design
 
@@ -52,8 +52,9 @@ class Store:
         path = self.folder(key) / "result.json"
         if not os.path.lexists(path):
             return None
+        data = read_input_bytes(path, "stored result", 1 << 32)   # a FIFO or a device: InputError
         try:
-            rec = json.loads(read_regular_text(path, "stored result"))
+            rec = json.loads(data.decode("utf-8"))
         except (json.JSONDecodeError, UnicodeDecodeError, RecursionError):
             return None
         return rec if _intact(rec) else None
