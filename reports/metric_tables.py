@@ -57,9 +57,8 @@ COLUMNS = [("case", "l"), ("engine", "l"), ("compared with", "l"), ("metric", "l
            ("result", "l")]
 
 
-EST_COLUMNS = [("case", "l"), ("engine", "l"), ("compared with", "l"), ("metric", "l"), ("difference", "r"),
-               ("estimated\nerror", "r"), ("reference's\nerror", "r"), ("bound k x\n(est. + ref.)", "r"),
-               ("difference /\nbound", "r"), ("engineering\ntolerance", "r"), ("tolerance\nin units", "r"),
+EST_COLUMNS = [("case", "l"), ("engine", "l"), ("vs", "l"), ("metric", "l"), ("difference (in full)", "r"),
+               ("estimated error (in full)", "r"), ("bound k x\n(est. + ref.)", "r"), ("tolerance\n(in units)", "r"),
                ("result", "l")]
 
 
@@ -76,11 +75,11 @@ def in_units(tol, unit) -> str:
 
 def _est_result(r: dict) -> tuple[str, str | None]:
     if not r["gated"]:
-        return ("within tolerance (not gated)", None) if r["pass"] else ("over tolerance (not gated)", ORANGE)
+        return ("ok (not gated)", None) if r["pass"] else ("over (not gated)", ORANGE)
     if r.get("consistent") is False:
-        return "DISAGREES beyond numerical error", RED
+        return "DISAGREES", RED
     if not r.get("accurate", True):
-        return "NOT CONVERGED (error > tolerance)", RED
+        return "NOT CONVERGED", RED
     return "PASS", GREEN
 
 
@@ -92,16 +91,16 @@ def estimated_rows(data) -> tuple[list, list[list[str]], list[list]]:
     for r in sorted(s["metrics"], key=_order(s)):
         res, col = _est_result(r)
         b = r.get("bound")
-        rows.append([r["case"], r["engine"], r.get("reference") or "(own check)", r["metric"], fmt(r["value"], 3),
-                     fmt(r.get("estimate"), 3) if r.get("estimate") is not None else "-",
-                     fmt(r.get("reference_error"), 3) if r.get("reference_error") is not None else "-",
-                     fmt(b, 3) if b is not None else "-", fmt(r["value"] / b, 3) if b else "-",
-                     fmt(r.get("tolerance"), 3), in_units(r.get("tolerance_abs"), r.get("unit")), res])
-        colors.append([None] * 8 + [col if col == RED and r.get("consistent") is False else None, None, None, col])
+        tol = fmt(r.get("tolerance"), 2) + (f" ({in_units(r['tolerance_abs'], r.get('unit'))})"
+                                              if r.get("tolerance_abs") is not None else "")
+        rows.append([r["case"], r["engine"], r.get("reference") or "(own)", r["metric"], fmt_full(r["value"]),
+                     fmt_full(r.get("estimate")) if r.get("estimate") is not None else "-",
+                     fmt(b, 3) if b is not None else "-", tol, res])
+        colors.append([None] * 4 + [col if col == RED and r.get("consistent") is False else None] + [None] * 3 + [col])
     for case, per in s["runs"].items():
         for engine, run in per.items():
             if run.get("status") != "ok":
-                rows.append([case, engine, "-", "the run failed"] + [""] * 7 + ["ERROR"])
+                rows.append([case, engine, "-", "the run failed"] + [""] * 4 + ["ERROR"])
                 colors.append([RED] * len(EST_COLUMNS))
     cols = natural([(h, 10, a) for h, a in EST_COLUMNS], rows, flex=-1, fontsize=FS)
     return cols, rows, colors
@@ -141,12 +140,12 @@ def metric_table_pages(data) -> list:
         def page(chunk=chunk, cchunk=cchunk, k=k):
             part = f" (part {k + 1} of {len(chunks)})" if len(chunks) > 1 else ""
             if estimated(s):
-                f = new_figure(LANDSCAPE, "Metrics: each engine's difference from the converged reference against its "
-                               "own estimated error" + part,
-                               f"consistent: difference <= bound = k x (estimated error + reference's), k = "
-                               f"{s['rule'].get('k', '?')}; accurate enough: max(estimated error, difference) <= "
-                               "engineering tolerance; (own check): the engine's own value against the tolerance; "
-                               "not gated: two engines compared, reported only")
+                f = new_figure(LANDSCAPE, "Metrics: differences against the engines' own error estimates" + part,
+                               f"consistent: difference from the converged reference <= bound = k x (estimated error "
+                               f"+ reference's), k = {s['rule'].get('k', '?')}, else DISAGREES; accurate enough: "
+                               "max(estimated error, difference) <= engineering tolerance, else NOT CONVERGED;\n"
+                               "(own check): the engine's own value against the tolerance; not gated: two engines "
+                               "compared, reported only; differences, estimates and bounds in full")
             else:
                 f = new_figure(LANDSCAPE, "Metrics against the limits applied to them" + part,
                                "the value in full and the limit applied to it; limit from: default = [limits], engine = "

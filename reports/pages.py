@@ -301,6 +301,8 @@ def definitions_pages(data) -> list:
         from comparisons.config import METRICS
         defs = {k: v[1] for k, v in METRICS.items()}
     units = s.get("metric_units", {})
+    if estimated(s):
+        return _rule_pages(s, defs, units)
     by_engine = s.get("tolerances_by_engine") or {}
     rows = []
     for m, v in s["tolerances"].items():
@@ -328,6 +330,44 @@ def definitions_pages(data) -> list:
     if defaulted:
         sub += "\ntaken from the default tolerance file (the given file left them out): " + ", ".join(defaulted)
     return _table_pages("Metrics: definitions and limits", sub, blocks)
+
+
+OF = {"max_dF_rel": "peak force", "rms_dF_rel": "peak force", "peak_force_rel": "peak force",
+      "loop_area_rel": "work per cycle", "region_shift_rel": "amplitude", "closure_max": "m (absolute)",
+      "tracking_error": "m (absolute)", "energy_balance_rel": "drive work per cycle",
+      "max_du_rel": "peak plate displacement", "peak_u_rel": "peak plate displacement",
+      "max_dF_device_rel": "peak device force", "peak_a_rel": "peak absolute acceleration",
+      "energy_residual_rel": "peak input energy", "max_dfloor_rel": "peak floor displacement",
+      "max_ddrift_rel": "peak story drift", "max_dfloor_a_rel": "peak floor acceleration"}
+
+
+def _rule_pages(s: dict, defs: dict, units: dict) -> list:
+    """The estimated rule: every metric with its definition and engineering tolerance, and the rule."""
+    rule = s["rule"]
+    rows = [[m, units.get(m, "-"), defs.get(m, "-"), fmt(tol, 3), OF.get(m, "-")]
+            for m, tol in (rule.get("engineering") or {}).items()]
+    cols = [("metric", 1, "l"), ("unit", 1, "c"), ("definition (F_ref, u_ref: the converged reference's)", 1, "l"),
+            ("engineering\ntolerance", 1, "r"), ("a fraction of", 1, "l")]
+    k, beta = rule.get("k"), rule.get("beta")
+    text = [["estimated error", "a fixed-step peer: its difference between its runs at h and h/2 x r^p / (r^p - 1), "
+             "p its method's order (MuJoCo Euler 1, RK4 2, Exudyn 2); the in-house engine: its difference from the "
+             "converged reference; the reference: its difference from its rtol 1e-11 check"],
+            ["consistent", f"difference from the converged reference <= {fmt(k, 3)} x (estimated error + "
+             "reference's); otherwise DISAGREES beyond numerical error: the engines differ about the model"],
+            ["accurate enough", "max(estimated error, difference) <= the engineering tolerance; otherwise NOT "
+             "CONVERGED at these settings, with the step the estimate asks for (nsd compare --refine runs it)"],
+            ["scalar metrics", f"a peak or loop-work difference can cancel by chance between h and h/2: its estimate "
+             f"is at least {fmt(beta, 3)} x the estimate of the max-norm difference it comes from"],
+            ["PASS", rule.get("text", "")]]
+    blocks = [("The rule (comparisons/verdict.py; the constants: the tolerance file's [verdict])",
+               [("", 1, "l"), ("", 1, "l")], text),
+              ("Metrics and their engineering tolerances ([engineering] of the tolerance file)", cols, rows)]
+    defaulted = s.get("tolerances_defaulted") or []
+    sub = ("drive cases on the steady (last) cycle resampled on a common phase grid; seismic cases on the time "
+           "histories at every output time")
+    if defaulted:
+        sub += "\nthe rule's default tolerance (the given file left them out): " + ", ".join(defaulted)
+    return _table_pages("Metrics: definitions, the rule and the engineering tolerances", sub, blocks)
 
 
 def parameter_pages(data) -> list:

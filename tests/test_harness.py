@@ -41,8 +41,10 @@ engine_params.mujoco = { rope_stiffness = 6.0e5 }   # +20 % for one engine only
 def test_gate_fails_and_names_case_and_metric(perturbed):
     p, out, d = perturbed
     assert p.returncode == 1, p.stderr
-    assert "FAILED stiff_ropes: mujoco max_dF_rel" in p.stdout
+    assert "FAILED stiff_ropes: mujoco disagrees beyond numerical error" in p.stdout, p.stdout
     res = json.loads((out / "results.json").read_text())
+    assert not res["verdicts"]["stiff_ropes"]["mujoco"]["consistent"]
+    assert res["verdicts"]["quick"]["mujoco"]["pass"] and res["verdicts"]["stiff_ropes"]["semirecursive"]["pass"]
     assert res["verdict"] == "FAIL" and res["exit_code"] == 1
     # the unperturbed case passes inside the same run: the engines agree to well within 0.1 %
     quick = [m for m in res["metrics"] if m["case"] == "quick" and m["gated"]]
