@@ -224,10 +224,13 @@ def pages(data: ReportData) -> list[tuple[str, Callable]]:
 
 
 def _study_plan(root: Path) -> tuple[list[tuple[str, Callable]], str]:
-    """An nsd sweep folder (sweep.json) or an nsd polar folder (polar.json): its own pages."""
+    """An nsd sweep (sweep.json), polar (polar.json) or cycle (cycle.csv) folder: its own pages."""
     from types import SimpleNamespace
     from nsd_core.device.params import Params
     from reports import figures_extra
+    from reports.cycle_pages import cycle_plan, is_cycle
+    if is_cycle(root) and not (root / "sweep.json").is_file():
+        return cycle_plan(root)
     if (root / "polar.json").is_file():
         from reports.polar import polar_figure
         p = _json(root / "polar.json", "written by nsd polar")
@@ -276,12 +279,8 @@ def source_plan(results_dir: str | Path) -> tuple[list[tuple[str, Callable]], st
     if kind == "seismic":
         plan, title = seismic_plan(results_dir)
         return plan, f"{title}  |  {time.strftime('%Y-%m-%d')}"
-    if kind in ("sweep", "polar"):
+    if kind in ("sweep", "polar", "cycle"):
         plan, title = _study_plan(Path(results_dir))
-        return plan, f"{title}  |  {time.strftime('%Y-%m-%d')}"
-    if kind == "cycle":
-        from reports.cycle_pages import cycle_plan
-        plan, title = cycle_plan(results_dir)
         return plan, f"{title}  |  {time.strftime('%Y-%m-%d')}"
     data = load(results_dir)
     title = "NSD cross-validation report"
