@@ -87,8 +87,8 @@ def run_compare(args, params, structure, motion, solver, out, head: dict) -> int
     atomic_write_json(out / "summary.json", top)
     for row in runs["ratios"] or []:
         where = f" {row['index']}" if row["index"] else ""
-        print(f"  {row['quantity']}{where}: fixed {row['fixed_base']:.6g}, supports {row['supports']:.6g}, "
-              f"device {row['device']:.6g}; device/fixed {_fmt(row['device_over_fixed'])}, "
+        print(f"  {row['quantity']}{where}: fixed {row['fixed_base']:.5g}, supports {row['supports']:.5g}, "
+              f"device {row['device']:.5g}; device/fixed {_fmt(row['device_over_fixed'])}, "
               f"supports/fixed {_fmt(row['supports_over_fixed'])}")
     if stopped:
         print(f"  the device run stopped at t = {stopped['t']:.6g} s ({stopped['kind']}): {stopped['reason']}")

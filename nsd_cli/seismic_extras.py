@@ -124,8 +124,9 @@ def run_compare(args, params, structure, motion, solver, out, head: dict) -> int
     _write_ratios(out / "ratios.csv", ratio_rows(both["ratios"]))
     atomic_write_json(out / "summary.json", top)
     for row in ratio_rows(both["ratios"]):
-        print(f"  {row['quantity']}: with the device {row['with_device']:.6g}, supports alone "
-              f"{row['supports_alone']:.6g}, ratio {row['ratio'] or '-'}")
+        ratio = f"{float(row['ratio']):.4g}" if row["ratio"] else "-"   # (ratios.csv keeps every digit)
+        print(f"  {row['quantity']}: with the device {row['with_device']:.5g}, supports alone "
+              f"{row['supports_alone']:.5g}, ratio {ratio}")
     if both["device"]["stopped"]:
         s = both["device"]["stopped"]
         print(f"  the device run stopped at t = {s['t']:.6g} s ({s['kind']}): {s['reason']}")

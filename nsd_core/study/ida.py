@@ -245,7 +245,7 @@ def trace_all(traces: list[Trace], store: Store, workers: int = 1, scheduler=Non
         tr.add(level, rec, p.key)
         reached, why = tr.history[-1][1], tr.history[-1][2]
         tail = f"{res['wall_time']:.1f} s" if rec["status"] == "ok" else f"stopped: {rec['error']}"
-        log(f"  [{n}] {tr.name} IM {level:.6g} m/s^2 (scale {p.ground['scale']:.6g}): "
+        log(f"  [{n}] {tr.name} IM {level:.5g} m/s^2 (scale {p.ground['scale']:.5g}): "
             f"{'LIMIT (' + why + ')' if reached else 'below the limit' if reached is False else 'undetermined'}, {tail}")
 
     first = {id(tr): _advance(tr, store, retry_failed, tried) for tr in traces}
