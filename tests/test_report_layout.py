@@ -122,3 +122,15 @@ def test_nsd_params_table_prints_values_to_a_stated_precision(capsys):
     assert text.startswith("values to 5 significant digits; every digit: --format toml")
     assert re.search(r"\nmass +3743\.8 +kg", text)
     assert not LONG_DIGITS.search(text)
+
+
+def test_compare_supports_prints_its_ratios_to_a_stated_precision(tmp_path, capsys):
+    """The ratios were printed as 1.0115888970293518: now 4 significant digits, ratios.csv every digit."""
+    from nsd_cli.main import main
+    out = tmp_path / "cs"
+    assert main(["seismic", "--record", "nearfield-pulse:1", "--window", "4.8,5.0", "--compare-supports",
+                 "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    lines = [ln for ln in printed.splitlines() if "supports alone" in ln and "ratio" in ln]
+    assert len(lines) >= 4 and not [ln for ln in lines if LONG_DIGITS.search(ln)], lines
+    assert LONG_DIGITS.search((out / "ratios.csv").read_text())   # the file keeps every digit
