@@ -157,10 +157,14 @@ def _writable_folder(option: str, value: str, folder: Path) -> None:
 SCAN_MAX = 20_000  # entries of an existing --out folder looked at (a resumed study holds a few thousand)
 
 
-def _no_special_files(option: str, value: str, folder: Path) -> None:
-    """An existing --out folder holds no FIFO, device or socket where a command would write (outputs
-    replace regular files only, nsd_core.device.results.check_output_target): refused before any work,
-    so that nothing is written. Folders inside are looked into (not through links), up to SCAN_MAX."""
+OUT_RULE = "outputs are written only over regular files (remove it or choose another folder)"
+
+
+def no_special_files(option: str, value: str, folder: Path, rule: str = OUT_RULE) -> None:
+    """An existing folder holds no FIFO, device or socket: for --out, where a command would write (outputs
+    replace regular files only, nsd_core.device.results.check_output_target); for nsd report --from,
+    what it reads (a FIFO would block). Refused before any work, so that nothing is written. Folders
+    inside are looked into (not through links), up to SCAN_MAX entries."""
     from nsd_core.device.inputs import _kind
     todo, seen = [folder], 0
     while todo and seen < SCAN_MAX:
@@ -178,8 +182,7 @@ def _no_special_files(option: str, value: str, folder: Path) -> None:
             except OSError:
                 continue   # a dangling link: the write replaces it
             if not stat.S_ISREG(mode) and not stat.S_ISDIR(mode):
-                raise ParameterError(f"{option} {printable(value)}: {printable(e.path)} is {_kind(mode)}; outputs are "
-                                     "written only over regular files (remove it or choose another folder)")
+                raise ParameterError(f"{option} {printable(value)}: {printable(e.path)} is {_kind(mode)}; {rule}")
 
 
 def check_out_dir(option: str, value: str | None, lock: bool = True) -> Path | None:
@@ -192,7 +195,7 @@ def check_out_dir(option: str, value: str | None, lock: bool = True) -> Path | N
         raise ParameterError(f"{option} '': name an output folder")
     path = Path(value)
     _writable_folder(option, value, path)
-    _no_special_files(option, value, path)
+    no_special_files(option, value, path)
     if lock:
         from nsd_cli.outlock import acquire
         try:

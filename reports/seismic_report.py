@@ -5,6 +5,7 @@ checked before anything is written (ParameterError, one line)."""
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
 from typing import Callable
 
@@ -56,11 +57,20 @@ def _run_pages(label: str, runs: dict, cost: dict | None = None, ground: dict | 
 
 
 def _summary(folder: Path) -> dict:
-    try:
-        s = json.loads(read_regular_text(folder / "summary.json"))
-        return s if isinstance(s, dict) else {}
-    except (OSError, ValueError):
+    """A run's summary.json ({} when there is none); one that is there but is no regular file or no JSON
+    object is one line, exit 2 (a FIFO or a damaged file is not silently left out)."""
+    path = folder / "summary.json"
+    if not os.path.lexists(path):
         return {}
+    try:
+        s = json.loads(read_regular_text(path, str(path)))
+    except json.JSONDecodeError as e:
+        raise ParameterError(f"{path}: not readable JSON ({' '.join(str(e).split())[:100]})") from None
+    except ValueError as e:   # InputError: a FIFO, a device, not text
+        raise ParameterError(str(e)) from None
+    if not isinstance(s, dict):
+        raise ParameterError(f"{path}: malformed (expected a JSON object)")
+    return s
 
 
 def _cost(summary: dict) -> dict | None:

@@ -477,7 +477,7 @@ for flag, argv in (("--params", cycle("--params", "{d}/x")), ("--cases", COMPARE
     add(f"device{flag}", [a.replace("{d}/x", "/dev/zero") for a in argv], {}, "device")
 add("report-results-fifo", ["report", "--from", "{d}/r", "--out", "{out}"], {"r/results.json": ("fifo",)}, "FIFO")
 add("report-seismic-summary-fifo", ["report", "--from", "{d}/r", "--out", "{out}"],
-    {"r/seismic.csv": ("fifo",), "r/set.json": ("fifo",)}, "results.json")
+    {"r/seismic.csv": ("fifo",), "r/set.json": ("fifo",)}, "FIFO")  # named: the folder is read as regular files
 # a damaged field in a compare folder
 GOOD_CSV = "t [s],u [m],F [N],closure [m]\n0,0,0,0\n0.05,0.001,10,0\n0.1,0,0,0\n"
 for name, change in (("metric-value-string", {"metrics": [{"case": "q", "engine": "semirecursive", "reference": None,

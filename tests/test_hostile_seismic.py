@@ -191,6 +191,13 @@ for name in ("ida.csv", "fragility.json", "ida.json"):
     add(f"report-ida-{name}-binary", ["report", "--from", "{d}/ida", "--out", "{out}"],
         {"ida": ("copy", "ida_small"), f"ida/{name}": b"\xff\xfe\x00" * 40}, "")
 
+for name in ("seismic.csv", "summary.json"):   # a seismic run's folder: both files are read
+    for damage, content in (("fifo", ("fifo",)), ("device", ("link", "/dev/zero")), ("nul", ("append", b"\0\0")),
+                            ("list", "[1, 2]\n"), ("truncated", ("truncate", 40)), ("binary", b"\xff\xfe\x00" * 40),
+                            ("empty", "")):
+        add(f"report-seismic-{name}-{damage}", ["report", "--from", "{d}/s", "--out", "{out}"],
+            {"s": ("copy", "seismic_small"), f"s/{name}": content}, "FIFO" if damage == "fifo" else "")
+
 # ---- a scheduler address where something else answers (garbage that passed the handshake check)
 for name, argv in (("sweep", ["sweep", "--param", "rod_length", "--values", "0.03", "--out", "{out}"]),
                    ("set", SET_R), ("ida", IDA)):

@@ -205,7 +205,12 @@ def read_csv(path: str | Path, engine: str = "") -> RunResult:
         name, _, unit = h.partition(" [")
         names.append(name)
         units[name] = unit.rstrip("]")
-    data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    import warnings
+    with warnings.catch_warnings():   # an empty table is said below, in one line, not warned about
+        warnings.simplefilter("ignore")
+        data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    if data.shape[0] == 0 or data.shape[1] != len(names):
+        raise ValueError(f"{len(names)} columns named, {data.shape[1]} read in {data.shape[0]} rows")
     return RunResult(engine, {n: data[:, i] for i, n in enumerate(names)}, units)
 
 
