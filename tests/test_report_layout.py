@@ -13,7 +13,12 @@ from matplotlib.colors import to_rgb
 from reports import style
 from tests.page_checks import _drawn_texts, figure_problems, text_problems
 
-LONG_DIGITS = re.compile(r"\d\.\d{7,}|\d{9,}")   # more than 8 significant digits
+class LONG_DIGITS:  # noqa: N801 - a pattern-like check: a number with more than 8 significant digits
+    NUMBER = re.compile(r"\d+(?:\.\d+)?")
+
+    @classmethod
+    def search(cls, text: str) -> bool:
+        return any(len(m.group(0).replace(".", "").lstrip("0")) > 8 for m in cls.NUMBER.finditer(text))
 
 
 def wide_problems(fig, margin: float = 0.25) -> list[str]:
