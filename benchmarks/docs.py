@@ -79,9 +79,102 @@ def _value_limit(m: dict | None) -> str:
     return f"{g(m['value'])} ({g(m['limit'])}){mark}"
 
 
+def _verdict_rows(d: dict) -> list[list[str]]:
+    """One row per case and engine: the verdict, its largest difference / bound and error / tolerance."""
+    rows = []
+    for case, per in (d.get("verdicts") or {}).items():
+        for e, v in per.items():
+            gated = [m for m in d["metrics"] if m["case"] == case and m["engine"] == e and m["gated"]]
+            bound = [m for m in gated if m.get("bound")]
+            wb = max(bound, key=lambda m: m["value"] / m["bound"]) if bound else None
+            wt = max(gated, key=lambda m: max(m.get("estimate") or 0.0, m["value"]) / m["tolerance"]) if gated else None
+            ev = v.get("evidence") or {}
+            p_obs = ev.get("observed_order")
+            rows.append([case, e, "PASS" if v["pass"] else "**FAIL**",
+                         f"{g(wb['value'] / wb['bound'])} ({wb['metric']})" if wb else "–",
+                         f"{g(max(wt.get('estimate') or 0.0, wt['value']) / wt['tolerance'])} ({wt['metric']})"
+                         if wt else "–",
+                         f"{g(ev.get('step'))} s, p {g(ev.get('order'))}" if ev.get("step") else "–",
+                         g(p_obs) if isinstance(p_obs, (int, float)) and p_obs == p_obs else "–",
+                         "" if v["pass"] else v["text"]])
+    return rows
+
+
+VERDICT_HEAD = ["case", "engine", "verdict", "largest difference / bound (metric)",
+                "largest error / tolerance (metric)", "step, order p", "observed order", "why it fails"]
+
+
+def _verdict_text(d: dict) -> str:
+    n = sum(len(per) for per in (d.get("verdicts") or {}).values())
+    ok = sum(v["pass"] for per in (d.get("verdicts") or {}).values() for v in per.values())
+    return f"Verdict **{d['verdict']}**: {ok} of {n} case-engine verdicts pass ({len(d['runs'])} cases).\n\n"
+
+
+def compare_variant() -> str:
+    out = []
+    for name, what in (("compare_variant", "as judged"), ("compare_variant_refine", "with --refine")):
+        rec = load(name)
+        d = rec["data"]
+        refined = d.get("refined") or []
+        out.append(provenance(rec) + "\n" + f"**{what}**. " + _verdict_text(d)
+                   + ("Refined: " + "; ".join(f"{r['case']} {r['engine']} {r['setting']} {g(r['from'])} -> {g(r['to'])} s"
+                                              for r in refined) + ".\n\n" if refined else "")
+                   + table(VERDICT_HEAD, [r for r in _verdict_rows(d) if r[2] != "PASS" or r[1] != "semirecursive"]))
+    return "\n".join(out)
+
+
+def power() -> str:
+    rec = load("power")
+    d = rec["data"]
+    rows = [[t["injection"], "yes" if t["seen_at_nominal"] else "**no**", ", ".join(t["engines_seeing"]) or "–",
+             t["best_metric"] or "–", g(t["best_ratio"]), t["best_case"] or "–",
+             "–" if t["smallest_seen_scale"] is None else f"x{g(t['smallest_seen_scale'])}"]
+            for t in d["table"]]
+    seen = sum(t["seen_at_nominal"] for t in d["table"])
+    kinds: dict[str, int] = {}
+    for r in d["rows"]:
+        if r.get("failed") and r.get("scale") == 1.0:
+            kinds[r.get("kind", "-")] = kinds.get(r.get("kind", "-"), 0) + 1
+    return (provenance(rec) + "\n"
+            + f"**{seen} of {len(d['table'])}** injected errors at 0.1 % (lengths 0.02 mm) fail the default gate "
+              f"(cases {', '.join(c['name'] for c in d['cases'])}; engines {', '.join(d['engines'])}). Failing "
+              "runs at the listed size by verdict: "
+            + ", ".join(f"{k} {n}" for k, n in sorted(kinds.items())) + ". Largest difference / bound per error "
+              "(the engine and case that saw it most); smallest seen: the ladder's size (x10, x100) at which one that "
+              "passed was seen.\n\n"
+            + table(["injected error", "seen", "by", "metric", "difference / bound", "on case", "smallest seen"], rows))
+
+
+def verdict_cost() -> str:
+    rec = load("bench_verdict_cost")
+    d = rec["data"]
+    med = d["median_compare_wall_s"]
+    rows = []
+    for side in ("baseline", "current"):
+        for k, r in enumerate(d["rows"][side]):
+            rows.append([side, str(k + 1), r.get("rule", "?"), g(r.get("compare_wall_s")), g(r.get("command_wall_s")),
+                         g(r.get("command_cpu_s")), str(r.get("runs")), str(r.get("load_before")), str(r.get("verdict"))])
+    cur = d["rows"]["current"][-1].get("run_cpu_s_by_kind") or {}
+    return (provenance(rec) + "\n"
+            + f"Warm gate, default cases: median compare wall **{g(med['baseline'])} s** with fixed limits (revision "
+              f"{d['baseline']}) against **{g(med['current'])} s** with the per-run verdict: ratio "
+              f"**{g(d['ratio'])}** (aim: at most 2), interleaved in one run.\n\n"
+            + table(["code", "repeat", "rule", "compare wall s", "command wall s", "command CPU s", "runs",
+                     "load before", "verdict"], rows)
+            + "\nWhere the current gate's run CPU seconds go (last repeat): "
+            + ", ".join(f"{k} {g(v)}" for k, v in sorted(cur.items(), key=lambda kv: -kv[1])) + ".\n")
+
+
 def compare_gate() -> str:
     rec = load("compare")
     d = rec["data"]
+    if (d.get("rule") or {}).get("name") == "estimated":
+        return (provenance(rec) + "\n" + _verdict_text(d)
+                + "Per case and engine: the largest ratio of a difference from the converged reference to its bound "
+                  "k x (estimated error + reference's), the largest ratio of the error (the larger of the estimate "
+                  "and the difference) to the engineering tolerance, the step and the order the estimate assumed, "
+                  "and the order observed against the reference (h against h/2):\n\n"
+                + table(VERDICT_HEAD, _verdict_rows(d)))
     seismic_cases = {m["case"] for m in d["metrics"] if m["metric"] == "max_du_rel"}
     drive_metrics = ("max_dF_rel", "rms_dF_rel", "loop_area_rel", "peak_force_rel")
     seismic_metrics = ("max_du_rel", "max_dF_device_rel", "peak_u_rel", "peak_a_rel")
@@ -339,7 +432,8 @@ RENDER = {"compare-gate": compare_gate, "convergence": convergence, "tables-5-6"
           "engine-benchmarks": engine_benchmarks, "direction-study": direction_study, "bench-cycle": bench_cycle,
           "bench-rhs": bench_rhs, "bench-seismic": bench_seismic,
           "gate-times": gate_times, "bench-start": bench_start, "compile-units": compile_units,
-          "bench-record-set": bench_record_set,
+          "bench-record-set": bench_record_set, "compare-variant": compare_variant, "power": power,
+          "verdict-cost": verdict_cost,
           "work-precision": work_precision}
 
 

@@ -32,6 +32,15 @@ PY = [sys.executable]
 # name -> (command with OUT for the temporary folder, the file it writes, what to keep)
 MEASUREMENTS = {
     "compare": (NSD + ["compare", "--convergence", "--out", "OUT"], "results.json", "compare"),
+    # the per-run verdict on a variant no limit was derived for, as judged and after --refine; its power
+    "compare_variant": (NSD + ["compare", "--set", "n_wires=8", "--set", "rope_stiffness=7.5e5", "--out", "OUT"],
+                        "results.json", "compare"),
+    "compare_variant_refine": (NSD + ["compare", "--set", "n_wires=8", "--set", "rope_stiffness=7.5e5", "--refine",
+                                      "--out", "OUT"], "results.json", "compare"),
+    "power": (NSD + ["compare", "--power", "--power-size", "0.001", "--power-profiles", "default", "--power-cases",
+                     "A15mm_f1Hz,A15mm_f10Hz,A25.5mm_f10Hz,seismic_nf1_pulse", "--out", "OUT"], "power.json", "json"),
+    "bench_verdict_cost": (PY + ["benchmarks/bench_verdict_cost.py", "--baseline", "cc555d9", "--repeats", "2",
+                                 "--out", "OUT"], "bench_verdict_cost.json", "json"),
     "tables": (NSD + ["tables", "--out", "OUT"], "tables.csv", "csv"),
     "benchmark": (NSD + ["benchmark", "--out", "OUT"], "results.json", "json"),
     "polar": (NSD + ["polar", "--out", "OUT"], "polar.json", "json"),
@@ -67,7 +76,8 @@ def _keep_compare(data: dict) -> dict:
             for c, per in data["runs"].items()}
     keep = {"verdict": data.get("verdict"), "exit_code": data.get("exit_code"),
             "total_wall_time": data.get("total_wall_time"), "metrics": data["metrics"], "runs": runs,
-            "cases": data.get("cases")}
+            "cases": data.get("cases"), "rule": data.get("rule"), "verdicts": data.get("verdicts"),
+            "refined": data.get("refined"), "failures": data.get("failures")}
     if "convergence" in data:
         keep["convergence"] = data["convergence"]
     return keep

@@ -158,6 +158,12 @@ def junit_xml(summary: dict) -> str:
                 cases.append(f'  <testcase classname="nsd.compare" name={name} time="{t:.3f}">'
                              f'<error message={quoteattr(r["message"])}/></testcase>')
                 continue
+            v = (summary.get("verdicts") or {}).get(c, {}).get(e)
+            if v is not None:   # the estimated rule: the verdict in words
+                body = "" if v["pass"] else (f'<failure message={quoteattr(v["text"].split(":")[0])}>'
+                                             f'{escape(v["text"])}</failure>')
+                cases.append(f'  <testcase classname="nsd.compare" name={name} time="{t:.3f}">{body}</testcase>')
+                continue
             bad = [m for m in summary["metrics"] if m["case"] == c and m["engine"] == e and m["gated"] and not m["pass"]]
             body = "".join(f'<failure message={quoteattr(m["metric"])}>{escape(_failure_text(m))}</failure>' for m in bad)
             cases.append(f'  <testcase classname="nsd.compare" name={name} time="{t:.3f}">{body}</testcase>')

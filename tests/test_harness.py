@@ -54,6 +54,7 @@ def test_gate_fails_and_names_case_and_metric(perturbed):
     assert (out / "cycles" / "quick__mujoco.csv").exists() and (out / "cycles" / "stiff_ropes__semirecursive.csv").exists()
     junit = (d / "junit.xml").read_text()
     assert 'name="stiff_ropes.mujoco"' in junit and "<failure" in junit and 'failures="1"' in junit
+    assert "disagrees beyond numerical error" in junit
 
 
 def test_engine_failure_is_reported_for_its_case_and_others_kept(tmp_path):

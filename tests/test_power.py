@@ -78,3 +78,41 @@ def test_energy_balance_closes_and_sees_a_wrong_force():
     for k in ("F", "F_x", "F_y"):                                       # the drive force 0.1 % off
         r.columns[k] = r[k] * 1.001
     assert energy_balance_rel(r, g, 10.0, d.unit_vector) > 5e-4
+
+
+@pytest.mark.parametrize("text, words", [
+    ("[engineering]\nmax_dF_rel = 0\n", "engineering.max_dF_rel = 0: allowed: a number in (0, 1]"),
+    ("[engineering]\nmax_dF_rel = 2.0\n", "engineering.max_dF_rel = 2.0"),
+    ("[engineering]\nmax_dF_rel = \"x\"\n", "engineering.max_dF_rel = 'x'"),
+    ("[engineering]\nwobble = 1e-3\n", "engineering.wobble: unknown metric"),
+    ("[verdict]\nk = 0.5\n", "verdict.k = 0.5: allowed: 1 to 100"),
+    ("[verdict]\nbeta = 2\n", "verdict.beta = 2.0: allowed: 0 to 1"),
+    ("[verdict]\nrule = \"limits\"\n", "verdict.rule = 'limits'"),
+    ("[verdict]\nsafety = 3\n", "verdict.safety: unknown"),
+    ("[engineering]\nmax_dF_rel = 1e-3\n[limits]\nmax_dF_rel = 1e-3\n", "'limits' beside [engineering]"),
+])
+def test_bad_engineering_tolerances_exit_2_naming_the_field(tmp_path, text, words):
+    import subprocess
+    import sys
+    f = tmp_path / "tol.toml"
+    f.write_text(text)
+    out = tmp_path / "out"
+    p = subprocess.run([sys.executable, "-m", "nsd_cli.main", "compare", "--tolerances", str(f), "--out", str(out)],
+                       capture_output=True, text=True, timeout=120)
+    assert p.returncode == 2 and words in p.stderr and len(p.stderr.strip().splitlines()) == 1, p.stderr
+    assert not out.exists()
+
+
+def test_engineering_file_reads_with_defaults_and_refine_needs_it(tmp_path):
+    import subprocess
+    import sys
+    f = tmp_path / "tol.toml"
+    f.write_text("[verdict]\nk = 5\n[engineering]\nmax_dF_rel = 5e-4\n")
+    t = load_tolerances(f)
+    assert t.rule.k == 5.0 and t.rule.engineering["max_dF_rel"] == 5e-4
+    assert t.rule.engineering["max_du_rel"] == 1e-3 and "max_du_rel" in t.defaulted   # the rule's default, named
+    out = tmp_path / "out"
+    p = subprocess.run([sys.executable, "-m", "nsd_cli.main", "compare", "--profile", "regression", "--refine",
+                        "--out", str(out)], capture_output=True, text=True, timeout=120)
+    assert p.returncode == 2 and "--refine" in p.stderr and "fixed limits" in p.stderr, p.stderr
+    assert not out.exists()
