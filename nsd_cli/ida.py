@@ -21,6 +21,7 @@ from nsd_core.device.params import ParameterError
 
 HELP = "incremental dynamic analysis and fragility over a record set, with and without the device"
 HUNT_FLAGS = ("start", "step", "max_runs", "resolution")
+STROKE_MIN = 1e-6  # m, --limit stroke=VALUE (as a drive's smallest amplitude); the most: the rod's length
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -113,6 +114,9 @@ def run(args) -> int:
     params = base_params(args)
     args.restrainer = args.restrainer or limit.kind == "restrainer"
     structure = with_building(args, isolated_structure(args, params))
+    if limit.kind == "stroke" and not STROKE_MIN <= limit.value <= params.rod_length:
+        raise ParameterError(f"--limit {args.limit!r}: stroke must be in [{STROKE_MIN:g}, {params.rod_length:g}] m "
+                             "(at least 1 um; at the rod's length every run stops, which counts as reached)")
     if limit.kind == "drift" and structure.building is None:
         raise ParameterError(f"--limit {args.limit!r}: drift needs a building on the slab (--building stories=N)")
     solver = {**DEFAULT_SOLVER, **solver_settings(args)}

@@ -114,6 +114,8 @@ for flag, values in (("--levels", ("1e300", "0", "-1", "1e-4", "nan", "inf", "x"
                      ("--max-runs", ("1", "101", "x")), ("--resolution", ("0", "1", "nan"))):
     for v in values:
         add(f"ida{flag}-{v[:12]}", IDA[:-2] + [flag, v] + IDA[-2:], fragment=flag.lstrip("-").split("-")[0])
+for v in ("1e300", "0.031", "1e-7", "1e-320"):
+    add(f"ida-limit-stroke-{v}", IDA[:6] + [f"stroke={v}"] + IDA[7:], fragment="stroke")
 add("ida-work-max-runs", ["ida", "--record-set", "farfield", "--limit", "stroke=0.02", "--max-runs", "100",
                           "--out", "{out}"], fragment="solver steps")
 add("ida-work-levels", ["ida", "--record-set", "farfield", "--limit", "stroke=0.02", "--levels",
