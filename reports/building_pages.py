@@ -84,9 +84,14 @@ def profiles_figure(label: str, summaries: dict, ratios: list):
     for ax in (ax1, ax2):
         ax.grid(alpha=0.3)
         ax.legend(loc="best")
+    n = max([r["index"] for r in ratios if isinstance(r.get("index"), int)] or [0])
+    shown = set(shown_floors(n))   # a tall building's rows would run off the page: the floors drawn elsewhere
+    kept = [r for r in ratios if not r.get("index") or r["index"] in shown]
     rows = [[r["quantity"] + (f" {r['index']}" if r.get("index") else ""), fmt(r["fixed_base"]), fmt(r["supports"]),
              fmt(r["device"]), fmt(r["supports_over_fixed"]), fmt(r["device_over_fixed"]),
-             fmt(r["device_over_supports"])] for r in ratios]
+             fmt(r["device_over_supports"])] for r in kept]
+    if len(kept) < len(ratios):
+        rows.append([f"(stories {', '.join(map(str, sorted(shown)))} of {n}; all in building_ratios.csv)"] + [""] * 6)
     table(fig, 0.33, [("quantity", 0.2, "l"), ("fixed base", 0.13, "r"), ("supports alone", 0.13, "r"),
                       ("with the device", 0.13, "r"), ("supports / fixed", 0.13, "r"), ("device / fixed", 0.13, "r"),
                       ("device / supports", 0.15, "r")], rows, fontsize=6.5)

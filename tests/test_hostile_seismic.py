@@ -385,3 +385,14 @@ def test_nsd_params_lists_a_device_without_a_default_structure(tmp_path):
     s = run("seismic", "--ground", GROUND, "--set", "rope_stiffness=1000", "--out", str(tmp_path / "o"))
     assert s.returncode == 2 and len(s.stderr.strip().splitlines()) == 1 and "rope_stiffness" in s.stderr, s.stderr
     assert not (tmp_path / "o").exists()
+
+
+def test_a_tall_building_s_pages_stay_inside_the_page(tmp_path, capsys):
+    """--compare-building with 12 stories: the profiles page's ratio table and the floors pages keep
+    every text inside the page (the table ran off it, the floors page had no height for 36 panels)."""
+    from tests.page_checks import figure_problems
+    out = tmp_path / "out"
+    code = main(["seismic", "--ground", "harmonic:amplitude=1,frequency=2,duration=0.05", "--building", "stories=12",
+                 "--compare-building", "--out", str(out)])
+    assert code == 0, capsys.readouterr().err
+    assert figure_problems(out) == {}
