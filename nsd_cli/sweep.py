@@ -59,7 +59,8 @@ def start_scheduler_hint() -> str:
     from pathlib import Path
     here = Path(sys.executable).parent / "dask"
     if importlib.util.find_spec("distributed") is not None and here.exists():
-        return f"start one with `{here} scheduler` and its workers with `{here} worker tcp://HOST:PORT`"
+        return (f"start one with `{here} scheduler` and its workers with `{here} worker tcp://HOST:PORT` "
+                "(the [dask] extra; README, Quick start)")
     return (f"Dask is not installed here: `{sys.executable} -m pip install -e '.[dask]'` from the repository "
             "adds it (then `dask scheduler`, `dask worker tcp://HOST:PORT`)")
 
