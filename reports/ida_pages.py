@@ -129,7 +129,8 @@ def fragility_figure(index: dict, frag: dict):
     width = (0.97 - 0.65) * LANDSCAPE[0] * 72   # the side column, to the page's right margin
     lines = []
     for block in texts:   # the first line of a configuration flush, the rest indented under it
-        lines += wrap_width(block[0], width, 7.5) + [w for ln in block[1:] for w in wrap_width("  " + ln, width, 7.5, "  ")]
+        lines += wrap_width(block[0], width, 7.5)
+        lines += [w for ln in block[1:] for w in wrap_width("- " + ln, width, 7.5, indent="  ")]
         lines.append("")
     fig.text(0.65, 0.84, "\n".join(lines[:-1]), fontsize=7.5, va="top")
     return fig
