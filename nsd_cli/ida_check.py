@@ -27,6 +27,7 @@ import numpy as np
 
 from comparisons.seismic import building_metrics, seismic_metrics
 from nsd_core.device.isolation import Structure
+from nsd_core.device.params import ParameterError
 from nsd_core.device.results import RunResult, read_csv, write_columns
 from nsd_core.study.ida import Trace, run_ida_point
 from nsd_core.study.store import Store
@@ -167,8 +168,8 @@ def cross_check(traces: list[Trace], store: Store, frag: dict, peers: list[str],
             entry["error"] = f"in-house run: {(ref_rec or {}).get('error')}"
             continue
         _copy(store.folder(ref_key) / "seismic.csv", folder / "seismic.csv")
-        ref = read_csv(folder / "seismic.csv")
-        entry["wall_time"] = {"semirecursive": ref_rec["wall_time"]}
+        ref = _stored_series(folder / "seismic.csv", store.folder(ref_key))
+        entry["wall_time"] = {"semirecursive": ref_rec.get("wall_time")}
         if tr.device:
             for e in peers:
                 key = tr.point(level, keep_series=True, engine=e).key
@@ -177,8 +178,8 @@ def cross_check(traces: list[Trace], store: Store, frag: dict, peers: list[str],
                     entry["engines"][e] = {"status": "failed", "error": (rec or {}).get("error")}
                     continue
                 _copy(store.folder(key) / "seismic.csv", folder / f"seismic_{e}.csv")
-                peer = read_csv(folder / f"seismic_{e}.csv", e)
-                entry["engines"][e] = {**seismic_metrics(ref, peer), "wall_time": rec["wall_time"]}
+                peer = _stored_series(folder / f"seismic_{e}.csv", store.folder(key), e)
+                entry["engines"][e] = {**seismic_metrics(ref, peer), "wall_time": rec.get("wall_time")}
                 if "floor1_x" in ref.columns:   # a building on the slab: its floors and stories too
                     entry["engines"][e]["building"] = building_metrics(ref, peer)
         else:
@@ -187,6 +188,16 @@ def cross_check(traces: list[Trace], store: Store, frag: dict, peers: list[str],
                 write_columns(folder / "exact.csv", cols)
             entry["engines"]["exact"] = metrics
     return out
+
+
+def _stored_series(path: Path, stored: Path, engine: str = "") -> RunResult:
+    """A cross-checked run's series; a damaged one (truncated, edited) is one line naming where it is
+    stored (exit 2), never a traceback."""
+    try:
+        return read_csv(path, engine)
+    except (ValueError, IndexError, OSError) as e:
+        raise ParameterError(f"{stored}: a damaged stored series ({' '.join(str(e).split())[:100]}); delete that "
+                             "folder and run nsd ida again to redo it") from None
 
 
 def _copy(src: Path, dest: Path) -> None:

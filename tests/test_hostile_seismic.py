@@ -396,3 +396,19 @@ def test_a_tall_building_s_pages_stay_inside_the_page(tmp_path, capsys):
                  "--compare-building", "--out", str(out)])
     assert code == 0, capsys.readouterr().err
     assert figure_problems(out) == {}
+
+
+def test_a_stored_run_whose_series_is_gone_is_not_a_result(tmp_path):
+    """A stored result naming a series that is missing, or is a FIFO where the file was, is run again."""
+    from nsd_core.study.store import Store
+    store = Store(tmp_path)
+    rec = {"key": "k", "status": "ok", "error": None, "design": {}, "metrics": {}, "files": {"seismic": "seismic.csv"}}
+    folder = store.folder("k")
+    folder.mkdir(parents=True)
+    (folder / "result.json").write_text(json.dumps(rec))
+    assert store.load("k") is None                       # the series is gone
+    os.mkfifo(folder / "seismic.csv")
+    assert store.load("k") is None                       # a FIFO where it was
+    (folder / "seismic.csv").unlink()
+    (folder / "seismic.csv").write_text("t [s]\n0\n")
+    assert store.load("k") == rec

@@ -57,7 +57,13 @@ class Store:
             rec = json.loads(data.decode("utf-8"))
         except (json.JSONDecodeError, UnicodeDecodeError, RecursionError):
             return None
-        return rec if _intact(rec) else None
+        if not _intact(rec):
+            return None
+        for name in (rec.get("files") or {}).values() if rec["status"] == "ok" else ():
+            f = self.folder(key) / str(name)
+            if not (f.is_file() and not f.is_symlink()) or Path(name).name != name:
+                return None   # a series it names is gone (or not a plain file there): run it again
+        return rec
 
     def save(self, d: Design, out: dict) -> dict:
         """Store one finished job (a Design or any frozen dataclass with ``key``): its files, then result.json."""
