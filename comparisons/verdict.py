@@ -78,13 +78,14 @@ def _finite(x) -> float:
 
 
 def case_verdicts(case, kind: str, engines: list[str], values: dict, estimates: dict, ref_error: dict,
-                  scales: dict, evidence: dict, rule: Rule) -> tuple[list[dict], dict]:
+                  scales: dict, evidence: dict, rule: Rule, floors: dict | None = None) -> tuple[list[dict], dict]:
     """Rows (one per engine and metric) and verdicts (one per engine) of one case.
 
     values[e]: metric -> e's difference from the converged reference (own checks: their value);
     estimates[e]: metric -> e's estimated error (None: not estimated); ref_error: metric -> the
     reference's own error; scales: metric -> (scale, unit) to state a tolerance in units;
-    evidence[e]: step, order, observed order, ratio, setting (for the step needed)."""
+    evidence[e]: step, order, observed order, ratio, setting (for the step needed); floors: metric -> the
+    resolution below which a difference is not measurable (a region boundary: two output samples)."""
     rows, verdicts = [], {}
     for e in engines:
         if e not in values:
@@ -102,10 +103,12 @@ def case_verdicts(case, kind: str, engines: list[str], values: dict, estimates: 
             est = estimates.get(e, {}).get(metric)
             ref = ref_error.get(metric, 0.0) or 0.0
             est = _finite(est) if est is not None else math.inf
-            bound = rule.k * (est + ref) + FLOOR
-            err = max(est, value)
-            erows.append(_row(case, e, CONVERGED, metric, value, est, ref, bound, tol, value <= bound, err <= tol,
-                              scales))
+            bound = rule.k * (est + ref) + max(FLOOR, (floors or {}).get(metric, 0.0))
+            consistent = value <= bound
+            # a consistent engine's error is also at least its distance from the reference; an inconsistent
+            # one's distance holds the modelling difference, so its own estimate alone says how converged it is
+            err = max(est, value) if consistent else est
+            erows.append(_row(case, e, CONVERGED, metric, value, est, ref, bound, tol, consistent, err <= tol, scales))
         rows += erows
         verdicts[e] = _verdict(e, erows, ev, rule)
     return rows, verdicts
@@ -142,8 +145,10 @@ def _verdict(engine: str, rows: list[dict], ev: dict, rule: Rule) -> dict:
         parts.append(f"disagrees beyond numerical error: {r['metric']} = {r['value']:.3g} is {ratio:.3g}x its bound "
                      f"{rule.k:g} x (estimated error {r['estimate']:.2g} + reference's {r['reference_error']:.2g})")
     if inacc and not missing:
-        r = max(inacc, key=lambda r: max(r["estimate"] or 0.0, r["value"]) / r["tolerance"])
-        err = max(r["estimate"] or 0.0, r["value"])
+        def err_of(r):
+            return max(r["estimate"] or 0.0, r["value"]) if r["consistent"] is not False else r["estimate"]
+        r = max(inacc, key=lambda r: err_of(r) / r["tolerance"])
+        err = err_of(r)
         text = f"not converged at these settings: {r['metric']} error {err:.3g} > tolerance {r['tolerance']:.3g}"
         if r["tolerance_abs"] is not None:
             text += f" ({_units(err * r['scale'], r['unit'])} > {_units(r['tolerance_abs'], r['unit'])})"
