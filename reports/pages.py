@@ -152,8 +152,8 @@ def _seismic_line(c: dict) -> str:
             f"{g.get('RecordingStationName', '?')}" if "set" in g else _closed_form(g))
     return (f"{c['name']}: {what}; window " + (f"{fmt_full(w[0])} to {fmt_full(w[1])} record s" if w else "whole record")
             + f", scale {fmt_full(g.get('scale', c.get('scale', 1.0)))}, rotation "
-            f"{fmt_full(g.get('rotate_deg', c.get('rotate_deg', 0.0)))} deg, time factor {fmt_full(g.get('time_factor'))}, "
-            f"{fmt_full(c.get('model_duration', c.get('duration')))} model s"
+            f"{fmt_full(g.get('rotate_deg', c.get('rotate_deg', 0.0)))} deg, time factor {fmt(g.get('time_factor'), 5)}, "
+            f"{fmt(c.get('model_duration', c.get('duration')), 5)} model s"
             + ("" if c.get("device", True) else ", supports alone"))
 
 
@@ -210,18 +210,18 @@ def seismic_rows(data) -> tuple[list, list, list, list]:
         rows.append([c["name"], ident, str(event), str(g.get("RecordingStationName", g.get("station", "-"))),
                      f"{fmt_full(w[0])} to {fmt_full(w[1])}" if w else "whole record",
                      fmt_full(g.get("scale", c.get("scale", 1.0))), fmt_full(g.get("rotate_deg", c.get("rotate_deg", 0.0))),
-                     fmt_full(g.get("time_factor")), fmt_full(c.get("model_duration", c.get("duration"))),
+                     fmt(g.get("time_factor"), 5), fmt(c.get("model_duration", c.get("duration")), 5),
                      fmt_full(c.get("dt_out")), "yes" if c.get("device", True) else "no (supports alone)",
                      _settings_text(c.get("settings"))])
         st = c.get("structure_used") or {}
         prov = st.get("provenance") or {}
         for key, sym, unit in (("mass", "M", "kg"), ("stiffness", "k_b", "N/m"), ("damping", "c_b", "N s/m"),
                                ("radius_of_gyration", "r_g", "m"), ("support_radius", "r_b", "m")):
-            srows.append([c["name"], f"{sym} ({key.replace('_', ' ')})", fmt_full(st.get(key)), unit,
+            srows.append([c["name"], f"{sym} ({key.replace('_', ' ')})", fmt(st.get(key), 5), unit,
                           str(prov.get(key, "not recorded"))])
         if isinstance(prov.get("K_dev"), dict):
             k = prov["K_dev"]
-            srows.append([c["name"], "K_dev (device, most negative)", fmt_full(k.get("value")), "N/m",
+            srows.append([c["name"], "K_dev (device, most negative)", fmt(k.get("value"), 5), "N/m",
                           f"{k.get('how', '')}; along psi = {fmt_full(k.get('direction_deg'))} deg"])
     scols = [("case", 1, "l"), ("structure", 1, "l"), ("value", 1, "r"), ("unit", 1, "c"), ("provenance", 1, "l")]
     return cols, rows, scols, srows
