@@ -116,3 +116,58 @@ def test_engineering_file_reads_with_defaults_and_refine_needs_it(tmp_path):
                         "--out", str(out)], capture_output=True, text=True, timeout=120)
     assert p.returncode == 2 and "--refine" in p.stderr and "fixed limits" in p.stderr, p.stderr
     assert not out.exists()
+
+
+POWER_CASE = """
+[[case]]
+name = "A25.5mm_f10Hz"
+amplitude = 0.0255
+frequency = 10.0
+settings.mujoco = { timestep = 5e-6 }
+"""
+SEISMIC_CASE = """
+[[case]]
+name = "seismic_nf1_pulse"
+mode = "seismic"
+record = "nearfield-pulse:1"
+window = [4.8, 6.0]
+scale = 0.4
+rotate_deg = 20.0
+dt_out = 1e-3
+settings.exudyn = { step_size = 1e-4 }
+"""
+
+
+def _power_cli(tmp_path, case_text: str, engine: str) -> tuple[int, dict]:
+    import json
+    import subprocess
+    import sys
+    cases = tmp_path / "cases.toml"
+    cases.write_text(case_text)
+    out = tmp_path / "power"
+    p = subprocess.run([sys.executable, "-m", "nsd_cli.main", "compare", "--power", "--power-size", "0.001",
+                        "--power-engines", engine, "--cases", str(cases), "--tolerances", "comparisons/tolerances.toml",
+                        "--out", str(out), "--workers", "2"], capture_output=True, text=True, timeout=1500)
+    assert p.returncode in (0, 1), p.stdout[-2000:] + p.stderr[-2000:]
+    return p.returncode, json.loads((out / "power.json").read_text())
+
+
+def test_power_cli_end_to_end_under_the_per_run_verdict(tmp_path):
+    """nsd compare --power at 0.1 % on one drive case, MuJoCo: every listed error runs at h and h/2 in
+    MuJoCo's own model and is judged by the rule; measured 28 of 31 seen (the rod mass +-0.1 % and the
+    spring's zeta0 are below 3x MuJoCo's numerical error there), every one as a disagreement."""
+    code, d = _power_cli(tmp_path, POWER_CASE, "mujoco")
+    assert d["rule"]["name"] == "estimated" and len(d["table"]) == 31
+    seen = sum(t["seen_at_nominal"] for t in d["table"])
+    assert seen >= 26, [t["injection"] for t in d["table"] if not t["seen_at_nominal"]]
+    assert code == (0 if seen == 31 else 1)
+    nominal = [r for r in d["rows"] if r["scale"] == 1.0]
+    assert all(r["kind"] == "disagrees" for r in nominal if r["failed"])   # never a spurious 'not converged'
+    assert not [r for r in nominal if r.get("error")]
+
+
+@pytest.mark.slow
+def test_power_cli_on_a_seismic_case(tmp_path):
+    """The same on the gate's near-fault seismic window in Exudyn: measured 27 of 31 seen at 0.1 %."""
+    _, d = _power_cli(tmp_path, SEISMIC_CASE, "exudyn")
+    assert sum(t["seen_at_nominal"] for t in d["table"]) >= 26
