@@ -110,8 +110,8 @@ TINY = ",".join(f"{0.001 * (i + 1):.3f}" for i in range(5000))
 for flag, values in (("--levels", ("1e300", "0", "-1", "1e-4", "nan", "inf", "x", "101", "1,1", TINY,
                                    ",".join(str(i + 1) for i in range(101)))),
                      ("--start", ("1e300", "0", "1e-4", "nan", "inf", "101", "-1")),
-                     ("--step", ("1e300", "0", "-1", "nan", "inf", "101")),
-                     ("--max-runs", ("1", "101", "x")), ("--resolution", ("0", "1", "nan"))):
+                     ("--step", ("1e300", "0", "-1", "nan", "inf", "101", "1e-320", "1e-9")),
+                     ("--max-runs", ("1", "101", "x")), ("--resolution", ("0", "1", "nan", "1e-320", "1e-9"))):
     for v in values:
         add(f"ida{flag}-{v[:12]}", IDA[:-2] + [flag, v] + IDA[-2:], fragment=flag.lstrip("-").split("-")[0])
 for v in ("1e300", "0.031", "1e-7", "1e-320"):

@@ -34,6 +34,7 @@ GROWTH = 0.5  # step increment / step (Vamvatsikos and Cornell 2002: 0.1 g step,
 # level would leave either range. At most LEVELS_MAX levels (the bound of --max-runs).
 IM_RANGE = (1e-3, 100.0)
 LEVELS_MAX = 100
+RESOLUTION_MIN = 1e-3   # a finer bracket than 0.1 % of the level is below what the runs can tell apart
 
 
 def tidy(level: float) -> float:
@@ -52,17 +53,16 @@ class Hunt:
 
     def __post_init__(self):
         lo, hi = IM_RANGE
-        for name in ("start", "step"):
+        for name in ("start", "step"):   # a step below the smallest level would repeat a level (9 digits)
             v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and (lo if name == "start" else 0) <= v <= hi
-                    and v > 0):
-                allowed = f"[{lo:g}, {hi:g}]" if name == "start" else f"(0, {hi:g}]"
-                raise ParameterError(f"--{name} = {v!r}: must be a finite number in {allowed} m/s^2")
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and lo <= v <= hi):
+                raise ParameterError(f"--{name} = {v!r}: must be a finite number in [{lo:g}, {hi:g}] m/s^2")
         if not (isinstance(self.max_runs, int) and 2 <= self.max_runs <= 100):
             raise ParameterError(f"--max-runs = {self.max_runs!r}: must be a whole number in 2..100")
         r = self.resolution
-        if not (isinstance(r, (int, float)) and math.isfinite(r) and 0 < r < 1):
-            raise ParameterError(f"--resolution = {r!r}: must be a number in (0, 1) (fraction of the level)")
+        if not (isinstance(r, (int, float)) and math.isfinite(r) and RESOLUTION_MIN <= r < 1):
+            raise ParameterError(f"--resolution = {r!r}: must be a number in [{RESOLUTION_MIN:g}, 1) (fraction of "
+                                 "the level)")
 
 
 def bracket(history: list[tuple[float, bool]]) -> tuple[float, float | None]:
