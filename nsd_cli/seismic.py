@@ -16,7 +16,7 @@ import argparse
 import math
 
 from nsd_cli import limits as lim
-from nsd_cli import seismic_building, seismic_extras
+from nsd_cli import seismic_building, seismic_checks, seismic_extras
 from nsd_cli.options import (Progress, add_param_arguments, add_solver_arguments, base_params, check_finite,
                              check_out_dir, solver_settings)
 from nsd_core.device.params import ParameterError
@@ -60,6 +60,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "restrainer_exponent, restrainer_damping (SI)")
     seismic_extras.add_arguments(p)
     seismic_building.add_arguments(p)
+    seismic_checks.add_arguments(p)
     p.add_argument("--records", default=None, metavar="1,3,5-7", help="with --record-set: these records only (default all)")
     p.add_argument("--workers", type=int, default=None, help="with --record-set: local processes (default: the cores)")
     p.add_argument("--scheduler", default=None, help="with --record-set: address of a running Dask scheduler")
@@ -161,8 +162,12 @@ def run(args) -> int:
             raise ParameterError(f"--{name.replace('_', '-')} = {v}: must be a finite number > 0 (s)")
     if args.fixed_base and len(engines) > 1:
         raise ParameterError("--engines: the fixed base runs on the in-house engine only")
+    restoring = seismic_checks.restoring_force(args, params, structure)
     out = check_out_dir("--out", args.out)
     head = {"ground": motion.describe(), "structure": structure.to_dict(), "device": not args.no_device}
+    if restoring is not None:
+        head["restoring_force"] = restoring
+    seismic_checks.print_restoring_force(restoring)
     if args.compare_building:
         if len(engines) > 1:
             raise ParameterError(f"--engines {args.engines!r}: --compare-building runs the in-house engine only")
@@ -183,7 +188,7 @@ def run(args) -> int:
         raise
     summary = {**head, **seismic_summary(result), "solver": result.stats, "wall_time": result.stats["wall_time"],
                "versions": versions(), "params": params.describe()}
-    seismic_extras.peak_warning(summary)
+    seismic_extras.warn(summary)
     others = {}
     for name in engines[1:]:
         other = run_seismic_engine(name, params, structure, motion, duration=args.duration, dt_out=args.dt_out)
@@ -284,7 +289,9 @@ def run_set(args) -> int:
                                   f"record {r.set}:{r.record}'s own duration")
     timeout = scheduler_timeout(args)
     check_scheduler(args.scheduler, timeout)
+    restoring = seismic_checks.restoring_force(args, params, structure)
     out = check_out_dir("--out", args.out)
+    seismic_checks.print_restoring_force(restoring)
     index = run_record_set(runs, out, workers=workers, scheduler=args.scheduler, scheduler_timeout=timeout,
                            retry_failed=args.retry_failed,
                            run_engine=run_seismic_engine, compare=seismic_metrics, tally=args.tally)

@@ -61,7 +61,7 @@ def run_compare(args, params, structure, motion, solver, out, head: dict) -> int
     """--compare-building: the three runs written, the ratios; exit 4 if the device run was ended by
     the device's failure (the runs are still written), 0 otherwise."""
     from nsd_cli.options import Progress
-    from nsd_cli.seismic_extras import peak_warning
+    from nsd_cli.seismic_extras import warn
     from nsd_core.device.results import atomic_write_json, versions, write_csv
     from nsd_core.study.building_compare import CONFIGURATIONS, run_three
     runs = run_three(params, structure, motion, duration=args.duration, dt_out=args.dt_out, solver=solver,
@@ -74,8 +74,7 @@ def run_compare(args, params, structure, motion, solver, out, head: dict) -> int
         summary = {**head, "device": name == "device", "fixed_base": name == "fixed_base", **run["summary"],
                    "solver": run["result"].stats, "complete": run["complete"], "versions": versions(),
                    "params": params.describe()}
-        if run["complete"]:
-            peak_warning(summary, f"{name}: ")
+        warn(summary, f"{name}: ")
         (out / name).mkdir(parents=True, exist_ok=True)
         write_csv(out / name / "seismic.csv", run["result"])
         atomic_write_json(out / name / "summary.json", summary)

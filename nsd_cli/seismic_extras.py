@@ -1,5 +1,5 @@
 """``nsd seismic`` (issue 23): the displacement restrainer's options, a run the device's failure ends
-(exit 4) still written, the warning when a peak falls on the last sample, and ``--compare-supports``
+(exit 4) still written, the run's warnings (nsd_core.device.seismic_warnings), and ``--compare-supports``
 (with the device and on the supports alone, both written, with their ratios). See docs/seismic.md.
 
 Layout of ``--compare-supports --out DIR``:
@@ -52,13 +52,12 @@ def check_compare(args, engines) -> None:
         raise ParameterError(f"--engines {args.engines!r}: --compare-supports runs the in-house engine only")
 
 
-def peak_warning(summary: dict, which: str = "") -> None:
-    """summary["warnings"] and one stderr line when a response peak falls on the run's last sample."""
-    at_end = summary.get("peaks_at_last_sample") or []
-    if at_end:
-        text = (f"{', '.join(at_end)} at the last sample (t = {summary['residual_displacement']['t']:.6g} s): "
-                "the true peak may lie beyond the window (lengthen --duration or the window)")
-        summary.setdefault("warnings", []).append(text)
+def warn(summary: dict, which: str = "") -> None:
+    """summary["warnings"] (and "warning_kinds") by the warning rules of nsd_core.device.seismic_warnings
+    (stroke exhausted or nearly, beyond the device's stroke, restrainer impacts, peaks on the last
+    sample), and one stderr line per warning."""
+    from nsd_core.device.seismic_warnings import apply_warnings
+    for text in apply_warnings(summary):
         print(f"nsd seismic: warning: {which}{text}", file=sys.stderr)
 
 
@@ -91,6 +90,7 @@ def write_stopped(err, out, head: dict) -> None:
     summary = stopped_summary(err, head)
     if summary is None:
         return
+    warn(summary)
     write_csv(out / "seismic.csv", err.partial)  # (no last-sample warning: the event ends the series)
     atomic_write_json(out / "summary.json", summary)
     print(f"stopped at t = {summary['stopped']['t']:.6g} s ({summary['stopped']['kind']}); kept the series up to "
@@ -112,8 +112,7 @@ def run_compare(args, params, structure, motion, solver, out, head: dict) -> int
             continue
         summary = {**head, "device": name == "device", **run["summary"], "solver": run["result"].stats,
                    "complete": run["complete"], "versions": versions(), "params": params.describe()}
-        if run["complete"]:
-            peak_warning(summary, f"{name}: ")
+        warn(summary, f"{name}: ")
         (out / name).mkdir(parents=True, exist_ok=True)
         write_csv(out / name / "seismic.csv", run["result"])
         atomic_write_json(out / name / "summary.json", summary)

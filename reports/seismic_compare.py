@@ -91,6 +91,8 @@ def overlay_figure(label: str, runs: dict, ratios: dict | None, stops: dict, war
         table(fig, 0.31, [("quantity", 1.4, "l"), ("with the device", 0.8, "r"), ("supports alone", 0.8, "r"),
                           ("ratio", 0.6, "r"), ("what", 3.6, "l")], rows, fontsize=8.0, left=0.06, right=0.97)
     lines = [ln for w in warnings for ln in wrap_width(f"warning: {w}", 0.9 * LANDSCAPE[0] * 72, 7.5, indent="   ")]
+    if len(lines) > 4:   # the room above the footer: the rest on the warnings page
+        lines = lines[:3] + [f"   ... {len(warnings)} warnings in all: the warnings page lists every one"]
     for k, line in enumerate(lines):   # wrapped, never cut (issue 20)
         fig.text(0.06, 0.10 - 0.018 * k, line, color=RED, fontsize=7.5)
     return fig

@@ -16,6 +16,7 @@ from nsd_core.device.results import read_csv
 from reports import building_pages as bp
 from reports import seismic_compare as sc
 from reports import seismic_pages as sp
+from reports.warnings_page import collect, warnings_pages
 
 NEEDED = ("t", "x", "y", "ax_abs", "ay_abs", "device_Fx", "device_Fy")
 
@@ -95,7 +96,10 @@ def seismic_plan(folder) -> tuple[list[tuple[str, Callable]], str]:
                 cpu = solver.get("cpu_time")
                 row["cost"] = (f"{solver['wall_time'] / solver['model_time']:.3g} / "
                                + (f"{cpu / solver['model_time']:.3g}" if isinstance(cpu, (int, float)) else "n/a"))
+        entries = index.get("entries") if isinstance(index.get("entries"), list) else []
         plan = [("set_table", lambda: sp.set_table_figure(index))]
+        plan += warnings_pages(f"record set {index.get('set')}", collect(
+            (f"record {e.get('set')}:{e.get('id')}: ", e) for e in entries if isinstance(e, dict)), "set.json")
         for row in rows:
             folder = root / "records" / f"{row['set']}_{row['id']}"
             if row.get("status") == "ok" and (folder / "seismic.csv").is_file():
@@ -106,9 +110,14 @@ def seismic_plan(folder) -> tuple[list[tuple[str, Callable]], str]:
                 plan += _run_pages(f"{row['set']}:{row['id']}", runs, _cost(summ), summ.get("ground"), nodevice)
         return plan, f"NSD seismic report  |  record set {index.get('set')}"
     if bp.is_building_compare(root):  # nsd seismic --compare-building (reports.building_pages)
-        return bp.compare_plan(root, _runs)
+        plan, footer = bp.compare_plan(root, _runs)
+        return warnings_pages("the building fixed-base and isolated", collect(
+            (f"{c}: ", _summary(root / c)) for c in bp.CONFIGS), "each configuration's summary.json") + plan, footer
     if sc.is_compare(root):  # nsd seismic --compare-supports (reports.seismic_compare)
-        return sc.compare_plan(root, _runs)
+        plan, footer = sc.compare_plan(root, _runs)
+        return warnings_pages("with and without the device", collect(
+            (f"{sc.RUNS[c][0]}: ", _summary(root / c)) for c in sc.RUNS), "device/ and supports/summary.json") + plan, \
+            footer
     runs = _runs(root)
     summary = _summary(root)
     ground = summary.get("ground") if isinstance(summary.get("ground"), dict) else {}
@@ -118,7 +127,7 @@ def seismic_plan(folder) -> tuple[list[tuple[str, Callable]], str]:
     pages = _run_pages(label, runs, _cost(summary), ground)
     if isinstance(summary.get("stopped"), dict):  # exit 4: the series up to the event, the event marked
         pages = [(stem, sc.with_stop_mark(draw, summary["stopped"])) for stem, draw in pages]
-    return pages, f"NSD seismic report  |  {label}"
+    return warnings_pages(label, collect([("", summary)])) + pages, f"NSD seismic report  |  {label}"
 
 
 def compare_seismic_pages(root) -> list[tuple[str, Callable]]:

@@ -349,9 +349,15 @@ def _row(set_: str, rid: int, group: dict, recs: dict, peers: list[str]) -> tupl
         reasons.append(f"device: outside the working range (the ropes went slack; peak |u| "
                        f"{s_dev['peak_displacement']['value'] * 1e3:.3g} mm"
                        + (f" of the {rod * 1e3:.3g} mm rod)" if rod else ")"))
-    for s, name in ((s_dev, "device"), (s_nod, "nodevice")):  # set.json: the true peak may lie beyond the window
-        if s and s.get("peaks_at_last_sample"):
-            entry.setdefault("warnings", []).append(f"{name}: {', '.join(s['peaks_at_last_sample'])} at the last "
-                                                    "sample")
+    from nsd_core.device.seismic_warnings import run_warnings  # set.json: the runs' warnings (one home of the rules)
+    rod = {p["name"]: p["value"] for p in (s_dev or s_nod or {}).get("params") or []}.get("rod_length")
+    if dev and dev["status"] != "ok" and (dev["metrics"] or {}).get("reason") in ("rod_reach", "outside_validity"):
+        stop = {"kind": dev["metrics"]["reason"], "t": dev["metrics"].get("t", float("nan"))}
+        entry.setdefault("warnings", []).extend(f"device: {w['text']}" for w in run_warnings({"stopped": stop}))
+    for s, name in ((s_dev, "device"), (s_nod, "nodevice")):
+        if s:
+            entry.setdefault("warnings", []).extend(f"{name}: {w['text']}" for w in run_warnings(s, rod))
+    if not entry.get("warnings"):
+        entry.pop("warnings", None)
     row["status"], row["reason"] = worst, "; ".join(reasons)
     return row, entry
