@@ -356,7 +356,8 @@ def _row(set_: str, rid: int, group: dict, recs: dict, peers: list[str]) -> tupl
         entry.setdefault("warnings", []).extend(f"device: {w['text']}" for w in run_warnings({"stopped": stop}))
     for s, name in ((s_dev, "device"), (s_nod, "nodevice")):
         if s:
-            entry.setdefault("warnings", []).extend(f"{name}: {w['text']}" for w in run_warnings(s, rod))
+            entry.setdefault("warnings", []).extend(f"{name}: {w['text']}"
+                                                    for w in run_warnings({**s, "device": name == "device"}, rod))
     if not entry.get("warnings"):
         entry.pop("warnings", None)
     row["status"], row["reason"] = worst, "; ".join(reasons)
