@@ -94,7 +94,8 @@ def _verdict_rows(d: dict) -> list[list[str]]:
                          f"{g(wb['value'] / wb['bound'])} ({wb['metric']})" if wb else "–",
                          f"{g(max(wt.get('estimate') or 0.0, wt['value']) / wt['tolerance'])} ({wt['metric']})"
                          if wt else "–",
-                         f"{g(ev.get('step'))} s, p {g(ev.get('order'))}" if ev.get("step") else "–",
+                         (f"rtol {g(ev.get('step'))}" if ev.get("setting") == "rtol" else
+                          f"{g(ev.get('step'))} s, p {g(ev.get('order'))}") if ev.get("step") else "–",
                          g(p_obs) if isinstance(p_obs, (int, float)) and p_obs == p_obs else "–",
                          "" if v["pass"] else v["text"]])
     return rows

@@ -63,9 +63,11 @@ def judge_case(case, engines: list[str], results: dict, entries: dict, rule: Rul
         if (case.name, e) not in results:
             continue
         values[e] = {**diff(e, CONVERGED), **own_checks(case, results[(case.name, e)])}
-        if e == REFERENCE:
+        if e == REFERENCE:   # its error is proportional to its rtol: --refine can ask for a smaller one
             estimates[e] = {k: v for k, v in values[e].items()}
-            evidence[e] = {"note": "its difference from the converged reference (the same code, rtol 1e-10)"}
+            rtol = ((entries.get(e) or {}).get("stats") or {}).get("rtol")
+            evidence[e] = {"note": "its difference from the converged reference (the same code, rtol 1e-10)",
+                           "setting": "rtol" if rtol else None, "step": rtol, "order": 1.0}
             continue
         h2 = peer_label(e)
         if e not in STEP_SETTING or (case.name, h2) not in results:
@@ -82,7 +84,7 @@ def judge_case(case, engines: list[str], results: dict, entries: dict, rule: Rul
     # a stiffness-region boundary is a sample of the output grid: it can move by a sample either way
     floors = {} if seismic else {"region_shift_rel": 2.0 * 2.0 * math.pi / case.drive.samples_per_cycle}
     rows, verdicts = case_verdicts(case.name, "seismic" if seismic else "drive", list(values), values, estimates,
-                                   ref_error, scales, evidence, rule, floors)
+                                   ref_error, scales, evidence, rule, floors, own_checks(case, conv))
     for e, v in verdicts.items():
         v["evidence"] = evidence.get(e, {})
         if not check:

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import dataclasses
 
+from comparisons.reference import CONVERGED_SETTINGS
+
 MAX_REFINE = 8.0
 
 
@@ -31,7 +33,8 @@ def refinements(cases, summary: dict) -> tuple[list, list[dict]]:
                 setting, asked = v["setting"], step / 2.0
             else:
                 continue
-            to = max(asked, step / MAX_REFINE)
+            # a step: at most MAX_REFINE x the steps; the in-house rtol: not below the converged reference's
+            to = max(asked, CONVERGED_SETTINGS["rtol"]) if setting == "rtol" else max(asked, step / MAX_REFINE)
             c = new[case_name]
             settings = {**c.settings, engine: {**c.settings.get(engine, {}), setting: to}}
             new[case_name] = dataclasses.replace(c, settings=settings)
@@ -41,6 +44,9 @@ def refinements(cases, summary: dict) -> tuple[list, list[dict]]:
 
 
 def refine_text(changes: list[dict]) -> list[str]:
-    return [f"refined {r['case']}: {r['engine']} {r['setting']} {r['from']:.3g} -> {r['to']:.3g} s"
-            + (f" (asked {r['asked']:.3g} s; capped at {MAX_REFINE:g}x the case's steps)" if r["capped"] else "")
+    def unit(r):
+        return "" if r["setting"] == "rtol" else " s"
+    return [f"refined {r['case']}: {r['engine']} {r['setting']} {r['from']:.3g} -> {r['to']:.3g}{unit(r)}"
+            + (f" (asked {r['asked']:.3g}{unit(r)}; capped: " + ("the converged reference's rtol)" if r["setting"] == "rtol"
+               else f"{MAX_REFINE:g}x the case's steps)") if r["capped"] else "")
             for r in changes]

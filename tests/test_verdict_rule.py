@@ -1,0 +1,79 @@
+"""The gate's rule on numbers worked by hand (comparisons/verdict.py, comparisons/estimate.py)."""
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from comparisons.estimate import nominal_order, observed_order, refined_settings, richardson_factor, step_needed
+from comparisons.verdict import Rule, case_verdicts, estimate_from_pair
+
+RULE = Rule()
+SCALES = {"max_dF_rel": (1000.0, "N"), "peak_force_rel": (1000.0, "N"), "energy_balance_rel": (10.0, "J")}
+EV = {"mujoco": {"setting": "timestep", "step": 2e-5, "order": 1.0, "observed_order": 1.0, "primary_error": 1e-4}}
+
+
+def judge(values, estimates, ref_error=None, ref_own=None):
+    rows, v = case_verdicts("c", "drive", ["mujoco"], {"mujoco": values}, {"mujoco": estimates}, ref_error or {},
+                            SCALES, EV, RULE, ref_own=ref_own)
+    return rows, v["mujoco"]
+
+
+def test_richardson_and_the_step_needed_by_hand():
+    assert richardson_factor(1.0) == 2.0 and richardson_factor(2.0) == pytest.approx(4 / 3)
+    assert richardson_factor(1.0, 4.0) == pytest.approx(4 / 3)
+    # error 4e-3 at h = 1e-5, first order, tolerance 1e-3: 0.8 x 1e-3 / 4e-3 = 0.2 of the step
+    assert step_needed(1e-5, 4e-3, 1e-3, 1.0) == pytest.approx(2e-6)
+    assert step_needed(1e-5, 4e-3, 1e-3, 2.0) == pytest.approx(1e-5 * math.sqrt(0.2))
+    assert observed_order(4e-4, 1e-4) == pytest.approx(2.0) and math.isnan(observed_order(0.0, 1e-4))
+    assert nominal_order("mujoco", {"integrator": "Euler"}) == 1.0 and nominal_order("mujoco", {"integrator": "RK4"}) == 2.0
+
+
+def test_halving_exudyn_halves_every_cap_on_its_step():
+    s = refined_settings("exudyn", {"step_size": 1e-5, "min_steps_per_cycle": 20000}, {"solver": "x"}, 2)
+    assert s == {"solver": "x", "step_size": 5e-6, "min_steps_per_cycle": 40000}
+    assert refined_settings("mujoco", {"timestep": 2e-5}, {"perturb": {"what": "cap_mass"}}, 2) == \
+        {"perturb": {"what": "cap_mass"}, "timestep": 1e-5}
+
+
+def test_a_scalar_estimate_is_at_least_beta_of_its_max_norm_one():
+    est = estimate_from_pair({"max_dF_rel": 1e-4, "peak_force_rel": 0.0}, 2.0, 0.1)
+    assert est == {"max_dF_rel": 2e-4, "peak_force_rel": pytest.approx(2e-5)}
+
+
+def test_numerical_difference_passes_and_a_model_difference_disagrees():
+    _, v = judge({"max_dF_rel": 2.9e-4}, {"max_dF_rel": 1e-4}, {"max_dF_rel": 1e-9})
+    assert v["pass"] and v["consistent"] and v["text"].startswith("consistent and accurate enough")
+    rows, v = judge({"max_dF_rel": 3.2e-4}, {"max_dF_rel": 1e-4}, {"max_dF_rel": 1e-9})   # 3.2e-4 > 3 x 1.00001e-4
+    assert not v["pass"] and v["consistent"] is False
+    assert v["text"].startswith("disagrees beyond numerical error: max_dF_rel = 0.00032 is 1.07x its bound")
+    assert rows[0]["bound"] == pytest.approx(3 * (1e-4 + 1e-9) + 1e-12)
+    # its own estimate is within the tolerance: it is not also called 'not converged'
+    assert "not converged" not in v["text"]
+
+
+def test_not_converged_names_the_error_in_units_and_the_step_it_needs():
+    _, v = judge({"max_dF_rel": 3e-3}, {"max_dF_rel": 2e-3})
+    assert v["consistent"] and not v["accurate"]
+    assert "max_dF_rel error 0.003 > 0.001 (3 N > 1 N)" in v["text"]
+    assert v["needs"] == {"timestep": pytest.approx(2e-5 * 0.8 * 1e-3 / 3e-3)}
+    assert v["text"].endswith(f"needs timestep <= {v['needs']['timestep']:.3g} s")
+
+
+def test_an_energy_balance_is_judged_beyond_the_output_grids_own_error():
+    # the converged reference's own balance is 0.034 (the quadrature on the output grid): 0.0341 adds 1e-4
+    _, v = judge({"energy_balance_rel": 0.0341}, {}, ref_own={"energy_balance_rel": 0.034})
+    assert v["pass"], v["text"]
+    _, v = judge({"energy_balance_rel": 0.0341}, {}, ref_own={"energy_balance_rel": 0.0})
+    assert not v["pass"] and "energy_balance_rel error 0.0341 > 0.01" in v["text"]
+
+
+def test_a_reference_that_is_not_converged_itself_is_said():
+    _, v = judge({"max_dF_rel": 1e-2}, {"max_dF_rel": 1e-2}, {"max_dF_rel": 2e-3})
+    assert v.get("reference_unresolved") and "the converged reference itself is not converged" in v["text"]
+
+
+def test_a_run_equal_to_the_reference_passes():
+    _, v = judge({"max_dF_rel": 0.0, "peak_force_rel": 0.0}, {"max_dF_rel": 0.0, "peak_force_rel": 0.0},
+                 {"max_dF_rel": 0.0})
+    assert v["pass"]
