@@ -57,6 +57,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--engines", default="semirecursive,mujoco,exudyn",
                    help="semirecursive first, then the engines that re-run the median record with the device "
                         "(default both; 'semirecursive' alone skips them)")
+    p.add_argument("--cross-check", default="median", metavar="none|median|all",
+                   help="re-run records at their limit intensity in the other engines of --engines (with the device) "
+                        "and against the exact linear solution (supports alone): none; median (default) the record "
+                        "closest to the fitted median; all every record that reached the limit (refused when the "
+                        "other engines' estimated steps exceed a bound); each re-run is printed with its time")
     p.add_argument("--workers", type=int, default=None, help="local processes (default: the cores)")
     p.add_argument("--scheduler", default=None, help="address of a running Dask scheduler")
     p.add_argument("--retry-failed", action="store_true", help="run levels stored as failed again")
@@ -105,7 +110,9 @@ def run(args) -> int:
     from nsd_core.study.ida_outputs import write_ida
     from nsd_core.study.intensity import record_intensity
     from nsd_core.study.store import Store
+    from nsd_cli.ida_check import check_work, parse_mode
     set_, records, limit, hunt, levels = _options(args)
+    mode = parse_mode(args.cross_check)
     engines = parse_engine_list(args.engines)
     if engines[0] != "semirecursive":
         raise ParameterError(f"--engines {args.engines!r}: semirecursive (the reference) must come first")
@@ -127,6 +134,7 @@ def run(args) -> int:
     motions = {rid: fema_record(set_, rid, **ground) for rid in records}
     flag = "--levels" if levels is not None else "--max-runs"
     check_ida_work({r: motions[r].duration for r in records}, len(levels or []) or hunt.max_runs, flag)
+    work = check_work(mode, {r: motions[r].duration for r in records}, engines[1:])
     im = {rid: record_intensity(motions[rid], args.measure, period) for rid in records}
     check_ida_scales({r: im[r]["value"] for r in records}, levels or [hunt.start], flag if levels else "--start",
                      args.measure)
@@ -147,7 +155,7 @@ def run(args) -> int:
              "notes": "im in m/s^2, model time scale (records x time_factor); scale = im / intensity_at_scale_1; "
                       "a trace's limit intensity is the lowest level at which it reached the limit"}
     index = write_ida(traces, store, index)
-    bad = _cross_check(traces, store, engines, workers, args, index, run_seismic_engine)
+    bad = _cross_check(traces, store, engines, workers, args, index, run_seismic_engine, work)
     _print(index, out)
     from reports.build import draw_study  # the study's PNGs into its own folder (issue 20)
     draw_study(out)
@@ -155,18 +163,29 @@ def run(args) -> int:
     return 3 if undetermined or bad else 0
 
 
-def _cross_check(traces, store, engines, workers, args, index, runner) -> bool:
-    """Item 5: the median records re-run (comparisons.ida_check); ida.json gets "cross_check"."""
+def _cross_check(traces, store, engines, workers, args, index, runner, work: dict) -> bool:
+    """The records re-run as --cross-check says (nsd_cli.ida_check); ida.json gets "cross_check", its
+    mode and estimate, and the times of the IDA's runs and of the cross-check apart."""
     import json
-    from nsd_cli.ida_check import cross_check
+    import sys
+    from nsd_cli.ida_check import cost, cross_check, entries
     from nsd_core.device.results import atomic_write_json
     frag = json.loads((store.root / "fragility.json").read_text())
-    check = cross_check(traces, store, frag, engines[1:], workers, args.scheduler,
-                        lambda s: print(s, file=__import__("sys").stderr, flush=True), runner)
+    if work["peer_steps"]:
+        print(f"ida cross-check ({work['mode']}): up to {work['records']} record(s) in {', '.join(engines[1:])}, "
+              f"about {work['peer_steps']:.3g} steps of theirs", file=sys.stderr, flush=True)
+    check, elapsed = cross_check(traces, store, frag, engines[1:], workers, args.scheduler,
+                                 lambda s: print(s, file=sys.stderr, flush=True), runner, work["mode"])
     index["cross_check"] = check
+    index["cross_check_mode"] = work["mode"]
+    index["cross_check_estimate"] = work
+    index["cross_check_cost"] = cost(check)
+    index["elapsed_cross_check_s"] = elapsed
+    index["elapsed_total_s"] = index["elapsed_this_run_s"] + elapsed
     atomic_write_json(store.root / "ida.json", index)
-    return any(e.get("status") == "failed" for c in check.values() for e in c.get("engines", {}).values()) or \
-        any("error" in c for c in check.values())
+    found = [c for _, c in entries(check)]
+    return any(e.get("status") == "failed" for c in found for e in c.get("engines", {}).values()) or \
+        any("error" in c for c in found)
 
 
 def _print(index: dict, out) -> None:
@@ -179,12 +198,15 @@ def _print(index: dict, out) -> None:
         fit = ("median %.4g m/s^2, dispersion %.3f" % (f["median"], f["dispersion"]) if f["median"] is not None
                else "no fit")
         print(f"{name}: {fit} ({f['n_reached']} reached, {f['n_censored']} censored)")
-    for name, c in index.get("cross_check", {}).items():
-        if "engines" in c:
-            parts = [f"{e} du {m['du']:.2e}" if "du" in m else f"{e} {m.get('status')}" for e, m in c["engines"].items()]
-            print(f"cross-check {name}: record {c['record']} at {c['level']:.4g} m/s^2: " + ", ".join(parts))
-        else:
-            print(f"cross-check {name}: {c.get('skipped') or c.get('error')}")
-    print(f"{index['runs']} runs; {index['elapsed_this_run_s']:.1f} s; wrote {out / 'ida.csv'}, "
-          f"{out / 'fragility.json'}, {out / 'ida.json'}")
+    from nsd_cli.ida_check import describe_entry, entries
+    for name, c in entries(index.get("cross_check", {})):
+        print(describe_entry(name, c))
+    spent = index.get("cross_check_cost") or {}
+    runs = sum(v["runs"] for v in spent.values())
+    per = ", ".join(f"{e} {v['runs']} in {v['wall_s']:.1f} s" for e, v in spent.items())
+    check = (f"cross-check ({index.get('cross_check_mode')}) {runs} runs in {index['elapsed_cross_check_s']:.1f} s"
+             + (f" ({per})" if per else ""))
+    print(f"{index['runs']} IDA runs in {index['elapsed_this_run_s']:.1f} s + {check} = "
+          f"{index['elapsed_total_s']:.1f} s in all; wrote {out / 'ida.csv'}, {out / 'fragility.json'}, "
+          f"{out / 'ida.json'}")
 

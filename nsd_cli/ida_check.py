@@ -13,6 +13,12 @@ A limit reached by the rod's length stops the run; the check then runs at the br
 the highest level below the limit, where every model runs the whole record (said in the entry).
 Written to DIR/cross_check/<config>/ (seismic.csv, seismic_<engine>.csv) and ida.json's
 "cross_check"; the runs are jobs of the IDA's store (resumable).
+
+``--cross-check none|median|all`` (``MODES``): no re-run; the record closest to the median (the
+default); or every record that reached the limit (the others under DIR/cross_check/<config>/record_<id>/
+and ida.json's "cross_check"["records"]), refused before anything runs when the peers' estimated
+steps exceed ``STEPS_MAX``. Each run's wall time is kept with its entry; the cross-check's own time is
+returned apart from the IDA's.
 """
 from __future__ import annotations
 
@@ -34,6 +40,41 @@ from nsd_core.study.store import Store
 from nsd_core.study.sweep import run_stored
 
 
+MODES = ("none", "median", "all")
+STEPS_MAX = 20_000_000   # peer steps of --cross-check all: about 2 h at the ~2500 steps per wall s measured
+                         # for MuJoCo on the 2-core machine (Exudyn is slower; the in-house re-runs not counted)
+
+
+def parse_mode(text) -> str:
+    if text not in MODES:
+        raise ParameterError(f"--cross-check {text!r}: unknown; allowed: {', '.join(MODES)}")
+    return text
+
+
+def peer_step(engine: str) -> float:
+    """A peer's default fixed step [s] on a seismic run (comparisons.engines.<engine>_seismic.DEFAULTS)."""
+    if engine == "mujoco":
+        from comparisons.engines.mujoco_seismic import DEFAULTS
+        return float(DEFAULTS["timestep"])
+    from comparisons.engines.exudyn_seismic import DEFAULTS
+    return float(DEFAULTS["step_size"])
+
+
+def check_work(mode: str, durations: dict, peers: list[str]) -> dict:
+    """The cross-check's estimated peer steps before anything runs: 'median' re-runs at most one record
+    (the longest counted), 'all' every record (ParameterError, one line, over STEPS_MAX)."""
+    if mode == "none" or not peers:
+        return {"mode": mode, "peer_steps": 0, "records": 0}
+    n = len(durations) if mode == "all" else 1
+    seconds = sum(durations.values()) if mode == "all" else max(durations.values())
+    steps = sum(seconds / peer_step(e) for e in peers)
+    if steps > STEPS_MAX:
+        raise ParameterError(f"--cross-check all: {n} records x {len(peers)} engines ({', '.join(peers)}) over "
+                             f"{seconds:.4g} model s would take about {steps:.3g} peer steps; allowed: at most "
+                             f"{STEPS_MAX:.0e} (--cross-check median, fewer --records or --engines semirecursive)")
+    return {"mode": mode, "peer_steps": steps, "records": n}
+
+
 def choose(traces: list[Trace], config: dict, device: bool, store: Store) -> dict | None:
     """The record closest to the median and the level to check it at (None: nothing to check)."""
     median = config.get("median") or (config.get("baker2015") or {}).get("median")
@@ -42,6 +83,11 @@ def choose(traces: list[Trace], config: dict, device: bool, store: Store) -> dic
         return None
     median = median or reached[0]["limit_im"]
     best = min(reached, key=lambda r: (abs(math.log(r["limit_im"] / median)), r["record"]))
+    return pick_for(best, traces, device, store, median)
+
+
+def pick_for(best: dict, traces: list[Trace], device: bool, store: Store, median: float) -> dict:
+    """The level at which to check the record ``best`` (a fragility record entry that reached the limit)."""
     tr = next(t for t in traces if t.record == best["record"] and t.device == device)
     level, note = best["limit_im"], "at the record's limit intensity"
     rec = store.load(tr.point(level).key)
@@ -128,12 +174,15 @@ def exact_supports_alone(run: RunResult, trace: Trace, level: float) -> tuple[di
 
 
 def cross_check(traces: list[Trace], store: Store, frag: dict, peers: list[str], workers: int, scheduler,
-                log, run_engine) -> dict:
-    """Run the checks (see the module docstring); returns ida.json's "cross_check"."""
-    out = {}
-    picks = {}
+                log, run_engine, mode: str = "median") -> tuple[dict, float]:
+    """Run the checks (see the module docstring); returns ida.json's "cross_check" and the seconds the
+    cross-check's runs took in this call (0 when every run was stored)."""
+    if mode == "none":
+        return {n: {"skipped": "not asked for (--cross-check none)"} for n in ("device", "nodevice")}, 0.0
+    out, picks, others = {}, {}, {"device": [], "nodevice": []}
     for name, device in (("device", True), ("nodevice", False)):
-        pick = choose(traces, frag["configurations"][name], device, store)
+        config = frag["configurations"][name]
+        pick = choose(traces, config, device, store)
         picks[name] = pick
         if pick is None:
             out[name] = {"skipped": "no record reached the limit"}
@@ -142,52 +191,103 @@ def cross_check(traces: list[Trace], store: Store, frag: dict, peers: list[str],
             picks[name] = None
         elif "skipped" in pick:
             out[name] = pick
+        if mode == "all" and picks[name] is not None:
+            others[name] = [pick_for(r, traces, device, store, pick.get("median") or r["limit_im"])
+                            for r in config["records"] if r["limit_im"] is not None and r["record"] != pick["record"]]
+    chosen = [p for p in [*picks.values(), *others["device"], *others["nodevice"]] if p and "trace" in p]
     jobs = []
+    for pick in chosen:
+        tr, level = pick["trace"], pick["level"]
+        jobs.append(tr.point(level, keep_series=True))
+        if tr.device:
+            jobs += [tr.point(level, keep_series=True, engine=e) for e in peers]
+    if not jobs:
+        return out, 0.0
+    fresh = {j.key for j in jobs if (rec := store.load(j.key)) is None or rec["status"] == "failed"}
+    elapsed = run_stored(jobs, store, partial(cross_check_job, run_engine=run_engine), workers, scheduler, True, log,
+                         None, f"ida cross-check ({mode}): {len(jobs)} runs (those stored as failed run again)")
     for name, pick in picks.items():
         if pick and "trace" in pick:
-            tr, level = pick["trace"], pick["level"]
-            jobs.append(tr.point(level, keep_series=True))
-            if tr.device:
-                jobs += [tr.point(level, keep_series=True, engine=e) for e in peers]
-    if not jobs:
-        return out
-    run_stored(jobs, store, partial(cross_check_job, run_engine=run_engine), workers, scheduler, True, log, None,
-               f"ida cross-check: {len(jobs)} runs (those stored as failed run again)")
-    for name, pick in picks.items():
-        if not pick or "trace" not in pick:
+            out[name] = _entry(pick, store, peers, store.root / "cross_check" / name, fresh)
+    if mode == "all":
+        out["records"] = {name: [_entry(p, store, peers, store.root / "cross_check" / name / f"record_{p['record']}",
+                                        fresh) if "trace" in p else p for p in lst] for name, lst in others.items()}
+    return out, elapsed
+
+
+def _entry(pick: dict, store: Store, peers: list[str], folder: Path, fresh: set) -> dict:
+    """One checked record: its runs' series copied into ``folder``, the differences, each run's wall
+    time and whether it ran in this call (``run_now``) or was read from the store."""
+    tr, level = pick["trace"], pick["level"]
+    folder.mkdir(parents=True, exist_ok=True)
+    ref_key = tr.point(level, keep_series=True).key
+    ref_rec = store.load(ref_key)
+    entry = {"record": pick["record"], "level": level, "limit_im": pick["limit_im"], "median": pick["median"],
+             "scale": tr.point(level).ground["scale"], "note": pick["note"], "engines": {}}
+    if ref_rec is None or ref_rec["status"] != "ok":
+        entry["error"] = f"in-house run: {(ref_rec or {}).get('error')}"
+        return entry
+    _copy(store.folder(ref_key) / "seismic.csv", folder / "seismic.csv")
+    ref = _stored_series(folder / "seismic.csv", store.folder(ref_key))
+    entry["wall_time"] = {"semirecursive": ref_rec.get("wall_time")}
+    entry["run_now"] = {"semirecursive": ref_key in fresh}
+    if not tr.device:
+        metrics, cols = exact_supports_alone(ref, tr, level)
+        if cols is not None:
+            write_columns(folder / "exact.csv", cols)
+        entry["engines"]["exact"] = metrics
+        return entry
+    for e in peers:
+        key = tr.point(level, keep_series=True, engine=e).key
+        rec = store.load(key)
+        timing = {"wall_time": (rec or {}).get("wall_time"), "run_now": key in fresh}
+        if rec is None or rec["status"] != "ok":
+            entry["engines"][e] = {"status": "failed", "error": (rec or {}).get("error"), **timing}
             continue
-        tr, level = pick["trace"], pick["level"]
-        folder = store.root / "cross_check" / name
-        folder.mkdir(parents=True, exist_ok=True)
-        ref_key = tr.point(level, keep_series=True).key
-        ref_rec = store.load(ref_key)
-        entry = {"record": pick["record"], "level": level, "limit_im": pick["limit_im"], "median": pick["median"],
-                 "scale": tr.point(level).ground["scale"], "note": pick["note"], "engines": {}}
-        out[name] = entry
-        if ref_rec is None or ref_rec["status"] != "ok":
-            entry["error"] = f"in-house run: {(ref_rec or {}).get('error')}"
-            continue
-        _copy(store.folder(ref_key) / "seismic.csv", folder / "seismic.csv")
-        ref = _stored_series(folder / "seismic.csv", store.folder(ref_key))
-        entry["wall_time"] = {"semirecursive": ref_rec.get("wall_time")}
-        if tr.device:
-            for e in peers:
-                key = tr.point(level, keep_series=True, engine=e).key
-                rec = store.load(key)
-                if rec is None or rec["status"] != "ok":
-                    entry["engines"][e] = {"status": "failed", "error": (rec or {}).get("error")}
-                    continue
-                _copy(store.folder(key) / "seismic.csv", folder / f"seismic_{e}.csv")
-                peer = _stored_series(folder / f"seismic_{e}.csv", store.folder(key), e)
-                entry["engines"][e] = {**seismic_metrics(ref, peer), "wall_time": rec.get("wall_time")}
-                if "floor1_x" in ref.columns:   # a building on the slab: its floors and stories too
-                    entry["engines"][e]["building"] = building_metrics(ref, peer)
-        else:
-            metrics, cols = exact_supports_alone(ref, tr, level)
-            if cols is not None:
-                write_columns(folder / "exact.csv", cols)
-            entry["engines"]["exact"] = metrics
+        _copy(store.folder(key) / "seismic.csv", folder / f"seismic_{e}.csv")
+        peer = _stored_series(folder / f"seismic_{e}.csv", store.folder(key), e)
+        entry["engines"][e] = {**seismic_metrics(ref, peer), **timing}
+        if "floor1_x" in ref.columns:   # a building on the slab: its floors and stories too
+            entry["engines"][e]["building"] = building_metrics(ref, peer)
+    return entry
+
+
+def entries(check: dict) -> list[tuple[str, dict]]:
+    """(configuration, entry) of every checked record: the median's, then the others (--cross-check all)."""
+    out = [(n, check[n]) for n in ("device", "nodevice") if isinstance(check.get(n), dict)]
+    for n, lst in (check.get("records") or {}).items():
+        out += [(n, e) for e in lst if isinstance(e, dict)]
     return out
+
+
+def describe_entry(name: str, c: dict) -> str:
+    """One printed line: the record, the level, each engine's difference and wall time."""
+    if "engines" not in c:
+        return f"cross-check {name}: {c.get('skipped') or c.get('error')}"
+    def when(m):
+        t = m.get("wall_time")
+        return "" if not isinstance(t, (int, float)) else f" ({t:.1f} s" + ("" if m.get("run_now") else ", stored") + ")"
+    parts = [(f"{e} du {m['du']:.2e}" if "du" in m else f"{e} {m.get('status')}") + when(m)
+             for e, m in c["engines"].items()]
+    own = (c.get("wall_time") or {}).get("semirecursive")
+    if isinstance(own, (int, float)):
+        stored = "" if (c.get("run_now") or {}).get("semirecursive") else ", stored"
+        parts.append(f"in-house re-run ({own:.1f} s{stored})")
+    return f"cross-check {name}: record {c['record']} at {c['level']:.4g} m/s^2: " + ", ".join(parts)
+
+
+def cost(check: dict) -> dict:
+    """The cross-check's runs done in this call: count and wall seconds per engine (stored runs excluded)."""
+    per = {}
+    for _, c in entries(check):
+        timed = [("semirecursive", (c.get("wall_time") or {}).get("semirecursive"),
+                  (c.get("run_now") or {}).get("semirecursive"))]
+        timed += [(e, m.get("wall_time"), m.get("run_now")) for e, m in (c.get("engines") or {}).items() if e != "exact"]
+        for e, t, now in timed:
+            if now and isinstance(t, (int, float)):
+                n, s = per.get(e, (0, 0.0))
+                per[e] = (n + 1, s + t)
+    return {e: {"runs": n, "wall_s": s} for e, (n, s) in per.items()}
 
 
 def _stored_series(path: Path, stored: Path, engine: str = "") -> RunResult:

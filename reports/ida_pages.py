@@ -162,13 +162,15 @@ def cross_check_figure(index: dict, root: Path):
             if isinstance(b, dict) and {"dfloor", "ddrift", "dfloor_a"} <= set(b):   # the worst floor / story
                 lines.append(f"    {' ' * len(e)}  building: floors {b['dfloor']:.3e}, drifts {b['ddrift']:.3e}, "
                              f"floor accelerations {b['dfloor_a']:.3e}")
+    lines += _more_and_cost(index, check)
     chars = int(0.92 * LANDSCAPE[0] * 72 / (0.62 * 7.5))   # monospace: 0.6 em a glyph, a little spare
     wrapped = [w for ln in lines for w in textwrap.wrap(ln, chars, subsequent_indent=" " * (len(ln) - len(ln.lstrip())
                                                                                          + 4)) or [""]]
     fig.text(0.04, min(0.86, fig._nsd_top - 0.01), "\n".join(wrapped), fontsize=7.5, va="top", family="monospace")
     folder = root / "cross_check" / "nodevice"
     ax = fig.add_axes([0.07, 0.1, 0.88, 0.4])
-    if (folder / "seismic.csv").is_file() and (folder / "exact.csv").is_file():
+    checked = "engines" in (check.get("nodevice") or {})   # (a folder left by an earlier call is not this one's)
+    if checked and (folder / "seismic.csv").is_file() and (folder / "exact.csv").is_file():
         run, exact = read_csv(folder / "seismic.csv"), read_csv(folder / "exact.csv")
         ax.plot(run["t"], (run["u"] - exact["u"]) * 1e3, color=CONFIG_STYLE["nodevice"][1], lw=0.8)
         ax.set(xlabel="t [s]", ylabel="|u| in-house - exact [mm]",
@@ -179,6 +181,26 @@ def cross_check_figure(index: dict, root: Path):
     return fig
 
 
+def _more_and_cost(index: dict, check: dict) -> list[str]:
+    """The other records' checks (--cross-check all), each engine's worst, and the cross-check's time
+    against the IDA's."""
+    lines = []
+    for name, lst in (check.get("records") or {}).items():
+        done = [c for c in lst if isinstance(c, dict) and isinstance(c.get("engines"), dict)]
+        worst = {}
+        for c in done:
+            for e, m in c["engines"].items():
+                if isinstance(m.get("du"), (int, float)) and m["du"] >= worst.get(e, (-1.0, None))[0]:
+                    worst[e] = (m["du"], c.get("record"))
+        if lst:
+            lines.append(f"{CONFIG_STYLE.get(name, (name,))[0]}: {len(done)} more record(s) checked (all): "
+                         + (", ".join(f"{e} worst du {d:.3e} (record {r})" for e, (d, r) in worst.items()) or "-"))
+    if isinstance(index.get("elapsed_cross_check_s"), (int, float)):
+        lines.append(f"time: IDA runs {index.get('elapsed_this_run_s', 0):.1f} s, cross-check "
+                     f"({index.get('cross_check_mode')}) {index['elapsed_cross_check_s']:.1f} s (this call)")
+    return lines
+
+
 def ida_plan(folder) -> tuple[list[tuple[str, Callable]], str]:
     """(file stem, figure function) per page and the footer's title."""
     root = Path(folder)
@@ -187,7 +209,8 @@ def ida_plan(folder) -> tuple[list[tuple[str, Callable]], str]:
             ("fragility", lambda: fragility_figure(index, frag)),
             ("ida_cross_check", lambda: cross_check_figure(index, root))]
     dev = root / "cross_check" / "device"
-    if (dev / "seismic.csv").is_file() and list(dev.glob("seismic_*.csv")):
+    if "engines" in ((index.get("cross_check") or {}).get("device") or {}) and (dev / "seismic.csv").is_file() \
+            and list(dev.glob("seismic_*.csv")):
         from reports.seismic_report import _run_pages, _runs
         c = (index.get("cross_check") or {}).get("device", {})
         plan += _run_pages(f"IDA cross-check {index.get('set')}:{c.get('record')} at IM {fmt(c.get('level', 0), 4)}",

@@ -260,7 +260,7 @@ def test_ida_on_a_dask_cluster_stores_what_a_local_run_reuses(tmp_path, capsys):
     from nsd_cli.main import main
     out = tmp_path / "ida"
     argv = ["ida", "--record-set", "nearfield-pulse", "--records", "9", "--levels", "0.5", "--limit", "stroke=0.02",
-            "--engines", "semirecursive", "--out", str(out)]
+            "--engines", "semirecursive", "--cross-check", "none", "--out", str(out)]   # (not what it tests)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   dashboard_address=None) as cluster:
         assert main(argv + ["--scheduler", cluster.scheduler_address]) == 0

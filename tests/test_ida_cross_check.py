@@ -1,0 +1,85 @@
+"""nsd ida --cross-check none|median|all (docs/ida.md, "Cross-check"): each re-run printed with its
+time, the IDA's time and the cross-check's apart and together in the last line and in ida.json, the
+work of 'all' bounded before anything runs; real runs on near-field pulse records 9 and 6 (6.3 and
+6.6 model s)."""
+from __future__ import annotations
+
+import json
+import re
+
+import pytest
+
+from nsd_cli.main import main
+
+BASE = ["ida", "--record-set", "nearfield-pulse", "--levels", "0.5,0.9", "--limit", "stroke=0.02", "--workers", "1"]
+
+
+@pytest.mark.parametrize("extra,words", [
+    (["--cross-check", "bogus"], "--cross-check 'bogus': unknown; allowed: none, median, all"),
+    (["--cross-check", "ALL"], "--cross-check 'ALL': unknown; allowed: none, median, all"),
+    (["--cross-check", ""], "--cross-check '': unknown"),
+    (["--records", "1-14", "--cross-check", "all"], "--cross-check all: 14 records x 2 engines (mujoco, exudyn)"),
+])
+def test_bad_cross_check_is_one_line_exit_2_nothing_written(extra, words, tmp_path, capsys):
+    out = tmp_path / "ida"
+    argv = [a for a in BASE if a != "--workers" and a != "1"] + (["--records", "9"] if "--records" not in extra else [])
+    assert main(argv + extra + ["--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and words in err[0] and "allowed" in err[0], err
+    assert not out.exists()
+
+
+def _last_line(text: str) -> re.Match:
+    line = [ln for ln in text.splitlines() if "IDA runs in" in ln][-1]
+    m = re.match(r"(\d+) IDA runs in ([\d.]+) s \+ cross-check \((\w+)\) (\d+) runs in ([\d.]+) s.* = ([\d.]+) s in all",
+                 line)
+    assert m, line
+    return m
+
+
+def test_all_checks_every_record_and_the_last_line_adds_both_times(tmp_path, capsys):
+    """--engines semirecursive: the supports alone of both records against the exact solution, each
+    re-run printed with its time; a second call finds them stored (0 runs, said 'stored'); --cross-check
+    none then runs nothing (13 s measured)."""
+    out = tmp_path / "ida"
+    argv = BASE + ["--records", "6,9", "--engines", "semirecursive", "--out", str(out)]
+    assert main(argv + ["--cross-check", "all"]) == 0
+    printed = capsys.readouterr().out
+    m = _last_line(printed)
+    ida_s, check_s, total = float(m[2]), float(m[5]), float(m[6])
+    assert m[1] == "8" and m[3] == "all" and m[4] == "2" and total == pytest.approx(ida_s + check_s, abs=0.11)
+    index = json.loads((out / "ida.json").read_text())
+    assert index["cross_check_mode"] == "all" and index["elapsed_total_s"] == pytest.approx(
+        index["elapsed_this_run_s"] + index["elapsed_cross_check_s"])
+    assert index["cross_check_cost"]["semirecursive"]["runs"] == 2
+    median, others = index["cross_check"]["nodevice"], index["cross_check"]["records"]["nodevice"]
+    assert len(others) == 1 and {median["record"], others[0]["record"]} == {6, 9}
+    for c in (median, others[0]):
+        assert c["engines"]["exact"]["du"] < 1e-6 and c["run_now"]["semirecursive"]
+    assert (out / "cross_check" / "nodevice" / f"record_{others[0]['record']}" / "exact.csv").is_file()
+    lines = [ln for ln in printed.splitlines() if ln.startswith("cross-check nodevice: record")]
+    assert len(lines) == 2 and all(re.search(r"in-house re-run \([\d.]+ s\)", ln) for ln in lines)
+    assert main(argv + ["--cross-check", "all"]) == 0
+    printed = capsys.readouterr().out
+    assert _last_line(printed)[4] == "0" and printed.count(" s, stored)") == 2
+    assert main(argv + ["--cross-check", "none"]) == 0
+    printed = capsys.readouterr().out
+    m = _last_line(printed)
+    assert m[3] == "none" and m[4] == "0" and float(m[5]) == 0.0
+    assert "cross-check nodevice: not asked for (--cross-check none)" in printed
+    check = json.loads((out / "ida.json").read_text())["cross_check"]
+    assert check["device"]["skipped"] == check["nodevice"]["skipped"] == "not asked for (--cross-check none)"
+
+
+@pytest.mark.slow
+def test_a_peer_re_run_is_printed_with_its_time(tmp_path, capsys):
+    """MuJoCo re-runs the device's median record (record 9 at the bracket's lower end, 0.5 m/s^2:
+    at 0.9 the device run stops at the rod's reach); its line and the last line carry its time.
+    (Several minutes: 6.3 model s at MuJoCo's 1e-5 s step.)"""
+    out = tmp_path / "ida"
+    assert main(BASE + ["--records", "9", "--engines", "semirecursive,mujoco", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    line = [ln for ln in printed.splitlines() if ln.startswith("cross-check device: record 9")][0]
+    assert re.search(r"mujoco du [\d.e+-]+ \(([\d.]+) s\)", line), line
+    cost = json.loads((out / "ida.json").read_text())["cross_check_cost"]
+    assert cost["mujoco"]["runs"] == 1 and f"mujoco 1 in {cost['mujoco']['wall_s']:.1f} s" in printed
