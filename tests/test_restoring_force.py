@@ -96,3 +96,13 @@ def test_nsd_seismic_reports_it_and_refuses_bad_input(tmp_path, capsys):
                  "--out", str(tmp_path / "nd")])
     c = json.loads((tmp_path / "nd" / "summary.json").read_text())["restoring_force"]
     assert code == 0 and c["with_device"] is None and math.isclose(c["D"], 0.025461, abs_tol=1e-6)
+
+
+def test_help_gives_the_default_it_uses(capsys):
+    """--design-displacement's help quotes the nominal X_max; checked against the computation."""
+    from nsd_core.device.restoring_force import default_design_displacement
+    with pytest.raises(SystemExit):
+        main_help = __import__("nsd_cli.main", fromlist=["main"]).main
+        main_help(["seismic", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert f"X_max ({default_design_displacement(P) * 1e3:.2f} mm for the nominal device)" in text
