@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 
 from nsd_cli import limits as lim
 from nsd_cli import seismic_building, seismic_checks, seismic_extras
@@ -303,6 +304,9 @@ def run_set(args) -> int:
         status = row["status"] + (" (outside the working range)" if row.get("outside_working_range") == "yes" else "")
         print(f"  {row['set']}:{row['id']} {row['earthquake']}: {status}{ratio}"
               + (f" [{row['reason']}]" if row["reason"] else ""))
+    for e in index.get("entries", []):   # each run's warnings (nsd_core.device.seismic_warnings), as a single run's
+        for w in e.get("warnings", []):
+            print(f"nsd seismic: warning: {e['set']}:{e['id']} {w}", file=sys.stderr)
     print(f"{len(index['rows'])} records: " + ", ".join(f"{c[k]} {k}" for k in c if k == "ok" or c[k])
           + f"; {index['elapsed_this_run_s']:.1f} s; wrote {out / 'set.csv'} and {out / 'set.json'}")
     from reports.build import draw_study  # the set's PNGs into its own folder (issue 20)

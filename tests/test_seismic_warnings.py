@@ -80,3 +80,20 @@ def test_warnings_page_keeps_its_text_on_the_page():
     fig = warnings_figure("many", [f"record {k}: " + "a long warning text " * 30 for k in range(40)], "set.json")
     assert text_problems(fig) == []
     assert any("more warning(s)" in t.get_text() for t in fig.texts)
+
+
+@pytest.mark.slow   # the set's worker process: 150 s measured on the loaded machine
+def test_a_record_set_warns_per_record_in_set_json_on_stderr_and_on_its_warnings_page(tmp_path, capsys):
+    """Near-field pulse 1, record seconds 2-3 at scale 16: the device run stops at the rod's reach, the
+    supports alone pass the rod's length."""
+    out = tmp_path / "set"
+    assert main(["seismic", "--record-set", "nearfield-pulse", "--records", "1", "--window", "2,3", "--scale", "16",
+                 "--dt-out", "0.002", "--workers", "1", "--out", str(out)]) == 4
+    entry = json.loads((out / "set.json").read_text())["entries"][0]
+    assert entry["warnings"][0].startswith("device: stroke exhausted: the run stopped at t = ")
+    assert any(w.startswith("nodevice: beyond the device's stroke") for w in entry["warnings"])
+    alone = json.loads((out / "records" / "nearfield-pulse_1_nodevice" / "summary.json").read_text())
+    assert "beyond_stroke" in alone["warning_kinds"]
+    err = _warned(capsys)
+    assert any(ln.startswith("nsd seismic: warning: nearfield-pulse:1 device: stroke exhausted") for ln in err)
+    assert "warnings_record_set_nearfield-pulse" in _pages(out, tmp_path)

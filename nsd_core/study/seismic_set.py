@@ -255,6 +255,8 @@ def write_set(runs: list[RecordRun], store: Store, compare=None) -> dict:
                                 "wall_time": prec["metrics"].get("wall_time")}
                     elif prec:
                         summary.setdefault("engines", {})[peer] = {"status": "failed", "error": prec["error"]}
+                from nsd_core.device.seismic_warnings import apply_warnings
+                apply_warnings(summary)   # as nsd seismic's summary.json has them
             else:
                 summary = {"status": "failed", "error": rec["error"], **rec["metrics"]}
             atomic_write_json(folder / "summary.json", summary)
