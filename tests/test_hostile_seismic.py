@@ -31,6 +31,7 @@ SET_R = ["seismic", "--record-set", "farfield", "--records", "1", "--window", "5
 IDA = ["ida", "--record-set", "farfield", "--records", "1", "--limit", "stroke=0.02", "--engines", "semirecursive",
        "--out", "{out}"]
 COMPARE = ["compare", "--engines", "semirecursive", "--cases", "{d}/c.toml", "--out", "{out}"]
+CYCLE = ["cycle", "--frequency", "10", "--out", "{out}"]
 SEIS_CASE = '[[case]]\nname = "s"\nmode = "seismic"\nground = "pulse:velocity=0.3,frequency=1"\n'
 
 CASES = []
@@ -133,8 +134,15 @@ for item, frag in (("rope_stiffness=1000", "cannot be sized"), ("rod_length=0.00
     add(f"device-{item}-ida", with_flag(IDA, "--set", [item]), fragment=frag)
     add(f"device-{item}-case", COMPARE, {"c.toml": SEIS_CASE + f"params = {table([item])}\n"}, frag)
 
+# ---- a device parameter below its unit's smallest magnitude (a denormal made a run that never ended)
+for item in ("rope_stiffness=1e-320", "rope_stiffness=1e-4", "cap_mass=1e-320", "rod_length=5e-324", "gravity=1e-320",
+             "wire_E=1e-320", "spring_kse=1e-320", "density=1e-9", "wire_n=1e-320", "cap_diameter=1e-9"):
+    name = item.split("=")[0]
+    add(f"param-tiny-{item}-cycle", CYCLE + ["--amplitude", "0.015", "--set", item], fragment=name)
+    add(f"param-tiny-{item}-seismic", with_flag(SEIS_G, "--set", [item]), fragment=name)
+    add(f"param-tiny-{item}-params", ["params", "--set", item], fragment=name)
+
 # ---- a named path's amplitude: at least 1 um (0 was a traceback, 1e-320 a RuntimeWarning then exit 3)
-CYCLE = ["cycle", "--frequency", "10", "--out", "{out}"]
 for v in ("0", "-0.0", "1e-320", "5e-324", "1e-7"):
     for path in ("line", "circle", "figure8"):
         add(f"amplitude-{v}-{path}", CYCLE + ["--amplitude", v, "--path", path], fragment="amplitude")

@@ -11,7 +11,7 @@ import dataclasses
 import math
 from typing import Any
 
-from nsd_core.device.params import _POSITIVE, FIELDS, MAGNITUDE_MAX, Params
+from nsd_core.device.params import _POSITIVE, FIELDS, MAGNITUDE_MAX, MAGNITUDE_MIN, Params
 
 # the rules of params.validate that are not "> 0" or the magnitude bound of the unit
 _SPECIAL = {
@@ -30,7 +30,7 @@ def bounds(name: str, p: Params | None = None) -> dict[str, Any]:
     top = MAGNITUDE_MAX.get(unit)
     lo, lo_open, hi, hi_open, note = (-top, False, top, False, "")
     if name in _POSITIVE:
-        lo, lo_open = 0.0, True
+        lo, lo_open = (MAGNITUDE_MIN[unit], False) if unit in MAGNITUDE_MIN else (0.0, True)
     if name in _SPECIAL:
         lo, lo_open, hi, hi_open, note = _SPECIAL[name]
     if name == "wire_upper_height":

@@ -221,6 +221,10 @@ _POSITIVE = [n for n, f in FIELDS.items() if f.metadata["kind"] is float
 # overflows or never ends (issue 12).
 MAGNITUDE_MAX = {"m": 10.0, "kg": 1e4, "N/m": 1e10, "Pa": 1e13, "N": 1e8, "1/m": 1e8, "deg": 360.0,
                  "kg/m^3": 1e5, "m/s^2": 100.0, "-": 1e6}
+# and the smallest value of a parameter that must be > 0: orders of magnitude below the device's values,
+# but no denormal (rope_stiffness = 1e-320 made the rope's natural length -inf and the run never ended)
+MAGNITUDE_MIN = {"m": 1e-6, "kg": 1e-6, "N/m": 1e-3, "Pa": 1e-3, "N": 1e-3, "1/m": 1e-6, "kg/m^3": 1e-3,
+                 "m/s^2": 1e-3, "-": 1e-6}
 
 
 def validate(p: Params) -> None:
@@ -239,6 +243,10 @@ def validate(p: Params) -> None:
         v = getattr(p, name)
         if not v > 0:
             raise ParameterError(f"{name} = {v}: must be > 0 ({FIELDS[name].metadata['unit']})")
+        low = MAGNITUDE_MIN.get(FIELDS[name].metadata["unit"], 0.0)
+        if v < low:
+            raise ParameterError(f"{name} = {v}: must be >= {low:g} {FIELDS[name].metadata['unit']} (far below any "
+                                 "device this model describes)")
     if p.n_ropes < 3:
         raise ParameterError(f"n_ropes = {p.n_ropes}: must be >= 3 (fewer ropes cannot hold the cap centred)")
     if p.n_ropes > 64:
