@@ -52,6 +52,9 @@ def load_ida(folder) -> tuple[dict, dict, list[dict]]:
         if missing:  # a truncated or foreign file: no rows to draw is no report
             raise ValueError(f"ida.csv has no column {missing[0]!r}")
         rows = list(reader)
+        for i, r in enumerate(rows):   # a row cut short or run on (NUL bytes, a truncated copy): one line
+            if None in r or None in r.values():
+                raise ValueError(f"ida.csv line {i + 2}: not one value per column of its header")
         index["traces"], frag["configurations"]  # noqa: B018 - the keys the pages need
         for r in rows:
             r["im"], r["peak_u"] = _num(r["im [m/s^2]"]), _num(r["peak_u [m]"])
