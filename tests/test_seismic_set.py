@@ -196,8 +196,10 @@ def test_report_of_a_single_run_with_a_peer_and_of_a_compare_folder_with_seismic
     rep = tmp_path / "single"
     p = nsd("report", "--from", str(single), "--out", str(rep))
     assert p.returncode == 0, p.stderr
-    assert sorted(x.name for x in rep.glob("*.png")) == [
-        "01_response_nearfield-pulse_2.png", "02_loops_nearfield-pulse_2.png", "03_energy_nearfield-pulse_2.png"]
+    assert json.loads((single / "summary.json").read_text())["warning_kinds"] == ["peaks_at_last_sample"]
+    assert sorted(x.name for x in rep.glob("*.png")) == [   # the run's warnings page first (docs/seismic.md)
+        "01_warnings_nearfield-pulse_2.png", "02_response_nearfield-pulse_2.png", "03_loops_nearfield-pulse_2.png",
+        "04_energy_nearfield-pulse_2.png"]
     cmp_dir = tmp_path / "compare"
     (cmp_dir / "seismic").mkdir(parents=True)
     for eng in ("semirecursive", "mujoco"):  # the format seisgate writes: nsd seismic's columns
