@@ -14,6 +14,7 @@ import csv
 import json
 import os
 import time
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
@@ -170,7 +171,9 @@ def _load_study(folder: Path) -> list[dict]:
                     check_regular(path, "steady CSV")
                     with open(path) as f:
                         names = [h.split(" [")[0] for h in f.readline().strip().split(",")]
-                    arr = np.genfromtxt(path, delimiter=",", skip_header=1, ndmin=2)  # blanks (nan) allowed
+                    with warnings.catch_warnings():   # an empty file is said in one line (malformed), not warned
+                        warnings.simplefilter("ignore")
+                        arr = np.genfromtxt(path, delimiter=",", skip_header=1, ndmin=2)  # blanks (nan) allowed
                     cols = {n: arr[:, i] for i, n in enumerate(names)}
                     curves.append({"value": d["value"], "engine": d.get("engine", "semirecursive"), "u": cols["u"],
                                    "F": cols["F"], "design": d})
