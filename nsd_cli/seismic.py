@@ -296,6 +296,10 @@ def run_set(args) -> int:
     index = run_record_set(runs, out, workers=workers, scheduler=args.scheduler, scheduler_timeout=timeout,
                            retry_failed=args.retry_failed,
                            run_engine=run_seismic_engine, compare=seismic_metrics, tally=args.tally)
+    if restoring is not None:   # the set's isolation level, as a single run's summary.json has it
+        import json
+        from nsd_core.device.results import atomic_write_json
+        atomic_write_json(out / "set.json", {**json.loads((out / "set.json").read_text()), "restoring_force": restoring})
     c = index["counts"]
     for row in index["rows"]:
         ratio = ("" if row.get("peak_u_ratio") is None else

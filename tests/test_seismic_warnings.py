@@ -89,7 +89,9 @@ def test_a_record_set_warns_per_record_in_set_json_on_stderr_and_on_its_warnings
     out = tmp_path / "set"
     assert main(["seismic", "--record-set", "nearfield-pulse", "--records", "1", "--window", "2,3", "--scale", "16",
                  "--dt-out", "0.002", "--workers", "1", "--out", str(out)]) == 4
-    entry = json.loads((out / "set.json").read_text())["entries"][0]
+    index = json.loads((out / "set.json").read_text())
+    assert index["restoring_force"]["pass"] and index["restoring_force"]["D_source"].startswith("default")
+    entry = index["entries"][0]
     assert entry["warnings"][0].startswith("device: stroke exhausted: the run stopped at t = ")
     assert any(w.startswith("nodevice: beyond the device's stroke") for w in entry["warnings"])
     alone = json.loads((out / "records" / "nearfield-pulse_1_nodevice" / "summary.json").read_text())
