@@ -14,17 +14,25 @@ def add_arguments(p) -> None:
 def restoring_force(args, params, structure) -> dict | None:
     """The check for this run's isolation level (None on a fixed base: no isolation level);
     ParameterError, one line, for a bad --design-displacement (before anything is written)."""
-    from nsd_core.device.restoring_force import check_design_displacement, restoring_force_check
+    from nsd_core.device.restoring_force import NoDefaultError, check_design_displacement, restoring_force_check
     given = getattr(args, "design_displacement", None)
     if given is not None:
         check_design_displacement(given, params.rod_length)
     if getattr(args, "fixed_base", False):
         return None
     device = not args.no_device or getattr(args, "compare_supports", False) or getattr(args, "compare_building", False)
-    return restoring_force_check(params, structure, given, device=device)
+    try:
+        return restoring_force_check(params, structure, given, device=device)
+    except NoDefaultError as e:   # a device variant without a working range still runs: the check says why not
+        return {"pass": None, "skipped": str(e)}
+    except (ValueError, RuntimeError, ArithmeticError) as e:   # a variant the quasi-static path cannot follow
+        return {"pass": None, "skipped": "the device's quasi-static force could not be followed to D: "
+                                         + " ".join(str(e).split())[:200]}
 
 
 def print_restoring_force(check: dict | None) -> None:
-    if check is not None:
+    if check is not None and "skipped" in check:
+        print(f"restoring force: not checked ({check['skipped']})")
+    elif check is not None:
         from nsd_core.device.restoring_force import describe
         print(describe(check))

@@ -106,3 +106,19 @@ def test_help_gives_the_default_it_uses(capsys):
         main_help(["seismic", "--help"])
     text = " ".join(capsys.readouterr().out.split())
     assert f"X_max ({default_design_displacement(P) * 1e3:.2f} mm for the nominal device)" in text
+
+
+def test_a_device_without_a_working_range_still_runs_and_says_why_it_is_not_checked(tmp_path, capsys):
+    """rope_stiffness = 1000 N/m: no slack point, so no X_max to default to (the structure given by hand);
+    the run goes on, the check says why it is missing; with a D given it is computed."""
+    from nsd_cli.main import main
+    argv = ["seismic", "--set", "rope_stiffness=1000", "--structure", "mass=3000", "--structure", "stiffness=1e5",
+            "--ground", "harmonic:amplitude=0.3,frequency=1,duration=0.05"]
+    assert main(argv + ["--out", str(tmp_path / "a")]) == 0
+    c = json.loads((tmp_path / "a" / "summary.json").read_text())["restoring_force"]
+    assert c["pass"] is None and "no default for this device" in c["skipped"]
+    assert "restoring force: not checked (--design-displacement: no default" in capsys.readouterr().out
+    assert main(argv + ["--design-displacement", "0.02", "--out", str(tmp_path / "b")]) == 0
+    c = json.loads((tmp_path / "b" / "summary.json").read_text())["restoring_force"]
+    assert c["x_max"] is None and c["supports_alone"]["difference"] == pytest.approx(1e5 * 0.01, rel=1e-12)
+    assert "over_working_range" not in c["with_device"]["0"]

@@ -82,7 +82,7 @@ def test_warnings_page_keeps_its_text_on_the_page():
     assert any("more warning(s)" in t.get_text() for t in fig.texts)
 
 
-@pytest.mark.slow   # the set's worker process: 150 s measured on the loaded machine
+@pytest.mark.slow   # the set's worker process: 7.5 s warm, 150 s when it first compiles the engine
 def test_a_record_set_warns_per_record_in_set_json_on_stderr_and_on_its_warnings_page(tmp_path, capsys):
     """Near-field pulse 1, record seconds 2-3 at scale 16: the device run stops at the rod's reach, the
     supports alone pass the rod's length."""

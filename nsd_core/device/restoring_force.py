@@ -41,13 +41,18 @@ def weight(structure, gravity: float) -> float:
     return (structure.mass + floors) * gravity
 
 
+class NoDefaultError(ParameterError):
+    """The device has no working range X_max to take the design displacement from."""
+
+
 def default_design_displacement(params: Params, directions_deg=DIRECTIONS_DEG) -> float:
-    """X_max [m], the smallest over the directions (nsd_core.device.working_range)."""
+    """X_max [m], the smallest over the directions (nsd_core.device.working_range); NoDefaultError
+    (one line) for a device without one."""
     from nsd_core.device.working_range import SlackPointError, x_max_at_slack
     try:
         return min(x_max_at_slack(params, psi) for psi in directions_deg)
     except SlackPointError as e:
-        raise ParameterError(f"--design-displacement: no default for this device (it has no working range: {e}); "
+        raise NoDefaultError(f"--design-displacement: no default for this device (it has no working range: {e}); "
                              "give one in metres") from None
 
 
@@ -79,11 +84,15 @@ def restoring_force_check(params: Params, structure, design_displacement: float 
     "supports_alone": {...}, "how"}; forces in N, displacements in m. ``device=False``: the supports
     alone only (with_device is None).
     """
-    x_max = default_design_displacement(params, directions_deg) if device or design_displacement is None else None
     if design_displacement is None:
-        d, source = x_max, f"default: {DEFAULT_D}"
+        d = x_max = default_design_displacement(params, directions_deg)
+        source = f"default: {DEFAULT_D}"
     else:
         d, source = check_design_displacement(design_displacement, params.rod_length), "given"
+        try:
+            x_max = default_design_displacement(params, directions_deg) if device else None
+        except NoDefaultError:
+            x_max = None   # no working range to scan
     w = weight(structure, params.gravity)
     k_b = structure.stiffness
     alone = {**_entry(k_b * d, k_b * d / 2.0, w), "least_passing_D": 2.0 * RATIO * w / k_b}
@@ -101,7 +110,8 @@ def restoring_force_check(params: Params, structure, design_displacement: float 
             half = (POINTS - 1) // 2
             per[f"{psi:g}"] = {**_entry(k_b * d + float(f_dev[-1]), k_b * d / 2.0 + float(f_dev[half]), w),
                                "device_F_D": float(f_dev[-1]), "device_F_half_D": float(f_dev[half])}
-            per[f"{psi:g}"]["over_working_range"] = margin_over_range(params, structure, x_max, psi)
+            if x_max is not None:
+                per[f"{psi:g}"]["over_working_range"] = margin_over_range(params, structure, x_max, psi)
         worst = min(per, key=lambda k: per[k]["margin"])
         out.update(with_device=per, governing_direction_deg=float(worst), **{"pass": per[worst]["pass"]},
                    margin=per[worst]["margin"])
