@@ -99,3 +99,20 @@ def test_a_record_set_warns_per_record_in_set_json_on_stderr_and_on_its_warnings
     err = _warned(capsys)
     assert any(ln.startswith("nsd seismic: warning: nearfield-pulse:1 device: stroke exhausted") for ln in err)
     assert "warnings_record_set_nearfield-pulse" in _pages(out, tmp_path)
+
+
+def test_compare_building_warns_per_configuration_and_checks_only_the_isolated_runs(tmp_path, capsys):
+    """0.3 s of a 1 Hz input: every configuration's peaks fall on the last sample; the fixed base has no
+    isolation level, so no restoring-force check in its summary (the top and the isolated runs have it)."""
+    out = tmp_path / "cb"
+    assert main(["seismic", "--ground", "harmonic:amplitude=0.5,frequency=1,duration=0.3", "--building", "stories=3",
+                 "--compare-building", "--design-displacement", "0.02", "--out", str(out)]) == 0
+    kinds = {c: json.loads((out / c / "summary.json").read_text()) for c in ("fixed_base", "supports", "device")}
+    assert "restoring_force" not in kinds["fixed_base"]
+    assert kinds["device"]["restoring_force"]["W"] == pytest.approx(2 * kinds["device"]["structure"]["mass"] * 9.81)
+    assert json.loads((out / "summary.json").read_text())["restoring_force"]["pass"] is False   # 934 N < 1836 N
+    for c in ("supports", "device"):
+        assert kinds[c]["warning_kinds"] == ["peaks_at_last_sample"]
+    err = _warned(capsys)
+    assert any(ln.startswith("nsd seismic: warning: device: ") for ln in err)
+    assert "warnings_the_building_fixed-base_and_isolated" in _pages(out, tmp_path)
