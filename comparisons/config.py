@@ -84,11 +84,10 @@ class SeismicCase:
     def isolated_structure(self):
         """The default structure of the case's (nominal) parameters with the case's overrides: the
         same structure for every engine (engine_params change the device, not the structure)."""
-        from nsd_core.device.isolation import default_structure
+        from nsd_core.device.isolation import structure_with
         from nsd_core.device.restrainer import split_overrides, with_restrainer
-        st = default_structure(self.params)
         own, restrainer = split_overrides({k: v for k, v in self.structure.items() if k != "restrainer"})
-        st = st.replace(**own) if own else st
+        st = structure_with(self.params, own)   # (a device without a default: the case's mass and stiffness)
         st = with_restrainer(st, self.params, self.structure.get("restrainer") is True, restrainer)
         if self.building is not None:
             from nsd_core.device.building import building_from

@@ -28,18 +28,11 @@ def add_arguments(p) -> None:
 def isolated_structure(args, params):
     """The default structure with --structure overrides and the restrainer (--restrainer or any
     restrainer_* override): ParameterError, one line, on anything wrong."""
-    from nsd_core.device.isolation import default_structure, structure_without_default
+    from nsd_core.device.isolation import structure_with
     from nsd_core.device.params import parse_set
     from nsd_core.device.restrainer import split_overrides, with_restrainer
     own, restrainer = split_overrides(parse_set(getattr(args, "structure", None) or []))
-    try:
-        structure = default_structure(params)
-    except ParameterError:
-        if not {"mass", "stiffness"} <= set(own):  # (the message says to give them)
-            raise
-        structure = structure_without_default(own)
-    if own:
-        structure = structure.replace(**own)
+    structure = structure_with(params, own)
     return with_restrainer(structure, params, bool(getattr(args, "restrainer", False)), restrainer)
 
 

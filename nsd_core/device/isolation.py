@@ -208,6 +208,19 @@ def structure_without_default(own: dict) -> "Structure":
                                                         "support_radius")}, provenance=prov)
 
 
+def structure_with(params: Params, own: dict) -> "Structure":
+    """The default structure of ``params`` with the overrides ``own`` (mass, stiffness, ...; strings
+    allowed); for a device whose default cannot be sized, the structure ``own`` gives when it holds mass
+    and stiffness (else the one-line ParameterError that says to give them)."""
+    try:
+        structure = default_structure(params)
+    except ParameterError:
+        if not {"mass", "stiffness"} <= set(own):
+            raise
+        structure = structure_without_default(own)
+    return structure.replace(**own) if own else structure
+
+
 def default_structure(params: Params | None = None, k_dev: dict | None = None) -> Structure:
     """The default isolated structure by the model document's rules (k_dev: a precomputed
     ``device_min_stiffness`` result; the nominal device uses the recorded NOMINAL_K_DEV)."""
