@@ -86,6 +86,8 @@ def test_nsd_seismic_reports_it_and_refuses_bad_input(tmp_path, capsys):
     assert code == 0 and c["D"] == 0.018 and c["pass"] is False and c["code"].startswith("ASCE/SEI 7-16")
     line = [ln for ln in printed.splitlines() if ln.startswith("restoring force")]
     assert len(line) == 1 and "D = 18 mm" in line[0] and "FAIL" in line[0] and "supports alone" in line[0]
+    assert "restoring_force_fails" in s["warning_kinds"]   # and on stderr and the report's warnings page
+    assert "restoring force: the isolation level with the device fails ASCE/SEI 7-16" in s["warnings"][-1]
     bad = tmp_path / "bad"
     assert main(["seismic", "--ground", "harmonic:amplitude=0.3,frequency=1,duration=0.05",
                  "--design-displacement", "0.04", "--out", str(bad)]) == 2

@@ -14,12 +14,16 @@ A run's warnings, each {"kind", "text"}:
 * ``restrainer_impacts``: the restrainer was touched (any contact): how many, the largest impact
   energy and velocity, the peak contact force;
 * ``peaks_at_last_sample``: a response peak falls on the run's last sample (a complete run only: a
-  stopped run's end is its event), so the true peak may lie beyond the window.
+  stopped run's end is its event), so the true peak may lie beyond the window;
+* ``restoring_force_fails``: the isolation level of this run (with the device, or the supports alone)
+  fails the building codes' restoring-force check at its design displacement
+  (``nsd_core.device.restoring_force``).
 """
 from __future__ import annotations
 
 STROKE_FRACTION = 0.95   # of the rod's length l_d: |u| this close to it leaves no stroke to speak of (assumed)
-KINDS = ("stroke_exhausted", "stroke_nearly_exhausted", "beyond_stroke", "restrainer_impacts", "peaks_at_last_sample")
+KINDS = ("stroke_exhausted", "stroke_nearly_exhausted", "beyond_stroke", "restrainer_impacts", "peaks_at_last_sample",
+         "restoring_force_fails")
 
 
 def rod_length_of(summary: dict) -> float | None:
@@ -87,11 +91,28 @@ def _last_sample(summary: dict) -> list[dict]:
                      "window (lengthen --duration or the window)"}]
 
 
+def _restoring_force(summary: dict) -> list[dict]:
+    rf = summary.get("restoring_force")
+    if not isinstance(rf, dict) or "skipped" in rf or summary.get("fixed_base"):
+        return []
+    with_device = rf.get("with_device") if summary.get("device", True) else None
+    if isinstance(with_device, dict) and rf.get("governing_direction_deg") is not None:
+        e, what = with_device.get(f"{rf['governing_direction_deg']:g}") or {}, "with the device"
+    else:
+        e, what = rf.get("supports_alone") or {}, "on the supports alone"
+    if e.get("pass") is not False:
+        return []
+    return [{"kind": "restoring_force_fails",
+             "text": f"restoring force: the isolation level {what} fails {rf.get('code')} at D = "
+                     f"{rf['D'] * 1e3:.4g} mm: F(D) - F(D/2) = {e['difference']:.4g} N < 0.025 W = "
+                     f"{rf['required']:.4g} N"}]
+
+
 def run_warnings(summary: dict, rod_length: float | None = None) -> list[dict]:
     """The warnings of one run's summary (see the module docstring); rod_length [m] defaults to the
     summary's own parameters."""
     rod = rod_length if rod_length is not None else rod_length_of(summary)
-    return _stroke(summary, rod) + _restrainer(summary) + _last_sample(summary)
+    return _stroke(summary, rod) + _restrainer(summary) + _last_sample(summary) + _restoring_force(summary)
 
 
 def apply_warnings(summary: dict, rod_length: float | None = None) -> list[str]:
