@@ -133,7 +133,8 @@ def run(args) -> int:
     period = structure.first_period   # the supports alone (and the building on them, if any)
     motions = {rid: fema_record(set_, rid, **ground) for rid in records}
     flag = "--levels" if levels is not None else "--max-runs"
-    check_ida_work({r: motions[r].duration for r in records}, len(levels or []) or hunt.max_runs, flag)
+    check_ida_work({r: motions[r].duration for r in records}, len(levels or []) or hunt.max_runs, flag,
+                   structure.building.stories if structure.building else 0)
     work = check_work(mode, {r: motions[r].duration for r in records}, engines[1:])
     im = {rid: record_intensity(motions[rid], args.measure, period) for rid in records}
     check_ida_scales({r: im[r]["value"] for r in records}, levels or [hunt.start], flag if levels else "--start",

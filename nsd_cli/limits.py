@@ -31,6 +31,12 @@ DRIVE_STEPS_PER_SECOND = 1100     # measured at max_step 1e-3 s (module docstrin
 STEPS_MAX = 2_000_000             # one run: about 15 min of wall time on the 2-core machine
 SWEEP_STEPS_MAX = 20_000_000      # a whole sweep, every design together
 
+# ---- a building on the slab: the in-house engine's cost per model second grows with its stories (the
+# generic evaluation of 10 + 2N bodies; measured, 2 loaded cores: 1.1, 2.3, 6.6, 11.5 wall s per model s at
+# 3, 12, 25 and 50 stories); one run is held to RUN_WALL_MAX, like STEPS_MAX without a building
+BUILDING_WALL_PER_STORY = 0.23    # wall s per model s per story
+RUN_WALL_MAX = 900.0              # s, one run (about 15 min)
+
 # ---- nsd ida: every run of every trace, estimated as nsd seismic's runs
 IDA_STEPS_MAX = SWEEP_STEPS_MAX   # the whole study (about 2 h of CPU at ~2500 steps per wall second)
 
@@ -116,10 +122,28 @@ def check_polar_work(wires, step: float, points: int) -> None:
                              f"quasi-static points (~{work * 1.5e-3:.0f} s of CPU); at most {POLAR_WORK_MAX}")
 
 
-def check_ida_work(durations: dict, runs: int, flag: str) -> float:
+def building_factor(stories: int) -> float:
+    """How many times a run with a building of ``stories`` costs what one without costs (>= 1)."""
+    return max(1.0, BUILDING_WALL_PER_STORY * stories * SEISMIC_STEPS_PER_SECOND / 2500.0) if stories else 1.0
+
+
+def check_building_work(duration: float, stories: int, where: str = "") -> None:
+    """One run of a structure with a building of ``stories``: its estimated wall time within RUN_WALL_MAX."""
+    wall = duration * BUILDING_WALL_PER_STORY * stories
+    if stories and wall > RUN_WALL_MAX:
+        tail = f" ({where})" if where else ""
+        raise ParameterError(f"--building stories={stories} over {duration:g} model s{tail}: about {wall / 60:.3g} min "
+                             f"of wall time (~{BUILDING_WALL_PER_STORY * stories:.3g} s per model second); at most "
+                             f"{RUN_WALL_MAX / 60:g} min (a shorter --duration or window, or fewer stories)")
+
+
+def check_ida_work(durations: dict, runs: int, flag: str, stories: int = 0) -> float:
     """Before any run of ``nsd ida``: the study's estimated steps (records x 2 configurations x ``runs``
-    runs x the record's model seconds x the seismic rate) within IDA_STEPS_MAX. Returns the steps."""
-    steps = sum(2 * runs * d * SEISMIC_STEPS_PER_SECOND for d in durations.values())
+    runs x the record's model seconds x the seismic rate, times the building's cost factor) within
+    IDA_STEPS_MAX, and each run's wall time (check_building_work). Returns the steps."""
+    for rid, d in durations.items():
+        check_building_work(d, stories, f"record {rid}")
+    steps = sum(2 * runs * d * SEISMIC_STEPS_PER_SECOND for d in durations.values()) * building_factor(stories)
     if steps > IDA_STEPS_MAX:
         raise ParameterError(f"{flag}: {len(durations)} records x 2 configurations x {runs} runs of "
                              f"{sum(durations.values()) / len(durations):.3g} model s on average would take about "

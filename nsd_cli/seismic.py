@@ -154,6 +154,8 @@ def run(args) -> int:
     lim.check_seismic_request(motion.duration if args.duration is None else args.duration, args.dt_out,
                               "" if args.duration is not None else "the input's own duration")
     structure = seismic_building.with_building(args, seismic_extras.isolated_structure(args, params))
+    lim.check_building_work(motion.duration if args.duration is None else args.duration,
+                            structure.building.stories if structure.building else 0)
     if args.fixed_base and (not args.no_device or args.compare_supports):
         raise ParameterError("--fixed-base: the slab is held to the ground, so the run has no device: add --no-device")
     solver = {**DEFAULT_SOLVER, **solver_settings(args)}
@@ -285,9 +287,12 @@ def run_set(args) -> int:
             raise ParameterError(f"--{name.replace('_', '-')} = {v}: must be a finite number > 0 (s)")
     runs = record_runs(set_, records, ground, params.to_dict(), numbers, args.duration, args.dt_out, solver,
                        code_fingerprint(), peers=tuple(engines[1:]))  # every record's window checked here
-    for r in runs if args.duration is None else ():
-        lim.check_seismic_request(fema_record(r.set, r.record, **r.ground).duration, args.dt_out,
-                                  f"record {r.set}:{r.record}'s own duration")
+    stories = structure.building.stories if structure.building else 0
+    for r in runs:
+        own = fema_record(r.set, r.record, **r.ground).duration if args.duration is None else args.duration
+        if args.duration is None:
+            lim.check_seismic_request(own, args.dt_out, f"record {r.set}:{r.record}'s own duration")
+        lim.check_building_work(own, stories, f"record {r.set}:{r.record}")
     timeout = scheduler_timeout(args)
     check_scheduler(args.scheduler, timeout)
     restoring = seismic_checks.restoring_force(args, params, structure)

@@ -125,6 +125,14 @@ add("ida-scale-start", with_flag(IDA, "--structure", ["mass=1e7", "stiffness=1e3
 add("ida-scale-levels", with_flag(IDA[:-2] + ["--levels", "0.5"] + IDA[-2:], "--structure",
                                   ["mass=1e7", "stiffness=1e3"]), fragment="scaled by")
 
+# ---- a building's cost per model second grows with its stories: one run and a whole study bounded
+add("building-work-seismic", ["seismic", "--ground", "harmonic:amplitude=1,frequency=2,duration=60", "--duration",
+                              "300", "--building", "stories=50", "--out", "{out}"], fragment="wall time")
+add("building-work-set", ["seismic", "--record-set", "farfield", "--records", "5", "--time-factor", "2", "--building",
+                          "stories=50", "--out", "{out}"], fragment="wall time")
+add("building-work-ida", ["ida", "--record-set", "farfield", "--limit", "stroke=0.02", "--max-runs", "10", "--building",
+                          "stories=50", "--out", "{out}"], fragment="solver steps")
+
 # ---- a device variant whose default structure cannot be sized (no working range, no negative stiffness)
 for item, frag in (("rope_stiffness=1000", "cannot be sized"), ("rod_length=0.005", "cannot be sized"),
                    ("spring_kse=1", "cannot be sized"), ("precompression_force=1e8", "cannot be sized"),
