@@ -196,7 +196,7 @@ def _step_loop(m, w, forces, motion, evaluator, tab, t_eval, settings, out, stat
             h_abs = min_step
         rejected = False
         while True:
-            if h_abs < min_step:
+            if not h_abs >= min_step:   # (NaN too: a NaN step size would loop here for ever)
                 stats[0], stats[1], stats[2], stats[3] = steps, nfev, TOO_SMALL_STEP, k
                 return TOO_SMALL_STEP
             t_new = t + h_abs
