@@ -107,6 +107,10 @@ def main(argv: list[str] | None = None) -> int:
     except SolverError as e:
         print(f"nsd: solver failure: {printable(e)}", file=sys.stderr)
         return 3
+    except (ZeroDivisionError, OverflowError, FloatingPointError) as e:  # arithmetic that failed inside a run
+        print(f"nsd: solver failure: {type(e).__name__}: {printable(e)} (the state left the range the "
+              "model's arithmetic holds)", file=sys.stderr)
+        return 3
     except OSError as e:
         if e.errno not in DISK_ERRNOS:
             raise
