@@ -324,12 +324,19 @@ def definitions_pages(data) -> list:
         if crows:
             blocks.append((f"Case limits (override the engine's and the default on that case; blank: not set{part})",
                            [("engine", 1, "l"), ("case", 1, "l")] + [(_head(m), 1, "r") for m in group], crows))
-    defaulted = s.get("tolerances_defaulted") or []
-    sub = ("drive cases on the steady (last) cycle resampled on a common phase grid; seismic cases on the time "
-           "histories at every output time; the most specific limit wins (case, then engine, then default)")
-    if defaulted:
-        sub += "\ntaken from the default tolerance file (the given file left them out): " + ", ".join(defaulted)
+    sub = _metrics_subtitle(s, "; the most specific limit wins (case, then engine, then default)",
+                            "taken from the default tolerance file")
     return _table_pages("Metrics: definitions and limits", sub, blocks)
+
+
+def _metrics_subtitle(s: dict, rule: str, defaulted_from: str) -> str:
+    """Where the metrics are taken, and which values the given file left to the defaults."""
+    sub = ("drive cases on the steady (last) cycle resampled on a common phase grid; seismic cases on the time "
+           "histories at every output time" + rule)
+    defaulted = s.get("tolerances_defaulted") or []
+    if defaulted:
+        sub += f"\n{defaulted_from} (the given file left them out): " + ", ".join(defaulted)
+    return sub
 
 
 OF = {"max_dF_rel": "peak force", "rms_dF_rel": "peak force", "peak_force_rel": "peak force",
@@ -362,11 +369,7 @@ def _rule_pages(s: dict, defs: dict, units: dict) -> list:
     blocks = [("The rule (comparisons/verdict.py; the constants: the tolerance file's [verdict])",
                [("", 1, "l"), ("", 1, "l")], text),
               ("Metrics and their engineering tolerances ([engineering] of the tolerance file)", cols, rows)]
-    defaulted = s.get("tolerances_defaulted") or []
-    sub = ("drive cases on the steady (last) cycle resampled on a common phase grid; seismic cases on the time "
-           "histories at every output time")
-    if defaulted:
-        sub += "\nthe rule's default tolerance (the given file left them out): " + ", ".join(defaulted)
+    sub = _metrics_subtitle(s, "", "the rule's default tolerance")
     return _table_pages("Metrics: definitions, the rule and the engineering tolerances", sub, blocks)
 
 
