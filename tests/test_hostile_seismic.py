@@ -428,3 +428,16 @@ def test_a_stored_run_whose_series_is_gone_is_not_a_result(tmp_path):
     (folder / "seismic.csv").unlink()
     (folder / "seismic.csv").write_text("t [s]\n0\n")
     assert store.load("k") == rec
+
+
+@pytest.mark.slow
+def test_a_record_set_with_a_12_story_building_runs(tmp_path):
+    """Both runs of a record with a 12-story building (numba failed on its generated evaluation:
+    MemoryError under 4 GB, RecursionError after ~140 s) finish, in a real process, and draw."""
+    p = subprocess.run([sys.executable, "-m", "nsd_cli.main", "seismic", "--record-set", "farfield", "--records", "1",
+                        "--window", "5,5.5", "--building", "stories=12", "--workers", "1", "--out", str(tmp_path)],
+                       capture_output=True, text=True, timeout=900)
+    assert p.returncode == 0 and "Traceback" not in p.stderr, p.stderr[-2000:]
+    index = json.loads((tmp_path / "set.json").read_text())
+    assert [r["status"] for r in index["rows"]] == ["ok"], index["rows"]
+    assert any(n.name.startswith("0") and "floors" in n.name for n in tmp_path.iterdir())
