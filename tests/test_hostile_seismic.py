@@ -353,6 +353,23 @@ def test_a_full_disk_while_a_figure_is_written_names_the_figure(tmp_path, capsys
     assert not [p for p in out.iterdir() if ".tmp" in p.name]
 
 
+def test_a_full_disk_while_the_report_s_pdf_is_written_names_the_pdf(tmp_path, capsys, monkeypatch):
+    """nsd report: the PDF writer's ENOSPC (injected) is one line naming validation.pdf, exit 1, no
+    temporary file and no page left behind."""
+    from matplotlib.backends import backend_pdf
+
+    def full(self, *a, **k):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(backend_pdf.PdfPages, "savefig", full)
+    out = tmp_path / "rep"
+    code = main(["report", "--from", str(DATA / "seismic_small"), "--out", str(out)])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 1 and len(err) == 1 and "Traceback" not in err[0], err
+    assert str(out / "validation.pdf") in err[0] and "No space left on device" in err[0], err
+    assert not out.exists() or [p.name for p in out.iterdir() if p.name != ".nsd.lock"] == []
+
+
 @pytest.mark.parametrize("damage", ["truncated", "list", "no-metrics", "status-unknown", "metrics-list", "binary"])
 def test_a_damaged_stored_run_is_not_a_result(tmp_path, damage):
     """The store's reader (nsd ida, sweep, record sets): a damaged result.json is no result (the job runs
