@@ -187,7 +187,7 @@ def verdict_cell(s: dict, case: str, engine: str, v: dict) -> tuple[str, float]:
         return f"DISAGREES {w.get('metric', '')} {fmt(w.get('ratio'), 3)}x bound", 2.0
     if not v["pass"]:
         need = v.get("needs") or {}
-        tail = "".join(f" needs {k} {fmt(x, 2)} s" for k, x in need.items())
+        tail = "".join(f" (rtol <= {fmt(x, 2)})" if k == "rtol" else f" (h <= {fmt(x, 2)} s)" for k, x in need.items())
         return f"NOT CONVERGED{tail}", 2.0
     return f"PASS  {fmt(agree, 2)} of bound, {fmt(acc, 2)} of tol", max(agree, acc)
 

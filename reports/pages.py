@@ -9,12 +9,16 @@ import json
 
 from reports.metric_tables import (SOURCES, draw_matrix, estimated, in_units, metric_rows,  # noqa: F401
                                    metric_table_pages)
+from reports.rule_pages import rule_pages, tolerance_line
 from reports.style import (GREEN, GREY, LANDSCAPE, RED, fit_columns, fmt, fmt_full, new_figure, rows_per_page, table,
                            wrap_rows, wrap_width)
 
 FS = 7.0           # table font size [pt]
 BOTTOM = 0.05
 WIDTH_PT = 0.88 * LANDSCAPE[0] * 72  # usable text width [pt]
+
+
+FOOTER_TOP = 0.045   # the page footer's top (fraction of the page height)
 
 
 def _line(size: float) -> float:
@@ -26,6 +30,13 @@ def _text(fig, y: float, text: str, size: float = 8.0, color: str = "black", wei
     text = "\n".join(wrap_width(text, WIDTH_PT, size, weight == "bold", indent="   "))
     fig.text(x, y, text, ha="left", va="top", fontsize=size, color=color, weight=weight)
     return y - (text.count("\n") + 1) * _line(size)
+
+
+def _height(sections: list[tuple[str, str]], size: float = 7.5) -> float:
+    """The height the headed text sections take on the page."""
+    lines = sum(len(wrap_width(t, WIDTH_PT, size, False, indent="   ")) for _, body in sections
+                for t in body.splitlines())
+    return lines * _line(size) + len(sections) * (0.018 + _line(10))
 
 
 def _heading(fig, y: float, text: str) -> float:
@@ -85,8 +96,8 @@ def page_one(data):
         lines = []
         for f in s["failures"] or [f"verdict {verdict} without a listed failure"]:
             lines += wrap_width("\u2022 " + str(f), WIDTH_PT, 8.0, indent="   ")
-        if len(lines) > 10:
-            lines = lines[:9] + [f"   (and {len(lines) - 9} more line(s): every failure is in the metric tables)"]
+        if len(lines) > 8:
+            lines = lines[:7] + [f"   (and {len(lines) - 7} more line(s): every failure is in the metric tables)"]
         y = _text(fig, y, "\n".join(lines), size=8.0, color=RED)
     elif estimated(s):
         y = _text(fig, y - 0.004, "Every engine agrees with the reference within its own numerical error, that error is "
@@ -113,31 +124,15 @@ def page_one(data):
                   size=7.5, color=GREY)
     y = draw_matrix(fig, y - 0.004, data)
     seis = [_seismic_line(c) for c in s.get("seismic_cases", [])]
-    if seis:
-        y = _heading(fig, y - 0.008, "Seismic input (details: what was run)")
-        y = _text(fig, y, "\n".join(seis), size=7.5)
-    y = _heading(fig, y - 0.008, "Software and cost")
-    _text(fig, y, "\n".join(_versions(data) + [_cost_line(data)]), size=7.5)
+    software = ("Software and cost", "\n".join(_versions(data) + [_cost_line(data)]))
+    tail = ([("Seismic input (details: what was run)", "\n".join(seis))] if seis else []) + [software]
+    if seis and y - _height(tail) < FOOTER_TOP:   # a long failure list: the seismic input is on 'what was run'
+        y = _text(fig, y - 0.008, "(the seismic input: on the page 'What was run')", size=7.5, color=GREY)
+        tail = [software]
+    for head, body in tail:
+        y = _heading(fig, y - 0.008, head)
+        y = _text(fig, y, body, size=7.5)
     return fig
-
-
-def tolerance_line(s: dict) -> str:
-    """The engineering tolerances in words and in units (their range over the cases)."""
-    by_metric: dict[str, list] = {}
-    for r in s["metrics"]:
-        if r["gated"] and r.get("tolerance_abs") is not None and r.get("reference"):
-            by_metric.setdefault(r["metric"], []).append(r)
-    parts = []
-    for m, rows in by_metric.items():
-        lo, hi = min(r["tolerance_abs"] for r in rows), max(r["tolerance_abs"] for r in rows)
-        unit = rows[0]["unit"]
-        span = in_units(lo, unit) if lo == hi else f"{in_units(lo, unit)} to {in_units(hi, unit)}"
-        parts.append(f"{m} {fmt(rows[0]['tolerance'], 2)} ({span})")
-    own = (s["rule"].get("engineering") or {})
-    return ("Engineering tolerances (a fraction of the reference's peak; in units over the cases): " + "; ".join(parts)
-            + f"; own checks: closure {in_units(own.get('closure_max'), 'm')}, tracking "
-              f"{in_units(own.get('tracking_error'), 'm')}, energy balance {fmt(own.get('energy_balance_rel'), 2)} "
-              f"of the work.")
 
 
 def _closed_form(g: dict) -> str:
@@ -302,7 +297,7 @@ def definitions_pages(data) -> list:
         defs = {k: v[1] for k, v in METRICS.items()}
     units = s.get("metric_units", {})
     if estimated(s):
-        return _rule_pages(s, defs, units)
+        return rule_pages(s, defs, units, _table_pages, _metrics_subtitle)
     by_engine = s.get("tolerances_by_engine") or {}
     rows = []
     for m, v in s["tolerances"].items():
@@ -337,40 +332,6 @@ def _metrics_subtitle(s: dict, rule: str, defaulted_from: str) -> str:
     if defaulted:
         sub += f"\n{defaulted_from} (the given file left them out): " + ", ".join(defaulted)
     return sub
-
-
-OF = {"max_dF_rel": "peak force", "rms_dF_rel": "peak force", "peak_force_rel": "peak force",
-      "loop_area_rel": "work per cycle", "region_shift_rel": "amplitude", "closure_max": "m (absolute)",
-      "tracking_error": "m (absolute)", "energy_balance_rel": "drive work per cycle",
-      "max_du_rel": "peak plate displacement", "peak_u_rel": "peak plate displacement",
-      "max_dF_device_rel": "peak device force", "peak_a_rel": "peak absolute acceleration",
-      "energy_residual_rel": "peak input energy", "max_dfloor_rel": "peak floor displacement",
-      "max_ddrift_rel": "peak story drift", "max_dfloor_a_rel": "peak floor acceleration"}
-
-
-def _rule_pages(s: dict, defs: dict, units: dict) -> list:
-    """The estimated rule: every metric with its definition and engineering tolerance, and the rule."""
-    rule = s["rule"]
-    rows = [[m, units.get(m, "-"), defs.get(m, "-"), fmt(tol, 3), OF.get(m, "-")]
-            for m, tol in (rule.get("engineering") or {}).items()]
-    cols = [("metric", 1, "l"), ("unit", 1, "c"), ("definition (F_ref, u_ref: the converged reference's)", 1, "l"),
-            ("engineering\ntolerance", 1, "r"), ("a fraction of", 1, "l")]
-    k, beta = rule.get("k"), rule.get("beta")
-    text = [["estimated error", "a fixed-step peer: its difference between its runs at h and h/2 x r^p / (r^p - 1), "
-             "p its method's order (MuJoCo Euler 1, RK4 2, Exudyn 2); the in-house engine: its difference from the "
-             "converged reference; the reference: its difference from its rtol 1e-11 check"],
-            ["consistent", f"difference from the converged reference <= {fmt(k, 3)} x (estimated error + "
-             "reference's); otherwise DISAGREES beyond numerical error: the engines differ about the model"],
-            ["accurate enough", "max(estimated error, difference) <= the engineering tolerance; otherwise NOT "
-             "CONVERGED at these settings, with the step the estimate asks for (nsd compare --refine runs it)"],
-            ["scalar metrics", f"a peak or loop-work difference can cancel by chance between h and h/2: its estimate "
-             f"is at least {fmt(beta, 3)} x the estimate of the max-norm difference it comes from"],
-            ["PASS", rule.get("text", "")]]
-    blocks = [("The rule (comparisons/verdict.py; the constants: the tolerance file's [verdict])",
-               [("", 1, "l"), ("", 1, "l")], text),
-              ("Metrics and their engineering tolerances ([engineering] of the tolerance file)", cols, rows)]
-    sub = _metrics_subtitle(s, "", "the rule's default tolerance")
-    return _table_pages("Metrics: definitions, the rule and the engineering tolerances", sub, blocks)
 
 
 def parameter_pages(data) -> list:
