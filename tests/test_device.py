@@ -1,4 +1,6 @@
 """The device on the semirecursive engine: rest state, quasi-static agreement, consistency."""
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -12,8 +14,11 @@ P = Params()
 ROD_BALANCE_10HZ = 8e-4   # measured 4.2e-4 at 10 Hz, A = 0.02 m: finite-difference accelerations, 200 samples
 
 
+REST = str(Path(__file__).resolve().parent / "data" / "rest_path.csv")   # the plate held at x = y = 0 for 0.2 s
+
+
 def test_rest_state_is_an_exact_equilibrium():
-    r = simulate(P, Drive(0.0, 10.0, cycles=1, samples_per_cycle=100))
+    r = simulate(P, Drive(0.0, 10.0, cycles=1, samples_per_cycle=100, path=REST))
     assert np.ptp(r["cap_z"]) < 1e-12 and np.ptp(r["wall_z"]) < 1e-12  # nothing moves, not by a micrometre
     # to round-off: 1e-10 of 3800 N is a wall displacement of ~1e-12 m against k_se
     np.testing.assert_allclose(r["spring_push"], P.precompression_force, rtol=1e-10)

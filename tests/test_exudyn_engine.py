@@ -5,6 +5,8 @@ under a minute on two cores.
 """
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -24,8 +26,9 @@ STEP = {"step_size": 2e-5, "min_steps_per_cycle": 1}  # 5000 steps per 0.1 s (de
 
 @pytest.fixture(scope="module")
 def rest():
-    """The plate held at u = 0 (a 1e-12 m drive: numerically the rest state, u'' ~ 4e-9 m/s^2)."""
-    return ExudynEngine().run(P, Drive(1e-12, 10.0, cycles=1, samples_per_cycle=100), STEP)
+    """The plate held at x = y = 0 (a path table of zeros: a named path needs at least 1 um of amplitude)."""
+    rest = Path(__file__).resolve().parent / "data" / "rest_path.csv"
+    return ExudynEngine().run(P, Drive(0.0, 10.0, cycles=1, samples_per_cycle=100, path=str(rest)), STEP)
 
 
 @pytest.fixture(scope="module")

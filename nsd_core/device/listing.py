@@ -33,6 +33,8 @@ def bounds(name: str, p: Params | None = None) -> dict[str, Any]:
         lo, lo_open = (MAGNITUDE_MIN[unit], False) if unit in MAGNITUDE_MIN else (0.0, True)
     if name in _SPECIAL:
         lo, lo_open, hi, hi_open, note = _SPECIAL[name]
+        if name in _POSITIVE and lo == 0.0 and lo_open and unit in MAGNITUDE_MIN:   # the validated smallest value
+            lo, lo_open = MAGNITUDE_MIN[unit], False
     if name == "wire_upper_height":
         lo, lo_open, note = -p.rod_length, True, "rod_length + wire_upper_height > 0 (the wire span)"
     elif name == "precompression_force":

@@ -87,5 +87,6 @@ class Store:
 def _intact(rec) -> bool:
     """A stored result as ``save`` writes it: status ok or failed, design and metrics objects, an error."""
     return (isinstance(rec, dict) and rec.get("status") in ("ok", "failed") and isinstance(rec.get("design"), dict)
-            and isinstance(rec.get("metrics"), dict) and "error" in rec
+            and (isinstance(rec.get("metrics"), dict) or (rec["status"] == "failed" and rec.get("metrics") is None))
+            and "error" in rec
             and (rec["status"] == "failed" or isinstance(rec.get("files", {}), dict)))
