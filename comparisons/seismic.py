@@ -42,18 +42,22 @@ def gate_metrics(ref, other) -> dict:
 def building_metrics(ref, other) -> dict:
     """The building's differences (docs/building.md): per floor / story, max |o - r| / max |r| of the plan
     vectors of the displacement relative to the ground (dfloor), the drift (ddrift) and the absolute
-    acceleration (dfloor_a), each list and its worst."""
+    acceleration (dfloor_a), each list and its worst; max |r| is at least 1e-3 of the building's largest."""
     n = 0
     while f"floor{n + 1}_x" in ref.columns:
         n += 1
     out = {}
     for key, (cx, cy) in {"dfloor": ("floor{}_x", "floor{}_y"), "ddrift": ("drift{}_x", "drift{}_y"),
                           "dfloor_a": ("floor{}_ax_abs", "floor{}_ay_abs")}.items():
+        refs = [np.column_stack([ref[cx.format(i)], ref[cy.format(i)]]) for i in range(1, n + 1)]
+        peaks = [float(np.max(np.linalg.norm(r, axis=1))) for r in refs]
+        # a floor or story whose own peak is near zero (a tall, stiff building early in a record) is measured
+        # against 1e-3 of the building's largest peak of that quantity, not against its own round-off
+        floor = max(1e-3 * max(peaks), 1e-300)
         per = []
-        for i in range(1, n + 1):
-            r = np.column_stack([ref[cx.format(i)], ref[cy.format(i)]])
+        for i, (r, peak) in enumerate(zip(refs, peaks), start=1):
             o = np.column_stack([other[cx.format(i)], other[cy.format(i)]])
-            per.append(float(np.max(np.linalg.norm(o - r, axis=1)) / max(np.max(np.linalg.norm(r, axis=1)), 1e-300)))
+            per.append(float(np.max(np.linalg.norm(o - r, axis=1)) / max(peak, floor)))
         out[key], out[key + "_per_floor"] = max(per), per
     return out
 

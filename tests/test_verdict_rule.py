@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 import pytest
 
 from comparisons.estimate import nominal_order, observed_order, refined_settings, richardson_factor, step_needed
@@ -77,3 +79,25 @@ def test_a_run_equal_to_the_reference_passes():
     _, v = judge({"max_dF_rel": 0.0, "peak_force_rel": 0.0}, {"max_dF_rel": 0.0, "peak_force_rel": 0.0},
                  {"max_dF_rel": 0.0})
     assert v["pass"]
+
+
+class _Run:
+    """Columns as a run has them (``.columns`` and ``run[name]``)."""
+
+    def __init__(self, columns):
+        self.columns = columns
+
+    def __getitem__(self, k):
+        return self.columns[k]
+
+
+def test_a_story_with_a_near_zero_reference_drift_is_measured_against_the_buildings_largest():
+    from comparisons.seismic import building_metrics
+    t = np.linspace(0, 1, 11)
+    base = {f"{q}{i}_{c}": np.zeros_like(t) for q in ("floor", "drift") for i in (1, 2) for c in ("x", "y")}
+    base.update({f"floor{i}_{c}_abs": np.zeros_like(t) for i in (1, 2) for c in ("ax", "ay")})
+    ref = dict(base, floor1_x=0.01 * t, drift1_x=0.01 * t, drift2_x=1e-280 * t, floor1_ax_abs=t)
+    other = dict(ref, drift2_x=1e-6 * t)   # 1e-6 m off on a story whose own peak is 1e-280 m
+    b = building_metrics(_Run(ref), _Run(other))
+    assert b["ddrift_per_floor"][1] == pytest.approx(1e-6 / (1e-3 * 0.01))   # 1e-3 of story 1's 0.01 m peak
+    assert b["ddrift"] == pytest.approx(0.1)
