@@ -40,22 +40,30 @@ FULL = ["compare"]
 SHORT = ["compare", "--engines", "semirecursive"]
 
 
-def run_once(args: list[str], cache: Path, out: Path) -> dict:
-    """One fresh process of ``nsd ARGS --out OUT`` with ``cache`` as XDG_CACHE_HOME."""
-    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
-    env.update(XDG_CACHE_HOME=str(cache), MPLBACKEND="Agg")
+def timed_nsd(args: list[str], out: Path, env: dict, cwd: Path = ROOT) -> tuple[dict, dict | None]:
+    """One fresh process of ``nsd ARGS --out OUT``: its exit code, wall and CPU seconds (the process and
+    its workers), and the results.json it wrote (None, and the last stderr line as ``error``, if none)."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
-    p = subprocess.run([sys.executable, "-m", "nsd_cli.main", *args, "--out", str(out)], cwd=ROOT, env=env,
+    p = subprocess.run([sys.executable, "-m", "nsd_cli.main", *args, "--out", str(out)], cwd=cwd, env=env,
                        capture_output=True, text=True)
     wall = time.perf_counter() - t0
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     row = {"exit_code": p.returncode, "command_wall_s": wall,
            "command_cpu_s": (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)}
     try:
-        res = json.loads((out / "results.json").read_text())
+        return row, json.loads((out / "results.json").read_text())
     except (OSError, ValueError):
         row["error"] = (p.stderr.strip().splitlines() or ["no results.json"])[-1][:300]
+        return row, None
+
+
+def run_once(args: list[str], cache: Path, out: Path) -> dict:
+    """One fresh process of ``nsd ARGS --out OUT`` with ``cache`` as XDG_CACHE_HOME."""
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env.update(XDG_CACHE_HOME=str(cache), MPLBACKEND="Agg")
+    row, res = timed_nsd(args, out, env)
+    if res is None:
         return row
     compile_s: dict[str, float] = {}
     for per in res["runs"].values():

@@ -15,37 +15,26 @@ extra time goes.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
-import resource
 import statistics
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from benchmarks.bench_start import timed_nsd  # noqa: E402
 from nsd_core.device.results import atomic_write_json, versions  # noqa: E402
 
 
 def run_once(cwd: Path, out: Path) -> dict:
-    env = {**os.environ, "MPLBACKEND": "Agg"}
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    load0, t0 = os.getloadavg(), time.perf_counter()
-    p = subprocess.run([sys.executable, "-m", "nsd_cli.main", "compare", "--out", str(out)], cwd=cwd, env=env,
-                       capture_output=True, text=True)
-    wall = time.perf_counter() - t0
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    row = {"exit_code": p.returncode, "command_wall_s": wall, "load_before": round(load0[0], 2),
-           "command_cpu_s": (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)}
-    try:
-        res = json.loads((out / "results.json").read_text())
-    except (OSError, ValueError):
-        row["error"] = (p.stderr.strip().splitlines() or ["no results.json"])[-1][:300]
+    load0 = os.getloadavg()
+    row, res = timed_nsd(["compare"], out, {**os.environ, "MPLBACKEND": "Agg"}, cwd)
+    row["load_before"] = round(load0[0], 2)
+    if res is None:
         return row
     cpu: dict[str, float] = {}
     for per in list(res["runs"].values()) + list(res.get("reference_runs", {}).values()):
