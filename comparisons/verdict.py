@@ -152,23 +152,17 @@ def _verdict(engine: str, rows: list[dict], ev: dict, rule: Rule) -> dict:
         parts.append(f"disagrees beyond numerical error: {r['metric']} = {r['value']:.3g} is {ratio:.3g}x its bound "
                      f"{rule.k:g} x (estimated error {r['estimate']:.2g} + reference's {r['reference_error']:.2g})")
     if inacc and not missing:
-        worst = sorted(inacc, key=lambda r: -_error(r) / _allowed(r))
-        items = []
-        for r in worst[:3]:
-            err = _error(r)
-            item = f"{r['metric']} error {err:.3g} > {_allowed(r):.3g}"
-            if r["tolerance_abs"] is not None:
-                item += f" ({_units(err * r['scale'], r['unit'])} > {_units(_allowed(r) * r['scale'], r['unit'])})"
-            items.append(item)
-        text = "not converged at these settings: " + ", ".join(items) + (
-            f" and {len(worst) - 3} more" if len(worst) > 3 else "")
-        steps = [r for r in worst if r["metric"] not in OWN]
-        if ev.get("setting") and ev.get("step") and steps:
-            r = steps[0]
-            need = step_needed(ev["step"], _error(r), r["tolerance"], ev["order"])
-            out["needs"] = {ev["setting"]: need}
-            text += f"; needs {ev['setting']} <= {need:.3g}" + ("" if ev["setting"] == "rtol" else " s")
-        parts.append(text)
+        steps = sorted((r for r in inacc if r["metric"] not in OWN), key=lambda r: -_error(r) / r["tolerance"])
+        own = sorted((r for r in inacc if r["metric"] in OWN), key=lambda r: -_error(r) / r["tolerance"])
+        if steps:
+            text = "not converged at these settings: " + _items(steps)
+            if ev.get("setting") and ev.get("step"):
+                need = step_needed(ev["step"], _error(steps[0]), steps[0]["tolerance"], ev["order"])
+                out["needs"] = {ev["setting"]: need}
+                text += f"; needs {ev['setting']} <= {need:.3g}" + ("" if ev["setting"] == "rtol" else " s")
+            parts.append(text)
+        if own:   # closure, tracking, energy balance: the engine's own checks, whatever the cause
+            parts.append("its own check over tolerance: " + _items(own))
     unresolved = [r for r in rows if r["metric"] not in OWN and (r["reference_error"] or 0.0) > r["tolerance"]]
     if unresolved:
         r = max(unresolved, key=lambda r: r["reference_error"] / r["tolerance"])
@@ -189,6 +183,18 @@ def _verdict(engine: str, rows: list[dict], ev: dict, rule: Rule) -> dict:
     return out
 
 
+def _items(rows: list[dict]) -> str:
+    """Up to three metrics' errors against their tolerances, in units."""
+    items = []
+    for r in rows[:3]:
+        err = _error(r)
+        item = f"{r['metric']} error {err:.3g} > {r['tolerance']:.3g}"
+        if r["tolerance_abs"] is not None:
+            item += f" ({_units(err * r['scale'], r['unit'])} > {_units(r['tolerance_abs'], r['unit'])})"
+        items.append(item)
+    return ", ".join(items) + (f" and {len(rows) - 3} more" if len(rows) > 3 else "")
+
+
 def _error(r: dict) -> float:
     """A row's error: a consistent engine's is at least its distance from the reference; an inconsistent
     one's distance holds the modelling difference, so its own estimate alone; an own check its value
@@ -196,10 +202,6 @@ def _error(r: dict) -> float:
     if r["metric"] in OWN:
         return r["value"] - (r["reference_error"] or 0.0) if r["metric"] in ENERGY else r["value"]
     return max(r["estimate"] or 0.0, r["value"]) if r["consistent"] is not False else r["estimate"]
-
-
-def _allowed(r: dict) -> float:
-    return r["tolerance"]
 
 
 def _units(value: float, unit: str) -> str:
