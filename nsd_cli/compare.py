@@ -33,8 +33,8 @@ def default_cases_text() -> str:
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--cases", help=f"case file (TOML); default: {default_cases_text()}")
-    p.add_argument("--tolerances", help="tolerance file (TOML); default: comparisons/tolerances.toml "
-                                        "(format: docs/cases.md)")
+    p.add_argument("--tolerances", help="tolerance file (TOML): [engineering] tolerances of the per-run verdict or "
+                                        "fixed [limits]; default: comparisons/tolerances.toml (format: docs/cases.md)")
     p.add_argument("--engines", default="semirecursive,mujoco,exudyn",
                    help="comma-separated engines; must include the reference, semirecursive")
     add_param_arguments(p, "parameter overrides applied to every case")
@@ -59,9 +59,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="--power: the size of the listed errors (relative; 0.001 = 0.1 %%; the 0.2 mm "
                         "lengths scale with it: 0.02 mm at 0.001; default: the listed sizes, 1 %% and 0.2 mm)")
     p.add_argument("--profile", choices=sorted(PROFILES), default="default",
-                   help="default: comparisons/cases.toml and tolerances.toml; strict: finer peer settings "
-                        "and their own limits (comparisons/cases_strict.toml, tolerances_strict.toml); "
-                        "--cases / --tolerances still override")
+                   help="default: comparisons/cases.toml judged by the per-run verdict (tolerances.toml: each engine "
+                        "within its own estimated error and the engineering tolerances); strict: finer peer settings "
+                        "(cases_strict.toml), the same verdict; regression, regression-strict: fixed limits derived "
+                        "on the nominal device (limits_regression*.toml); --cases / --tolerances still override")
     p.add_argument("--out", required=True, help="output folder")
 
 
