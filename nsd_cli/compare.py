@@ -197,6 +197,9 @@ def run(args) -> int:
         raise ParameterError(f"--power-size {args.power_size!r}: " + ("a size in (0, 0.1] (0.001 = 0.1 %)"
                              if args.power else "applies to --power only"))
     if args.power:
+        if args.refine:
+            raise ParameterError("--refine: applies to the gate, not to --power (each injected error is judged at "
+                                 "the case settings, with its own h/2 run)")
         return _run_power(args, base, own_files)
     for flag in ("power_cases",):
         if getattr(args, flag) is not None:

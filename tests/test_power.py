@@ -116,6 +116,10 @@ def test_engineering_file_reads_with_defaults_and_refine_needs_it(tmp_path):
                         "--out", str(out)], capture_output=True, text=True, timeout=120)
     assert p.returncode == 2 and "--refine" in p.stderr and "fixed limits" in p.stderr, p.stderr
     assert not out.exists()
+    p = subprocess.run([sys.executable, "-m", "nsd_cli.main", "compare", "--power", "--refine", "--out", str(out)],
+                       capture_output=True, text=True, timeout=120)
+    assert p.returncode == 2 and "--refine: applies to the gate, not to --power" in p.stderr, p.stderr
+    assert len(p.stderr.strip().splitlines()) == 1 and not out.exists()
 
 
 POWER_CASE = """
