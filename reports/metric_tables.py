@@ -144,7 +144,7 @@ def metric_table_pages(data) -> list:
                                f"consistent: difference from the converged reference <= bound = k x (estimated error "
                                f"+ reference's), k = {s['rule'].get('k', '?')}, else DISAGREES; accurate enough: "
                                "max(estimated error, difference) <= engineering tolerance, else NOT CONVERGED;\n"
-                               "(own check): the engine's own value against the tolerance; not gated: two engines "
+                               "(own): the engine's own check against the tolerance; not gated: two engines "
                                "compared, reported only; differences, estimates and bounds in full")
             else:
                 f = new_figure(LANDSCAPE, "Metrics against the limits applied to them" + part,

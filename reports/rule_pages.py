@@ -49,6 +49,8 @@ def rule_pages(s: dict, defs: dict, units: dict, table_pages, subtitle) -> list:
              "reference's); otherwise DISAGREES beyond numerical error: the engines differ about the model"],
             ["accurate enough", "max(estimated error, difference) <= the engineering tolerance; otherwise NOT "
              "CONVERGED at these settings, with the step the estimate asks for (nsd compare --refine runs it)"],
+            ["own checks", "closure, tracking and energy balance against their tolerance; an energy balance beyond the "
+             "converged reference's own (the output grid's quadrature error)"],
             ["scalar metrics", f"a peak or loop-work difference can cancel by chance between h and h/2: its estimate "
              f"is at least {fmt(beta, 3)} x the estimate of the max-norm difference it comes from"],
             ["PASS", rule.get("text", "")]]
