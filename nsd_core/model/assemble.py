@@ -1,0 +1,183 @@
+"""A description on the in-house engine's terms (the mechanism as parent array and 1-DOF joints), and
+the consistent initial state every engine starts from.
+
+Multi-coordinate joints become chains of one-coordinate joints through massless auxiliary bodies
+(the paper's Figure 4), named ``body.0``, ``body.1``, ...; the described body is the chain's last
+member and carries the mass. Loop closures become cut joints (Eq. 13).
+
+``initial_state`` closes the loops once, at t = 0, from the description's initial coordinates (the
+free ones as given, the dependent ones by Newton from the given guess) and makes the velocities
+consistent (the free ones as given, the dependent ones from Phi_z z' = 0). Every engine starts from
+this state: the initial conditions are input data, shared so that differences between the engines
+are differences in their dynamics, not in where they start. A given coordinate or velocity the loops
+do not allow is reported as bad input.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from nsd_core.engine.elements import AxialElements
+from nsd_core.engine.mechanism import Cut, Mechanism, mechanism, revolute_cut
+from nsd_core.engine.semirecursive import SemiRecursiveSystem
+from nsd_core.model.description import GROUND, JOINT_DOFS, Model
+from nsd_core.model.errors import ModelError
+from nsd_core.model.laws import JOINT, POINTS
+
+ASSEMBLY_TOL = 1e-9   # m or rad: a closure residual above this after Newton means the loops cannot close
+
+
+@dataclass(frozen=True)
+class Tree:
+    """The description as the in-house engine's mechanism, with the maps between the two."""
+    mech: Mechanism
+    coordinate: dict     # (body, dof) -> engine coordinate index
+    body: dict           # body name -> engine body index (ground -1)
+    prescribed: list     # engine indices of the prescribed coordinates, in the description's order
+
+
+def to_tree(model: Model) -> Tree:
+    rows, coordinate, body_index = [], {}, {GROUND: -1}
+    for b in model.bodies:
+        dofs = b.joint.dofs()
+        parent = b.parent
+        for k, (kind, axis) in enumerate(dofs):
+            last = k == len(dofs) - 1
+            name = b.name if len(dofs) == 1 else f"{b.name}.{k}"
+            row = dict(name=name, parent=None if parent == GROUND else parent, joint=kind, axis=tuple(axis),
+                       offset=b.joint.position if k == 0 else (0.0, 0.0, 0.0))
+            if last:
+                row.update(mass=b.mass, com=b.com, inertia=b.inertia)
+            coordinate[(b.name, k)] = len(rows)
+            rows.append(row)
+            parent = name
+        body_index[b.name] = len(rows) - 1
+    names = [r["name"] for r in rows]
+    for r in rows:   # parents by index (chain members have names the description does not know)
+        r["parent"] = None if r["parent"] is None else names.index(r["parent"])
+
+    def ref(body):
+        return body_index[body]
+    cuts = []
+    for lp in model.loops:
+        if lp.type == "point":
+            cuts.append(Cut("point", ref(lp.body_a), lp.point_a, ref(lp.body_b), lp.point_b, lp.name))
+        else:
+            cuts += revolute_cut(ref(lp.body_a), lp.point_a, lp.axis_a, ref(lp.body_b), lp.point_b, lp.axis_b, lp.name)
+    mech = mechanism(rows, cuts, gravity=model.gravity)
+    return Tree(mech, coordinate, body_index, [coordinate[(p.joint, p.dof)] for p in model.prescribed])
+
+
+@dataclass(frozen=True)
+class InitialState:
+    """Where every engine starts: each coordinate and rate, and each described body's world pose."""
+    q: dict          # (body, dof) -> coordinate [m or rad]
+    qd: dict         # (body, dof) -> rate
+    rotation: dict   # body -> 3x3 world rotation of its frame
+    origin: dict     # body -> world position of its frame's origin [m]
+    velocity: dict   # body -> world velocity of its frame's origin [m/s]
+    omega: dict      # body -> world angular velocity [rad/s]
+
+
+class Forces:
+    """The description's force elements on the in-house engine: every law through the registry."""
+
+    def __init__(self, model: Model, tree: Tree):
+        pts = [f for f in model.forces if f.law.acts_on == POINTS]
+        self.points, self.n = pts, tree.mech.n
+        self.joints = [(f, tree.coordinate[(f.joint, f.dof)]) for f in model.forces if f.law.acts_on == JOINT]
+        self.elements = AxialElements([tree.body[f.body_a] for f in pts], [f.point_a for f in pts],
+                                      [tree.body[f.body_b] for f in pts], [f.point_b for f in pts], tree.mech.n)
+
+    def values(self, kin, z, zd) -> dict:
+        """Each element's force: tension [N] of a points law, generalized force of a joint law."""
+        out = {}
+        if self.points:
+            L, Ld = self.elements.state(kin)
+            out.update({f.name: f.force(L[i], Ld[i]) for i, f in enumerate(self.points)})
+        out.update({f.name: f.force(z[i], zd[i]) for f, i in self.joints})
+        return out
+
+    def __call__(self, t, kin, z, zd, extra):
+        gen = np.zeros(self.n)
+        if self.points:
+            L, Ld = self.elements.state(kin)
+            T = np.array([f.force(L[i], Ld[i]) for i, f in enumerate(self.points)])
+            wrench = self.elements.wrench(T)
+        else:
+            wrench = np.zeros((self.n, 6))
+        for f, i in self.joints:
+            gen[i] += f.force(z[i], zd[i])
+        return wrench, gen, np.zeros(0)
+
+
+def system_of(model: Model, tree: Tree | None = None) -> tuple[SemiRecursiveSystem, Tree]:
+    """The in-house system of a description (its partition not yet chosen)."""
+    tree = tree or to_tree(model)
+    drives = model.prescribed
+
+    def motion(t):
+        qs = np.array([d(t) for d in drives]).reshape(-1, 3)
+        return qs[:, 0].copy(), qs[:, 1].copy(), qs[:, 2].copy()
+    prefer = [tree.coordinate[c] for c in model.free]
+    system = SemiRecursiveSystem(tree.mech, tree.prescribed, motion, Forces(model, tree), prefer_free=prefer)
+    return system, tree
+
+
+def guess(model: Model, tree: Tree) -> tuple[np.ndarray, np.ndarray]:
+    z = np.zeros(tree.mech.n)
+    zd = np.zeros(tree.mech.n)
+    for c, v in model.initial_coordinates.items():
+        z[tree.coordinate[c]] = v
+    for c, v in model.initial_velocities.items():
+        zd[tree.coordinate[c]] = v
+    for p, i in zip(model.prescribed, tree.prescribed):
+        z[i], zd[i], _ = p(0.0)
+    return z, zd
+
+
+def start(model: Model, system: SemiRecursiveSystem, tree: Tree):
+    """The system's partition and its consistent initial (z, z', y0) at t = 0 (ModelError when the
+    loops cannot be closed from the given coordinates, or a given rate breaks them)."""
+    z, zd = guess(model, tree)
+    system.choose_partition(z)
+    ws = system.workspace(z)
+    free = system.partition.free
+    try:
+        z = system.assemble(ws, 0.0, z[free]).copy()
+    except Exception as e:  # noqa: BLE001 (Newton's own failure, said as the description's mistake)
+        raise ModelError(f"loops: cannot be closed from [initial].coordinates ({' '.join(str(e).split())})") from None
+    ev = system.evaluate(system.workspace(z), 0.0, system.state(z, zd))
+    resid = float(np.max(np.abs(ev.Phi))) if ev.Phi.size else 0.0
+    if not np.isfinite(resid) or resid > ASSEMBLY_TOL:
+        raise ModelError(f"loops: cannot be closed from [initial].coordinates (residual {resid:.3g} after "
+                         "Newton): check the joints, the loop points and the initial coordinates")
+    names = {i: c for c, i in tree.coordinate.items()}
+    for i in system.partition.dependent:
+        if names[i] in model.initial_velocities and abs(ev.zd[i] - zd[i]) > 1e-8 * max(1.0, float(np.max(np.abs(ev.zd)))):
+            body, k = names[i]
+            raise ModelError(f"[initial].velocities.{body} = {zd[i]!r} (coordinate {k}): the loops require "
+                             f"{ev.zd[i]:.6g}; give the rates of the free coordinates only")
+    return z, ev.zd.copy(), system.state(z, ev.zd), ev
+
+
+def initial_state(model: Model) -> InitialState:
+    """The consistent state at t = 0 every engine starts from (see the module's docstring)."""
+    system, tree = system_of(model)
+    z, zd, _, ev = start(model, system, tree)
+    kin = ev.kin
+    q = {c: float(z[i]) for c, i in tree.coordinate.items()}
+    qd = {c: float(zd[i]) for c, i in tree.coordinate.items()}
+    rot, org, vel, om = {}, {}, {}, {}
+    for b in model.bodies:
+        i = tree.body[b.name]
+        rot[b.name] = kin.A[i].copy()
+        org[b.name] = kin.r[i].copy()
+        vel[b.name] = kin.point_velocity(i, kin.r[i])
+        om[b.name] = kin.Z[i, 3:].copy()
+    return InitialState(q, qd, rot, org, vel, om)
+
+
+def count_dofs(model: Model) -> int:
+    return sum(JOINT_DOFS[b.joint.type] for b in model.bodies)

@@ -1,0 +1,158 @@
+"""A mechanism described as data: bodies on a tree of joints, loop closures, force elements whose laws
+come from one registry (nsd_core.model.laws), prescribed motions, and named outputs.
+
+The conventions every builder follows (docs/models.md):
+- each body hangs on its parent ("ground" or another body) by one joint; the body's frame sits at the
+  joint's ``position`` (given in the parent's frame) and is parallel to the parent's frame when the
+  joint's coordinates are zero. Centres of mass, inertias and points are in the body's frame;
+- a joint's coordinates, in order: revolute q about ``axis``; prismatic q along ``axis``; universal
+  q1 about ``axis``, then q2 about ``axis2`` (turned by q1); spherical three turns about x, then the
+  turned y, then the turned z; planar two slides along u, v (u, v, normal right-handed), then a turn
+  about ``normal`` (axes in the parent's frame);
+- a loop closure (``point``: two body points coincide; ``revolute``: they coincide and two body axes
+  stay parallel) cuts a closed chain; ``ground`` can be either side;
+- SI units everywhere: m, kg, kg m^2, s, rad, N, N m.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from nsd_core.model.errors import ModelError
+from nsd_core.model.laws import JOINT, POINTS, Law
+
+GROUND = "ground"
+JOINT_DOFS = {"revolute": 1, "prismatic": 1, "universal": 2, "spherical": 3, "planar": 3}
+OUTPUT_KINDS = ("coordinate", "point", "point_velocity", "force", "drive_force", "energy")
+MOTION_KINDS = {"constant_speed": ("start", "speed"), "harmonic": ("centre", "amplitude", "frequency", "phase")}
+COMPONENTS = {"x": 0, "y": 1, "z": 2}
+
+
+def unit(v) -> np.ndarray:
+    v = np.asarray(v, dtype=float)
+    return v / np.linalg.norm(v)
+
+
+@dataclass(frozen=True)
+class Joint:
+    type: str
+    position: tuple          # the child's frame origin, in the parent's frame [m]
+    axis: tuple = (0.0, 0.0, 1.0)   # revolute, prismatic, universal's first axis, planar's normal
+    axis2: tuple = (0.0, 1.0, 0.0)  # universal's second axis
+
+    def dofs(self) -> list[tuple[str, np.ndarray]]:
+        """The joint as a chain of one-coordinate joints: ('R' or 'P', unit axis in the frame turned by
+        the earlier ones), in coordinate order."""
+        a = unit(self.axis)
+        if self.type == "revolute":
+            return [("R", a)]
+        if self.type == "prismatic":
+            return [("P", a)]
+        if self.type == "universal":
+            return [("R", a), ("R", unit(self.axis2))]
+        if self.type == "spherical":
+            return [("R", np.eye(3)[0]), ("R", np.eye(3)[1]), ("R", np.eye(3)[2])]
+        u = np.cross(a, np.eye(3)[int(np.argmin(np.abs(a)))])
+        u /= np.linalg.norm(u)
+        return [("P", u), ("P", np.cross(a, u)), ("R", a)]   # planar
+
+
+@dataclass(frozen=True)
+class Body:
+    name: str
+    parent: str
+    joint: Joint
+    mass: float              # kg
+    com: tuple               # m, body frame
+    inertia: np.ndarray      # 3x3 about the centre of mass, body axes [kg m^2]
+    source: str = ""
+
+
+@dataclass(frozen=True)
+class Loop:
+    name: str
+    type: str                # "point" or "revolute"
+    body_a: str
+    point_a: tuple
+    body_b: str
+    point_b: tuple
+    axis_a: tuple = (0.0, 0.0, 1.0)
+    axis_b: tuple = (0.0, 0.0, 1.0)
+
+
+@dataclass(frozen=True)
+class ForceElement:
+    name: str
+    law: Law
+    parameters: np.ndarray   # packed in the law's order
+    given: dict              # as written, with units from the law
+    body_a: str = GROUND     # points laws: from point_a on body_a to point_b on body_b
+    point_a: tuple = (0.0, 0.0, 0.0)
+    body_b: str = GROUND
+    point_b: tuple = (0.0, 0.0, 0.0)
+    joint: str = ""          # joint laws: the body whose joint, and which of its coordinates
+    dof: int = 0
+
+    def force(self, x: float, xd: float) -> float:
+        return float(self.law.force(float(x), float(xd), self.parameters))
+
+
+@dataclass(frozen=True)
+class Prescribed:
+    """A joint coordinate moved as a function of time (the drive): q(t), q'(t), q''(t)."""
+    name: str
+    joint: str
+    dof: int
+    kind: str
+    values: dict
+
+    def __call__(self, t: float) -> tuple[float, float, float]:
+        v = self.values
+        if self.kind == "constant_speed":
+            return v["start"] + v["speed"] * t, v["speed"], 0.0
+        w = 2.0 * math.pi * v["frequency"]
+        s, c = math.sin(w * t + v["phase"]), math.cos(w * t + v["phase"])
+        return v["centre"] + v["amplitude"] * s, v["amplitude"] * w * c, -v["amplitude"] * w * w * s
+
+
+@dataclass(frozen=True)
+class Output:
+    name: str
+    kind: str
+    body: str = ""
+    point: tuple = (0.0, 0.0, 0.0)
+    component: int = 0
+    dof: int = 0
+    element: str = ""        # force: a force element; drive_force: a prescribed motion
+    term: str = ""           # energy: kinetic or gravity
+    tolerance: float = 1e-3  # engineering tolerance, a fraction of the scale
+    scale: float = 0.0       # the quantity's scale [its unit]; 0: the reference's peak |value|
+    unit: str = ""
+
+
+@dataclass(frozen=True)
+class Model:
+    name: str
+    source: str
+    gravity: tuple
+    bodies: tuple[Body, ...]
+    loops: tuple[Loop, ...]
+    forces: tuple[ForceElement, ...]
+    prescribed: tuple[Prescribed, ...]
+    outputs: tuple[Output, ...]
+    initial_coordinates: dict = field(default_factory=dict)   # (body, dof) -> value
+    initial_velocities: dict = field(default_factory=dict)
+    free: tuple = ()                                         # (body, dof) kept independent
+    path: str = ""
+
+    def body(self, name: str) -> Body:
+        return next(b for b in self.bodies if b.name == name)
+
+    def coordinates(self) -> list[tuple[str, int]]:
+        """Every joint coordinate (body, dof), bodies in file order (parents first)."""
+        return [(b.name, k) for b in self.bodies for k in range(JOINT_DOFS[b.joint.type])]
+
+    def coordinate_unit(self, body: str, dof: int) -> str:
+        return "rad" if self.body(body).joint.dofs()[dof][0] == "R" else "m"

@@ -1,0 +1,144 @@
+"""The force-law registry: every law a model description can name, written once, used by every engine.
+
+A law maps one scalar coordinate and its rate to one scalar force:
+- a *points* law acts along the line between two body points: x = the distance L [m], xd = its rate
+  L' [m/s]; it returns the tension T [N] (positive pulls the points together, negative pushes them
+  apart);
+- a *joint* law acts on one joint coordinate: x = q [m or rad], xd = q' [m/s or rad/s]; it returns
+  the generalized force Q [N or N m] on that coordinate (positive drives q up).
+
+Each law is a compiled scalar function ``force(x, xd, p)`` of a float64 array p holding its
+parameters in the order of ``Law.parameters``. The in-house builder, MuJoCo's passive callback and
+Exudyn's connector user functions all call exactly this function: a law added here (one function and
+one ``register`` call) reaches all three engines. Where the device already has a law (the rope of
+Eq. 16, the restrainer's Hunt-Crossley contact), the registry calls that one implementation.
+
+Laws with a hysteretic internal state (the SMA wires, the Bouc-Wen push spring) are not yet offered to
+descriptions: their state needs each engine's own way of carrying it (see docs/models.md).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+from numba import njit
+
+from nsd_core.device.forces import restrainer_force_scalar, rope_tension_scalar
+
+POINTS, JOINT = "points", "joint"
+
+
+@dataclass(frozen=True)
+class LawParameter:
+    name: str
+    unit: str
+    low: float                 # allowed range, inclusive
+    high: float = np.inf
+    default: float | None = None   # None: required
+    doc: str = ""
+
+
+@dataclass(frozen=True)
+class Law:
+    name: str
+    acts_on: str               # POINTS or JOINT
+    parameters: tuple[LawParameter, ...]
+    force: Callable            # compiled force(x, xd, p) -> float
+    doc: str
+
+    def pack(self, given: dict, where: str) -> np.ndarray:
+        """The parameters of one element as the array ``force`` takes; bad input raises ModelError."""
+        from nsd_core.model.errors import ModelError
+        known = {p.name for p in self.parameters}
+        for k in given:
+            if k not in known:
+                raise ModelError(f"{where}.{k}: unknown parameter of law {self.name!r}; "
+                                 f"allowed: {', '.join(p.name for p in self.parameters)}")
+        out = []
+        for p in self.parameters:
+            v = given.get(p.name, p.default)
+            if v is None:
+                raise ModelError(f"{where}.{p.name}: missing; law {self.name!r} needs it [{p.unit}]")
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not np.isfinite(v) or not p.low <= v <= p.high:
+                hi = "" if p.high == np.inf else f", <= {p.high:g}"
+                raise ModelError(f"{where}.{p.name} = {v!r}: must be a number >= {p.low:g}{hi} [{p.unit}]")
+            out.append(float(v))
+        return np.array(out, dtype=np.float64)
+
+
+LAWS: dict[str, Law] = {}
+
+
+def register(law: Law) -> Law:
+    """Add a law to the registry (a name is registered once)."""
+    if law.name in LAWS:
+        raise ValueError(f"law {law.name!r} is already registered")
+    if law.acts_on not in (POINTS, JOINT):
+        raise ValueError(f"law {law.name!r}: acts_on must be {POINTS!r} or {JOINT!r}")
+    LAWS[law.name] = law
+    return law
+
+
+def get_law(name: str, where: str) -> Law:
+    from nsd_core.model.errors import ModelError
+    if name not in LAWS:
+        raise ModelError(f"{where}.law = {name!r}: unknown; allowed: {', '.join(sorted(LAWS))}")
+    return LAWS[name]
+
+
+# ---- the laws ---------------------------------------------------------------------------------------
+
+@njit(cache=True, _nrt=False)
+def linear_spring_damper(x, xd, p):
+    """T = k (L - L0) + c L' + T0: a linear spring of stiffness k [N/m] and free length L0 [m], a
+    dashpot c [N s/m] and a preload T0 [N] (as Andrews' spring c0, l0; any strut)."""
+    return p[0] * (x - p[2]) + p[1] * xd + p[3]
+
+
+@njit(cache=True, _nrt=False)
+def rope(x, xd, p):
+    """Eq. 16 of the paper: T = k (L - L0) H(L - L0), tension only (the device's rope law)."""
+    return rope_tension_scalar(x, p[1], p[0])
+
+
+@njit(cache=True, _nrt=False)
+def hunt_crossley_stop(x, xd, p):
+    """A stop that holds the points within a distance gap [m]: past it, delta = L - gap > 0 and
+    T = max(k delta^n (1 + alpha delta'), 0) pulls them together (the device's restrainer law,
+    Hunt and Crossley 1975, evaluated by the restrainer's own function)."""
+    return restrainer_force_scalar(x, 0.0, xd, 0.0, p[0], p[1], p[2], p[3])[2]
+
+
+@njit(cache=True, _nrt=False)
+def constant_force(x, xd, p):
+    """Q = Q0: a constant generalized force (a motor torque [N m] on a revolute joint, a force [N] on
+    a prismatic one; Andrews' driving torque mom)."""
+    return p[0]
+
+
+@njit(cache=True, _nrt=False)
+def joint_spring_damper(x, xd, p):
+    """Q = -k (q - q0) - c q': a linear spring [N/m or N m/rad] and dashpot [N s/m or N m s/rad] on a
+    joint coordinate, neutral at q0 [m or rad]."""
+    return -p[0] * (x - p[2]) - p[1] * xd
+
+
+INF = np.inf
+register(Law("linear_spring_damper", POINTS, (
+    LawParameter("stiffness", "N/m", 0.0, doc="k"), LawParameter("damping", "N s/m", 0.0, default=0.0, doc="c"),
+    LawParameter("free_length", "m", 0.0, doc="L0"), LawParameter("preload", "N", -INF, default=0.0, doc="T0")),
+    linear_spring_damper, linear_spring_damper.py_func.__doc__))
+register(Law("rope", POINTS, (
+    LawParameter("stiffness", "N/m", 0.0, doc="k_r"), LawParameter("free_length", "m", 0.0, doc="l_r0")),
+    rope, rope.py_func.__doc__))
+register(Law("hunt_crossley_stop", POINTS, (
+    LawParameter("gap", "m", 0.0), LawParameter("stiffness", "N/m^n", 0.0),
+    LawParameter("exponent", "-", 1.0, 3.0, default=1.5), LawParameter("damping", "s/m", 0.0, default=0.0, doc="alpha")),
+    hunt_crossley_stop, hunt_crossley_stop.py_func.__doc__))
+register(Law("constant_force", JOINT, (LawParameter("value", "N or N m", -INF, doc="Q0"),),
+             constant_force, constant_force.py_func.__doc__))
+register(Law("joint_spring_damper", JOINT, (
+    LawParameter("stiffness", "N/m or N m/rad", 0.0), LawParameter("damping", "N s/m or N m s/rad", 0.0, default=0.0),
+    LawParameter("neutral", "m or rad", -INF, default=0.0)),
+    joint_spring_damper, joint_spring_damper.py_func.__doc__))

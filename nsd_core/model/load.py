@@ -1,0 +1,331 @@
+"""Read a model description (TOML) into nsd_core.model.description's dataclasses, one clear error per
+mistake: ``ModelError`` names the element, the field, the value and what is allowed (exit code 2).
+
+The file format is documented, with a worked example, in docs/models.md; the device's own models and
+the benchmark mechanisms are files under models/.
+"""
+from __future__ import annotations
+
+import math
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+from nsd_core.model.description import (COMPONENTS, GROUND, JOINT_DOFS, MOTION_KINDS, OUTPUT_KINDS, Body,
+                                        ForceElement, Joint, Loop, Model, Output, Prescribed)
+from nsd_core.model.errors import ModelError
+from nsd_core.model.laws import JOINT, POINTS, get_law
+
+TOP = {"model", "bodies", "loops", "forces", "prescribed", "outputs", "initial", "case"}
+
+
+def load_model(path) -> Model:
+    """The description in file ``path`` (ModelError for a missing file, bad TOML or any mistake)."""
+    p = Path(path)
+    try:
+        raw = tomllib.loads(p.read_text())
+    except OSError as e:
+        raise ModelError(f"--model {path}: cannot read ({e.strerror or e})") from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
+        raise ModelError(f"--model {path}: not valid TOML ({e})") from None
+    return parse_model(raw, str(p))
+
+
+def _fields(where: str, table, allowed: set, required: tuple = ()) -> dict:
+    if not isinstance(table, dict):
+        raise ModelError(f"{where} = {table!r}: must be a table")
+    for k in table:
+        if k not in allowed:
+            raise ModelError(f"{where}.{k}: unknown field; allowed: {', '.join(sorted(allowed))}")
+    for k in required:
+        if k not in table:
+            raise ModelError(f"{where}.{k}: missing")
+    return table
+
+
+def _num(where: str, v, low=-math.inf, high=math.inf, strict_low=False) -> float:
+    ok = not isinstance(v, bool) and isinstance(v, (int, float)) and math.isfinite(v)
+    if ok and (v > low if strict_low else v >= low) and v <= high:
+        return float(v)
+    rng = f"> {low:g}" if strict_low else (f">= {low:g}" if low > -math.inf else "finite")
+    raise ModelError(f"{where} = {v!r}: must be a number {rng}" + (f" and <= {high:g}" if high < math.inf else ""))
+
+
+def _vec(where: str, v, nonzero=False) -> tuple:
+    if not isinstance(v, list) or len(v) != 3:
+        raise ModelError(f"{where} = {v!r}: must be a list of 3 numbers")
+    out = tuple(_num(where, x) for x in v)
+    if nonzero and math.hypot(*out) < 1e-12:
+        raise ModelError(f"{where} = {v!r}: must be a non-zero vector")
+    return out
+
+
+def _name(where: str, v) -> str:
+    if not isinstance(v, str) or not v or not all(c.isalnum() or c in "_-." for c in v):
+        raise ModelError(f"{where} = {v!r}: must be a name of letters, digits, '_', '-' or '.'")
+    return v
+
+
+def _inertia(where: str, v) -> np.ndarray:
+    if not isinstance(v, list) or len(v) not in (3, 6):
+        raise ModelError(f"{where} = {v!r}: must be 3 principal values [Ixx, Iyy, Izz] or 6 "
+                         "[Ixx, Iyy, Izz, Ixy, Ixz, Iyz] [kg m^2]")
+    x = [_num(where, e) for e in v]
+    J = np.diag(x[:3])
+    if len(x) == 6:
+        J[0, 1] = J[1, 0] = x[3]
+        J[0, 2] = J[2, 0] = x[4]
+        J[1, 2] = J[2, 1] = x[5]
+    ev = np.linalg.eigvalsh(J)
+    tol = 1e-12 * max(1.0, float(np.max(np.abs(ev))))
+    if ev[0] < -tol or any(ev[i] + ev[j] < ev[k] - tol for i, j, k in ((0, 1, 2), (1, 2, 0), (0, 2, 1))):
+        raise ModelError(f"{where} = {v!r}: not a physical inertia (principal values must be >= 0 and "
+                         "obey the triangle inequality)")
+    return J
+
+
+def parse_model(raw: dict, path: str = "") -> Model:
+    _fields("model file", raw, TOP, ("bodies",))
+    head = _fields("[model]", raw.get("model", {}), {"name", "source", "gravity", "description"})
+    bodies = _bodies(raw["bodies"])
+    names = {b.name for b in bodies}
+    loops = tuple(_loop(i, t, names) for i, t in enumerate(_list("loops", raw.get("loops", []))))
+    forces = tuple(_force(i, t, bodies) for i, t in enumerate(_list("forces", raw.get("forces", []))))
+    prescribed = tuple(_prescribed(i, t, bodies) for i, t in enumerate(_list("prescribed", raw.get("prescribed", []))))
+    taken = {}
+    for p in prescribed:
+        if (p.joint, p.dof) in taken:
+            raise ModelError(f"prescribed.{p.name}: coordinate {p.joint}[{p.dof}] is already prescribed")
+        taken[(p.joint, p.dof)] = p.name
+    model = Model(name=str(head.get("name", Path(path).stem or "model")), source=str(head.get("source", "")),
+                  gravity=_vec("[model].gravity", head.get("gravity", [0.0, 0.0, 0.0])), bodies=bodies,
+                  loops=loops, forces=forces, prescribed=prescribed, outputs=(), path=path)
+    outputs = tuple(_output(i, t, model) for i, t in enumerate(_list("outputs", raw.get("outputs", []))))
+    if not outputs:
+        raise ModelError("[[outputs]]: missing; name at least one quantity to compare")
+    _unique("forces", forces)
+    _unique("prescribed", prescribed)
+    _unique("outputs", outputs)
+    _unique("loops", loops)
+    init = _initial(raw.get("initial", {}), bodies, taken)
+    return Model(**{**model.__dict__, "outputs": outputs, **init})
+
+
+def _list(where: str, v) -> list:
+    if not isinstance(v, list):
+        raise ModelError(f"[[{where}]] = {v!r}: must be an array of tables")
+    return v
+
+
+def _unique(where: str, items) -> None:
+    seen = set()
+    for it in items:
+        if it.name in seen:
+            raise ModelError(f"{where}.{it.name}: the name is used twice")
+        seen.add(it.name)
+
+
+def _bodies(items) -> tuple[Body, ...]:
+    items = _list("bodies", items)
+    if not items:
+        raise ModelError("[[bodies]]: at least one body is needed")
+    out, names = [], {}
+    for i, t in enumerate(items):
+        where = f"bodies[{i}]"
+        _fields(where, t, {"name", "parent", "joint", "mass", "com", "inertia", "source"}, ("name", "joint", "mass"))
+        name = _name(f"{where}.name", t["name"])
+        where = f"bodies.{name}"
+        if name == GROUND or name in names:
+            raise ModelError(f"{where}.name = {name!r}: must be unique and not 'ground'")
+        parent = t.get("parent", GROUND)
+        if parent != GROUND and parent not in names:
+            raise ModelError(f"{where}.parent = {parent!r}: unknown body; a parent must be 'ground' or a body "
+                             "listed before it (close loops with [[loops]])")
+        jt = _fields(f"{where}.joint", t["joint"], {"type", "position", "axis", "axis2", "normal"}, ("type",))
+        if jt["type"] not in JOINT_DOFS:
+            raise ModelError(f"{where}.joint.type = {jt['type']!r}: allowed: {', '.join(JOINT_DOFS)}")
+        axis = jt.get("normal" if jt["type"] == "planar" else "axis", [0.0, 0.0, 1.0])
+        joint = Joint(jt["type"], _vec(f"{where}.joint.position", jt.get("position", [0.0, 0.0, 0.0])),
+                      _vec(f"{where}.joint.axis", axis, nonzero=True),
+                      _vec(f"{where}.joint.axis2", jt.get("axis2", [0.0, 1.0, 0.0]), nonzero=True))
+        if jt["type"] == "universal" and np.linalg.norm(np.cross(joint.axis, joint.axis2)) < 1e-9 * np.linalg.norm(joint.axis) * np.linalg.norm(joint.axis2):
+            raise ModelError(f"{where}.joint.axis2 = {list(joint.axis2)}: must not be parallel to axis")
+        mass = _num(f"{where}.mass", t["mass"], 0.0, strict_low=True) if _is_num(t["mass"]) and t["mass"] > 0 else None
+        if mass is None:
+            raise ModelError(f"{where}.mass = {t['mass']!r}: must be a number > 0 [kg] (every described body moves)")
+        out.append(Body(name, parent, joint, mass, _vec(f"{where}.com", t.get("com", [0.0, 0.0, 0.0])),
+                        _inertia(f"{where}.inertia", t.get("inertia", [0.0, 0.0, 0.0])), str(t.get("source", ""))))
+        names[name] = i
+    return tuple(out)
+
+
+def _is_num(v) -> bool:
+    return not isinstance(v, bool) and isinstance(v, (int, float)) and math.isfinite(v)
+
+
+def _body_ref(where: str, v, names) -> str:
+    if v != GROUND and v not in names:
+        raise ModelError(f"{where} = {v!r}: unknown body; allowed: ground, {', '.join(sorted(names))}")
+    return v
+
+
+def _loop(i: int, t: dict, names) -> Loop:
+    where = f"loops[{i}]"
+    _fields(where, t, {"name", "type", "body_a", "point_a", "body_b", "point_b", "axis_a", "axis_b"},
+            ("body_a", "body_b"))
+    name = _name(f"{where}.name", t.get("name", f"loop{i}"))
+    where = f"loops.{name}"
+    kind = t.get("type", "point")
+    if kind not in ("point", "revolute"):
+        raise ModelError(f"{where}.type = {kind!r}: allowed: point, revolute")
+    a, b = _body_ref(f"{where}.body_a", t["body_a"], names), _body_ref(f"{where}.body_b", t["body_b"], names)
+    if a == b:
+        raise ModelError(f"{where}.body_b = {b!r}: must differ from body_a")
+    axes = {}
+    if kind == "revolute":
+        for k in ("axis_a", "axis_b"):
+            if k not in t:
+                raise ModelError(f"{where}.{k}: missing (a revolute closure keeps axis_a parallel to axis_b)")
+            axes[k] = _vec(f"{where}.{k}", t[k], nonzero=True)
+    return Loop(name, kind, a, _vec(f"{where}.point_a", t.get("point_a", [0.0, 0.0, 0.0])), b,
+                _vec(f"{where}.point_b", t.get("point_b", [0.0, 0.0, 0.0])), **axes)
+
+
+def _dof(where: str, t: dict, bodies, key="joint") -> tuple[str, int]:
+    names = {b.name: b for b in bodies}
+    body = t.get(key)
+    if body not in names:
+        raise ModelError(f"{where}.{key} = {body!r}: must name a body (its joint to its parent); "
+                         f"allowed: {', '.join(names)}")
+    n = JOINT_DOFS[names[body].joint.type]
+    dof = t.get("dof", 0)
+    if isinstance(dof, bool) or not isinstance(dof, int) or not 0 <= dof < n:
+        raise ModelError(f"{where}.dof = {dof!r}: must be a whole number in [0, {n - 1}] "
+                         f"({body}'s {names[body].joint.type} joint has {n})")
+    return body, dof
+
+
+def _force(i: int, t: dict, bodies) -> ForceElement:
+    where = f"forces[{i}]"
+    _fields(where, t, {"name", "law", "body_a", "point_a", "body_b", "point_b", "joint", "dof", "parameters"},
+            ("law",))
+    name = _name(f"{where}.name", t.get("name", f"force{i}"))
+    where = f"forces.{name}"
+    law = get_law(t["law"], where)
+    params = t.get("parameters", {})
+    if not isinstance(params, dict):
+        raise ModelError(f"{where}.parameters = {params!r}: must be a table")
+    packed = law.pack(params, f"{where}.parameters")
+    names = {b.name for b in bodies}
+    if law.acts_on == POINTS:
+        for k in ("joint", "dof"):
+            if k in t:
+                raise ModelError(f"{where}.{k}: law {law.name!r} acts between two points (body_a/point_a, body_b/point_b)")
+        a = _body_ref(f"{where}.body_a", t.get("body_a", GROUND), names)
+        b = _body_ref(f"{where}.body_b", t.get("body_b", GROUND), names)
+        if a == b:
+            raise ModelError(f"{where}.body_b = {b!r}: must differ from body_a")
+        return ForceElement(name, law, packed, dict(params), a, _vec(f"{where}.point_a", t.get("point_a", [0, 0, 0])),
+                            b, _vec(f"{where}.point_b", t.get("point_b", [0, 0, 0])))
+    for k in ("body_a", "point_a", "body_b", "point_b"):
+        if k in t:
+            raise ModelError(f"{where}.{k}: law {law.name!r} acts on a joint coordinate (joint, dof)")
+    body, dof = _dof(where, t, bodies)
+    return ForceElement(name, law, packed, dict(params), joint=body, dof=dof)
+
+
+def _prescribed(i: int, t: dict, bodies) -> Prescribed:
+    where = f"prescribed[{i}]"
+    _fields(where, t, {"name", "joint", "dof", "motion"} | {k for v in MOTION_KINDS.values() for k in v},
+            ("joint", "motion"))
+    name = _name(f"{where}.name", t.get("name", f"drive{i}"))
+    where = f"prescribed.{name}"
+    body, dof = _dof(where, t, bodies)
+    kind = t["motion"]
+    if kind not in MOTION_KINDS:
+        raise ModelError(f"{where}.motion = {kind!r}: allowed: {', '.join(MOTION_KINDS)}")
+    values = {}
+    for k in MOTION_KINDS[kind]:
+        default = 0.0 if k in ("start", "centre", "phase") else None
+        v = t.get(k, default)
+        if v is None:
+            raise ModelError(f"{where}.{k}: missing (motion {kind!r} needs {', '.join(MOTION_KINDS[kind])})")
+        values[k] = _num(f"{where}.{k}", v, 0.0, strict_low=True) if k == "frequency" else _num(f"{where}.{k}", v)
+    for k in t:
+        if k in {x for v in MOTION_KINDS.values() for x in v} and k not in MOTION_KINDS[kind]:
+            raise ModelError(f"{where}.{k}: not a value of motion {kind!r}; allowed: {', '.join(MOTION_KINDS[kind])}")
+    return Prescribed(name, body, dof, kind, values)
+
+
+def _output(i: int, t: dict, model: Model) -> Output:
+    where = f"outputs[{i}]"
+    _fields(where, t, {"name", "kind", "body", "point", "component", "joint", "dof", "element", "term",
+                       "tolerance", "scale"}, ("kind",))
+    name = _name(f"{where}.name", t.get("name", f"output{i}"))
+    where = f"outputs.{name}"
+    kind = t["kind"]
+    if kind not in OUTPUT_KINDS:
+        raise ModelError(f"{where}.kind = {kind!r}: allowed: {', '.join(OUTPUT_KINDS)}")
+    common = dict(tolerance=_num(f"{where}.tolerance", t.get("tolerance", 1e-3), 0.0, strict_low=True),
+                  scale=_num(f"{where}.scale", t.get("scale", 0.0), 0.0))
+    names = {b.name for b in model.bodies}
+    if kind == "coordinate":
+        body, dof = _dof(where, t, model.bodies)
+        return Output(name, kind, body=body, dof=dof, unit=model.coordinate_unit(body, dof), **common)
+    if kind in ("point", "point_velocity"):
+        body = _body_ref(f"{where}.body", t.get("body"), names)
+        comp = t.get("component", "x")
+        if comp not in COMPONENTS:
+            raise ModelError(f"{where}.component = {comp!r}: allowed: x, y, z")
+        return Output(name, kind, body=body, point=_vec(f"{where}.point", t.get("point", [0, 0, 0])),
+                      component=COMPONENTS[comp], unit="m" if kind == "point" else "m/s", **common)
+    if kind == "force":
+        el = {f.name: f for f in model.forces}
+        if t.get("element") not in el:
+            raise ModelError(f"{where}.element = {t.get('element')!r}: must name a force element; "
+                             f"allowed: {', '.join(el) or '(none)'}")
+        f = el[t["element"]]
+        u = "N" if f.law.acts_on == POINTS else ("N m" if model.coordinate_unit(f.joint, f.dof) == "rad" else "N")
+        return Output(name, kind, element=f.name, unit=u, **common)
+    if kind == "drive_force":
+        pr = {p.name: p for p in model.prescribed}
+        if t.get("element") not in pr:
+            raise ModelError(f"{where}.element = {t.get('element')!r}: must name a prescribed motion; "
+                             f"allowed: {', '.join(pr) or '(none)'}")
+        p = pr[t["element"]]
+        return Output(name, kind, element=p.name,
+                      unit="N m" if model.coordinate_unit(p.joint, p.dof) == "rad" else "N", **common)
+    term = t.get("term")
+    if term not in ("kinetic", "gravity"):
+        raise ModelError(f"{where}.term = {term!r}: allowed: kinetic, gravity")
+    return Output(name, kind, term=term, unit="J", **common)
+
+
+def _initial(t, bodies, prescribed) -> dict:
+    _fields("[initial]", t, {"coordinates", "velocities", "free"})
+    out = {"initial_coordinates": {}, "initial_velocities": {}, "free": ()}
+    by = {b.name: b for b in bodies}
+    for key in ("coordinates", "velocities"):
+        table = t.get(key, {})
+        if not isinstance(table, dict):
+            raise ModelError(f"[initial].{key} = {table!r}: must be a table of body = value (or [values])")
+        for body, v in table.items():
+            if body not in by:
+                raise ModelError(f"[initial].{key}.{body}: unknown body; allowed: {', '.join(by)}")
+            n = JOINT_DOFS[by[body].joint.type]
+            vals = v if isinstance(v, list) else [v]
+            if len(vals) != n:
+                raise ModelError(f"[initial].{key}.{body} = {v!r}: must give {n} value(s), one per coordinate "
+                                 f"of its {by[body].joint.type} joint")
+            for k, x in enumerate(vals):
+                if (body, k) in prescribed:
+                    raise ModelError(f"[initial].{key}.{body}: coordinate {k} is prescribed "
+                                     f"({prescribed[(body, k)]}); its motion gives its value")
+                out[f"initial_{key}"][(body, k)] = _num(f"[initial].{key}.{body}", x)
+    free = t.get("free", [])
+    if not isinstance(free, list) or any(f not in by for f in free):
+        raise ModelError(f"[initial].free = {free!r}: must be a list of body names (their joints' coordinates "
+                         "are kept independent)")
+    out["free"] = tuple((b, k) for b in free for k in range(JOINT_DOFS[by[b].joint.type]))
+    return out
