@@ -69,11 +69,17 @@ def simulate(model: Model, duration: float, dt_out: float, settings: dict | None
 
     ws = system.workspace()
     begin = time.perf_counter()
-    traj = integrate(system, ws, y0, t_eval, method=s["method"], rtol=s["rtol"], atol=s["atol"],
-                     max_step=s["max_step"], outputs=record, first_step=min(dt_out, s["max_step"]) / 10)
+    if len(y0) == 0:   # every coordinate prescribed or dependent: kinematics only, nothing to integrate
+        for t in t_eval:
+            record(t, y0)
+        steps, nfev, parts = 0, len(t_eval), 0
+    else:
+        traj = integrate(system, ws, y0, t_eval, method=s["method"], rtol=s["rtol"], atol=s["atol"],
+                         max_step=s["max_step"], outputs=record, first_step=min(dt_out, s["max_step"]) / 10)
+        steps, nfev, parts = traj.steps, traj.nfev, len(traj.partitions) - 1
     wall = time.perf_counter() - begin
     data = np.array(rows).reshape(len(t_eval), len(model.outputs))
     return ModelRun(name, t_eval, {o.name: data[:, k] for k, o in enumerate(model.outputs)},
                     {o.name: o.unit for o in model.outputs},
-                    {"wall_time": wall, "steps": traj.steps, "nfev": traj.nfev, "closure_max": closure[0],
-                     "tracking_error": tracking[0], "repartitions": len(traj.partitions) - 1, **s})
+                    {"wall_time": wall, "steps": steps, "nfev": nfev, "closure_max": closure[0],
+                     "tracking_error": tracking[0], "repartitions": parts, **s})
