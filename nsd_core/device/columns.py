@@ -30,7 +30,7 @@ COLUMN_UNITS = {
     "support_Fx": "N", "support_Fy": "N", "support_torque": "N m",
     "device_Fx": "N", "device_Fy": "N", "base_shear_x": "N", "base_shear_y": "N",
     # the restrainer (moat wall)
-    "restrainer_Fx": "N", "restrainer_Fy": "N", "restrainer_F": "N", "restrainer_indentation": "m",
+    "isolator_zx": "-", "isolator_zy": "-", "restrainer_Fx": "N", "restrainer_Fy": "N", "restrainer_F": "N", "restrainer_indentation": "m",
     # the building above the slab: floor i relative to the ground, story i's drift and shear
     "floor{i}_x": "m", "floor{i}_y": "m", "floor{i}_vx": "m/s", "floor{i}_vy": "m/s",
     "floor{i}_ax_abs": "m/s^2", "floor{i}_ay_abs": "m/s^2",

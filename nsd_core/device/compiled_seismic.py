@@ -18,7 +18,9 @@ header: has_device, n_device_params, n_device_extra, ground offset, plate_x, pla
         base_y, base, cap, wall (indices; -1 without the device), k_b, c_b, k_b r_b^2, c_b r_b^2,
         rod_length, total mass, has_restrainer, u_gap, k_c, n_c, alpha_c, building offset
         (the building's block, nsd_core.device.building_tree.building_block, after the ground's; its
-        story and floor-slab dampers' power is the fifth energy state, E_building_dissipated')
+        story and floor-slab dampers' power is the fifth energy state, E_building_dissipated'),
+        isolator offset (-1: none; else a baseline isolator's law constants, Isolator.block(), after the
+        building's: its state z is extra[0:2] of a run without the device, its work joins the supports')
 motion_params = the ground block (GroundMotion.block()); a fixed-base run prescribes the plate too
 (six prescribed coordinates: the slab follows the ground).
 """
@@ -33,6 +35,7 @@ from nsd_core.device.building_tree import building_block
 from nsd_core.device.compiled import device_forces, force_params as device_force_params
 from nsd_core.device.forces import restrainer_force_scalar
 from nsd_core.device.ground import ground_values
+from nsd_core.device.isolator_laws import hysteretic_force_scalar
 from nsd_core.engine.codegen import evaluator_for
 from nsd_core.engine.compiled import EVALUATE, copy_into, derivatives, generic_evaluator
 from nsd_core.engine.compiled_model import (EVAL_FN, FORCE_FN, FORCE_SIG, MODEL_TYPE, MOTION_FN, MOTION_SIG,
@@ -40,7 +43,7 @@ from nsd_core.engine.compiled_model import (EVAL_FN, FORCE_FN, FORCE_SIG, MODEL_
 from nsd_core.engine.compile_once import compile_once, unit
 from nsd_core.engine.rk import STEP_LOOP, integrate_kernel, make_outputs, tableau
 
-HEADER = 24
+HEADER = 25
 CHUNK = 1.0  # s of model time per compiled call: progress and Ctrl-C are seen between calls
 STEPS_PER_SECOND = 100_000  # accepted steps per model second beyond which a run is a runaway
 ROD_REACH = 10  # the force callback's failure code: |u| >= l_d
@@ -104,6 +107,13 @@ def seismic_forces(t, z, zd, P, L, Ld, extra, p, T, gen, rate):
     rate[nx_dev + 2] = c * (vx * vx + vy * vy) + ct * thd * thd
     rate[nx_dev + 3] = 0.0
     rate[nx_dev + 4] = building_forces(z, zd, p, int(p[23]), gen)
+    oi = int(p[24])
+    if oi >= 0:  # a baseline isolator (nsd_core.device.isolator_laws, the shared law)
+        fx, fy, rate[0], rate[1], power = hysteretic_force_scalar(vx, vy, extra[0], extra[1], p[oi], p[oi + 1],
+                                                                  p[oi + 2], p[oi + 3], p[oi + 4])
+        gen[px] -= fx
+        gen[py] -= fy
+        rate[nx_dev + 2] += power
     if p[18] != 0.0:  # the displacement restrainer: the plate pushes it with (fx, fy), it pushes back
         fx, fy, F, _, drate = restrainer_force_scalar(ux, uy, vx, vy, p[19], p[20], p[21], p[22])
         gen[px] -= fx
@@ -128,15 +138,19 @@ def seismic_force_params(mech, g, structure, ground_block, device: bool) -> np.n
           for name in ("plate_x", "plate_y", "plate", "base_x", "base_y", "base", "cap", "wall")}
     dev = device_force_params(g) if device else np.zeros(0)
     s = structure
-    header = [1.0 if device else 0.0, len(dev), (g.n_wires + 1) if device else 0, HEADER + len(dev),
+    iso = s.isolator if not device else None
+    n_extra = (g.n_wires + 1) if device else (2 if iso is not None else 0)
+    header = [1.0 if device else 0.0, len(dev), n_extra, HEADER + len(dev),
               *ix.values(), s.stiffness, s.damping, s.stiffness * s.support_radius ** 2,
               s.damping * s.support_radius ** 2, g.params.rod_length if device else math.inf,
               float(np.sum(mech.mass))]
     r = s.restrainer
     header += [1.0, *r.block()] if r is not None else [0.0, 0.0, 0.0, 1.0, 0.0]
     header.append(HEADER + len(dev) + len(ground_block))
+    bld = building_block(mech, s.building)
+    header.append(HEADER + len(dev) + len(ground_block) + len(bld) if iso is not None else -1.0)
     assert len(header) == HEADER
-    return np.concatenate([header, dev, ground_block, building_block(mech, s.building)])
+    return np.concatenate([header, dev, ground_block, bld, iso.block() if iso is not None else np.zeros(0)])
 
 
 def seismic_model(system, g, structure, ground, device: bool):

@@ -24,6 +24,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from nsd_core.device.building import Building, building_dict_from
+from nsd_core.device.isolators import Isolator, isolator_from
 from nsd_core.device.params import ParameterError, Params
 from nsd_core.device.restrainer import Restrainer, restrainer_from
 
@@ -60,9 +61,12 @@ class Structure:
     provenance: dict = field(default_factory=dict, compare=False)
     restrainer: Restrainer | None = None  # the displacement restrainer (nsd_core.device.restrainer), off by default
     building: Building | None = None      # a shear building on the slab (nsd_core.device.building), none by default
+    # the baseline isolator that replaces the supports in a run without the device (nsd_core.device.isolators)
+    isolator: Isolator | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "restrainer", restrainer_from(self.restrainer))
+        object.__setattr__(self, "isolator", isolator_from(self.isolator))
         object.__setattr__(self, "building", building_dict_from(self.building))
         for name in ("mass", "radius_of_gyration", "stiffness", "support_radius"):
             v = getattr(self, name)
@@ -96,19 +100,36 @@ class Structure:
                 raise ParameterError(f"structure {name} = {value!r}: not a number") from None
         prov = dict(self.provenance)
         prov.update({n: "override" for n in changes})
-        return Structure(**values, provenance=prov, restrainer=self.restrainer, building=self.building)
+        return Structure(**values, provenance=prov, restrainer=self.restrainer, building=self.building,
+                         isolator=self.isolator)
 
     def with_restrainer(self, restrainer: Restrainer | None) -> "Structure":
         """A copy with this restrainer (None: without one)."""
         names = ("mass", "radius_of_gyration", "stiffness", "damping", "support_radius")
         return Structure(**{n: getattr(self, n) for n in names}, provenance=dict(self.provenance),
-                         restrainer=restrainer, building=self.building)
+                         restrainer=restrainer, building=self.building, isolator=self.isolator)
 
     def with_building(self, building: Building | None) -> "Structure":
         """A copy with this building on the slab (None: without one)."""
         names = ("mass", "radius_of_gyration", "stiffness", "damping", "support_radius")
         return Structure(**{n: getattr(self, n) for n in names}, provenance=dict(self.provenance),
-                         restrainer=self.restrainer, building=building)
+                         restrainer=self.restrainer, building=building, isolator=self.isolator)
+
+    def with_isolator(self, isolator: Isolator | None) -> "Structure":
+        """A copy whose runs without the device stand on this baseline isolator (None: the supports)."""
+        names = ("mass", "radius_of_gyration", "stiffness", "damping", "support_radius")
+        return Structure(**{n: getattr(self, n) for n in names}, provenance=dict(self.provenance),
+                         restrainer=self.restrainer, building=self.building, isolator=isolator)
+
+    def on_isolator(self) -> "Structure":
+        """The structure a run without the device integrates: with a baseline isolator, its linear part
+        (k_d, c) in the supports' place (the hysteretic part acts through ``isolator``); else itself."""
+        iso = self.isolator
+        if iso is None:
+            return self
+        return Structure(self.mass, self.radius_of_gyration, iso.stiffness, iso.damping, self.support_radius,
+                         {**self.provenance, "stiffness": "the isolator's k_d", "damping": "the isolator's c"},
+                         restrainer=self.restrainer, building=self.building, isolator=iso)
 
     @property
     def polar_inertia(self) -> float:
@@ -138,6 +159,8 @@ class Structure:
         d = asdict(self)
         if self.building is not None:
             d["building"] = self.building.to_dict()
+        if self.isolator is None:
+            del d["isolator"]  # a structure without one reads (and is stored) as before
         return d
 
 
@@ -247,3 +270,14 @@ def default_structure(params: Params | None = None, k_dev: dict | None = None) -
         "params": "nominal device (Params defaults)" if params == Params() else "overridden device",
     }
     return Structure(M, r_g, k_b, c_b, r_b, prov)
+
+
+def designed_structure_with(params: Params, own: dict, resize: bool = False, design_level: bool = False) -> Structure:
+    """The structure of the design basis (nsd_core.device.design: the same for every device) with the
+    overrides ``own``; resize: derived from the device instead (``structure_with``, the model
+    document's rule), as before issue 33."""
+    if resize:
+        return structure_with(params, own)
+    from nsd_core.device.design import designed_structure
+    structure = designed_structure(design_level)
+    return structure.replace(**own) if own else structure

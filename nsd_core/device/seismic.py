@@ -43,6 +43,7 @@ from nsd_core.device.columns import units_of
 from nsd_core.device.building_tree import BuildingIndex, floor_names, with_floors
 from nsd_core.device.ground import GroundMotion
 from nsd_core.device.isolation import Structure
+from nsd_core.device.isolator_laws import hysteretic_force_scalar
 from nsd_core.device.model import (BODY, COMPILED_METHODS, DEFAULT_SOLVER, DeviceForces, _check_lengths,
                                    check_validity, device_mechanism, rest_coordinates)
 from nsd_core.device.params import ParameterError, Params
@@ -115,6 +116,9 @@ class SeismicForces:
         self.ground = ground_cache
         self.massive = np.flatnonzero(mech.mass > 0)
         self.building = BuildingIndex(mech, structure.building) if structure.building is not None else None
+        # a baseline isolator (runs without the device): its hysteretic state z (2 extra states, after the device's)
+        self.iso = structure.isolator if not device else None
+        self.n_iso = 2 if self.iso is not None else 0
 
     def relative(self, z, zd):
         """Plate relative to base: (u (2,), u' (2,), theta, theta')."""
@@ -144,6 +148,15 @@ class SeismicForces:
         gen = np.zeros(n)
         gen[i["plate_x"]], gen[i["plate_y"]] = -s.stiffness * u - s.damping * ud
         gen[i["plate"]] = -kt * th - ct * thd
+        e_sup = s.damping * float(ud @ ud) + ct * thd * thd
+        iso_rates = np.zeros(self.n_iso)
+        if self.iso is not None:  # the baseline isolator's hysteretic part (nsd_core.device.isolator_laws)
+            zx, zy = extra[self.n_dev], extra[self.n_dev + 1]
+            fx, fy, iso_rates[0], iso_rates[1], power = hysteretic_force_scalar(ud[0], ud[1], zx, zy,
+                                                                                *self.iso.block())
+            gen[i["plate_x"]] -= fx
+            gen[i["plate_y"]] -= fy
+            e_sup += power  # its work counts with the supports' dissipation (its stored part is < Q D_y)
         e_res = 0.0
         if s.restrainer is not None:  # the plate pushes the restrainer with (F_x, F_y); it pushes back
             r = s.restrainer
@@ -159,8 +172,7 @@ class SeismicForces:
             e_bld = building_dissipation_rate(self.building.b, v, v0)
         _, v_g, a_g = self.ground["now"]
         e_in = -float(a_g[:2] @ self.relative_momentum(kin, v_g))
-        e_sup = s.damping * float(ud @ ud) + ct * thd * thd
-        return wrench, gen, np.concatenate([dev_rates, [e_in, absorbed, e_sup, e_res, e_bld]])
+        return wrench, gen, np.concatenate([dev_rates, iso_rates, [e_in, absorbed, e_sup, e_res, e_bld]])
 
 
 class SeismicSystem(SemiRecursiveSystem):
@@ -219,7 +231,8 @@ def seismic_system(params: Params, structure: Structure, ground: GroundMotion, d
     free = [mech.names.index(n) for n in FREE if n in mech.names and n not in driven]
     if structure.building is not None:
         free += [mech.names.index(n) for n in floor_names(structure.building.stories)]
-    system = SeismicSystem(mech, prescribed, motion, forces, n_extra=forces.n_dev + N_ENERGY, prefer_free=free)
+    system = SeismicSystem(mech, prescribed, motion, forces, n_extra=forces.n_dev + forces.n_iso + N_ENERGY,
+                           prefer_free=free)
     if device:
         system.reach = params.rod_length
     z0 = _rest(g, mech, device)
@@ -269,6 +282,8 @@ def simulate_seismic(params: Params, structure: Structure, ground: GroundMotion,
     if not (math.isfinite(dt_out) and 0 < dt_out <= duration):
         raise ParameterError(f"dt_out = {dt_out!r}: must be in (0, duration]")
     start = time.perf_counter()
+    if not device:  # a baseline isolator's linear part takes the supports' place (nsd_core.device.isolators)
+        structure = structure.on_isolator()
     system, g, forces = seismic_system(params, structure, ground, device, fixed_base)
     system.fast = backend != "numpy"
     mech, ix = system.m, forces.ix
@@ -276,7 +291,7 @@ def simulate_seismic(params: Params, structure: Structure, ground: GroundMotion,
     extra0 = np.concatenate([g.initial_wire_stress(), [g.spring_zeta0]]) if device else np.zeros(0)
     ws = system.workspace()
     y0 = system.state(system.assemble(ws, 0.0, z0[system.partition.free]).copy(), np.zeros(mech.n),
-                      np.concatenate([extra0, np.zeros(N_ENERGY)]))
+                      np.concatenate([extra0, np.zeros(forces.n_iso + N_ENERGY)]))
     t_eval = output_times(duration, dt_out)
     first_step = min(max_step, 1e-4, duration)  # the ground moves: start small
     if backend == "compiled":
@@ -296,6 +311,12 @@ def simulate_seismic(params: Params, structure: Structure, ground: GroundMotion,
                "support_Fx": s.stiffness * u[0] + s.damping * ud[0],
                "support_Fy": s.stiffness * u[1] + s.damping * ud[1],
                "support_torque": s.support_radius ** 2 * (s.stiffness * th + s.damping * thd)}
+        if forces.iso is not None:
+            fx, fy, _, _, _ = hysteretic_force_scalar(ud[0], ud[1], y[-N_ENERGY - 2], y[-N_ENERGY - 1],
+                                                      *forces.iso.block())
+            row["support_Fx"] += fx
+            row["support_Fy"] += fy
+            row["isolator_zx"], row["isolator_zy"] = y[-N_ENERGY - 2], y[-N_ENERGY - 1]
         E_in, E_dev, E_sup_diss, E_res, E_bld = y[-N_ENERGY:]
         kinetic, height = _kinetic_and_height(mech, ev.kin, v_g)
         if not height0:
@@ -423,6 +444,12 @@ def _compiled_result(res, keep, t_eval, system, g, structure, device, stats) -> 
             "y": y, "theta": th, "vx": vx, "vy": vy, "ax_abs": tab["ax_abs"], "ay_abs": tab["ay_abs"],
             "support_Fx": s.stiffness * x + s.damping * vx, "support_Fy": s.stiffness * y + s.damping * vy,
             "support_torque": s.support_radius ** 2 * (s.stiffness * th + s.damping * thd)}
+    if s.isolator is not None and not device:   # its hysteretic part from the integrated z (the shared law)
+        zx, zy = res["y"][:, -N_ENERGY - 2], res["y"][:, -N_ENERGY - 1]
+        f = np.array([hysteretic_force_scalar(a, b, c, d, *s.isolator.block())[:2] for a, b, c, d in
+                      zip(vx, vy, zx, zy)]).reshape(-1, 2)
+        cols["support_Fx"], cols["support_Fy"] = cols["support_Fx"] + f[:, 0], cols["support_Fy"] + f[:, 1]
+        cols["isolator_zx"], cols["isolator_zy"] = zx, zy
     E_in, E_dev, E_sup_diss, E_res, E_bld = res["y"][:, -N_ENERGY:].T
     cols["device_Fx"], cols["device_Fy"] = tab["device_Fx"], tab["device_Fy"]
     if device:
