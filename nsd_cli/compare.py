@@ -32,7 +32,10 @@ def default_cases_text() -> str:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--cases", help=f"case file (TOML); default: {default_cases_text()}")
+    p.add_argument("--cases", help=f"case file (TOML); default: {default_cases_text()}; with --model, a file of "
+                   "[[case]] tables (default: the model file's own)")
+    p.add_argument("--model", help="a mechanism's description (TOML, docs/models.md): cross-validate it in every "
+                   "engine instead of the device (e.g. models/andrews.toml)")
     p.add_argument("--tolerances", help="tolerance file (TOML): [engineering] tolerances of the per-run verdict or "
                                         "fixed [limits]; default: comparisons/tolerances.toml (format: docs/cases.md)")
     p.add_argument("--engines", default="semirecursive,mujoco,exudyn",
@@ -176,6 +179,9 @@ def junit_xml(summary: dict) -> str:
 
 
 def run(args) -> int:
+    if args.model:
+        from nsd_cli.compare_model import run as run_model
+        return run_model(args)
     engines = parse_engines(args.engines)
     if REFERENCE not in engines:
         raise ParameterError(f"--engines {args.engines}: must include the reference {REFERENCE}; without it "

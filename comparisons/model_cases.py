@@ -1,0 +1,145 @@
+"""The cases of a described mechanism (``nsd compare --model FILE [--cases FILE]``): how long to run,
+how often to sample, each engine's settings, and an optional reference solution.
+
+A case is a ``[[case]]`` table, in the model file itself or in a separate cases file:
+
+    [[case]]
+    name = "andrews_0.03s"
+    duration = 0.03            # s
+    dt_out = 1e-4              # s: output interval
+    mujoco = { timestep = 1e-6 }          # any engine's settings (its builder's default_settings keys)
+    exudyn = { step_size = 1e-6 }
+    reference = { file = "andrews_reference.csv", source = "...", accuracy = 1e-12 }
+
+A reference file is a CSV whose first column is ``t`` [s] and whose other columns are named outputs of
+the model; its times must lie on the case's output grid (0, dt_out, ...) up to ``duration`` (later
+rows are ignored). ``accuracy`` is the reference solution's own error, as a fraction of each output's
+scale (default 0: exact).
+"""
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from nsd_core.model.description import Model
+from nsd_core.model.errors import ModelError
+from nsd_core.model.run import output_times
+
+MAX_OUTPUTS = 1_000_000
+
+
+@dataclass(frozen=True)
+class Reference:
+    path: str
+    source: str
+    accuracy: float
+    index: np.ndarray                  # output-grid indices of the reference's times
+    columns: dict = field(default_factory=dict)   # output name -> values at those times
+
+
+@dataclass(frozen=True)
+class ModelCase:
+    name: str
+    duration: float
+    dt_out: float
+    settings: dict                     # engine -> settings
+    reference: Reference | None = None
+
+    def times(self) -> np.ndarray:
+        return output_times(self.duration, self.dt_out)
+
+
+def load_model_cases(model: Model, cases_path: str | None, engines) -> list[ModelCase]:
+    """The cases of ``cases_path`` (a TOML file of [[case]] tables), or of the model file itself."""
+    path = Path(cases_path or model.path)
+    try:
+        raw = tomllib.loads(path.read_text())
+    except OSError as e:
+        raise ModelError(f"--cases {path}: cannot read ({e.strerror or e})") from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
+        raise ModelError(f"--cases {path}: not valid TOML ({e})") from None
+    if cases_path:
+        extra = [k for k in raw if k != "case"]
+        if extra:
+            raise ModelError(f"--cases {path}: {extra[0]!r}: unknown table; a cases file holds [[case]] tables only")
+    items = raw.get("case", [])
+    if not isinstance(items, list) or not items:
+        raise ModelError(f"{path}: no [[case]] table; give at least one (name, duration, dt_out)")
+    cases = [_case(i, t, model, path.parent, engines) for i, t in enumerate(items)]
+    names = [c.name for c in cases]
+    dup = {n for n in names if names.count(n) > 1}
+    if dup:
+        raise ModelError(f"case.{sorted(dup)[0]}: the name is used twice")
+    return cases
+
+
+def _case(i: int, t: dict, model: Model, folder: Path, engines) -> ModelCase:
+    where = f"case[{i}]"
+    if not isinstance(t, dict):
+        raise ModelError(f"{where} = {t!r}: must be a table")
+    allowed = {"name", "duration", "dt_out", "reference"} | set(engines)
+    for k in t:
+        if k not in allowed:
+            raise ModelError(f"{where}.{k}: unknown field; allowed: {', '.join(sorted(allowed))}")
+    name = t.get("name")
+    if not isinstance(name, str) or not name or not all(c.isalnum() or c in "_-." for c in name):
+        raise ModelError(f"{where}.name = {name!r}: must be a name of letters, digits, '_', '-' or '.'")
+    where = f"case.{name}"
+    duration, dt = _positive(f"{where}.duration", t.get("duration")), _positive(f"{where}.dt_out", t.get("dt_out"))
+    if dt > duration:
+        raise ModelError(f"{where}.dt_out = {dt!r}: must be <= duration ({duration!r} s)")
+    if duration / dt > MAX_OUTPUTS:
+        raise ModelError(f"{where}.dt_out = {dt!r}: gives more than {MAX_OUTPUTS} output samples")
+    settings = {}
+    for e in engines:
+        s = t.get(e, {})
+        if not isinstance(s, dict):
+            raise ModelError(f"{where}.{e} = {s!r}: must be a table of setting = value")
+        settings[e] = dict(s)
+    case = ModelCase(name, duration, dt, settings)
+    if "reference" in t:
+        case = ModelCase(name, duration, dt, settings, _reference(where, t["reference"], model, folder, case.times()))
+    return case
+
+
+def _positive(where: str, v) -> float:
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
+        raise ModelError(f"{where} = {v!r}: must be a number > 0 [s]")
+    return float(v)
+
+
+def _reference(where: str, t, model: Model, folder: Path, grid: np.ndarray) -> Reference:
+    if not isinstance(t, dict) or "file" not in t:
+        raise ModelError(f"{where}.reference = {t!r}: must be a table with file (and source, accuracy)")
+    for k in t:
+        if k not in ("file", "source", "accuracy"):
+            raise ModelError(f"{where}.reference.{k}: unknown field; allowed: accuracy, file, source")
+    path = folder / str(t["file"])
+    try:
+        data = np.genfromtxt(path, delimiter=",", names=True)
+    except (OSError, ValueError) as e:
+        raise ModelError(f"{where}.reference.file = {t['file']!r}: cannot read a CSV with a header ({e})") from None
+    data = np.atleast_1d(data)
+    names = data.dtype.names or ()
+    if not names or names[0] != "t":
+        raise ModelError(f"{where}.reference.file = {t['file']!r}: the first column must be t [s]")
+    outputs = {o.name for o in model.outputs}
+    for n in names[1:]:
+        if n not in outputs:
+            raise ModelError(f"{where}.reference.file: column {n!r} is not an output of the model; "
+                             f"allowed: {', '.join(sorted(outputs))}")
+    times = data["t"]
+    keep = times <= grid[-1] + 1e-9 * max(1.0, grid[-1])
+    index = np.rint(times[keep] / (grid[1] - grid[0])).astype(int) if len(grid) > 1 else np.zeros(0, int)
+    if not keep.any() or np.any(np.abs(grid[np.clip(index, 0, len(grid) - 1)] - times[keep]) > 1e-9 * max(1.0, grid[-1])):
+        raise ModelError(f"{where}.reference.file = {t['file']!r}: its times must lie on the output grid "
+                         f"0, {grid[1] - grid[0]:g}, ... {grid[-1]:g} s (and at least one within the duration)")
+    accuracy = t.get("accuracy", 0.0)
+    if isinstance(accuracy, bool) or not isinstance(accuracy, (int, float)) or not 0 <= accuracy < 1:
+        raise ModelError(f"{where}.reference.accuracy = {accuracy!r}: must be a number in [0, 1)")
+    return Reference(str(path), str(t.get("source", "")), float(accuracy), index,
+                     {n: np.asarray(data[n][keep], dtype=float) for n in names[1:]})

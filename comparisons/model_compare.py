@@ -1,0 +1,195 @@
+"""``nsd compare --model FILE``: a described mechanism cross-validated in every engine (issue 32).
+
+Every engine builds the mechanism from the same description (nsd_core.model) through its builder
+(``BUILDERS``: one module each, ``simulate(model, duration, dt_out, settings) -> ModelRun``); no line
+here or in a builder knows which mechanism it runs. The verdict is the gate's rule
+(comparisons.verdict): each engine's difference from the converged in-house reference within
+k x its own error estimate (peers: Richardson from their runs at h and h/2; the in-house engine: its
+difference from the converged run), and that error within each output's engineering tolerance
+(the output's ``tolerance``, a fraction of its ``scale``: given, or the reference's peak |value|).
+With a reference solution (a case's ``reference``), every engine and the converged reference are
+also judged against it, within their estimated error plus the solution's stated accuracy.
+"""
+from __future__ import annotations
+
+import importlib
+import math
+import time
+
+import numpy as np
+
+from comparisons.estimate import STEP_SETTING, nominal_order, observed_order, richardson_factor, step_ratio
+from comparisons.model_cases import ModelCase
+from comparisons.verdict import Rule, case_verdicts, pass_sentence
+from nsd_core.model.description import Model
+from nsd_core.model.run import ModelRun
+
+BUILDERS = {"semirecursive": "nsd_core.model.semirecursive", "mujoco": "comparisons.builders.mujoco",
+            "exudyn": "comparisons.builders.exudyn"}
+REFERENCE = "semirecursive"
+CONVERGED, CHECK = "converged", "converged_check"
+CONVERGED_SETTINGS = {"rtol": 1e-12, "atol": 1e-14}
+CHECK_SETTINGS = {"rtol": 1e-13, "atol": 1e-15}
+OWN_TOLERANCE = {"closure_max": 1e-6, "tracking_error": 1e-6}   # m (or rad): the engines' own checks
+SOLUTION = " vs solution"
+
+
+def builder(engine: str):
+    return importlib.import_module(BUILDERS[engine])
+
+
+def run_plan(case: ModelCase, engines: list[str]) -> list[tuple[str, str, dict]]:
+    """(label, engine, settings) of every run a case needs: each engine at its case settings, each
+    fixed-step peer again at half its step, and the converged reference and its check."""
+    plan = []
+    for e in engines:
+        own = dict(case.settings.get(e, {}))
+        plan.append((e, e, own))
+        if e in STEP_SETTING:
+            key = STEP_SETTING[e]
+            step = own.get(key, builder(e).default_settings[key])
+            plan.append((f"{e}_h2", e, {**own, key: step / 2.0}))
+    base = dict(case.settings.get(REFERENCE, {}))
+    plan += [(CONVERGED, REFERENCE, {**base, **CONVERGED_SETTINGS}), (CHECK, REFERENCE, {**base, **CHECK_SETTINGS})]
+    return plan
+
+
+def run_one(model: Model, case: ModelCase, engine: str, settings: dict) -> dict:
+    """One run, never raising: a failure comes back as data and is reported for its case."""
+    start = time.perf_counter()
+    try:
+        run = builder(engine).simulate(model, case.duration, case.dt_out, settings)
+        bad = [k for k, v in run.outputs.items() if not np.all(np.isfinite(v))]
+        if bad:
+            raise RuntimeError(f"a non-finite output: {bad[0]}")
+        return {"status": "ok", "run": run, "wall_time": time.perf_counter() - start}
+    except Exception as e:  # noqa: BLE001 (an engine's failure is that case's, the others go on)
+        msg = " ".join(f"{type(e).__name__}: {e}".split())
+        return {"status": "error", "message": msg[:500], "wall_time": time.perf_counter() - start}
+
+
+def scales(model: Model, ref: ModelRun) -> dict:
+    """output -> (scale, unit): the output's ``scale``, else the converged reference's peak |value|."""
+    out = {}
+    for o in model.outputs:
+        peak = float(np.max(np.abs(ref.outputs[o.name])))
+        out[o.name] = (o.scale or peak or 1.0, o.unit)
+    for k in OWN_TOLERANCE:
+        out[k] = (1.0, "m")
+    return out
+
+
+def differences(a: ModelRun, b: ModelRun, sc: dict) -> dict:
+    """output -> max over the samples of |a - b| / scale."""
+    return {k: float(np.max(np.abs(a.outputs[k] - b.outputs[k]))) / sc[k][0] for k in a.outputs}
+
+
+def solution_differences(run: ModelRun, case: ModelCase, sc: dict) -> dict:
+    ref = case.reference
+    return {k + SOLUTION: float(np.max(np.abs(run.outputs[k][ref.index] - v))) / sc[k][0]
+            for k, v in ref.columns.items()}
+
+
+def judge(model: Model, case: ModelCase, engines: list[str], runs: dict, rule: Rule) -> tuple[list, dict]:
+    """Rows and verdicts of one case from its runs (label -> ModelRun)."""
+    conv, check = runs[CONVERGED], runs[CHECK]
+    sc = scales(model, conv)
+    ref_error = differences(check, conv, sc)
+    values, estimates, evidence = {}, {}, {}
+    for e in engines:
+        if e not in runs:
+            continue
+        d = differences(runs[e], conv, sc)
+        values[e] = {**d, "closure_max": runs[e].stats.get("closure_max", 0.0)}
+        if model.prescribed:
+            values[e]["tracking_error"] = runs[e].stats.get("tracking_error", 0.0)
+        if e in STEP_SETTING and f"{e}_h2" in runs:
+            h2 = runs[f"{e}_h2"]
+            p = nominal_order(e, {**builder(e).default_settings, **case.settings.get(e, {})})
+            ratio = step_ratio(runs[e].stats, h2.stats)
+            factor = richardson_factor(p, ratio)
+            estimates[e] = {k: factor * v for k, v in differences(runs[e], h2, sc).items()}
+            primary = max(d, key=lambda k: d[k])
+            d2 = differences(h2, conv, sc)
+            key = STEP_SETTING[e]
+            evidence[e] = {"order": p, "ratio": ratio, "factor": factor, "setting": key,
+                           "step": float(runs[e].stats.get(key) or {**builder(e).default_settings,
+                                                                  **case.settings.get(e, {})}[key]),
+                           "observed_order": observed_order(d[primary], d2[primary], ratio), "primary_error": d[primary]}
+        else:   # the in-house engine: its estimate is its distance from the converged run
+            estimates[e] = dict(d)
+            evidence[e] = {}
+        if case.reference is not None:
+            sol = solution_differences(runs[e], case, sc)
+            values[e].update(sol)
+            estimates[e].update({k: estimates[e][k[: -len(SOLUTION)]] for k in sol})
+    if case.reference is not None:   # the converged reference against the solution, within its own error
+        sol = solution_differences(conv, case, sc)
+        values[CONVERGED] = sol
+        estimates[CONVERGED] = {k: ref_error[k[: -len(SOLUTION)]] for k in sol}
+        evidence[CONVERGED] = {}
+        ref_error = {**ref_error, **{k: case.reference.accuracy for k in sol}}
+    names = [e for e in engines if e in values] + ([CONVERGED] if CONVERGED in values else [])
+    sc_all = {**sc, **{k + SOLUTION: v for k, v in sc.items()}}
+    return case_verdicts(case.name, "model", names, values, estimates, ref_error, sc_all, evidence, rule)
+
+
+def model_rule(model: Model, k: float) -> Rule:
+    """The rule with each output's tolerance (and the own checks')."""
+    eng = {o.name: o.tolerance for o in model.outputs}
+    eng.update({o.name + SOLUTION: o.tolerance for o in model.outputs})
+    eng.update(OWN_TOLERANCE)
+    return Rule(eng, k=k)
+
+
+def compare_model(model: Model, cases: list[ModelCase], engines: list[str], k: float = 3.0,
+                  log=print) -> dict:
+    """Run every case on every engine, judge it, and return the summary (runs kept under 'runs')."""
+    rule = model_rule(model, k)
+    summary = {"model": model.name, "model_file": model.path, "source": model.source, "engines": engines,
+               "rule": {**rule.describe(), "text": pass_sentence(k)}, "cases": {}, "rows": [], "runs": {}}
+    for case in cases:
+        runs, failures, timing = {}, {}, {}
+        for label, engine, settings in run_plan(case, engines):
+            log(f"  {case.name}: {label} ...")
+            res = run_one(model, case, engine, settings)
+            timing[label] = {"wall_time": res["wall_time"]}
+            if res["status"] == "ok":
+                runs[label] = res["run"]
+                timing[label].update({k_: v for k_, v in res["run"].stats.items() if isinstance(v, (int, float, str))})
+            else:
+                failures[label] = res["message"]
+        entry = {"duration": case.duration, "dt_out": case.dt_out, "failures": failures, "runs": timing,
+                 "reference": None if case.reference is None else
+                 {"file": case.reference.path, "source": case.reference.source, "accuracy": case.reference.accuracy}}
+        if CONVERGED in runs and CHECK in runs:
+            ok = [e for e in engines if e in runs]
+            rows, verdicts = judge(model, case, ok, runs, rule)
+            summary["rows"] += rows
+            entry["verdicts"] = verdicts
+        else:
+            entry["verdicts"] = {}
+        for e in engines:
+            if e in failures:
+                entry["verdicts"][e] = {"pass": False, "consistent": None, "accurate": False, "failed": True,
+                                        "text": f"failed: {failures[e]}"}
+        summary["cases"][case.name] = entry
+        summary["runs"][case.name] = runs
+    verdicts = [v for c in summary["cases"].values() for v in c["verdicts"].values()]
+    failed = any(c["failures"] for c in summary["cases"].values())
+    summary["passed"] = bool(verdicts) and all(v["pass"] for v in verdicts) and not failed
+    summary["exit_code"] = 3 if failed else (0 if summary["passed"] else 1)
+    return summary
+
+
+def table(summary: dict) -> str:
+    """One line per case and engine: PASS/FAIL and the verdict in words."""
+    lines = [f"model {summary['model']} ({summary['model_file']})"]
+    for name, c in summary["cases"].items():
+        for e, v in c["verdicts"].items():
+            lines.append(f"  {name:<24} {e:<14} {'PASS' if v['pass'] else 'FAIL'}  {v.get('text', '')}")
+    return "\n".join(lines)
+
+
+def finite(x):
+    return x if x is None or not isinstance(x, float) or math.isfinite(x) else None
