@@ -60,6 +60,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "radius_of_gyration, support_radius, restrainer_gap, restrainer_stiffness, "
                         "restrainer_exponent, restrainer_damping (SI)")
     seismic_extras.add_arguments(p)
+    seismic_extras.add_design_arguments(p)
     seismic_building.add_arguments(p)
     seismic_checks.add_arguments(p)
     p.add_argument("--records", default=None, metavar="1,3,5-7", help="with --record-set: these records only (default all)")
@@ -107,8 +108,14 @@ def ground_motion(args):
                 raise ParameterError(f"--window {args.window!r}: expected T0,T1 (record seconds)")
             window = parts
         tf = ground.SIMILITUDE_TIME_FACTOR if args.time_factor is None else args.time_factor
-        return ground.fema_record(set_, rid.strip(), scale=args.scale, time_factor=tf, window=window,
+        scale = args.scale
+        if getattr(args, "design_level", False):
+            scale = seismic_extras.design_scale(set_, rid.strip(), args, window)
+        return ground.fema_record(set_, rid.strip(), scale=scale, time_factor=tf, window=window,
                                   rotate_deg=args.rotate, normalised=not args.raw)
+    if getattr(args, "design_level", False):
+        raise ParameterError("--design-level: scales a record (--record, --record-set); a synthetic --ground has "
+                             "no design level")
     for name in ("window", "time_factor"):
         if getattr(args, name) is not None:
             raise ParameterError(f"--{name.replace('_', '-')}: applies to --record only")
@@ -147,7 +154,8 @@ def run(args) -> int:
     engines = parse_engine_list(args.engines)
     if engines[0] != "semirecursive":
         raise ParameterError(f"--engines {args.engines!r}: semirecursive (the reference) must come first")
-    if args.no_device and len(engines) > 1:
+    baseline = _baseline(args, engines)
+    if args.no_device and len(engines) > 1 and not baseline:
         raise ParameterError("--engines: the supports alone (--no-device) run on the in-house engine only")
     seismic_extras.check_compare(args, engines)
     motion = ground_motion(args)
@@ -194,9 +202,17 @@ def run(args) -> int:
     seismic_extras.warn(summary)
     others = {}
     for name in engines[1:]:
-        other = run_seismic_engine(name, params, structure, motion, duration=args.duration, dt_out=args.dt_out)
+        if baseline:  # the baseline isolator's peer (comparisons/isolator_mujoco.py)
+            from comparisons.isolator_mujoco import run_isolator
+            other = run_isolator(structure, motion, duration=args.duration, dt_out=args.dt_out)
+        else:
+            other = run_seismic_engine(name, params, structure, motion, duration=args.duration, dt_out=args.dt_out)
         others[name] = other
-        summary.setdefault("engines", {})[name] = {**seismic_metrics(result, other),
+        if baseline:
+            from comparisons.isolator_mujoco import isolator_metrics as metrics
+        else:
+            metrics = seismic_metrics
+        summary.setdefault("engines", {})[name] = {**metrics(result, other),
                                                    "wall_time": other.stats["wall_time"]}
         if "floor1_x" in result.columns:  # the building's floors and stories (docs/building.md)
             from comparisons.seismic import building_metrics
@@ -232,6 +248,28 @@ def run(args) -> int:
     return 0
 
 
+def _baseline(args, engines) -> bool:
+    """--isolator: a baseline runs without the device (a single run: as --no-device; --compare-supports and
+    --compare-building: their run without the device). True for a bilinear or friction-pendulum single
+    run, whose cross-check is MuJoCo's (comparisons/isolator_mujoco.py) alone."""
+    from nsd_core.device.isolators import KINDS
+    kind = seismic_extras.isolator_choice(args)
+    if kind == "device":
+        return False
+    if args.no_device:
+        raise ParameterError(f"--no-device: --isolator {kind} already runs without the device; leave one out")
+    if not (args.compare_supports or args.compare_building):
+        args.no_device = True
+    if kind in KINDS and args.no_device:
+        if set(engines[1:]) - {"mujoco"}:
+            raise ParameterError(f"--engines {args.engines!r}: --isolator {kind} cross-checks in mujoco only")
+        if engines[1:] and (args.restrainer or getattr(args, "building", None)):
+            raise ParameterError(f"--engines {args.engines!r}: the mujoco isolator peer runs no restrainer and no "
+                                 "building")
+        return True
+    return False
+
+
 def _window(text: str | None) -> list[float] | None:
     if text is None:
         return None
@@ -259,7 +297,8 @@ def run_set(args) -> int:
     records = parse_records(args.records, set_)
     check_record_flags(args)
     if args.no_device:
-        raise ParameterError("--no-device: --record-set runs every record both with and without the device")
+        raise ParameterError("--no-device: --record-set runs every record both with and without the device "
+                             "(the run without it on --isolator's baseline)")
     if args.compare_supports:
         raise ParameterError("--compare-supports: --record-set runs every record both with and without the device already")
     if args.fixed_base or args.compare_building:
@@ -285,8 +324,19 @@ def run_set(args) -> int:
         v = getattr(args, name)
         if v is not None and not (math.isfinite(v) and v > 0):
             raise ParameterError(f"--{name.replace('_', '-')} = {v}: must be a finite number > 0 (s)")
-    runs = record_runs(set_, records, ground, params.to_dict(), numbers, args.duration, args.dt_out, solver,
-                       code_fingerprint(), peers=tuple(engines[1:]))  # every record's window checked here
+    if seismic_extras.isolator_choice(args) not in ("device", "linear") and engines[1:]:
+        raise ParameterError(f"--engines {args.engines!r}: a record set's cross-check runs the device and the supports; "
+                             f"the {args.isolator} baseline's peer: nsd seismic --record SET:ID --isolator "
+                             f"{args.isolator} --engines semirecursive,mujoco")
+    if args.design_level:   # each record at its own scale: Sa(T_D) = the design spectrum's (docs/design.md)
+        runs = []
+        for rec in records:
+            own = {**ground, "scale": seismic_extras.design_scale(set_, rec, args, window)}
+            runs += record_runs(set_, [rec], own, params.to_dict(), numbers, args.duration, args.dt_out, solver,
+                                code_fingerprint(), peers=tuple(engines[1:]))
+    else:
+        runs = record_runs(set_, records, ground, params.to_dict(), numbers, args.duration, args.dt_out, solver,
+                           code_fingerprint(), peers=tuple(engines[1:]))  # every record's window checked here
     stories = structure.building.stories if structure.building else 0
     for r in runs:
         own = fema_record(r.set, r.record, **r.ground).duration if args.duration is None else args.duration

@@ -15,6 +15,21 @@ import sys
 from nsd_core.device.params import ParameterError
 
 
+def add_design_arguments(p) -> None:
+    """--isolator, --resize, --design-level (issue 33; docs/design.md): every seismic command's."""
+    p.add_argument("--isolator", default="device", metavar="device|linear|bilinear|friction-pendulum",
+                   help="what isolates the structure: the device (on the supports; default), or a baseline without "
+                        "it: linear (the supports alone), bilinear (lead-rubber), friction-pendulum, sized for the "
+                        "design displacement (docs/design.md); where a command runs with and without the device, "
+                        "the run without it stands on this baseline")
+    p.add_argument("--resize", action="store_true",
+                   help="derive the isolated structure from the device (the model document's rule) instead of the "
+                        "design basis, which holds it fixed for every device")
+    p.add_argument("--design-level", action="store_true",
+                   help="the design level: each record scaled so that its Sa(T_D) is the design spectrum's, and the "
+                        "isolation level's supplemental damping of the design (docs/design.md)")
+
+
 def add_arguments(p) -> None:
     p.add_argument("--restrainer", action="store_true",
                    help="add the displacement restrainer (Hunt-Crossley contact at |u| > u_gap, defaults in "
@@ -28,12 +43,41 @@ def add_arguments(p) -> None:
 def isolated_structure(args, params):
     """The default structure with --structure overrides and the restrainer (--restrainer or any
     restrainer_* override): ParameterError, one line, on anything wrong."""
-    from nsd_core.device.isolation import structure_with
     from nsd_core.device.params import parse_set
     from nsd_core.device.restrainer import split_overrides, with_restrainer
+    from nsd_core.device.isolation import designed_structure_with
+    from nsd_core.device.isolators import CHOICES, KINDS, sized
+    kind = isolator_choice(args)
     own, restrainer = split_overrides(parse_set(getattr(args, "structure", None) or []))
-    structure = structure_with(params, own)
+    structure = designed_structure_with(params, own, resize=bool(getattr(args, "resize", False)),
+                                        design_level=bool(getattr(args, "design_level", False)))
+    if kind in KINDS:
+        structure = structure.with_isolator(sized(kind, structure.mass))
+    assert kind in CHOICES
     return with_restrainer(structure, params, bool(getattr(args, "restrainer", False)), restrainer)
+
+
+def isolator_choice(args) -> str:
+    """--isolator's value, checked (one line on anything else)."""
+    from nsd_core.device.isolators import CHOICES
+    kind = getattr(args, "isolator", None) or "device"
+    if kind not in CHOICES:
+        raise ParameterError(f"--isolator {kind!r}: allowed {', '.join(CHOICES)}")
+    return kind
+
+
+def design_scale(set_: str, rid, args, window=None) -> float:
+    """--design-level: the record's scale so that its Sa(T_D) is the design spectrum's
+    (nsd_core.device.design.design_level_scale), on the whole record (a window is a part of the same
+    scaled record, so its Sa does not set the scale); --scale must be left at 1."""
+    from nsd_core.device.design import design_level_scale
+    from nsd_core.device.ground import SIMILITUDE_TIME_FACTOR, fema_record
+    if float(args.scale) != 1.0:
+        raise ParameterError(f"--scale {args.scale!r}: --design-level sets each record's scale; leave --scale out")
+    tf = SIMILITUDE_TIME_FACTOR if args.time_factor is None else args.time_factor
+    motion = fema_record(set_, rid, scale=1.0, time_factor=tf, window=None, rotate_deg=args.rotate,
+                         normalised=not args.raw)
+    return design_level_scale(motion)["scale"]
 
 
 def check_compare(args, engines) -> None:
