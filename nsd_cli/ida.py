@@ -67,6 +67,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--retry-failed", action="store_true", help="run levels stored as failed again")
     add_param_arguments(p)
     add_solver_arguments(p)
+    from nsd_cli.seismic_extras import add_design_arguments  # --isolator, --resize, --design-level (docs/design.md)
+    add_design_arguments(p)
     p.add_argument("--out", required=True, help="output folder (resumable)")
 
 
