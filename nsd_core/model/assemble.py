@@ -81,7 +81,9 @@ class InitialState:
 
 
 class Forces:
-    """The description's force elements on the in-house engine: every law through the registry."""
+    """The description's force elements on the in-house engine: every law through the registry. The
+    states of the laws that have one (``stateful``, in the description's order) are the ODE's extra
+    states."""
 
     def __init__(self, model: Model, tree: Tree):
         pts = [f for f in model.forces if f.law.acts_on == POINTS]
@@ -89,27 +91,37 @@ class Forces:
         self.joints = [(f, tree.coordinate[(f.joint, f.dof)]) for f in model.forces if f.law.acts_on == JOINT]
         self.elements = AxialElements([tree.body[f.body_a] for f in pts], [f.point_a for f in pts],
                                       [tree.body[f.body_b] for f in pts], [f.point_b for f in pts], tree.mech.n)
+        self.stateful = [f.name for f in model.forces if f.law.state is not None]
+        self.slot = {name: k for k, name in enumerate(self.stateful)}
+        self.initial = np.array([f.initial_state for f in model.forces if f.law.state is not None])
 
-    def values(self, kin, z, zd) -> dict:
-        """Each element's force: tension [N] of a points law, generalized force of a joint law."""
-        out = {}
+    def _each(self, kin, z, zd, extra):
+        """(element, x, x', state slot or -1) for every element."""
         if self.points:
             L, Ld = self.elements.state(kin)
-            out.update({f.name: f.force(L[i], Ld[i]) for i, f in enumerate(self.points)})
-        out.update({f.name: f.force(z[i], zd[i]) for f, i in self.joints})
-        return out
+            for i, f in enumerate(self.points):
+                yield f, L[i], Ld[i], self.slot.get(f.name, -1)
+        for f, i in self.joints:
+            yield f, z[i], zd[i], self.slot.get(f.name, -1)
+
+    def values(self, kin, z, zd, extra=()) -> dict:
+        """Each element's force: tension [N] of a points law, generalized force of a joint law."""
+        return {f.name: f.force(x, xd, extra[k] if k >= 0 else 0.0) for f, x, xd, k in self._each(kin, z, zd, extra)}
 
     def __call__(self, t, kin, z, zd, extra):
         gen = np.zeros(self.n)
-        if self.points:
-            L, Ld = self.elements.state(kin)
-            T = np.array([f.force(L[i], Ld[i]) for i, f in enumerate(self.points)])
-            wrench = self.elements.wrench(T)
-        else:
-            wrench = np.zeros((self.n, 6))
-        for f, i in self.joints:
-            gen[i] += f.force(z[i], zd[i])
-        return wrench, gen, np.zeros(0)
+        T = np.zeros(len(self.points))
+        rates = np.zeros(len(self.stateful))
+        for j, (f, x, xd, k) in enumerate(self._each(kin, z, zd, extra)):
+            value = f.force(x, xd, extra[k] if k >= 0 else 0.0)
+            if k >= 0:
+                rates[k] = f.rate(x, xd, extra[k])
+            if j < len(self.points):
+                T[j] = value
+            else:
+                gen[self.joints[j - len(self.points)][1]] += value
+        wrench = self.elements.wrench(T) if self.points else np.zeros((self.n, 6))
+        return wrench, gen, rates
 
 
 def system_of(model: Model, tree: Tree | None = None) -> tuple[SemiRecursiveSystem, Tree]:
@@ -121,7 +133,9 @@ def system_of(model: Model, tree: Tree | None = None) -> tuple[SemiRecursiveSyst
         qs = np.array([d(t) for d in drives]).reshape(-1, 3)
         return qs[:, 0].copy(), qs[:, 1].copy(), qs[:, 2].copy()
     prefer = [tree.coordinate[c] for c in model.free]
-    system = SemiRecursiveSystem(tree.mech, tree.prescribed, motion, Forces(model, tree), prefer_free=prefer)
+    forces = Forces(model, tree)
+    system = SemiRecursiveSystem(tree.mech, tree.prescribed, motion, forces, n_extra=len(forces.stateful),
+                                 prefer_free=prefer)
     return system, tree
 
 
@@ -148,7 +162,8 @@ def start(model: Model, system: SemiRecursiveSystem, tree: Tree):
         z = system.assemble(ws, 0.0, z[free]).copy()
     except Exception as e:  # noqa: BLE001 (Newton's own failure, said as the description's mistake)
         raise ModelError(f"loops: cannot be closed from [initial].coordinates ({' '.join(str(e).split())})") from None
-    ev = system.evaluate(system.workspace(z), 0.0, system.state(z, zd))
+    extra0 = system.forces.initial
+    ev = system.evaluate(system.workspace(z), 0.0, system.state(z, zd, extra0))
     resid = float(np.max(np.abs(ev.Phi))) if ev.Phi.size else 0.0
     if not np.isfinite(resid) or resid > ASSEMBLY_TOL:
         raise ModelError(f"loops: cannot be closed from [initial].coordinates (residual {resid:.3g} after "
@@ -159,7 +174,7 @@ def start(model: Model, system: SemiRecursiveSystem, tree: Tree):
             body, k = names[i]
             raise ModelError(f"[initial].velocities.{body} = {zd[i]!r} (coordinate {k}): the loops require "
                              f"{ev.zd[i]:.6g}; give the rates of the free coordinates only")
-    return z, ev.zd.copy(), system.state(z, ev.zd), ev
+    return z, ev.zd.copy(), system.state(z, ev.zd, extra0), ev
 
 
 def initial_state(model: Model) -> InitialState:

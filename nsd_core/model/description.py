@@ -8,7 +8,7 @@ The conventions every builder follows (docs/models.md):
 - a joint's coordinates, in order: revolute q about ``axis``; prismatic q along ``axis``; universal
   q1 about ``axis``, then q2 about ``axis2`` (turned by q1); spherical three turns about x, then the
   turned y, then the turned z; planar two slides along u, v (u, v, normal right-handed), then a turn
-  about ``normal`` (axes in the parent's frame);
+  about ``normal`` (axes in the parent's frame); translational three slides along the parent's x, y, z;
 - a loop closure (``point``: two body points coincide; ``revolute``: they coincide and two body axes
   stay parallel) cuts a closed chain; ``ground`` can be either side;
 - SI units everywhere: m, kg, kg m^2, s, rad, N, N m.
@@ -24,7 +24,7 @@ from nsd_core.model.errors import ModelError
 from nsd_core.model.laws import JOINT, POINTS, Law
 
 GROUND = "ground"
-JOINT_DOFS = {"revolute": 1, "prismatic": 1, "universal": 2, "spherical": 3, "planar": 3}
+JOINT_DOFS = {"revolute": 1, "prismatic": 1, "universal": 2, "spherical": 3, "planar": 3, "translational": 3}
 OUTPUT_KINDS = ("coordinate", "point", "point_velocity", "force", "drive_force", "energy")
 MOTION_KINDS = {"constant_speed": ("start", "speed"), "harmonic": ("centre", "amplitude", "frequency", "phase")}
 COMPONENTS = {"x": 0, "y": 1, "z": 2}
@@ -54,6 +54,8 @@ class Joint:
             return [("R", a), ("R", unit(self.axis2))]
         if self.type == "spherical":
             return [("R", np.eye(3)[0]), ("R", np.eye(3)[1]), ("R", np.eye(3)[2])]
+        if self.type == "translational":
+            return [("P", np.eye(3)[0]), ("P", np.eye(3)[1]), ("P", np.eye(3)[2])]
         u = np.cross(a, np.eye(3)[int(np.argmin(np.abs(a)))])
         u /= np.linalg.norm(u)
         return [("P", u), ("P", np.cross(a, u)), ("R", a)]   # planar
@@ -95,8 +97,19 @@ class ForceElement:
     joint: str = ""          # joint laws: the body whose joint, and which of its coordinates
     dof: int = 0
 
-    def force(self, x: float, xd: float) -> float:
-        return float(self.law.force(float(x), float(xd), self.parameters))
+    def force(self, x: float, xd: float, s: float = 0.0) -> float:
+        """The law's force at (x, x') (and its state s, for a law with one)."""
+        if self.law.state is None:
+            return float(self.law.force(float(x), float(xd), self.parameters))
+        return float(self.law.force(float(x), float(xd), float(s), self.parameters))
+
+    def rate(self, x: float, xd: float, s: float) -> float:
+        """ds/dt of the law's state (a law with a state only)."""
+        return float(self.law.rate(float(x), float(xd), float(s), self.parameters))
+
+    @property
+    def initial_state(self) -> float:
+        return self.law.initial_state(self.parameters)
 
 
 @dataclass(frozen=True)

@@ -13,8 +13,10 @@ Exudyn's connector user functions all call exactly this function: a law added he
 one ``register`` call) reaches all three engines. Where the device already has a law (the rope of
 Eq. 16, the restrainer's Hunt-Crossley contact), the registry calls that one implementation.
 
-Laws with a hysteretic internal state (the SMA wires, the Bouc-Wen push spring) are not yet offered to
-descriptions: their state needs each engine's own way of carrying it (see docs/models.md).
+A law may carry one internal state s (the SMA wire's stress, the Bouc-Wen spring's zeta): then
+``state`` names it (its unit and the parameter holding its value at t = 0), ``force(x, xd, s, p)``
+takes it, and ``rate(x, xd, s, p)`` gives ds/dt. Each engine integrates the state along with its own
+motion (the in-house engine as extra states of its ODE).
 """
 from __future__ import annotations
 
@@ -24,7 +26,8 @@ from typing import Callable
 import numpy as np
 from numba import njit
 
-from nsd_core.device.forces import restrainer_force_scalar, rope_tension_scalar
+from nsd_core.device.forces import (bouc_wen_slope_scalar, restrainer_force_scalar, rope_tension_scalar,
+                                    sma_slope_scalar, spring_push_scalar, wire_tension_scalar)
 
 POINTS, JOINT = "points", "joint"
 
@@ -40,12 +43,26 @@ class LawParameter:
 
 
 @dataclass(frozen=True)
+class StateSpec:
+    """A law's internal state: its name, unit, and the parameter that gives its value at t = 0."""
+    name: str
+    unit: str
+    initial: str
+
+
+@dataclass(frozen=True)
 class Law:
     name: str
     acts_on: str               # POINTS or JOINT
     parameters: tuple[LawParameter, ...]
-    force: Callable            # compiled force(x, xd, p) -> float
+    force: Callable            # compiled force(x, xd, p) -> float; with a state force(x, xd, s, p)
     doc: str
+    state: StateSpec | None = None
+    rate: Callable | None = None   # with a state: compiled rate(x, xd, s, p) -> ds/dt
+
+    def initial_state(self, packed: np.ndarray) -> float:
+        names = [p.name for p in self.parameters]
+        return float(packed[names.index(self.state.initial)]) if self.state else 0.0
 
     def pack(self, given: dict, where: str) -> np.ndarray:
         """The parameters of one element as the array ``force`` takes; bad input raises ModelError."""
@@ -76,6 +93,10 @@ def register(law: Law) -> Law:
         raise ValueError(f"law {law.name!r} is already registered")
     if law.acts_on not in (POINTS, JOINT):
         raise ValueError(f"law {law.name!r}: acts_on must be {POINTS!r} or {JOINT!r}")
+    if (law.state is None) != (law.rate is None):
+        raise ValueError(f"law {law.name!r}: a state needs a rate, and a rate a state")
+    if law.state is not None and law.state.initial not in {p.name for p in law.parameters}:
+        raise ValueError(f"law {law.name!r}: the state's initial value {law.state.initial!r} is not a parameter")
     LAWS[law.name] = law
     return law
 
@@ -142,3 +163,50 @@ register(Law("joint_spring_damper", JOINT, (
     LawParameter("stiffness", "N/m or N m/rad", 0.0), LawParameter("damping", "N s/m or N m s/rad", 0.0, default=0.0),
     LawParameter("neutral", "m or rad", -INF, default=0.0)),
     joint_spring_damper, joint_spring_damper.py_func.__doc__))
+
+
+# ---- laws with a hysteretic state: the device's SMA wire (Eq. 17) and push spring (Eq. 18) --------------
+# p: area, natural_length, E, Y, alpha, n, fT, a, Em, eps_t, c, initial_stress
+
+@njit(cache=True, _nrt=False)
+def sma_wire_tension(x, xd, s, p):
+    """Eq. 17a: T = sigma A_w H(sigma), sigma the wire's stress (its state); a wire never pushes."""
+    return wire_tension_scalar(s, p[0])
+
+
+@njit(cache=True, _nrt=False)
+def sma_wire_rate(x, xd, s, p):
+    """Eq. 17b-d: d sigma/dt = (d sigma/d eps)(eps, sgn eps', sigma) eps', eps = (L - L0)/L0; the stress
+    evolves as Eq. 17 says even while the wire is slack (only the force is clipped)."""
+    eps, eps_rate = (x - p[1]) / p[1], xd / p[1]
+    return sma_slope_scalar(eps, eps_rate, s, p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10]) * eps_rate
+
+
+# p: kse, ksd, beta, gamma, n, free_length, initial_zeta
+
+@njit(cache=True, _nrt=False)
+def push_spring_tension(x, xd, s, p):
+    """Eq. 18a: the spring pushes with P = max(k_se x_s + zeta, 0), x_s = L_s0 - L: T = -P."""
+    return -spring_push_scalar(x, s, p[0], p[5])
+
+
+@njit(cache=True, _nrt=False)
+def push_spring_rate(x, xd, s, p):
+    """Eq. 18b: d zeta/dt = (k_sd - (gamma + beta sgn(zeta x_s')) |zeta|^n) x_s', x_s' = -L'."""
+    return bouc_wen_slope_scalar(s, -xd, p[1], p[2], p[3], p[4]) * (-xd)
+
+
+register(Law("sma_wire", POINTS, (
+    LawParameter("area", "m^2", 0.0, doc="A_w"), LawParameter("natural_length", "m", 0.0, doc="l_w0"),
+    LawParameter("E", "Pa", 0.0), LawParameter("Y", "Pa", 0.0), LawParameter("alpha", "-", 0.0),
+    LawParameter("n", "-", 0.0), LawParameter("fT", "-", -INF), LawParameter("a", "-", -INF),
+    LawParameter("Em", "Pa", 0.0), LawParameter("eps_t", "-", 0.0), LawParameter("c", "-", 0.0),
+    LawParameter("initial_stress", "Pa", -INF, default=0.0)),
+    sma_wire_tension, "SMA wire, Eq. 17 of the paper (Bouc-Wen-type stress-strain law with pinching)",
+    StateSpec("stress", "Pa", "initial_stress"), sma_wire_rate))
+register(Law("push_spring", POINTS, (
+    LawParameter("kse", "N/m", 0.0), LawParameter("ksd", "N/m", 0.0), LawParameter("beta", "1/N^n", -INF),
+    LawParameter("gamma", "1/N^n", -INF), LawParameter("n", "-", 0.0), LawParameter("free_length", "m", 0.0),
+    LawParameter("initial_zeta", "N", -INF, default=0.0)),
+    push_spring_tension, "Push-only Bouc-Wen spring, Eq. 18 of the paper",
+    StateSpec("zeta", "N", "initial_zeta"), push_spring_rate))

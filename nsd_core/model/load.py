@@ -108,7 +108,7 @@ def parse_model(raw: dict, path: str = "") -> Model:
     _unique("prescribed", prescribed)
     _unique("outputs", outputs)
     _unique("loops", loops)
-    init = _initial(raw.get("initial", {}), bodies, taken)
+    init = _initial(raw.get("initial", {}), bodies, {(p.joint, p.dof): p for p in prescribed})
     return Model(**{**model.__dict__, "outputs": outputs, **init})
 
 
@@ -319,10 +319,15 @@ def _initial(t, bodies, prescribed) -> dict:
                 raise ModelError(f"[initial].{key}.{body} = {v!r}: must give {n} value(s), one per coordinate "
                                  f"of its {by[body].joint.type} joint")
             for k, x in enumerate(vals):
-                if (body, k) in prescribed:
-                    raise ModelError(f"[initial].{key}.{body}: coordinate {k} is prescribed "
-                                     f"({prescribed[(body, k)]}); its motion gives its value")
-                out[f"initial_{key}"][(body, k)] = _num(f"[initial].{key}.{body}", x)
+                x = _num(f"[initial].{key}.{body}", x)
+                if (body, k) in prescribed:   # its motion gives its value: a value given must be that one
+                    motion = prescribed[(body, k)]
+                    at0 = motion(0.0)[0 if key == "coordinates" else 1]
+                    if abs(x - at0) > 1e-12 * max(1.0, abs(at0)):
+                        raise ModelError(f"[initial].{key}.{body} = {v!r}: coordinate {k} is prescribed "
+                                         f"({motion.name}), whose motion gives {at0!r} at t = 0")
+                    continue
+                out[f"initial_{key}"][(body, k)] = x
     free = t.get("free", [])
     if not isinstance(free, list) or any(f not in by for f in free):
         raise ModelError(f"[initial].free = {free!r}: must be a list of body names (their joints' coordinates "

@@ -43,8 +43,8 @@ def sampler(model: Model, system, tree):
             return kinetic_energy(system.m, kin)
         return potential_energy_gravity(system.m, kin)
 
-    def sample(ev):
-        law_values = forces.values(ev.kin, ev.z, ev.zd) if model.forces else {}
+    def sample(ev, extra=()):
+        law_values = forces.values(ev.kin, ev.z, ev.zd, extra) if model.forces else {}
         return [float(one(ev, o, law_values)) for o in model.outputs]
     return sample
 
@@ -60,7 +60,7 @@ def simulate(model: Model, duration: float, dt_out: float, settings: dict | None
 
     def record(t, y):
         ev = system.evaluate(ws, t, y)
-        rows.append(sample(ev))
+        rows.append(sample(ev, y[len(y) - system.n_extra:] if system.n_extra else ()))
         if ev.Phi.size:
             closure[0] = max(closure[0], float(np.max(np.abs(ev.Phi))))
         if len(prescribed):

@@ -1,0 +1,192 @@
+"""The device in drive mode as a model description (docs/models.md): a file a user can read, copy and
+change, built by every engine's builder like any other mechanism.
+
+The description is the in-house device model's tree (nsd_core.device.model) with the base held
+fixed (drive mode locks it) and the massless driven plate folded into the cap's joint: the cap
+slides on three translations (X and Y prescribed: the plate's line path; Z free), the wall slides
+along Z on the base, the rod hangs on the wall by a universal joint (about X, then Y), and a point
+closure joins the rod's upper end to the cap's reference point (the cut spherical joint of Eq. 13).
+The ropes (Eq. 16), SMA wires (Eq. 17) and the push spring (Eq. 18) are force elements whose laws
+come from the registry (nsd_core.model.laws); every number comes from ``device_geometry(params)``.
+
+    python -m nsd_core.device.describe --amplitude 0.015 --frequency 1 --out models/nsd_drive.toml
+
+writes it for the nominal parameters (``--set NAME=VALUE`` for a variant).
+"""
+from __future__ import annotations
+
+import argparse
+import math
+
+import numpy as np
+
+from nsd_core.device.geometry import device_geometry
+from nsd_core.device.params import Params, parse_set, with_overrides
+
+
+def _v(x) -> str:
+    return "[" + ", ".join(repr(float(a)) for a in np.asarray(x, float).ravel()) + "]"
+
+
+def _inertia(J) -> str:
+    J = np.asarray(J, float)
+    return _v([J[0, 0], J[1, 1], J[2, 2], J[0, 1], J[0, 2], J[1, 2]])
+
+
+def _changed(params: Params) -> dict:
+    nominal = Params().to_dict()
+    return {k: v for k, v in params.to_dict().items() if nominal.get(k) != v}
+
+
+def device_description(params: Params, amplitude: float, frequency: float, direction_deg: float = 0.0,
+                       cycles: int = 2, samples_per_cycle: int = 500) -> str:
+    """The drive-mode device under a line drive (u = A sin(2 pi f t) along the direction), as TOML."""
+    g = device_geometry(params)
+    psi = math.radians(direction_deg)
+    w, s = g.wire, g.spring
+    lines = [f'''# The negative-stiffness device (Dai et al. 2024) in drive mode, as a model description.
+# Written by `python -m nsd_core.device.describe` from the device's parameters (nsd params lists each
+# with its unit and provenance; docs/model.md gives the equations). Parameters that differ from the
+# nominal ones: {", ".join(f"{k} = {v!r}" for k, v in _changed(params).items()) or "none"}.
+# Drive: a line of amplitude {amplitude!r} m at {frequency!r} Hz, {direction_deg!r} degrees from X.
+
+[model]
+name = "nsd_drive"
+source = "Dai et al. 2024 (doi:10.1002/msd2.12118); nominal values in nsd_core/device/params.py"
+gravity = {_v(g.gravity_vector)}
+
+[[bodies]]   # the cap: X and Y follow the plate (prescribed), Z is free
+name = "cap"
+joint = {{ type = "translational", position = [0.0, 0.0, 0.0] }}
+mass = {g.cap.mass!r}
+com = {_v(g.cap.com)}
+inertia = {_inertia(g.cap.inertia)}
+
+[[bodies]]   # the wall: slides along Z in the base's guide, on the spring
+name = "wall"
+joint = {{ type = "prismatic", position = [0.0, 0.0, 0.0], axis = [0.0, 0.0, 1.0] }}
+mass = {g.wall.mass!r}
+com = {_v(g.wall.com)}
+inertia = {_inertia(g.wall.inertia)}
+
+[[bodies]]   # the rod: a universal joint at the wall's reference point (no spin about its own axis)
+name = "rod"
+parent = "wall"
+joint = {{ type = "universal", position = [0.0, 0.0, 0.0], axis = [1.0, 0.0, 0.0], axis2 = [0.0, 1.0, 0.0] }}
+mass = {g.rod.mass!r}
+com = {_v(g.rod.com)}
+inertia = {_inertia(g.rod.inertia)}
+
+[[loops]]    # the rod's upper joint: the cut spherical joint of Eq. 13
+name = "cap_rod"
+body_a = "cap"
+point_a = [0.0, 0.0, 0.0]
+body_b = "rod"
+point_b = [0.0, 0.0, {params.rod_length!r}]
+
+[[prescribed]]
+name = "drive_x"
+joint = "cap"
+dof = 0
+motion = "harmonic"
+amplitude = {amplitude * math.cos(psi)!r}
+frequency = {frequency!r}
+
+[[prescribed]]
+name = "drive_y"
+joint = "cap"
+dof = 1
+motion = "harmonic"
+amplitude = {amplitude * math.sin(psi)!r}
+frequency = {frequency!r}
+
+[initial]    # the precompressed rest state
+coordinates = {{ cap = [0.0, 0.0, {g.cap_rest_z!r}], wall = {g.wall_rest_z!r} }}
+free = ["cap"]
+''']
+    for k in range(g.n_ropes):
+        lines.append(f'''
+[[forces]]   # rope {k}: base point -> cap point (Eq. 16)
+name = "rope{k}"
+law = "rope"
+body_a = "cap"
+point_a = {_v(g.rope_cap_points[k])}
+body_b = "ground"
+point_b = {_v(g.rope_base_points[k])}
+parameters = {{ stiffness = {g.rope_stiffness!r}, free_length = {float(g.rope_natural_length[k])!r} }}
+''')
+    stress0 = g.initial_wire_stress()
+    for k in range(g.n_wires):
+        lines.append(f'''
+[[forces]]   # SMA wire {k}: cap point -> wall point (Eq. 17)
+name = "wire{k}"
+law = "sma_wire"
+body_a = "cap"
+point_a = {_v(g.wire_cap_points[k])}
+body_b = "wall"
+point_b = {_v(g.wire_wall_points[k])}
+parameters = {{ area = {w.area!r}, natural_length = {w.natural_length!r}, E = {w.E!r}, Y = {w.Y!r}, alpha = {w.alpha!r}, n = {w.n!r}, fT = {w.fT!r}, a = {w.a!r}, Em = {w.Em!r}, eps_t = {w.eps_t!r}, c = {w.c!r}, initial_stress = {float(stress0[k])!r} }}
+''')
+    lines.append(f'''
+[[forces]]   # the precompressed push spring: wall reference -> base origin, along Z (Eq. 18)
+name = "spring"
+law = "push_spring"
+body_a = "wall"
+body_b = "ground"
+parameters = {{ kse = {s.kse!r}, ksd = {s.ksd!r}, beta = {s.beta!r}, gamma = {s.gamma!r}, n = {s.n!r}, free_length = {s.free_length!r}, initial_zeta = {g.spring_zeta0!r} }}
+
+[[outputs]]
+name = "F_x"
+kind = "drive_force"
+element = "drive_x"
+
+[[outputs]]
+name = "F_y"
+kind = "drive_force"
+element = "drive_y"
+scale = 1.0    # N: the force across a line drive is zero up to round-off; judged in newtons
+
+[[outputs]]
+name = "cap_z"
+kind = "coordinate"
+joint = "cap"
+dof = 2
+
+[[outputs]]
+name = "wall_z"
+kind = "coordinate"
+joint = "wall"
+
+[[outputs]]
+name = "rope0_tension"
+kind = "force"
+element = "rope0"
+
+[[outputs]]
+name = "spring_tension"
+kind = "force"
+element = "spring"
+
+[[case]]
+name = "drive_A{amplitude * 1e3:g}mm_f{frequency:g}Hz"
+duration = {cycles / frequency!r}   # s: {cycles} cycles
+dt_out = {1.0 / (frequency * samples_per_cycle)!r}
+''')
+    return "".join(lines)
+
+
+def main(argv=None) -> None:
+    from nsd_core.device.results import atomic_write_text
+    p = argparse.ArgumentParser(description="write the device in drive mode as a model description (TOML)")
+    p.add_argument("--amplitude", type=float, required=True, help="m")
+    p.add_argument("--frequency", type=float, required=True, help="Hz")
+    p.add_argument("--direction", type=float, default=0.0, help="degrees from X")
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE")
+    p.add_argument("--out", required=True)
+    a = p.parse_args(argv)
+    params = with_overrides(Params(), parse_set(a.set))
+    atomic_write_text(a.out, device_description(params, a.amplitude, a.frequency, a.direction))
+
+
+if __name__ == "__main__":
+    main()
