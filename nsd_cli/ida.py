@@ -45,6 +45,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="limit state: stroke=VALUE peak |u| >= VALUE m; restrainer: the displacement restrainer "
                         "engages (runs with it); drift=VALUE the peak story drift ratio of the building >= VALUE "
                         "(needs --building); the rod's length reached counts for every one")
+    p.add_argument("--limit-states", default=None, metavar="NAME=VALUE,...",
+                   help="thresholds of the limit states reported apart (limit_states.json/.csv/.png): capacity=m "
+                        "(isolator displacement capacity; default the device's working range X_max), drift=- "
+                        "(default 0.015; with --building), floor_acceleration=m/s^2 (default 9.80665), impact=N "
+                        "(restrainer force; default 0, any engagement; with --restrainer)")
     p.add_argument("--building", action="append", default=[], metavar="NAME=VALUE",
                    help="a shear building on the slab, as nsd seismic --building (docs/building.md); "
                         "--building stories=3 gives the default building")
@@ -128,6 +133,8 @@ def run(args) -> int:
                              "(at least 1 um; at the rod's length every run stops, which counts as reached)")
     if limit.kind == "drift" and structure.building is None:
         raise ParameterError(f"--limit {args.limit!r}: drift needs a building on the slab (--building stories=N)")
+    from nsd_cli.ida_states import parse_limit_states
+    states = parse_limit_states(args.limit_states, params, structure)
     solver = {**DEFAULT_SOLVER, **solver_settings(args)}
     check_scheduler(args.scheduler)
     ground = {"scale": 1.0, "time_factor": SIMILITUDE_TIME_FACTOR, "window": None, "rotate_deg": 0.0,
@@ -144,7 +151,7 @@ def run(args) -> int:
     out = check_out_dir("--out", args.out)
     numbers = {k: v for k, v in structure.to_dict().items() if k != "provenance"}
     common = dict(ground=ground, params=params.to_dict(), structure=numbers, duration=None, dt_out=1e-3,
-                  settings=solver, code=code_fingerprint())
+                  settings=solver, code=code_fingerprint(), states=states.to_dict())
     traces = make_traces(set_, records, {r: im[r]["value"] for r in records}, common, limit, hunt, levels)
     store = Store(out)
     store.remove_stale_temps()  # a killed run's half-written files (no worker runs yet)
@@ -160,6 +167,11 @@ def run(args) -> int:
     index = write_ida(traces, store, index)
     bad = _cross_check(traces, store, engines, workers, args, index, run_seismic_engine, work)
     _print(index, out)
+    from nsd_core.study.limit_state_outputs import summary_lines
+    if (out / "limit_states.json").exists():
+        import json
+        print("limit states apart (limit_states.json, .csv, .png):")
+        print("\n".join(summary_lines(json.loads((out / "limit_states.json").read_text()))))
     from reports.build import draw_study  # the study's PNGs into its own folder (issue 20)
     draw_study(out)
     undetermined = [t["name"] for t in index["traces"] if t["undetermined"]]
@@ -195,7 +207,9 @@ def _print(index: dict, out) -> None:
     for t in index["traces"]:
         tail = (f"limit at IM {t['limit_im']:.4g} m/s^2 ({t['limit_why']})" if t["limit_im"] is not None else
                 f"never reached up to {t['censored_at']:.4g} m/s^2" if t["censored_at"] is not None else
-                f"undetermined: {t['undetermined']}")
+                f"undetermined: {t['undetermined']}" if t["undetermined"] else "never observed")
+        if t.get("stroke_exhausted_at") is not None:
+            tail += f"; stroke exhausted (the rod's reach) at {t['stroke_exhausted_at']:.4g} m/s^2, not counted"
         print(f"  {t['name']}: {t['runs']} runs, {tail}")
     for name, f in index["fragility"].items():
         fit = ("median %.4g m/s^2, dispersion %.3f" % (f["median"], f["dispersion"]) if f["median"] is not None

@@ -12,8 +12,12 @@ Limit states (``Limit``): ``stroke=VALUE`` peak |u| >= VALUE [m] (|u| the plate'
 relative to the base); ``restrainer`` the displacement restrainer engages (its force is positive at
 some output time: |u| > u_gap; nsd_core.device.restrainer, the runs carry it); ``drift=VALUE`` the
 peak story drift ratio of a building on the slab (any story, |drift| / story height, -) >= VALUE
-(the runs carry the building: nsd_core.device.building); a run that stops because the rod cannot reach (|u| >= l_d) or a wire leaves
-the SMA law's validity counts as reaching every limit (the device is spent). A solver failure ends
+(the runs carry the building: nsd_core.device.building); ``impact=VALUE`` the restrainer's force
+>= VALUE [N]. A run that stops because the rod cannot reach (|u| >= l_d) or a wire leaves the SMA
+law's validity ends the trace (the device is spent); the rod's reach counts as reaching ``stroke``
+and ``restrainer`` (|u| passed them on its way to l_d), and for drift and impact the trace is
+"stroke exhausted" (``trace_result``), never counted as reaching them. Every run also says which
+of the five limit states of ``nsd_core.study.limit_states`` it reached and when. A solver failure ends
 that record's trace undetermined (listed, left out of the fit).
 """
 from __future__ import annotations
@@ -32,12 +36,18 @@ from nsd_core.study.hunt import Hunt, next_hunt_level, next_stripe_level
 from nsd_core.study.seismic_set import RecordRun, peak_drift_ratio, run_record, set_warmup
 from nsd_core.study.store import Store
 
-SPENT = ("rod_reach", "outside_validity")  # a run stopped by these reached every limit state
-LIMITS = ("stroke", "restrainer", "drift")
+from nsd_core.study.limit_states import SPENT  # a run stopped by these ends its trace (the device is spent)
+
+LIMITS = ("stroke", "restrainer", "drift", "impact")
 VALUES = {  # the limits with a threshold: its upper bound (the lower is 0, excluded) and how to say it
     "stroke": (math.inf, "stroke=VALUE with VALUE > 0 (m)"),
     "drift": (1.0, "drift=VALUE with 0 < VALUE <= 1 (a story drift over the story's height, -)"),
+    "impact": (1e9, "impact=VALUE with 0 < VALUE <= 1e9 (the restrainer's force, N)"),
 }
+# Limits a run stopped by the rod's reach is known to have reached: |u| rose continuously to l_d
+# through every displacement below it. Drift and impact force were not observed in it: the trace
+# ends there ("stroke exhausted") but is not counted as having reached them (issue 33, item 3).
+PASSED_ON_THE_WAY = ("stroke", "restrainer")
 
 
 @dataclass(frozen=True)
@@ -50,7 +60,11 @@ class Limit:
         if self.kind == "stroke":
             return f"peak |u| >= {self.value:g} m (or the rod's length reached)"
         if self.kind == "drift":
-            return f"peak story drift ratio >= {self.value:g} (any story; or the rod's length reached)"
+            return (f"peak story drift ratio >= {self.value:g} (any story; a trace the rod's reach ends is stroke "
+                    "exhausted, not counted as drift)")
+        if self.kind == "impact":
+            return (f"the restrainer's force >= {self.value:g} N (a trace the rod's reach ends is stroke exhausted, "
+                    "not counted as an impact)")
         return "the displacement restrainer engages, |u| > u_gap (or the rod's length reached)"
 
     def evaluate(self, rec: dict) -> tuple[bool | None, str]:
@@ -63,6 +77,9 @@ class Limit:
         if self.kind == "restrainer":
             engaged = (rec["metrics"].get("peak_restrainer_force") or {}).get("value", 0.0) > 0.0
             return engaged, "restrainer" if engaged else ""
+        if self.kind == "impact":
+            force = (rec["metrics"].get("peak_restrainer_force") or {}).get("value", 0.0)
+            return force >= self.value, "impact" if force >= self.value else ""
         if self.kind == "drift":
             peak = peak_drift_ratio(rec["metrics"])
             if peak is None:
@@ -77,7 +94,8 @@ def parse_limit(text: str) -> Limit:
     ``drift`` needs a building (the command checks that)."""
     kind, sep, value = str(text).partition("=")
     kind = kind.strip()
-    allowed = "stroke=VALUE (m, 0 < VALUE), restrainer, drift=VALUE (-, 0 < VALUE <= 1; with --building)"
+    allowed = ("stroke=VALUE (m, 0 < VALUE), restrainer, drift=VALUE (-, 0 < VALUE <= 1; with --building), "
+               "impact=VALUE (N, 0 < VALUE <= 1e9)")
     if kind not in LIMITS:
         raise ParameterError(f"--limit {text!r}: unknown limit state; allowed: {allowed}")
     if kind == "restrainer":
@@ -99,13 +117,19 @@ def parse_limit(text: str) -> Limit:
 class IdaRun(RecordRun):
     """One run of an IDA: a record-set run, with its time series kept only when asked (the runs
     that are cross-checked): the peaks are what an IDA needs, and whole series of every level
-    would fill the disk."""
+    would fill the disk. ``states``: the limit states' thresholds (LimitStates.to_dict()), whose
+    first crossing times the worker finds in the series before dropping them."""
     keep_series: bool = False
+    states: dict | None = None
 
 
 def run_ida_point(r: IdaRun, run_engine: Callable | None = None) -> dict:
-    """run_record, without the time series unless the run keeps them (in a worker)."""
+    """run_record, without the time series unless the run keeps them (in a worker); with ``states``,
+    metrics["crossings"] holds when the run first reached each."""
     out = run_record(r, run_engine)
+    if r.states and out["status"] == "ok":
+        from nsd_core.study.limit_states import first_crossings
+        out["metrics"]["crossings"] = first_crossings(out["files"]["seismic.csv"], r.states)
     if not r.keep_series:
         out["files"] = {}
     return out
@@ -279,6 +303,11 @@ def trace_result(tr: Trace) -> dict:
     below = [lv for lv, r, _, _ in tr.history if r is False]
     out = {"record": tr.record, "device": tr.device, "runs": len(tr.history), "limit_im": None,
            "below_im": None, "censored_at": None, "undetermined": tr.stopped}
+    spent = [lv for lv, r, w, _ in tr.history if r and w in SPENT and not _counts(tr.limit, w)]
+    if spent:   # the trace ended with the device spent: stroke exhausted, never counted as this limit
+        out["stroke_exhausted_at"] = min(spent)
+        reached = [lv for lv in reached if lv < min(spent)]
+        below = [lv for lv in below if lv < min(spent)]
     if reached:
         hi = min(reached)
         out["limit_im"] = hi
@@ -288,4 +317,9 @@ def trace_result(tr: Trace) -> dict:
     elif below and not tr.stopped:
         out["censored_at"] = max(below)
     return out
+
+
+def _counts(limit: Limit, why: str) -> bool:
+    """Whether a run stopped for ``why`` (the device spent) counts as reaching the limit."""
+    return why == "rod_reach" and limit.kind in PASSED_ON_THE_WAY
 

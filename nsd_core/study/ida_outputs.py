@@ -6,6 +6,8 @@ every trace has ended (each file atomically; a resumed IDA writes the same bytes
                      limit intensity, the records that never reached the limit (censored) and those
                      left undetermined
     ida.json         the index: set, measure, limit, tracing settings, each trace's levels and outcome
+    limit_states.*   the five limit states apart, when the runs carry their thresholds
+                     (nsd_core.study.limit_state_outputs)
 """
 from __future__ import annotations
 
@@ -79,6 +81,9 @@ def fragility(traces: list[Trace], measure: dict, limit_text: str) -> dict:
             **fit, "records": results,
             "never_reached": [{"record": r["record"], "censored_at": r["censored_at"]} for r in censored],
             "undetermined": [{"record": r["record"], "why": r["undetermined"]} for r in results if r["undetermined"]],
+            "stroke_exhausted": [{"record": r["record"], "at_im": r["stroke_exhausted_at"],
+                                  "censored_at": r["censored_at"], "limit_im": r["limit_im"]}
+                                 for r in results if r.get("stroke_exhausted_at") is not None],
             "note": fit.get("note", "") + ("; " if fit.get("note") and censored else "")
                     + ("records that never reached the limit are right-censored at their highest level"
                        if censored else ""),
@@ -98,6 +103,14 @@ def write_ida(traces: list[Trace], store: Store, index: dict) -> dict:
     atomic_write_text(root / "ida.csv", text.getvalue())
     frag = fragility(traces, index["measure"], index["limit"])
     atomic_write_json(root / "fragility.json", frag)
+    from nsd_core.study.limit_state_outputs import write_states
+    states = write_states(traces, store, index["measure"].get("measure", "IM"))
+    if states is not None:   # the limit states apart (limit_states.json): their fits in the index too
+        index = {**index, "limit_states": {name: {s: {k: e[k] for k in ("median", "dispersion", "n_reached",
+                                                                           "n_censored", "n_not_observed")}
+                                                  for s, e in cfg.items()}
+                                           for name, cfg in states["configurations"].items()},
+                 "limit_state_thresholds": states["thresholds"]}
     index = {**index, "columns": dict(IDA_COLUMNS), "runs": len(rows),
              "traces": [{"name": tr.name, "record": tr.record, "device": tr.device, "im_at_scale_1": tr.im1,
                          "levels": [lv for lv, *_ in tr.history], **trace_result(tr)} for tr in traces],
