@@ -1,0 +1,130 @@
+"""``nsd p695``: a FEMA P695 evaluation of the isolated structure, with the device and on each
+baseline, on the far-field set (docs/p695.md; the methodology in nsd_core/study/p695.py).
+
+An IDA (nsd ida's machinery, resumable, parallel) scales the whole normalised set together until
+each record reaches the collapse surrogate; then per configuration Ŝ_CT (with a bootstrap interval
+over records), S_MT, CMR, mu_T, SSF, beta_TOT, ACMR and pass/fail against ACMR10% and ACMR20%
+-> DIR/p695.json, DIR/p695.png, and the IDA's files (ida.csv, fragility.json, ida.json,
+limit_states.*). Exit 0 done; 2 bad input (nothing written); 3 a trace ended undetermined.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+
+from nsd_cli.options import add_param_arguments, add_solver_arguments, base_params, check_out_dir, solver_settings
+from nsd_core.device.params import ParameterError
+
+HELP = "FEMA P695 evaluation (CMR, SSF, beta_TOT, ACMR) on the far-field set, with and without the device"
+G_RECORDS = 9.80665   # m/s^2: the records and the package's spectra are in g of this value
+COLLAPSE = "capacity | drift=VALUE | impact=VALUE"
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--records", default=None, metavar="1,3,5-7", help="these far-field records only (default all 22)")
+    p.add_argument("--collapse", default="capacity", metavar=COLLAPSE,
+                   help="the collapse surrogate: capacity (default) the isolator displacement capacity exhausted, peak "
+                        "|u| >= --capacity; drift=VALUE a story drift ratio (with --building); impact=VALUE a "
+                        "restrainer force in N (runs with the restrainer); the rod's reach is collapse in every one "
+                        "(the device spent), counted apart")
+    p.add_argument("--capacity", type=float, default=None,
+                   help="isolator displacement capacity [m] (default: the device's working range X_max)")
+    p.add_argument("--sdc", default="dmax", help="seismic design category of S_MT and SSF: dmax (default), dmin, "
+                                                 "cmax, cmin, bmax, bmin")
+    p.add_argument("--quality", default=None, metavar="DR=B,TD=C,MDL=B",
+                   help="quality ratings A-D of design requirements, test data and modelling (default DR=B,TD=C,MDL=B)")
+    p.add_argument("--duration", type=float, default=None, help="model seconds of each record (default whole records)")
+    p.add_argument("--start", type=float, default=None, help="hunt and fill: first level [m/s^2] (default 0.25)")
+    p.add_argument("--step", type=float, default=None, help="hunt and fill: first step [m/s^2] (default 0.25)")
+    p.add_argument("--max-runs", type=int, default=None, help="runs per record and configuration (default 6)")
+    p.add_argument("--resolution", type=float, default=None, help="bracket until hi - lo <= resolution hi (0.1)")
+    p.add_argument("--bootstrap", type=int, default=2000, help="bootstrap resamples of the median (default 2000)")
+    p.add_argument("--seed", type=int, default=None, help="the bootstrap's seed (default fixed: same numbers)")
+    p.add_argument("--building", action="append", default=[], metavar="NAME=VALUE",
+                   help="a shear building on the slab, as nsd seismic --building")
+    p.add_argument("--restrainer", action="store_true", help="run with the displacement restrainer")
+    p.add_argument("--structure", action="append", default=[], metavar="NAME=VALUE",
+                   help="override the default isolated structure (as nsd ida)")
+    p.add_argument("--workers", type=int, default=None, help="local processes (default: the cores)")
+    add_param_arguments(p)
+    add_solver_arguments(p)
+    p.add_argument("--out", required=True, help="output folder (resumable)")
+
+
+def _collapse_limit(text: str, capacity: float):
+    from nsd_core.study.ida import Limit, parse_limit
+    if text.strip() == "capacity":
+        return Limit("stroke", capacity)
+    if text.split("=")[0].strip() in ("drift", "impact"):
+        return parse_limit(text)
+    raise ParameterError(f"--collapse {text!r}: unknown surrogate; allowed: {COLLAPSE}")
+
+
+def run(args) -> int:
+    from comparisons.engines import run_seismic_engine
+    from comparisons.harness import code_fingerprint
+    from nsd_cli.ida_states import parse_limit_states
+    from nsd_cli.limits import check_ida_work
+    from nsd_cli.options import WORKERS_MAX, whole
+    from nsd_cli.seismic_building import with_building
+    from nsd_cli.seismic_extras import isolated_structure
+    from nsd_core.device.ground import SIMILITUDE_TIME_FACTOR, fema_record
+    from nsd_core.device.model import DEFAULT_SOLVER
+    from nsd_core.study import p695
+    from nsd_core.study.hunt import Hunt
+    from nsd_core.study.ida import make_traces, trace_all
+    from nsd_core.study.ida_outputs import write_ida
+    from nsd_core.study.intensity import component_sa
+    from nsd_core.study.p695_outputs import evaluation, print_lines, write_p695
+    from nsd_core.study.seismic_set import parse_records
+    from nsd_core.study.store import Store
+    from nsd_cli.options import reject_record_set_in_set
+    reject_record_set_in_set(args.set)
+    records = parse_records(args.records, "farfield")
+    sdc = p695.check_sdc(args.sdc)
+    ratings = p695.parse_ratings(args.quality)
+    whole("--bootstrap", args.bootstrap, 100, 100000)
+    workers = (os.cpu_count() or 1) if args.workers is None else args.workers
+    whole("--workers", workers, 1, WORKERS_MAX)
+    if args.duration is not None and not (0.1 <= args.duration <= 1000.0):
+        raise ParameterError(f"--duration = {args.duration!r}: allowed: model seconds in [0.1, 1000]")
+    hunt_given = {n: getattr(args, n) for n in ("start", "step", "max_runs", "resolution") if getattr(args, n) is not None}
+    hunt = Hunt(**hunt_given)
+    params = base_params(args)
+    args.restrainer = args.restrainer or args.collapse.strip().startswith("impact")
+    structure = with_building(args, isolated_structure(args, params))
+    cap = None if args.capacity is None else f"capacity={args.capacity!r}"
+    states = parse_limit_states(cap, params, structure, option="--capacity" if cap else "--limit-states")
+    limit = _collapse_limit(args.collapse, states.capacity)
+    if limit.kind == "drift" and structure.building is None:
+        raise ParameterError(f"--collapse {args.collapse!r}: drift needs a building on the slab (--building stories=N)")
+    solver = {**DEFAULT_SOLVER, **solver_settings(args)}
+    period = structure.first_period
+    level = p695.design_level(sdc, period, SIMILITUDE_TIME_FACTOR, G_RECORDS)
+    ground = {"scale": 1.0, "time_factor": SIMILITUDE_TIME_FACTOR, "window": None, "rotate_deg": 0.0,
+              "normalised": True}
+    motions = {rid: fema_record("farfield", rid, **ground) for rid in records}
+    durations = {r: min(m.duration, args.duration or m.duration) for r, m in motions.items()}
+    check_ida_work(durations, hunt.max_runs, "--max-runs", structure.building.stories if structure.building else 0)
+    # the set's median Sa at T (every component of the chosen records): a level is this x the common scale
+    s_nrt = float(__import__("numpy").median([component_sa(c.t, c.a, period) for m in motions.values() for c in m.comp]))
+    out = check_out_dir("--out", args.out)
+    common = dict(ground=ground, params=params.to_dict(), structure=structure.to_dict(), duration=args.duration,
+                  dt_out=1e-3, settings=solver, code=code_fingerprint(), states=states.to_dict())
+    common["structure"].pop("provenance", None)
+    traces = make_traces("farfield", records, {r: s_nrt for r in records}, common, limit, hunt, None)
+    store = Store(out)
+    store.remove_stale_temps()
+    elapsed = trace_all(traces, store, workers=workers, run_engine=run_seismic_engine, tally=args.tally)
+    measure = {"measure": "sa_set_median", "period": period, "S_NRT": s_nrt, "unit": "m/s^2",
+               "definition": "median Sa(T) (5 %) of the normalised set's components x the common scale"}
+    index = {"set": "farfield", "records": records, "measure": measure, "limit": limit.describe(),
+             "limit_option": args.collapse, "hunt": hunt.__dict__, "levels": None, "structure": structure.to_dict(),
+             "ground": ground, "code": common["code"], "elapsed_this_run_s": elapsed}
+    index = write_ida(traces, store, index)
+    result = evaluation(traces, params, structure, states, limit, level, s_nrt, ratings, args.bootstrap,
+                        args.seed if args.seed is not None else p695.SEED, records, elapsed, os.getloadavg())
+    write_p695(result, out)
+    print("\n".join(print_lines(result)))
+    print(f"wrote {out / 'p695.json'}, {out / 'p695.png'}, {out / 'limit_states.json'}, {out / 'ida.csv'}")
+    return 3 if any(t["undetermined"] for t in index["traces"]) else 0
