@@ -1,0 +1,374 @@
+"""The Exudyn builder: a model description (nsd_core.model) run in Exudyn, with no per-mechanism code.
+
+``simulate(model, duration, dt_out, settings) -> ModelRun``. Exudyn shares no formulation with the
+in-house engine (minimal coordinates, recursive): here every described body is one rigid body on
+redundant coordinates (the centre of mass and four Euler parameters, their normalisation an algebraic
+equation), placed at its pose and velocity of ``initial_state(model)``, the state every engine
+starts from; joints and loop closures are constraints with Lagrange multipliers (index 3).
+- A tree joint is one GenericJoint between parent and child that locks the axes of the joint's frame
+  the joint does not free (comparisons.builders.exudyn_frames); a prescribed coordinate locks its axis
+  too, the offset following q(t) exactly (offsetUserFunction).
+- A ``point`` closure locks the three translations, a ``revolute`` one also the two rotations
+  across its axis. In a planar mechanism (``exudyn_frames.planar_normal``) a closure's out-of-plane
+  equations repeat the tree's and make the Jacobian singular: only the two in-plane translations are
+  locked. A spatial mechanism whose closures are still redundant (Bricard's, IFToMM A04: a revolute
+  closure of which one equation follows from the others) is found by Exudyn's own rank test of the
+  constraint Jacobian at t = 0 (``exudyn.solver.ComputeSystemDegreeOfFreedom``); it is then solved
+  with Exudyn's option for redundant constraints, Eigen's full-pivoting LU
+  (``linearSolver.ignoreSingularJacobian``), which gives the dependent multipliers a least-squares
+  share and leaves the motion unique. The number found is ``stats["redundant_found"]``.
+- Force elements, every law through the registry (nsd_core.model.laws), nothing here knowing which
+  laws exist: a points law is a SpringDamper connector of reference length 0 (so its deltaL is the
+  distance L) whose force user function returns ``law.force(L, L', p)``, the tension; a joint law
+  on a revolute (prismatic) coordinate is a torsional (linear) spring-damper connector on the
+  joint's axis whose user function returns ``-law.force(q, q', p)`` (the connector's force opposes
+  its coordinate; the law's drives it up). All are evaluated at every Newton iteration (implicit).
+Outputs are read from the bodies' world poses at the output times (a pre-step function; the step
+divides the output interval): joint coordinates (angles continuous across +-pi), points and their
+velocities, the laws' values, the drive's generalized force (the locked axis' reaction; the sign of
+the in-house ``Evaluation.drive_force``: positive drives the coordinate up), kinetic and gravity
+energy (-sum m g . r_com, as nsd_core.engine.dynamics).
+
+Steps for a relative error ~1e-3 (largest |Exudyn - in-house at rtol 1e-11| over an output's peak,
+worst output named; generalized-alpha rho_inf 0.8; second order, the error falls 4x per halving; wall
+time of the solve on a loaded 2-core machine):
+  andrews (0.03 s):        h = 5e-5 s: 1.6e-3 (Phi), 0.25 s;  2.5e-5 s: 3.9e-4, 0.6 s
+  IFToMM A01 (20 s):       h = 2e-3 s: 1.0e-3 (P1_x), 0.4 s;  1e-3 s: 2.5e-4, 0.7 s
+  slider_crank (0.4 s):    h = 2e-4 s: 4.2e-3 (drive torque), 0.45 s;  1e-4 s: 7.5e-4 (slider_v 1e-6)
+  IFToMM A04 (5 s):        h = 1e-2 s: 3.4e-4 (P3_z), 0.2 s;  5e-3 s: 8.5e-5 (one redundant equation found)
+  fourbar_spring (2 s):    h = 1e-3 s: 2.0e-3 (crank angle), 0.4 s;  5e-4 s: 5.1e-4
+  IFToMM A02 (5 s):        fails: Exudyn's Newton diverges at the singular positions (all bars aligned,
+                           the closures' Jacobian loses rank): h = 1e-3 s stops at 1.24 s, 2.5e-4 s at
+                           4.63 s, the full-pivot LU ("ignore") at 0.72 s; an EngineError says where.
+"""
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+import exudyn as exu
+import exudyn.solver
+from exudyn.itemInterface import (MarkerBodyRigid, NodeGenericData, ObjectConnectorLinearSpringDamper,
+                                  ObjectConnectorSpringDamper, ObjectConnectorTorsionalSpringDamper,
+                                  ObjectGround, ObjectJointGeneric)
+from exudyn.rigidBodyUtilities import RigidBodyInertia
+
+from comparisons.builders.exudyn_frames import (AXIS_OF_DOF, Continuous, constrained_axes, frame_with_z,
+                                                joint_coordinates, joint_frame, joint_rate, planar_normal)
+from comparisons.engines.base import EngineError
+from comparisons.engines.exudyn_quiet import quiet_allocation_warning
+from nsd_core.model.assemble import initial_state
+from nsd_core.model.description import GROUND, Model
+from nsd_core.model.errors import ModelError
+from nsd_core.model.laws import POINTS
+from nsd_core.model.run import ModelRun, output_times
+
+quiet_allocation_warning()
+
+name = "exudyn"
+default_settings = {
+    "step_size": 1e-4,             # largest step [s]; the step used is dt_out / n, the largest <= this
+    "solver": "generalized_alpha",  # index 3; or "trapezoidal_index2" (no prescribed motions: Exudyn's
+                                    # GenericJoint has no velocity-level offset)
+    "spectral_radius": 0.8,        # generalized-alpha rho_inf: damps the multipliers' step-to-step ringing
+    "newton_rel_tol": 1e-10,       # Newton's residual tolerances (relative, absolute); the index-3
+    "newton_abs_tol": 1e-12,       # multipliers amplify position residuals by M / (beta h^2)
+    "redundant_constraints": "auto",  # "auto": Exudyn's rank test at t = 0 picks the full-pivot LU when
+                                      # it finds any; "ignore": always; "fail": never (singular -> error)
+}
+CHOICES = {"solver": ("generalized_alpha", "trapezoidal_index2"), "redundant_constraints": ("auto", "ignore", "fail")}
+POSITIVE = ("step_size", "spectral_radius", "newton_rel_tol", "newton_abs_tol")
+
+
+def check_settings(settings: dict | None, model: Model) -> dict:
+    """Defaults updated by ``settings``; a bad key or value raises ModelError (one line)."""
+    settings = settings or {}
+    for k in settings:
+        if k not in default_settings:
+            raise ModelError(f"exudyn.{k}: unknown setting; allowed: {', '.join(default_settings)}")
+    s = {**default_settings, **settings}
+    for k, allowed in CHOICES.items():
+        if s[k] not in allowed:
+            raise ModelError(f"exudyn.{k} = {s[k]!r}: allowed: {', '.join(allowed)}")
+    for k in POSITIVE:
+        if isinstance(s[k], bool) or not isinstance(s[k], (int, float)) or not s[k] > 0:
+            raise ModelError(f"exudyn.{k} = {s[k]!r}: must be a number > 0")
+    if s["solver"] == "generalized_alpha" and s["spectral_radius"] >= 1:
+        raise ModelError(f"exudyn.spectral_radius = {s['spectral_radius']!r}: must be < 1 (index 3)")
+    if s["solver"] == "trapezoidal_index2" and model.prescribed:
+        raise ModelError(f"exudyn.solver = 'trapezoidal_index2': {model.name} has prescribed motions, whose "
+                         "velocity-level offset Exudyn's GenericJoint lacks; allowed: generalized_alpha")
+    return s
+
+
+def _local_frame(R_body_world, axis_world) -> np.ndarray:
+    return frame_with_z(R_body_world.T @ axis_world)
+
+
+class Build:
+    """One description as an Exudyn system, with what the outputs need to read it back."""
+
+    def __init__(self, model: Model, s: dict):
+        self.model, self.s = model, s
+        st = self.state = initial_state(model)
+        self.SC = exu.SystemContainer()
+        mbs = self.mbs = self.SC.AddSystem()
+        self.ground = mbs.AddObject(ObjectGround())
+        self.node, self.obj = {}, {GROUND: self.ground}
+        grav = list(model.gravity)
+        for b in model.bodies:
+            R, c = st.rotation[b.name], np.asarray(b.com, dtype=float)
+            com_w = st.origin[b.name] + R @ c
+            d = mbs.CreateRigidBody(name=b.name, referencePosition=list(com_w), referenceRotationMatrix=R,
+                                    initialVelocity=list(st.velocity[b.name] + np.cross(st.omega[b.name], R @ c)),
+                                    initialAngularVelocity=list(st.omega[b.name]),
+                                    inertia=RigidBodyInertia(b.mass, np.asarray(b.inertia, dtype=float), com=[0.0, 0.0, 0.0]),
+                                    gravity=grav, nodeType=exu.NodeType.RotationEulerParameters,
+                                    returnDict=True, show=False)
+            self.node[b.name], self.obj[b.name] = d["nodeNumber"], d["bodyNumber"]
+        self.frames = {b.name: joint_frame(b) for b in model.bodies}
+        self.joints = {b.name: self._tree_joint(b) for b in model.bodies}
+        self.normal = planar_normal(model, st) if model.loops else None
+        for lp in model.loops:
+            self._closure(lp)
+        self.connectors = [self._force(f) for f in model.forces]
+
+    def marker(self, body: str, point, frame=np.eye(3)):
+        """A rigid marker at ``point`` of ``body`` (in the body's frame), axes ``frame`` (its columns
+        in the body's frame); bodies' nodes sit at their centres of mass."""
+        p = np.asarray(point, dtype=float) - (0.0 if body == GROUND else np.asarray(self.model.body(body).com))
+        HT = np.eye(4)
+        HT[:3, :3], HT[:3, 3] = frame, p
+        return self.mbs.AddMarker(MarkerBodyRigid(bodyNumber=self.obj[body], localHT=HT))
+
+    def _tree_joint(self, b):
+        J = self.frames[b.name]
+        axes = constrained_axes(b)
+        drives = [p for p in self.model.prescribed if p.joint == b.name]
+        kw = {}
+        if drives:
+            slots = {AXIS_OF_DOF[b.joint.type][p.dof]: p for p in drives}
+            for k in slots:
+                axes[k] = 1
+
+            def offset(mbs, t, item, params, slots=slots):
+                out = [0.0] * 6
+                for k, p in slots.items():
+                    out[k] = p(t)[0]
+                return out
+            kw["offsetUserFunction"] = offset
+        m0 = self.marker(b.parent, b.joint.position, J)
+        m1 = self.marker(b.name, (0.0, 0.0, 0.0), J)
+        return self.mbs.AddObject(ObjectJointGeneric(markerNumbers=[m0, m1], constrainedAxes=axes,
+                                                     **kw))
+
+    def _rotation(self, body):
+        return np.eye(3) if body == GROUND else self.state.rotation[body]
+
+    def _closure(self, lp):
+        Ra, Rb = self._rotation(lp.body_a), self._rotation(lp.body_b)
+        if self.normal is not None:        # planar: the in-plane translations only
+            Ja = _local_frame(Ra, self.normal)
+            axes = [1, 1, 0, 0, 0, 0]
+        elif lp.type == "revolute":
+            Ja = _local_frame(Ra, Ra @ np.asarray(lp.axis_a, dtype=float))
+            axes = [1, 1, 1, 1, 1, 0]
+        else:
+            Ja, axes = np.eye(3), [1, 1, 1, 0, 0, 0]
+        Jb = Rb.T @ Ra @ Ja   # the same world axes at t = 0: the relative rotation starts at zero
+        m0, m1 = self.marker(lp.body_a, lp.point_a, Ja), self.marker(lp.body_b, lp.point_b, Jb)
+        self.mbs.AddObject(ObjectJointGeneric(markerNumbers=[m0, m1], constrainedAxes=axes))
+
+    def _force(self, f):
+        law, p = f.law.force, f.parameters
+        mbs = self.mbs
+        if f.law.acts_on == POINTS:
+            def tension(mbs_, t, item, L, L_t, k, d, f0):
+                return law(L, L_t, p)
+            return mbs.AddObject(ObjectConnectorSpringDamper(
+                markerNumbers=[self.marker(f.body_a, f.point_a), self.marker(f.body_b, f.point_b)],
+                referenceLength=0.0, springForceUserFunction=tension))
+        b = self.model.body(f.joint)
+        if b.joint.type not in ("revolute", "prismatic"):
+            raise ModelError(f"forces.{f.name}.joint = {f.joint!r}: the Exudyn builder applies joint laws on "
+                             f"revolute and prismatic joints only (this one is {b.joint.type})")
+        J = self.frames[b.name]
+        if b.joint.type == "prismatic":   # the connector slides along its frame's x: turn J's z onto x
+            J = J[:, [2, 0, 1]]
+        markers = [self.marker(b.parent, b.joint.position, J), self.marker(b.name, (0.0, 0.0, 0.0), J)]
+
+        def generalized(mbs_, t, item, q, q_t, k, d, offset):
+            return -law(q, q_t, p)
+        if b.joint.type == "prismatic":
+            return mbs.AddObject(ObjectConnectorLinearSpringDamper(
+                markerNumbers=markers, springForceUserFunction=generalized))
+        # the data node counts whole turns, so that q reaches the law continuous past +-pi
+        q0 = self.state.q[(b.name, 0)]
+        turns = mbs.AddNode(NodeGenericData(initialCoordinates=[round(q0 / (2 * math.pi))], numberOfDataCoordinates=1))
+        return mbs.AddObject(ObjectConnectorTorsionalSpringDamper(
+            markerNumbers=markers, nodeNumber=turns, springTorqueUserFunction=generalized))
+
+    # ---- reading the description's quantities back -------------------------------------------------
+    def poses(self) -> dict:
+        """body -> (R, origin, origin velocity, omega) in the world, from the nodes (at the centres of
+        mass); the ground's frame is the world's."""
+        OV, mbs = exu.OutputVariableType, self.mbs
+        out = {GROUND: (np.eye(3), np.zeros(3), np.zeros(3), np.zeros(3))}
+        for b in self.model.bodies:
+            n = self.node[b.name]
+            R = np.asarray(mbs.GetNodeOutput(n, OV.RotationMatrix)).reshape(3, 3)
+            w = np.asarray(mbs.GetNodeOutput(n, OV.AngularVelocity))
+            c = R @ np.asarray(b.com, dtype=float)
+            out[b.name] = (R, mbs.GetNodeOutput(n, OV.Position) - c,
+                           mbs.GetNodeOutput(n, OV.Velocity) - np.cross(w, c), w)
+        return out
+
+    def coordinates(self, P: dict, body: str) -> list[float]:
+        b = self.model.body(body)
+        Rp, rp = P[b.parent][:2]
+        Rc, rc = P[body][:2]
+        return joint_coordinates(b, self.frames[body], Rp, rp, Rc, rc)
+
+    def drive_force(self, p) -> float:
+        """The generalized force of prescribed motion ``p``: the reaction of its locked axis, in the
+        joint's frame (Exudyn's joint force and torque are those on the child's marker, which drive
+        the coordinate up; the sign checked against the in-house engine on the slider-crank)."""
+        k = AXIS_OF_DOF[self.model.body(p.joint).joint.type][p.dof]
+        OV = exu.OutputVariableType
+        v = self.mbs.GetObjectOutput(self.joints[p.joint], OV.ForceLocal if k < 3 else OV.TorqueLocal)
+        return float(v[k % 3])
+
+
+class Sampler:
+    """Every named output, the largest closure distance and the largest drive tracking error."""
+
+    def __init__(self, build: Build):
+        self.b = build
+        m = build.model
+        rotational = {(b.name, k) for b in m.bodies for k, (kind, _) in enumerate(b.joint.dofs()) if kind == "R"}
+        self.continuous = Continuous(build.state.q, rotational)
+        self.rows, self.closure, self.tracking = [], 0.0, 0.0
+        self.forces = {f.name: f for f in m.forces}
+        self.drives = {p.name: p for p in m.prescribed}
+
+    def point(self, P, body, point):
+        R, r, v, w = P[body]
+        x = R @ np.asarray(point, dtype=float)
+        return r + x, v + np.cross(w, x)
+
+    def law_value(self, P, f) -> float:
+        if f.law.acts_on == POINTS:
+            pa, va = self.point(P, f.body_a, f.point_a)
+            pb, vb = self.point(P, f.body_b, f.point_b)
+            d = pa - pb
+            L = float(np.linalg.norm(d))
+            return f.force(L, float(d @ (va - vb)) / L if L > 0 else 0.0)
+        b = self.b.model.body(f.joint)
+        Rp, rp, vp, wp = P[b.parent]
+        _, rc, vc, wc = P[b.name]
+        return f.force(self.q[(b.name, f.dof)], joint_rate(b, self.b.frames[b.name], Rp, rp, vp, wp, rc, vc, wc))
+
+    def energy(self, P, term) -> float:
+        e = 0.0
+        g = np.asarray(self.b.model.gravity, dtype=float)
+        for b in self.b.model.bodies:
+            R, r, v, w = P[b.name]
+            c, vc = self.point(P, b.name, b.com)
+            if term == "kinetic":
+                e += 0.5 * b.mass * float(vc @ vc) + 0.5 * float(w @ (R @ b.inertia @ R.T @ w))
+            else:
+                e -= b.mass * float(g @ c)
+        return e
+
+    def __call__(self, t: float) -> None:
+        m, P = self.b.model, self.b.poses()
+        self.q = {}
+        for body in {o.body for o in m.outputs if o.kind == "coordinate"} | {f.joint for f in m.forces if f.joint} | \
+                {p.joint for p in m.prescribed}:
+            for k, x in enumerate(self.b.coordinates(P, body)):
+                self.q[(body, k)] = self.continuous((body, k), x)
+        row = []
+        for o in m.outputs:
+            if o.kind == "coordinate":
+                row.append(self.q[(o.body, o.dof)])
+            elif o.kind in ("point", "point_velocity"):
+                row.append(float(self.point(P, o.body, o.point)[o.kind == "point_velocity"][o.component]))
+            elif o.kind == "force":
+                row.append(self.law_value(P, self.forces[o.element]))
+            elif o.kind == "drive_force":
+                row.append(self.b.drive_force(self.drives[o.element]))
+            else:
+                row.append(self.energy(P, o.term))
+        self.rows.append(row)
+        for lp in m.loops:
+            gap = self.point(P, lp.body_a, lp.point_a)[0] - self.point(P, lp.body_b, lp.point_b)[0]
+            self.closure = max(self.closure, float(np.linalg.norm(gap)))
+        for p in m.prescribed:
+            self.tracking = max(self.tracking, abs(self.q[(p.joint, p.dof)] - p(t)[0]))
+
+
+def _redundant(build: Build, ss) -> int:
+    """Exudyn's count of dependent constraint equations at t = 0 (its rank test of the Jacobian)."""
+    info = exudyn.solver.ComputeSystemDegreeOfFreedom(build.mbs, ss, autoAssemble=False)
+    return int(info["redundantConstraints"])
+
+
+def _solver_settings(s: dict, n_steps: int, duration: float):
+    ss = exu.SimulationSettings()
+    ti = ss.timeIntegration
+    ti.numberOfSteps, ti.endTime, ti.verboseMode, ti.adaptiveStep = n_steps, duration, 0, False
+    ti.newton.relativeTolerance, ti.newton.absoluteTolerance = float(s["newton_rel_tol"]), float(s["newton_abs_tol"])
+    ti.newton.useModifiedNewton = True
+    ti.generalizedAlpha.spectralRadius = float(s["spectral_radius"])
+    ti.generalizedAlpha.computeInitialAccelerations = True
+    ss.linearSolver.solverType = exu.LinearSolverType.EigenDense
+    ss.solution.file.write = False
+    ss.solution.sensors.active = False   # outputs are read in the pre-step function, never written
+    ss.show.statistics = ss.show.computationTime = False
+    return ss
+
+
+def simulate(model: Model, duration: float, dt_out: float, settings: dict | None = None) -> ModelRun:
+    s = check_settings(settings, model)
+    t_out = output_times(duration, dt_out)
+    per_out = max(1, int(math.ceil((t_out[1] - t_out[0]) / s["step_size"] - 1e-9)))
+    n_steps = per_out * (len(t_out) - 1)
+    build = Build(model, s)
+    sample = Sampler(build)
+    counter = [0]
+
+    def pre_step(mbs, t):
+        """t is the END of the step (Exudyn's convention); the state is the converged one at t - h."""
+        n = counter[0]
+        counter[0] += 1
+        if n % per_out == 0:
+            sample(t_out[n // per_out])
+        return True
+
+    build.mbs.SetPreStepUserFunction(pre_step)
+    build.mbs.Assemble()
+    ss = _solver_settings(s, n_steps, duration)
+    redundant = _redundant(build, ss) if model.loops and build.normal is None and s["redundant_constraints"] == "auto" else 0
+    if redundant or s["redundant_constraints"] == "ignore":
+        ss.linearSolver.ignoreSingularJacobian = True
+    solver = {"generalized_alpha": exu.DynamicSolverType.GeneralizedAlpha,
+              "trapezoidal_index2": exu.DynamicSolverType.TrapezoidalIndex2}[s["solver"]]
+    begin = time.perf_counter()
+    why = "SolveDynamic returned False"
+    try:
+        ok = build.mbs.SolveDynamic(ss, solverType=solver)
+    except Exception as err:  # noqa: BLE001 (Exudyn's multi-line solver text, said on one line)
+        ok, why = False, " ".join(str(err).split())[:200]
+    if not ok or counter[0] != n_steps:
+        raise EngineError(f"exudyn: {model.name}: solver failed in step {counter[0]} of {n_steps} "
+                          f"(t = {counter[0] * duration / n_steps:.6g} s): {why}")
+    sample(t_out[-1])
+    wall = time.perf_counter() - begin
+    data = np.array(sample.rows).reshape(len(t_out), len(model.outputs))
+    return ModelRun(name, t_out, {o.name: data[:, k] for k, o in enumerate(model.outputs)},
+                    {o.name: o.unit for o in model.outputs},
+                    {"wall_time": wall, "steps": n_steps, "step_size": duration / n_steps,
+                     "closure_max": sample.closure, "tracking_error": sample.tracking,
+                     **s, "redundant_found": redundant})
