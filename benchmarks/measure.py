@@ -42,6 +42,8 @@ MEASUREMENTS = {
     "bench_verdict_cost": (PY + ["benchmarks/bench_verdict_cost.py", "--baseline", "cc555d9", "--repeats", "2",
                                  "--out", "OUT"], "bench_verdict_cost.json", "json"),
     "tables": (NSD + ["tables", "--out", "OUT"], "tables.csv", "csv"),
+    # issue 32: every mechanism description in models/ through nsd compare --model, in every engine
+    "bench_models": (PY + ["benchmarks/bench_models.py", "--out", "OUT"], "bench_models.json", "json"),
     "benchmark": (NSD + ["benchmark", "--out", "OUT"], "results.json", "json"),
     "polar": (NSD + ["polar", "--out", "OUT"], "polar.json", "json"),
     "bench_cycle": (PY + ["benchmarks/bench_cycle.py", "--no-compile", "--repeats", "3", "--out", "OUT"],

@@ -68,9 +68,9 @@ def isolator_choice(args) -> str:
 
 def design_scale(set_: str, rid, args, window=None) -> float:
     """--design-level: the record's scale so that its Sa(T_D) is the design spectrum's
-    (nsd_core.device.design.design_level_scale), on the whole record (a window is a part of the same
+    (nsd_core.study.intensity.design_level_scale), on the whole record (a window is a part of the same
     scaled record, so its Sa does not set the scale); --scale must be left at 1."""
-    from nsd_core.device.design import design_level_scale
+    from nsd_core.study.intensity import design_level_scale
     from nsd_core.device.ground import SIMILITUDE_TIME_FACTOR, fema_record
     if float(args.scale) != 1.0:
         raise ParameterError(f"--scale {args.scale!r}: --design-level sets each record's scale; leave --scale out")

@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from nsd_core.device.describe import device_description
 from nsd_core.device.drive import Drive
@@ -20,6 +21,7 @@ def test_the_committed_device_description_is_the_generators():
     assert (MODELS / "nsd_drive.toml").read_text() == device_description(Params(), 0.015, 1.0)
 
 
+@pytest.mark.slow   # ~1 min alone (the description's laws called from Python), 3 min on a loaded machine
 def test_device_description_gives_the_device_models_force_on_a_variant():
     """A variant (8 wires, stiffer ropes, 30 degrees): the description's run and the device model agree
     on the drive force to 1e-6 of its peak over 0.03 s at 10 Hz, past the ropes' slackening (the same

@@ -119,14 +119,3 @@ def designed_structure(design_level: bool = False):
             "params": "fixed by the design basis: the same for every device (--resize derives it from the device)",
             "design_level": bool(design_level)}
     return Structure(M, side / math.sqrt(6.0), k, 2.0 * zeta * math.sqrt(k * M), side / 2.0, prov)
-
-
-def design_level_scale(motion_at_scale_1) -> dict:
-    """The record's scale factor at the design level: Sa(T_D) of the design spectrum over the record's
-    (5 %-damped, geometric mean of the two components, at the model's T_D; nsd_core.study.intensity)."""
-    from nsd_core.study.intensity import record_intensity
-    d = design()
-    own = record_intensity(motion_at_scale_1, "sa", d["T_D_model_s"])["value"]
-    target = d["Sa_TD_model_m_s2"]
-    return {"scale": target / own, "Sa_target_m_s2": target, "Sa_record_scale1_m_s2": own,
-            "period_model_s": d["T_D_model_s"]}

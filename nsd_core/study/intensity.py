@@ -53,3 +53,15 @@ def record_intensity(motion, measure: str, period: float) -> dict:
         out.update(period=period, damping=DAMPING, library="eqsig.sdof.pseudo_response_spectra (Nigam-Jennings)")
     out["time_scale"] = "model time (record time x time_factor)"
     return out
+
+
+def design_level_scale(motion_at_scale_1) -> dict:
+    """The record's scale factor at the design level: Sa(T_D) of the design spectrum over the record's
+    (5 %-damped, geometric mean of the two components, at the model's T_D), scaled by the similitude
+    of nsd_core.device.design (here, in the study layer, because the intensity measure lives here)."""
+    from nsd_core.device.design import design
+    d = design()
+    own = record_intensity(motion_at_scale_1, "sa", d["T_D_model_s"])["value"]
+    target = d["Sa_TD_model_m_s2"]
+    return {"scale": target / own, "Sa_target_m_s2": target, "Sa_record_scale1_m_s2": own,
+            "period_model_s": d["T_D_model_s"]}
