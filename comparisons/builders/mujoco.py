@@ -1,0 +1,374 @@
+"""The MuJoCo builder: a model description (nsd_core.model) run on MuJoCo, with no per-mechanism code.
+
+``simulate(model, duration, dt_out, settings) -> ModelRun``. The MJCF comes from
+comparisons.builders.mujoco_mjcf (nested bodies, one hinge/slide per joint coordinate, loop closures
+as equality connects; see there). Every engine starts from ``initial_state(model)``: qpos from its
+coordinates, qvel from its rates.
+
+Forces: one ``mjcb_passive`` callback (Python; installed for the run only, the previous one restored)
+evaluates every force element through the law registry and nothing else: a points element's two
+world points and velocities come from MuJoCo's state (mj_jac of each point), then L, L', the tension
+T = ``element.force(L, L')`` and +T u on point a, -T u on point b (u from a to b; T > 0 pulls them
+together), added to qfrc_passive through the points' Jacobians; a joint element adds
+``element.force(q, q')`` to its coordinate. No line here knows which laws exist. Coincident points
+(L = 0) have no direction: their tension is not applied.
+
+A law with an internal state (``Law.state``) keeps it in a zero-force actuator's activation
+(mujoco_mjcf): MuJoCo integrates it with the motion, its rate ``element.rate(x, x', s)`` computed by
+the passive callback of the same stage and handed over by ``mjcb_act_dyn``.
+
+Prescribed motions (the heavy virtual drive): a driven coordinate gets an armature A =
+``drive_armature`` x its own inertia at t = 0, and the callback adds, at every stage (each stage's
+own time), the feed-forward A q''(t) + tau_est(t), tau_est the drive force of the last steps,
+extrapolated linearly. The driven coordinate's acceleration then misses q''(t) by only
+(tau - tau_est) / A, and after each step its qpos/qvel are reset to q(t), q'(t) exactly;
+``tracking_error`` is the largest miss before the reset (slider-crank, RK4, h = 1.25e-4 s: 7e-15 rad).
+The drive force (the sign of the in-house engine's ``Evaluation.drive_force``: positive drives q up)
+is measured per step as its average over the step: the stages' feed-forward (RK4 weights) less A
+times the step's average acceleration (MuJoCo's qacc after the step), i.e. the impulse the virtual
+drive gave the real mechanism / h. One evaluation's force would not do: RK4 leaves the soft loop
+constraints with a velocity offset at the step's ends (their time constant is a few steps), and the
+constraints' damping turns it into a force error that does not shrink with the step (slider-crank,
+solref 2h: 1.8e-3 of the peak torque at every step). The value at an output time is then
+reconstructed from the four nearest steps' averages (the cubic with those averages; one-sided at
+the run's ends), fourth order like RK4.
+
+The step: MuJoCo's own pieces, in a plain loop: mj_forward (the step's first stage, whose state also
+gives the outputs at output times) then mj_RungeKutta (RK4) or mj_Euler, as mj_step does. The step
+used divides the output interval (<= ``timestep``). The loop constraints are soft: solref time
+constant ``solref_factor`` x h. With RK4 a factor of 2 (MuJoCo's floor) leaves that velocity offset
+largest (an error of first order in h in velocities and the drive force); 4 is the compromise
+measured: slider-crank drive torque at h = 1.25e-4 s: 2.8e-5 (factor 2), 3.9e-6 (4), 2.2e-6 (8);
+Andrews at h = 1e-5 s: 5.3e-7 (2), 1.3e-6 (4), 6.9e-6 (8) (the position-level softness grows as
+(factor h)^2).
+
+Outputs: coordinate = qpos (hinges are not wrapped: angles stay continuous); point and
+point_velocity from the body's pose and mj_jac; force = the law's value at that state; drive_force as
+above; kinetic energy = 1/2 v^T M v less the virtual drives' armature share; gravity potential =
+-sum m g . r_com (both as nsd_core.engine.dynamics). stats: wall_time (steps and outputs only),
+steps, timestep, closure_max (largest distance between the two sites of any connect at the output
+times [m]; a revolute loop's second pair measures the axes' misalignment times the arm),
+tracking_error.
+
+Step each model needs for ~1e-3 relative error (RK4, defaults otherwise; error = the largest over the
+outputs of max|y - y_ref| / scale, scale the output's own or the peak |y_ref|, y_ref the in-house
+builder at rtol 1e-11 over the model's case; wall = stepping and outputs, loaded 2-core machine):
+- andrews (0.03 s): h = 1e-4 s (the output interval, the largest step) 1.7e-4, 0.10 s wall; 5e-5
+  4.6e-5; the default 1e-5: 1.3e-6, 0.7 s. Test set reference at 0.03 s: tests/test_model_mujoco.py.
+- iftomm_a01_pendulum (20 s): h = 0.05 s 2.4e-4 (0.1 s: 1.1e-2; 0.025 s: 2.7e-6), 0.01 s wall.
+- iftomm_a02_fourbar (N = 4, 5 s, through the singular flat position): h = 1e-3 s 9.8e-4, 0.4 s wall
+  (2e-3: 4.1e-3; 5e-4: 2.9e-4; 2.5e-4: 1.1e-4): order ~1.5 near the singular position.
+- iftomm_a04_bricard (5 s, revolute closure, one redundant equation): h = 0.05 s (the output
+  interval) 2.4e-4, 0.01 s wall; 1e-2: 7e-6.
+- slider_crank (0.4 s, prescribed crank): h = 2e-3 s (the output interval) 7.9e-5 (drive torque),
+  tracking error 3e-11 rad; 5e-4: 1.5e-5.
+- fourbar_spring (2 s): h = 1e-2 s 1.5e-3, 5e-3 s 9.5e-5, 0.03 s wall.
+"""
+from __future__ import annotations
+
+import math
+import time
+
+import mujoco
+import numpy as np
+
+from comparisons.builders.mujoco_mjcf import build_mjcf, connects, joint_name
+from comparisons.engines.base import EngineError, check_step_count
+from nsd_core.model.assemble import initial_state
+from nsd_core.model.description import GROUND, Model
+from nsd_core.model.errors import ModelError
+from nsd_core.model.laws import POINTS
+from nsd_core.model.run import ModelRun, output_times
+
+name = "mujoco"
+default_settings = {
+    "timestep": 1e-5,           # [s] largest step; the step used divides the output interval
+    "integrator": "RK4",        # RK4 | Euler (semi-implicit)
+    "solref_factor": 4.0,       # connect time constant = factor x step (>= 2, MuJoCo's smallest; see above)
+    "solref_dampratio": 1.0,    # connect damping ratio (1: critical)
+    "solimp": [0.9999, 0.9999, 0.001, 0.5, 2.0],   # connect impedance (closer to 1: harder)
+    "solver_tolerance": 1e-12,  # MuJoCo's constraint solver (Newton) tolerance
+    "solver_iterations": 20,    # and its iteration limit
+    "drive_armature": 1e6,      # virtual drive inertia of a prescribed coordinate / its own at t = 0
+    "inertia_floor": 1e-12,     # [kg m^2] smallest principal moment passed to MuJoCo (point masses)
+    "closure_limit": 1e-2,      # [m] a larger loop gap at an output time is an instability (EngineError)
+}
+INTEGRATORS = ("RK4", "Euler")
+RK4_WEIGHTS = np.array([1.0, 2.0, 2.0, 1.0]) / 6.0   # the classic RK4 stages' weights, as MuJoCo's
+_POSITIVE = ("timestep", "solref_factor", "drive_armature", "inertia_floor", "closure_limit", "solver_tolerance")
+
+
+def merged_settings(settings: dict | None) -> dict:
+    """The defaults updated by ``settings``; an unknown key or a bad value raises ModelError."""
+    if settings is not None and not isinstance(settings, dict):
+        raise ModelError(f"mujoco settings = {settings!r}: must be a table of setting = value")
+    s = dict(default_settings)
+    for k, v in (settings or {}).items():
+        if k not in default_settings:
+            raise ModelError(f"mujoco.{k}: unknown setting; allowed: {', '.join(sorted(default_settings))}")
+        s[k] = v
+    if s["integrator"] not in INTEGRATORS:
+        raise ModelError(f"mujoco.integrator = {s['integrator']!r}: allowed: {', '.join(INTEGRATORS)}")
+    for k in _POSITIVE:
+        v = s[k]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
+            raise ModelError(f"mujoco.{k} = {v!r}: must be a number > 0")
+    if s["solref_factor"] < 2.0:
+        raise ModelError(f"mujoco.solref_factor = {s['solref_factor']!r}: must be >= 2 (MuJoCo's smallest time constant)")
+    if s["inertia_floor"] < 1e-14:
+        raise ModelError(f"mujoco.inertia_floor = {s['inertia_floor']!r}: must be >= 1e-14 kg m^2 (MuJoCo rejects less)")
+    it = s["solver_iterations"]
+    if isinstance(it, bool) or not isinstance(it, int) or it < 1:
+        raise ModelError(f"mujoco.solver_iterations = {it!r}: must be a whole number >= 1")
+    return s
+
+
+class Passive:
+    """The mjcb_passive callback: every force element through its law, plus the drives' feed-forward."""
+
+    def __init__(self, model: Model, m: mujoco.MjModel, drives: list):
+        self.nv = m.nv
+        self.jac = np.zeros((2, 3, m.nv))
+        self.points, self.joints = [], []
+        # a law with a state keeps it in its actuator's activation (mujoco_mjcf); -1: no state
+        self.act = {f.name: int(m.actuator_actadr[m.actuator(f"state:{f.name}").id])
+                    for f in model.forces if f.law.state is not None}
+        self.rates = np.zeros(m.na)   # each state's rate at the last evaluation, for mjcb_act_dyn
+        for f in model.forces:
+            slot = self.act.get(f.name, -1)
+            if f.law.acts_on == POINTS:
+                ends = tuple((-1 if b == GROUND else m.body(b).id, np.asarray(p, float))
+                             for b, p in ((f.body_a, f.point_a), (f.body_b, f.point_b)))
+                self.points.append((f, ends, slot))
+            else:
+                j = m.joint(joint_name(f.joint, f.dof))
+                self.joints.append((f, int(j.qposadr[0]), int(j.dofadr[0]), slot))
+        self.drives = drives                    # (Prescribed, qposadr, dofadr, armature)
+        nd = len(drives)
+        self.tau = np.zeros(nd)                 # the drive forces' estimate at t_tau ...
+        self.tau_slope = np.zeros(nd)           # ... and its rate [per s]
+        self.t_tau = 0.0
+        self.feeds: list[np.ndarray] = []       # the feed-forward of each evaluation since the step began
+
+    def point(self, m, d, body: int, p: np.ndarray, jac: np.ndarray):
+        """World position and velocity of body point p; ``jac`` gets its 3 x nv Jacobian (ground: 0)."""
+        if body < 0:
+            jac[:] = 0.0
+            return p, np.zeros(3)
+        x = d.xpos[body] + d.xmat[body].reshape(3, 3) @ p
+        mujoco.mj_jac(m, d, jac, None, x, body)
+        return x, jac @ d.qvel
+
+    def element_state(self, m, d, ends):
+        """(L, L', unit vector a -> b) of a points element; the Jacobians stay in self.jac."""
+        (ba, pa), (bb, pb) = ends
+        xa, va = self.point(m, d, ba, pa, self.jac[0])
+        xb, vb = self.point(m, d, bb, pb, self.jac[1])
+        r = xb - xa
+        L = float(np.linalg.norm(r))
+        u = r / L if L > 0.0 else np.zeros(3)
+        return L, float(u @ (vb - va)), u
+
+    def law(self, d, f, x: float, xd: float, slot: int) -> float:
+        """The element's force at (x, x') and its state; the state's rate is kept for mjcb_act_dyn."""
+        if slot < 0:
+            return f.force(x, xd)
+        s = float(d.act[slot])
+        self.rates[slot] = f.rate(x, xd, s)
+        return f.force(x, xd, s)
+
+    def law_values(self, m, d) -> dict:
+        """Each element's force at d's state (tension [N], or generalized force)."""
+        out = {f.name: self.law(d, f, *self.element_state(m, d, ends)[:2], slot) for f, ends, slot in self.points}
+        out.update({f.name: self.law(d, f, d.qpos[qa], d.qvel[da], slot) for f, qa, da, slot in self.joints})
+        return out
+
+    def act_dyn(self, m, d, actuator: int) -> float:
+        """mjcb_act_dyn: a state's rate, computed by this stage's passive call (MuJoCo evaluates the
+        passive forces before the actuators)."""
+        return float(self.rates[m.actuator_actadr[actuator]])
+
+    def __call__(self, m, d):
+        qfrc = d.qfrc_passive
+        for f, ends, slot in self.points:
+            L, Ld, u = self.element_state(m, d, ends)
+            qfrc += (self.law(d, f, L, Ld, slot) * u) @ (self.jac[0] - self.jac[1])
+        for f, qa, da, slot in self.joints:
+            qfrc[da] += self.law(d, f, d.qpos[qa], d.qvel[da], slot)
+        if self.drives:
+            t = d.time
+            feed = np.array([A * p(t)[2] for p, _, _, A in self.drives]) + self.tau + self.tau_slope * (t - self.t_tau)
+            qfrc[[da for _, _, da, _ in self.drives]] += feed
+            self.feeds.append(feed)
+
+
+def simulate(model: Model, duration: float, dt_out: float, settings: dict | None = None) -> ModelRun:
+    s = merged_settings(settings)
+    init = initial_state(model)
+    t_out = output_times(duration, dt_out)
+    n_sub = max(1, math.ceil((t_out[1] - t_out[0]) / float(s["timestep"]) - 1e-9))
+    h = float(t_out[1] - t_out[0]) / n_sub
+    n_steps = n_sub * (len(t_out) - 1)
+    check_step_count(name, n_steps)
+    m, d, drives = _compile(model, s, h, init)
+    forces = Passive(model, m, drives)
+    pairs = [(m.site(f"{c[0]}:a").id, m.site(f"{c[0]}:b").id) for c in connects(model, init.rotation)]
+    sample = _sampler(model, m, d, forces)
+    advance = {"RK4": lambda: mujoco.mj_RungeKutta(m, d, 4), "Euler": lambda: mujoco.mj_Euler(m, d)}[s["integrator"]]
+    weights = RK4_WEIGHTS if s["integrator"] == "RK4" else np.ones(1)
+    armature = np.array([A for *_, A in drives])
+    drive_dof = [da for _, _, da, _ in drives]
+    rows, closure, tracking = [], 0.0, 0.0
+    drive_at = np.zeros((len(t_out), len(drives)))   # the drive forces at the output times
+    uses = point_from_averages(n_steps, n_sub) if drives else {}
+    previous = mujoco.get_mjcb_passive(), mujoco.get_mjcb_act_dyn()
+    try:
+        mujoco.set_mjcb_passive(forces)
+        mujoco.set_mjcb_act_dyn(forces.act_dyn)
+        for _ in range(3 if drives else 0):   # the drive force at t = 0, refined by its own measurement
+            forces.feeds.clear()
+            mujoco.mj_forward(m, d)
+            forces.tau[:] = forces.feeds[-1] - armature * d.qacc[drive_dof]
+        begin = time.perf_counter()
+        for n in range(n_steps + 1):
+            t = n * h
+            d.time = t
+            forces.feeds.clear()
+            mujoco.mj_forward(m, d)
+            if n % n_sub == 0:
+                gap = max((float(np.linalg.norm(d.site_xpos[a] - d.site_xpos[b])) for a, b in pairs), default=0.0)
+                closure = max(closure, gap)
+                if not (np.all(np.isfinite(d.qpos)) and gap < s["closure_limit"]):
+                    raise EngineError(f"mujoco: unstable at t = {t:.6g} s (loop gap {gap:.3g} m); "
+                                      "try a smaller timestep")
+                rows.append(sample())
+            if n == n_steps:
+                break
+            advance()
+            if drives:
+                # the step's average drive force (its impulse / h): the weighted feed-forward of the
+                # stages less the armature times the step's average acceleration (MuJoCo's qacc after
+                # the step). Unlike one evaluation's force, it carries no share of the soft loop
+                # constraints' velocity offset, which RK4 leaves at the step's ends.
+                bar = weights @ np.array(forces.feeds) - armature * d.qacc[drive_dof]
+                for k, w in uses.get(n, ()):
+                    drive_at[k] += w * bar
+                forces.tau_slope[:] = (bar - forces.tau) / h if n else 0.0
+                forces.tau[:], forces.t_tau = bar, t + 0.5 * h
+            for p, qa, da, _ in drives:   # the drive's coordinate, exactly on its path
+                q, qd, _ = p(t + h)
+                tracking = max(tracking, abs(d.qpos[qa] - q))
+                d.qpos[qa], d.qvel[da] = q, qd
+        wall = time.perf_counter() - begin
+    finally:
+        mujoco.set_mjcb_passive(previous[0])
+        mujoco.set_mjcb_act_dyn(previous[1])
+    data = np.array(rows)
+    for k, o in enumerate(model.outputs):
+        if o.kind == "drive_force":
+            data[:, k] = drive_at[:, [p.name for p in model.prescribed].index(o.element)]
+    return ModelRun(name, t_out, {o.name: data[:, k] for k, o in enumerate(model.outputs)},
+                    {o.name: o.unit for o in model.outputs},
+                    {"wall_time": wall, "steps": n_steps, "timestep": h, "closure_max": closure,
+                     "tracking_error": tracking, "mujoco_version": mujoco.__version__, **s})
+
+
+def point_from_averages(n_steps: int, n_sub: int) -> dict[int, list[tuple[int, float]]]:
+    """How the drive force at each output time comes from the steps' average forces: step n -> [(output
+    index, weight)]. The value at a step boundary is the one of the cubic whose averages over the four
+    nearest steps (two on either side; one-sided at the run's ends) are the measured ones: fourth
+    order, like RK4, where the nearest two steps' mean would be second order."""
+    uses: dict[int, list] = {}
+    cells = min(4, n_steps)
+    for k in range(n_steps // n_sub + 1):
+        at = k * n_sub
+        first = min(max(at - cells // 2, 0), n_steps - cells)
+        steps = np.arange(first, first + cells)
+        # the average of (t - t_at)^j / h^j over step i is ((i + 1 - at)^(j+1) - (i - at)^(j+1)) / (j + 1)
+        j = np.arange(cells)
+        averages = ((steps[:, None] + 1 - at) ** (j + 1) - (steps[:, None] - at) ** (j + 1)) / (j + 1)
+        w = np.linalg.solve(averages.T.astype(float), np.eye(cells)[0])
+        for i, wi in zip(steps, w):
+            uses.setdefault(int(i), []).append((k, float(wi)))
+    return uses
+
+
+def _compile(model: Model, s: dict, h: float, init):
+    """The compiled model and its data at the initial state, and the drives as (Prescribed, qposadr,
+    dofadr, armature). The model is compiled once without armature to read each driven coordinate's
+    own inertia at the initial state, which scales its virtual drive."""
+    def compiled(armature: dict):
+        try:
+            m = mujoco.MjModel.from_xml_string(build_mjcf(model, s, h, init.rotation, armature))
+        except ValueError as e:
+            raise EngineError(f"mujoco: model rejected: {str(e).splitlines()[0]}") from None
+        d = mujoco.MjData(m)
+        for (body, k), q in init.q.items():
+            j = m.joint(joint_name(body, k))
+            d.qpos[j.qposadr[0]] = q
+            d.qvel[j.dofadr[0]] = init.qd[(body, k)]
+        for f in model.forces:
+            if f.law.state is not None:
+                d.act[m.actuator_actadr[m.actuator(f"state:{f.name}").id]] = f.initial_state
+        return m, d
+
+    armature = {}
+    if model.prescribed:
+        m, d = compiled({})
+        mujoco.mj_forward(m, d)
+        M = np.zeros((m.nv, m.nv))
+        mujoco.mj_fullM(m, d, M)
+        for p in model.prescribed:
+            dof = int(m.joint(joint_name(p.joint, p.dof)).dofadr[0])
+            armature[(p.joint, p.dof)] = float(s["drive_armature"]) * M[dof, dof]
+    m, d = compiled(armature)
+    drives = []
+    for p in model.prescribed:
+        j = m.joint(joint_name(p.joint, p.dof))
+        drives.append((p, int(j.qposadr[0]), int(j.dofadr[0]), armature[(p.joint, p.dof)]))
+    return m, d, drives
+
+
+def _sampler(model: Model, m: mujoco.MjModel, d: mujoco.MjData, forces: Passive):
+    """A function giving every named output at d's state, in the description's order (a drive force
+    is left NaN: simulate fills it from the steps on either side)."""
+    jac = np.zeros((3, m.nv))
+    Mv = np.zeros(m.nv)
+    coordinate = {}
+    for o in model.outputs:
+        if o.kind == "coordinate":
+            coordinate[o.name] = int(m.joint(joint_name(o.body, o.dof)).qposadr[0])
+    gravity = np.asarray(model.gravity, float)
+    mass = m.body_mass.copy()
+
+    def point(o):
+        if o.body == GROUND:
+            return np.asarray(o.point, float), np.zeros(3)
+        b = m.body(o.body).id
+        x = d.xpos[b] + d.xmat[b].reshape(3, 3) @ np.asarray(o.point, float)
+        mujoco.mj_jac(m, d, jac, None, x, b)
+        return x, jac @ d.qvel
+
+    def kinetic():
+        mujoco.mj_mulM(m, d, Mv, d.qvel)
+        return 0.5 * float(d.qvel @ Mv - m.dof_armature @ d.qvel ** 2)
+
+    def one(o, laws):
+        if o.kind == "coordinate":
+            return d.qpos[coordinate[o.name]]
+        if o.kind == "point":
+            return point(o)[0][o.component]
+        if o.kind == "point_velocity":
+            return point(o)[1][o.component]
+        if o.kind == "force":
+            return laws[o.element]
+        if o.kind == "drive_force":
+            return math.nan
+        if o.term == "kinetic":
+            return kinetic()
+        return -float(mass @ (d.xipos @ gravity))
+
+    def sample():
+        laws = forces.law_values(m, d) if model.forces else {}
+        return [float(one(o, laws)) for o in model.outputs]
+    return sample
