@@ -137,3 +137,20 @@ def test_a_rate_the_loops_forbid_is_said():
     with pytest.raises(ModelError) as e:
         initial_state(parse_model(d))
     assert "[initial].velocities.rocker" in str(e.value)
+
+
+def test_a_body_on_a_multi_coordinate_joint_carries_children():
+    """A spherical pendulum with an arm hinged at its tip: the arm's parent is the ball's last chain
+    member; energy is conserved (no forces but gravity)."""
+    d = {"model": {"gravity": [0.0, 0.0, -9.81]},
+         "bodies": [{"name": "ball", "joint": {"type": "spherical"}, "mass": 1.0, "com": [0.0, 0.0, -0.5],
+                     "inertia": [0.02, 0.02, 0.01]},
+                    {"name": "arm", "parent": "ball", "joint": {"type": "revolute", "position": [0.0, 0.0, -1.0],
+                                                                "axis": [1.0, 0.0, 0.0]},
+                     "mass": 0.5, "com": [0.0, 0.0, -0.3], "inertia": [0.01, 0.01, 0.002]}],
+         "initial": {"coordinates": {"ball": [0.4, 0.2, 0.0], "arm": 0.3}, "velocities": {"ball": [0.0, 0.0, 1.0]}},
+         "outputs": [{"name": "K", "kind": "energy", "term": "kinetic"}, {"name": "V", "kind": "energy", "term": "gravity"},
+                     {"name": "tip_z", "kind": "point", "body": "arm", "point": [0.0, 0.0, -0.6], "component": "z"}]}
+    r = simulate(parse_model(d), 1.0, 0.01, {"rtol": 1e-11, "atol": 1e-13})
+    E = r.outputs["K"] + r.outputs["V"]
+    assert np.ptp(r.outputs["tip_z"]) > 0.05 and np.ptp(E) < 1e-8 * np.max(np.abs(r.outputs["V"]))

@@ -41,21 +41,17 @@ def to_tree(model: Model) -> Tree:
     rows, coordinate, body_index = [], {}, {GROUND: -1}
     for b in model.bodies:
         dofs = b.joint.dofs()
-        parent = b.parent
+        parent = body_index[b.parent]   # the parent's last chain member (a described body's own index)
         for k, (kind, axis) in enumerate(dofs):
             last = k == len(dofs) - 1
-            name = b.name if len(dofs) == 1 else f"{b.name}.{k}"
-            row = dict(name=name, parent=None if parent == GROUND else parent, joint=kind, axis=tuple(axis),
-                       offset=b.joint.position if k == 0 else (0.0, 0.0, 0.0))
+            row = dict(name=b.name if len(dofs) == 1 else f"{b.name}.{k}", parent=None if parent < 0 else parent,
+                       joint=kind, axis=tuple(axis), offset=b.joint.position if k == 0 else (0.0, 0.0, 0.0))
             if last:
                 row.update(mass=b.mass, com=b.com, inertia=b.inertia)
             coordinate[(b.name, k)] = len(rows)
+            parent = len(rows)
             rows.append(row)
-            parent = name
         body_index[b.name] = len(rows) - 1
-    names = [r["name"] for r in rows]
-    for r in rows:   # parents by index (chain members have names the description does not know)
-        r["parent"] = None if r["parent"] is None else names.index(r["parent"])
 
     def ref(body):
         return body_index[body]
