@@ -41,14 +41,16 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                                                                "(default 6)")
     p.add_argument("--resolution", type=float, default=None,
                    help="hunt and fill: bracket the limit until hi - lo <= resolution hi (default 0.1)")
-    p.add_argument("--limit", required=True, metavar="stroke=VALUE|restrainer|drift=VALUE",
-                   help="limit state: stroke=VALUE peak |u| >= VALUE m; restrainer: the displacement restrainer "
-                        "engages (runs with it); drift=VALUE the peak story drift ratio of the building >= VALUE "
-                        "(needs --building); the rod's length reached counts for every one")
+    p.add_argument("--limit", required=True, metavar="stroke=VALUE|restrainer|drift=VALUE|impact=VALUE",
+                   help="limit state that ends each trace: stroke=VALUE peak |u| >= VALUE m; restrainer: the "
+                        "displacement restrainer engages (runs with it); drift=VALUE the peak story drift ratio of the "
+                        "building >= VALUE (needs --building); impact=VALUE the restrainer's force >= VALUE N (runs "
+                        "with it); the rod's reach ends every trace, counted as reached for stroke and restrainer, as "
+                        "'stroke exhausted' (not reached) for drift and impact")
     p.add_argument("--limit-states", default=None, metavar="NAME=VALUE,...",
                    help="thresholds of the limit states reported apart (limit_states.json/.csv/.png): capacity=m "
                         "(isolator displacement capacity; default the device's working range X_max), drift=- "
-                        "(default 0.015; with --building), floor_acceleration=m/s^2 (default 9.80665), impact=N "
+                        "(default --limit's drift, else 0.015; with --building), floor_acceleration=m/s^2 (default 9.80665), impact=N "
                         "(restrainer force; default 0, any engagement; with --restrainer)")
     p.add_argument("--building", action="append", default=[], metavar="NAME=VALUE",
                    help="a shear building on the slab, as nsd seismic --building (docs/building.md); "
@@ -126,7 +128,7 @@ def run(args) -> int:
     workers = (os.cpu_count() or 1) if args.workers is None else args.workers
     whole("--workers", workers, 1, WORKERS_MAX)
     params = base_params(args)
-    args.restrainer = args.restrainer or limit.kind == "restrainer"
+    args.restrainer = args.restrainer or limit.kind in ("restrainer", "impact")
     structure = with_building(args, isolated_structure(args, params))
     if limit.kind == "stroke" and not STROKE_MIN <= limit.value <= params.rod_length:
         raise ParameterError(f"--limit {args.limit!r}: stroke must be in [{STROKE_MIN:g}, {params.rod_length:g}] m "
@@ -134,7 +136,7 @@ def run(args) -> int:
     if limit.kind == "drift" and structure.building is None:
         raise ParameterError(f"--limit {args.limit!r}: drift needs a building on the slab (--building stories=N)")
     from nsd_cli.ida_states import parse_limit_states
-    states = parse_limit_states(args.limit_states, params, structure)
+    states = parse_limit_states(args.limit_states, params, structure, limit=limit)
     solver = {**DEFAULT_SOLVER, **solver_settings(args)}
     check_scheduler(args.scheduler)
     ground = {"scale": 1.0, "time_factor": SIMILITUDE_TIME_FACTOR, "window": None, "rotate_deg": 0.0,

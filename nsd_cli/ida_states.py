@@ -30,8 +30,9 @@ def default_capacity(params, structure) -> tuple[float, str]:
         return params.rod_length, "the rod's length (the device has no working range)"
 
 
-def parse_limit_states(text: str | None, params, structure, option: str = "--limit-states"):
-    """'capacity=0.02,drift=0.01' -> LimitStates (the defaults for what is not given)."""
+def parse_limit_states(text: str | None, params, structure, option: str = "--limit-states", limit=None):
+    """'capacity=0.02,drift=0.01' -> LimitStates (the defaults for what is not given; a drift or impact
+    ``limit`` that ends the traces gives its state's threshold unless the text does)."""
     from nsd_core.study.limit_states import limit_states_for
     given: dict[str, float] = {}
     allowed = ", ".join(f"{n}=VALUE ({lo:g}..{hi:g} {u}, {what})" for n, (lo, hi, u, what) in BOUNDS.items())
@@ -57,6 +58,8 @@ def parse_limit_states(text: str | None, params, structure, option: str = "--lim
                              "(--building stories=N)")
     if "impact" in given and structure.restrainer is None:
         raise ParameterError(f"{option} impact = {given['impact']:g}: an impact needs the restrainer (--restrainer)")
+    if limit is not None and limit.kind in ("drift", "impact"):
+        given.setdefault(limit.kind, limit.value)
     capacity = given.get("capacity")
     if capacity is None:
         capacity, _ = default_capacity(params, structure)

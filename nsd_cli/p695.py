@@ -29,8 +29,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "(the device spent), counted apart")
     p.add_argument("--capacity", type=float, default=None,
                    help="isolator displacement capacity [m] (default: the device's working range X_max)")
-    p.add_argument("--sdc", default="dmax", help="seismic design category of S_MT and SSF: dmax (default), dmin, "
-                                                 "cmax, cmin, bmax, bmin")
+    p.add_argument("--isolators", default="device,linear,bilinear,friction-pendulum", metavar="LIST",
+                   help="the configurations evaluated: device (the device on the supports), and the baselines linear "
+                        "(the supports alone), bilinear (lead-rubber), friction-pendulum, sized for the design "
+                        "displacement (docs/design.md); default all four")
+    p.add_argument("--sdc", default="basis", help="the design level of S_MT: basis (default: the project's design "
+                                                  "basis, MCE_R = 1.5 x its ASCE 7-16 spectrum; SSF for SDC dmin), or "
+                                                  "a FEMA P695 category dmax, dmin, cmax, cmin, bmax, bmin")
     p.add_argument("--quality", default=None, metavar="DR=B,TD=C,MDL=B",
                    help="quality ratings A-D of design requirements, test data and modelling (default DR=B,TD=C,MDL=B)")
     p.add_argument("--duration", type=float, default=None, help="model seconds of each record (default whole records)")
@@ -60,6 +65,24 @@ def _collapse_limit(text: str, capacity: float):
     raise ParameterError(f"--collapse {text!r}: unknown surrogate; allowed: {COLLAPSE}")
 
 
+def _isolators(text: str) -> list[str]:
+    from nsd_core.device.isolators import CHOICES
+    names = [n.strip() for n in str(text).split(",") if n.strip()]
+    bad = [n for n in names if n not in CHOICES]
+    if not names or bad or len(set(names)) != len(names):
+        raise ParameterError(f"--isolators {text!r}: allowed: a list of distinct {', '.join(CHOICES)}")
+    return names
+
+
+def _numbers(structure) -> dict:
+    """A structure's numbers as a run takes them (its provenance is not an input)."""
+    d = structure.to_dict()
+    d.pop("provenance", None)
+    if isinstance(d.get("isolator"), dict):
+        d["isolator"].pop("provenance", None)
+    return d
+
+
 def run(args) -> int:
     from comparisons.engines import run_seismic_engine
     from comparisons.harness import code_fingerprint
@@ -72,7 +95,8 @@ def run(args) -> int:
     from nsd_core.device.model import DEFAULT_SOLVER
     from nsd_core.study import p695
     from nsd_core.study.hunt import Hunt
-    from nsd_core.study.ida import make_traces, trace_all
+    from nsd_core.device.isolators import sized
+    from nsd_core.study.ida import Trace, trace_all
     from nsd_core.study.ida_outputs import write_ida
     from nsd_core.study.intensity import component_sa
     from nsd_core.study.p695_outputs import evaluation, print_lines, write_p695
@@ -88,13 +112,17 @@ def run(args) -> int:
     whole("--workers", workers, 1, WORKERS_MAX)
     if args.duration is not None and not (0.1 <= args.duration <= 1000.0):
         raise ParameterError(f"--duration = {args.duration!r}: allowed: model seconds in [0.1, 1000]")
+    configs = _isolators(args.isolators)
     hunt_given = {n: getattr(args, n) for n in ("start", "step", "max_runs", "resolution") if getattr(args, n) is not None}
     hunt = Hunt(**hunt_given)
     params = base_params(args)
     args.restrainer = args.restrainer or args.collapse.strip().startswith("impact")
+    # the isolation level as designed: its supplemental damping (docs/design.md), every device alike
+    args.design_level, args.isolator, args.resize = True, "device", False
     structure = with_building(args, isolated_structure(args, params))
     cap = None if args.capacity is None else f"capacity={args.capacity!r}"
-    states = parse_limit_states(cap, params, structure, option="--capacity" if cap else "--limit-states")
+    limit = _collapse_limit(args.collapse, 1.0)   # checked before the states (a capacity comes from them)
+    states = parse_limit_states(cap, params, structure, option="--capacity" if cap else "--limit-states", limit=limit)
     limit = _collapse_limit(args.collapse, states.capacity)
     if limit.kind == "drift" and structure.building is None:
         raise ParameterError(f"--collapse {args.collapse!r}: drift needs a building on the slab (--building stories=N)")
@@ -109,10 +137,12 @@ def run(args) -> int:
     # the set's median Sa at T (every component of the chosen records): a level is this x the common scale
     s_nrt = float(__import__("numpy").median([component_sa(c.t, c.a, period) for m in motions.values() for c in m.comp]))
     out = check_out_dir("--out", args.out)
-    common = dict(ground=ground, params=params.to_dict(), structure=structure.to_dict(), duration=args.duration,
-                  dt_out=1e-3, settings=solver, code=code_fingerprint(), states=states.to_dict())
-    common["structure"].pop("provenance", None)
-    traces = make_traces("farfield", records, {r: s_nrt for r in records}, common, limit, hunt, None)
+    common = dict(ground=ground, params=params.to_dict(), duration=args.duration, dt_out=1e-3, settings=solver,
+                  code=code_fingerprint(), states=states.to_dict(), set="farfield")
+    structures = {name: (name == "device", structure if name in ("device", "linear") else
+                         structure.with_isolator(sized(name, structure.mass))) for name in configs}
+    traces = [Trace(rid, dev, s_nrt, {**common, "structure": _numbers(st)}, limit, hunt, None, config=name)
+              for rid in records for name, (dev, st) in structures.items()]
     store = Store(out)
     store.remove_stale_temps()
     elapsed = trace_all(traces, store, workers=workers, run_engine=run_seismic_engine, tally=args.tally)
@@ -122,7 +152,7 @@ def run(args) -> int:
              "limit_option": args.collapse, "hunt": hunt.__dict__, "levels": None, "structure": structure.to_dict(),
              "ground": ground, "code": common["code"], "elapsed_this_run_s": elapsed}
     index = write_ida(traces, store, index)
-    result = evaluation(traces, params, structure, states, limit, level, s_nrt, ratings, args.bootstrap,
+    result = evaluation(traces, params, structures, states, limit, level, s_nrt, ratings, args.bootstrap,
                         args.seed if args.seed is not None else p695.SEED, records, elapsed, os.getloadavg())
     write_p695(result, out)
     print("\n".join(print_lines(result)))

@@ -55,6 +55,30 @@ def test_device_pushover_mu_t_at_least_one_and_supports_alone_exactly_one():
     assert dev["mu_T"] >= 1.0 and dev["V_max"] < s.stiffness * 0.02   # the device lowers the force
 
 
+def test_bilinear_pushover_and_the_design_basis_level_by_hand():
+    """A baseline's mu_T from its constants (ideal bilinear: V_max = k_d delta_u + Q at delta_u > D_y);
+    S_MT of the design basis from its table: 1.5 S_D1 / T (T above T_s) in m/s^2."""
+    import tomllib
+    from pathlib import Path
+    from nsd_core.device.isolation import default_structure
+    from nsd_core.device.isolators import sized
+    from nsd_core.device.params import Params
+    params = Params()
+    s = default_structure(params)
+    iso = sized("bilinear", s.mass)
+    du = 0.025
+    push = p695.pushover(params, s.with_isolator(iso), du, device=False)
+    v_max = iso.stiffness * du + iso.q_fast
+    delta_y = v_max / (s.mass * (2 * math.pi / s.period) ** 2)
+    assert push["V_max"] == pytest.approx(v_max, rel=1e-12)
+    assert push["mu_T"] == pytest.approx(max(1.0, du / delta_y), rel=1e-9)
+    table = tomllib.loads((Path(p695.__file__).parents[1] / "device" / "design_basis.toml").read_text())
+    s_d1 = table["site"]["S_D1"]["value"]
+    lv = p695.design_level("basis", 1.0, math.sqrt(0.1), 9.80665)
+    assert lv["S_MT"] == pytest.approx(1.5 * s_d1 / (1.0 / math.sqrt(0.1)) * 9.80665, rel=1e-12)
+    assert lv["sdc"] == "dmin"
+
+
 @pytest.mark.parametrize("mu, expected", [(1.0, 1.00), (2.0, 1.23), (4.0, 1.40), (8.0, 1.61)])
 def test_package_ssf_matches_the_methodology_s_table(mu, expected):
     """FEMA P695 Table 7-1b (SDC D_max, T >= 1.5 s), as the practice notes quote it."""
@@ -84,7 +108,9 @@ def _check(c: dict) -> None:
     beta = math.sqrt(beta_rtr ** 2 + sum(ratings[c["ratings"][k]] ** 2 for k in ("DR", "TD", "MDL")))
     assert c["beta_TOT"] == pytest.approx(round(beta / 0.025) * 0.025, abs=1e-12)
     beta1 = 0.14 * (min(c["mu_T"], 8.0) - 1) ** 0.42 if c["mu_T"] <= 8 else 0.32
-    assert c["SSF"] == pytest.approx(math.exp(beta1 * 1.5), rel=1e-9)   # D_max, far field, T >= 1.5 s
+    # Appendix B: far field, T >= 1.5 s: epsilon of the records 0; target epsilon 1.5 for D_max, else 1.0
+    assert c["T"] >= 1.5
+    assert c["SSF"] == pytest.approx(math.exp(beta1 * (1.5 if c["sdc"] == "dmax" else 1.0)), rel=1e-9)
     acmr10, acmr20 = (math.exp(-c["beta_TOT"] * norm.ppf(p)) for p in (0.1, 0.2))
     assert (c["ACMR10"], c["ACMR20"]) == (pytest.approx(acmr10, rel=1e-12), pytest.approx(acmr20, rel=1e-12))
     if c["S_CT"] is None:
@@ -97,6 +123,7 @@ def _check(c: dict) -> None:
 
 
 BAD = [["--quality", "DR=E"], ["--quality", "XX=B"], ["--sdc", "e"], ["--collapse", "melt"],
+       ["--isolators", "device,rubber"], ["--isolators", "linear,linear"], ["--isolators", ""],
        ["--collapse", "drift=0.01"], ["--capacity", "0"], ["--records", "23"], ["--bootstrap", "5"],
        ["--duration", "-1"], ["--max-runs", "1"], ["--set", "farfield"]]
 
@@ -134,8 +161,9 @@ def test_evaluation_of_traces_reproduced_independently(tmp_path):
             tr.history = [(0.5, False, "", "k")] + ([(c, True, "rod_reach" if rid == 1 else "drift", "k")] if c else
                                                     [(8.0, False, "", "k")])
             traces.append(tr)
-    level = p695.design_level("dmax", s.first_period, math.sqrt(0.1), 9.80665)
-    res = evaluation(traces, params, s, LimitStates(capacity=0.02, rod_length=0.03), limit, level, 0.7,
+    level = p695.design_level("basis", s.first_period, math.sqrt(0.1), 9.80665)
+    res = evaluation(traces, params, {"device": (True, s), "nodevice": (False, s)},
+                     LimitStates(capacity=0.02, rod_length=0.03), limit, level, 0.7,
                      {"DR": "B", "TD": "C", "MDL": "B"}, 300, 1, [1, 2, 3, 4, 5], 1.0, (0.0, 0.0, 0.0))
     dev, nod = res["configurations"]["device"], res["configurations"]["nodevice"]
     assert (dev["S_CT"], nod["S_CT"]) == (2.5, 6.0)   # the 3rd smallest of 5 (a survivor above all)
@@ -155,10 +183,11 @@ def test_small_evaluation_reproduced_independently(tmp_path, capsys):
     from nsd_cli.main import main
     out = tmp_path / "p695"
     argv = ["p695", "--records", "1-3", "--duration", "3", "--max-runs", "3", "--start", "1", "--step", "1.5",
-            "--bootstrap", "300", "--workers", "1", "--out", str(out)]
+            "--sdc", "dmax", "--isolators", "device,linear,bilinear", "--bootstrap", "300", "--workers", "1",
+            "--out", str(out)]
     assert main(argv) == 0
     res = json.loads((out / "p695.json").read_text())
-    assert set(res["configurations"]) == {"device", "nodevice"}
+    assert set(res["configurations"]) == {"device", "linear", "bilinear"}
     lv = res["design_level"]
     assert lv["T"] == pytest.approx(lv["T_model"] / math.sqrt(0.1), rel=1e-12)
     assert lv["S_MT"] == pytest.approx(0.9 / lv["T"] * 9.80665, rel=1e-12)   # S_M1 / T of D_max, in m/s^2

@@ -147,9 +147,12 @@ class Trace:
     levels: list[float] | None = None
     history: list = field(default_factory=list)  # (level, reached, why, key) in the order run
     stopped: str | None = None     # why the trace ended early (a run that could not tell)
+    config: str | None = None      # the configuration's name where more than device / no device run (nsd p695)
 
     @property
     def name(self) -> str:
+        if self.config:
+            return f"{self.common['set']}_{self.record}_{self.config}"
         return f"{self.common['set']}_{self.record}" + ("" if self.device else "_nodevice")
 
     def point(self, level: float, keep_series: bool = False, engine: str = "semirecursive") -> IdaRun:
@@ -274,8 +277,9 @@ def trace_all(traces: list[Trace], store: Store, workers: int = 1, scheduler=Non
 
     first = {id(tr): _advance(tr, store, retry_failed, tried) for tr in traces}
     waiting = sum(p is not None for p in first.values())
-    log(f"ida: {len(traces)} traces ({len(traces) // 2} records x with/without the device), {waiting} with runs to "
-        "do on " + (f"Dask at {scheduler}" if scheduler is not None else f"{workers} local worker(s)"))
+    records = len({tr.record for tr in traces})
+    log(f"ida: {len(traces)} traces ({records} records x {len(traces) // max(records, 1)} configurations), {waiting} "
+        "with runs to do on " + (f"Dask at {scheduler}" if scheduler is not None else f"{workers} local worker(s)"))
     if scheduler is None and (workers <= 1 or waiting <= 1):
         for tr in traces:
             nxt = first[id(tr)]

@@ -26,9 +26,14 @@ TABLE_COLUMNS = [("configuration", ""), ("state", ""), ("threshold", ""), ("medi
 
 
 def configuration(trace) -> str:
-    """A trace's configuration name: 'device' or 'nodevice', or a baseline's own name (a trace that
-    carries ``config``, the hook for other isolators)."""
-    return getattr(trace, "config", None) or ("device" if trace.device else "nodevice")
+    """A trace's configuration name: its own ``config`` (nsd p695), else 'device', the baseline
+    isolator's kind its runs without the device stand on (nsd ida --isolator), or 'nodevice'."""
+    if getattr(trace, "config", None):
+        return trace.config
+    if trace.device:
+        return "device"
+    iso = (trace.common.get("structure") or {}).get("isolator")
+    return iso["kind"] if isinstance(iso, dict) else "nodevice"
 
 
 def limit_states_of(traces) -> LimitStates | None:

