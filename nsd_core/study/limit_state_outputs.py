@@ -113,8 +113,8 @@ def draw_states(report: dict, measure: str, path) -> None:
                for r in e["records"]] + [1e-3]) * 1.3
     x = np.linspace(top / 400, top, 400)
     for ax, (name, cfg) in zip(axes[0], configs.items()):
-        for k, (s, e) in enumerate(cfg.items()):
-            color = f"C{k}"
+        for s, e in cfg.items():
+            color = f"C{STATES.index(s)}"   # one colour per state in every panel
             ims = sorted(r["limit_im"] for r in e["records"] if r["limit_im"] is not None)
             n = len(e["records"])
             if e["median"] is not None:
@@ -127,6 +127,7 @@ def draw_states(report: dict, measure: str, path) -> None:
         ax.set_title(f"{name}: limit states")
         ax.set_xlabel(f"{measure} [m/s^2]")
         ax.set_ylim(0, 1.02)
+        ax.set_xlim(0, top)   # every panel on one scale, so configurations compare at a glance
         ax.legend(fontsize=6.5, loc="lower right")
         ax.grid(alpha=0.3)
     axes[0][0].set_ylabel("P(state reached | IM)")
