@@ -19,7 +19,8 @@ from nsd_core.model.description import Body, unit
 from nsd_core.model.errors import ModelError
 
 # which of GenericJoint's six axes (translations 0-2, rotations 3-5 of J) each coordinate moves
-AXIS_OF_DOF = {"revolute": (5,), "prismatic": (2,), "universal": (3, 4), "spherical": (3, 4, 5), "planar": (0, 1, 5)}
+AXIS_OF_DOF = {"revolute": (5,), "prismatic": (2,), "universal": (3, 4), "spherical": (3, 4, 5), "planar": (0, 1, 5),
+               "translational": (0, 1, 2)}
 
 
 def perpendicular(a: np.ndarray) -> np.ndarray:
@@ -47,7 +48,7 @@ def joint_frame(body: Body) -> np.ndarray:
                              "universal joint's axes perpendicular (Exudyn's universal joint is a GenericJoint "
                              "with two free rotations about perpendicular axes)")
         return np.column_stack([x, y, np.cross(x, y)])
-    if j.type == "spherical":
+    if j.type in ("spherical", "translational"):   # the parent's own axes
         return np.eye(3)
     return np.column_stack([dofs[0][1], dofs[1][1], dofs[2][1]])   # planar: u, v, normal
 
@@ -71,6 +72,8 @@ def joint_coordinates(body: Body, J, Rp, rp, Rc, rc) -> list[float]:
         return [math.atan2(M[1, 0], M[0, 0])]
     if t == "prismatic":
         return [float(d[2])]
+    if t == "translational":
+        return [float(d[0]), float(d[1]), float(d[2])]
     if t == "universal":          # M = Rx(q1) Ry(q2)
         return [math.atan2(M[2, 1], M[1, 1]), math.atan2(M[0, 2], M[0, 0])]
     if t == "spherical":          # M = Rx(q1) Ry(q2) Rz(q3)
@@ -79,13 +82,23 @@ def joint_coordinates(body: Body, J, Rp, rp, Rc, rc) -> list[float]:
     return [float(d[0]), float(d[1]), math.atan2(M[1, 0], M[0, 0])]   # planar
 
 
-def joint_rate(body: Body, J, Rp, rp, vp, wp, rc, vc, wc) -> float:
-    """q' of a one-coordinate (revolute or prismatic) joint from the world velocities of the two
-    frames' origins (v) and the angular velocities (w)."""
-    a = Rp @ J[:, 2]
-    if body.joint.type == "revolute":
+def joint_rate(body: Body, dof: int, J, Rp, rp, vp, wp, rc, vc, wc) -> float:
+    """q' of coordinate ``dof`` when it is a slide or a turn about J's z (the coordinates a joint law's
+    connector can act on, ``law_axis``) from the world velocities of the two frames' origins (v) and
+    the angular velocities (w)."""
+    k = AXIS_OF_DOF[body.joint.type][dof]
+    a = Rp @ J[:, k % 3]
+    if k >= 3:
         return float(a @ (wc - wp))
     return float(a @ (vc - vp - np.cross(wp, rc - rp)))   # the slide seen from the turning parent
+
+
+def law_axis(body: Body, dof: int) -> int | None:
+    """Which axis of J a joint law on coordinate ``dof`` acts along (0-2) or about (5), or None where
+    no connector measures that coordinate: a connector measures a slide along an axis of its marker
+    or a turn about its z, while the turns of universal and spherical joints are Tait-Bryan angles."""
+    k = AXIS_OF_DOF[body.joint.type][dof]
+    return k if k in (0, 1, 2, 5) else None
 
 
 class Continuous:

@@ -1,0 +1,130 @@
+"""The description's force elements as Exudyn connectors (used by comparisons.builders.exudyn), and the
+laws' internal states integrated along with Exudyn's motion, nothing here knowing which laws exist.
+
+Connectors. A points law is a SpringDamper connector of reference length 0 (so its deltaL is the
+distance L) whose force user function returns the law's tension. A joint law on a slide (prismatic,
+translational, planar u or v) is a linear spring-damper connector along the slide's axis, on a
+revolute or planar turn a torsional one about it; its user function returns ``-law.force(q, q', ...)``
+(the connector's force opposes its coordinate; the law's drives it up). Exudyn evaluates them at
+every Newton iteration and differentiates them numerically (implicit).
+
+Laws with a state (``Law.state``, ds/dt = ``law.rate(x, x', s, p)``): Heun's method (the explicit
+trapezoidal rule) with the mechanics' own step h, second order like generalized-alpha, so the
+gate's Richardson estimate (order 2 for Exudyn) holds for the coupled solution:
+    s_{n+1} = s_n + h/2 (r_n + rate(x_{n+1}, x'_{n+1}, s_n + h r_n)),   r_n = rate(x_n, x'_n, s_n).
+The connector's user function evaluates this for the configuration Newton is trying at t_{n+1}, so
+the force at the end of the step uses the state at the end of the step, and the state's dependence
+on x_{n+1}, x'_{n+1} is in the connector's numerical Jacobian; the pre-step function commits s_{n+1}
+and r_{n+1} at the converged configuration (from the bodies' poses). The force is thus an
+implicit, pure function of the configuration within a step, as Exudyn's Newton needs. Forces at a
+lagged state s_n would be first order (a force shifted by one step); Exudyn's own ODE1
+coordinates (ObjectGenericODE1) see only their own coordinates in the right-hand side and their
+coupling to the bodies would be outside Exudyn's Jacobian. The hand-written device adapter
+(comparisons/engines/exudyn_engine.py) integrates the same laws in strain from committed states
+(Heun as well); here the integration runs in time, since a law's rate is a function of (x, x', s).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from exudyn.itemInterface import (NodeGenericData, ObjectConnectorLinearSpringDamper, ObjectConnectorSpringDamper,
+                                  ObjectConnectorTorsionalSpringDamper)
+
+from comparisons.builders.exudyn_frames import joint_rate, law_axis
+from nsd_core.model.errors import ModelError
+from nsd_core.model.laws import POINTS
+
+
+class LawStates:
+    """The states of the laws that have one, by Heun's method (the module's docstring)."""
+
+    def __init__(self, h: float):
+        self.h, self.elements, self.s, self.r = h, [], [], []
+        self.started = False   # before the first step (the initial accelerations): s = s_0 exactly
+
+    def add(self, f) -> int:
+        self.elements.append(f)
+        self.s.append(f.initial_state)
+        self.r.append(0.0)
+        return len(self.elements) - 1
+
+    def at(self, k: int, x: float, xd: float) -> float:
+        """Element k's state at the end of the step being solved, for the configuration (x, x')."""
+        s = self.s[k]
+        if not self.started:
+            return s
+        f, h, r = self.elements[k], self.h, self.r[k]
+        return s + 0.5 * h * (r + f.law.rate(x, xd, s + h * r, f.parameters))
+
+    def commit(self, args) -> None:
+        """The step converged: (x, x') of each element there; its state and rate become the start's."""
+        for k, (x, xd) in enumerate(args):
+            f = self.elements[k]
+            if self.started:
+                self.s[k] = self.at(k, x, xd)
+            self.r[k] = f.law.rate(x, xd, self.s[k], f.parameters)
+        self.started = True
+
+
+def law_function(f, states: LawStates | None, sign: float):
+    """A connector's force function of (x, x'): the law's value (times sign), through its state."""
+    law, p = f.law.force, f.parameters
+    if f.law.state is None:
+        return lambda x, xd: sign * law(x, xd, p)
+    k = states.add(f)
+    return lambda x, xd: sign * law(x, xd, states.at(k, x, xd), p)
+
+
+def add_force(build, f, states: LawStates):
+    """One force element of the description as a connector of ``build`` (a comparisons.builders.exudyn
+    Build)."""
+    mbs = build.mbs
+    if f.law.acts_on == POINTS:
+        tension = law_function(f, states, 1.0)
+        return mbs.AddObject(ObjectConnectorSpringDamper(
+            markerNumbers=[build.marker(f.body_a, f.point_a), build.marker(f.body_b, f.point_b)], referenceLength=0.0,
+            springForceUserFunction=lambda mbs_, t, item, L, L_t, k, d, f0: tension(L, L_t)))
+    b = build.model.body(f.joint)
+    axis = law_axis(b, f.dof)
+    if axis is None:
+        raise ModelError(f"forces.{f.name}.joint = {f.joint!r}: the Exudyn builder applies joint laws on slides and "
+                         f"on revolute and planar turns only (this is a turn of a {b.joint.type} joint)")
+    J = build.frames[b.name]
+    if axis < 3:   # the linear connector slides along its frame's x: turn J's slide axis onto x
+        J = J[:, [axis, (axis + 1) % 3, (axis + 2) % 3]]
+    markers = [build.marker(b.parent, b.joint.position, J), build.marker(b.name, (0.0, 0.0, 0.0), J)]
+    generalized = law_function(f, states, -1.0)
+
+    def user(mbs_, t, item, q, q_t, k, d, offset):
+        return generalized(q, q_t)
+    if axis < 3:
+        return mbs.AddObject(ObjectConnectorLinearSpringDamper(markerNumbers=markers, springForceUserFunction=user))
+    # the data node counts whole turns, so that q reaches the law continuous past +-pi
+    q0 = build.state.q[(b.name, f.dof)]
+    turns = mbs.AddNode(NodeGenericData(initialCoordinates=[round(q0 / (2 * math.pi))], numberOfDataCoordinates=1))
+    return mbs.AddObject(ObjectConnectorTorsionalSpringDamper(markerNumbers=markers, nodeNumber=turns,
+                                                              springTorqueUserFunction=user))
+
+
+def point(P, body, p):
+    """World position and velocity of body point p, from the poses P (Build.poses)."""
+    R, r, v, w = P[body]
+    x = R @ np.asarray(p, dtype=float)
+    return r + x, v + np.cross(w, x)
+
+
+def law_arguments(build, P, q, f) -> tuple[float, float]:
+    """(x, x') of force element f: the distance and its rate, or the joint coordinate (from q, kept
+    continuous by the caller) and its rate."""
+    if f.law.acts_on == POINTS:
+        pa, va = point(P, f.body_a, f.point_a)
+        pb, vb = point(P, f.body_b, f.point_b)
+        d = pa - pb
+        L = float(np.linalg.norm(d))
+        return L, (float(d @ (va - vb)) / L if L > 0 else 0.0)
+    b = build.model.body(f.joint)
+    Rp, rp, vp, wp = P[b.parent]
+    _, rc, vc, wc = P[b.name]
+    return q[(b.name, f.dof)], joint_rate(b, f.dof, build.frames[b.name], Rp, rp, vp, wp, rc, vc, wc)
