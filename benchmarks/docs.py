@@ -270,6 +270,24 @@ def engine_benchmarks() -> str:
             + table(["problem", "error vs reference", "energy drift [J]", "CPU [s]", "goal"], rows))
 
 
+def model_benchmarks() -> str:
+    """nsd compare --model on every description under models/ (benchmarks/bench_models.py)."""
+    rec = load("bench_models")
+    rows = []
+    for name, m in rec["data"].items():
+        if "cases" not in m:
+            rows.append([name, "-", "-", "failed: " + " ".join(m.get("error", [])), "-", "-", "-"])
+            continue
+        for case, c in m["cases"].items():
+            for e, v in c["engines"].items():
+                step = ", ".join(f"{k} {plain(x)}" for k, x in v["settings"].items()) or "-"
+                rows.append([name, case, e, "PASS" if v["pass"] else "**FAIL**", g(v["worst_ratio"]),
+                             g(v["worst_error"]), f"{plain(v['wall_time'])} ({step})" if v.get("wall_time") else "-"])
+    return (provenance(rec) + "\n"
+            + table(["model", "case", "engine", "verdict", "largest difference / bound", "largest error / tolerance",
+                     "wall s (settings)"], rows))
+
+
 def direction_study() -> str:
     rec = load("polar")
     d = rec["data"]
@@ -434,7 +452,7 @@ RENDER = {"compare-gate": compare_gate, "convergence": convergence, "tables-5-6"
           "bench-rhs": bench_rhs, "bench-seismic": bench_seismic,
           "gate-times": gate_times, "bench-start": bench_start, "compile-units": compile_units,
           "bench-record-set": bench_record_set, "compare-variant": compare_variant, "power": power,
-          "verdict-cost": verdict_cost,
+          "verdict-cost": verdict_cost, "model-benchmarks": model_benchmarks,
           "work-precision": work_precision}
 
 
