@@ -33,11 +33,16 @@ def spec(engine: str, seismic: bool, drive=None, settings: dict | None = None) -
 def job_warmup(specs) -> partial:
     """``warm`` for ``worker_pool``: every distinct kind of ``specs`` (from ``spec``), the in-house
     ones as kernels, each peer's as a tiny job of the same engine, mode and settings."""
-    kinds, calls, seen = set(), [], set()
+    specs = list(specs)
+    kinds = {kind(mode, settings, path) for engine, mode, path, _, settings in specs if engine == REFERENCE}
+    return partial(warm_worker, tuple(sorted(kinds)), (), tuple(peer_calls(specs)))
+
+
+def peer_calls(specs) -> list:
+    """A tiny job of each distinct peer kind of ``specs`` (engine, mode, path kind, named choices)."""
+    calls, seen = [], set()
     for engine, mode, path, key, settings in specs:
-        if engine == REFERENCE:
-            kinds.add(kind(mode, settings, path))
-        elif (engine, mode, path, key) not in seen:
+        if engine != REFERENCE and (engine, mode, path, key) not in seen:
             seen.add((engine, mode, path, key))
             # the named choices alone: they decide what compiles; a case's step (A25.5mm_f1Hz: Exudyn
             # at 6.25e-6 s) would make the tiny run cost 2.5 s in each worker
@@ -47,4 +52,16 @@ def job_warmup(specs) -> partial:
                                      TINY_DURATION, TINY_DT_OUT, settings))
             else:
                 calls.append(partial(run_job, engine, Params(), tiny_drive(path), settings))
-    return partial(warm_worker, tuple(sorted(kinds)), (), tuple(calls))
+    return calls
+
+
+def every_mode_calls() -> list:
+    """The peers' tiny jobs of every kind the default cases run (each peer's drive along a line and a
+    circle, MuJoCo's RK4, the seismic mode): what nsd_core.engine.warm_all compiles once per version."""
+    from comparisons.engines import ENGINES
+    peers = [e for e in ENGINES if e != REFERENCE]
+    specs = [spec(e, False, tiny_drive(p), {}) for e in peers for p in ("line", "circle")]
+    specs += [spec(e, True, None, {}) for e in peers]
+    if "mujoco" in peers:
+        specs.append(spec("mujoco", False, tiny_drive("line"), {"integrator": "RK4"}))
+    return peer_calls(specs)

@@ -10,6 +10,13 @@ numba warns on stderr when it cannot cache a kernel ("Cannot cache compiled func
 dynamic globals": every kernel under NUMBA_OPT=0). Such a kernel is compiled again in the next
 process, which costs time and changes no number; the warning would break the one-line error promise,
 so ``quiet_cache_warnings`` keeps it off the user's stderr (NSD_NUMBA_CACHE_WARNINGS=1 shows it).
+
+numba names the cache's sub-folder of a source file after the hash of its absolute directory: a new
+install of the same version elsewhere (another clone, a CI runner's fresh checkout, a venv's
+site-packages) would miss every kernel and compile them again. ``relocatable_cache`` names it after the
+file's place inside the package instead (``nsd_core/engine`` -> ``nsd_core_engine``): the folder is
+already keyed by the content of every source file, so the same version finds the same machine code
+wherever it is installed (tests/test_numba_cache.py).
 """
 from __future__ import annotations
 
@@ -52,7 +59,45 @@ def use_versioned_cache(environ=os.environ) -> str | None:
     if "numba" in sys.modules:  # numba read its configuration already: tell it too
         from numba.core import config
         config.CACHE_DIR = str(folder)
+    relocatable_cache()
     return str(folder)
+
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def package_subfolder(py_file: str, root: Path = ROOT) -> str | None:
+    """The cache sub-folder of a source file of PACKAGES (its folder inside the package, "/" -> "_"),
+    None for any other file (numba's own naming then applies)."""
+    try:
+        rel = Path(py_file).resolve().relative_to(root)
+    except ValueError:
+        return None
+    return "_".join(rel.parent.parts) if rel.parts and rel.parts[0] in PACKAGES else None
+
+
+def relocatable_cache() -> bool:
+    """Put a locator in front of numba's own that names the cache sub-folder of the packages' files
+    by their place in the package, not by their absolute path (once per process). Only under the
+    versioned folder: a user's own NUMBA_CACHE_DIR keeps numba's naming."""
+    from numba.core import caching
+    if any(getattr(c, "nsd_relocatable", False) for c in caching.CacheImpl._locator_classes):
+        return False
+
+    class PackageLocator(caching.UserProvidedCacheLocator):
+        nsd_relocatable = True
+
+        def __init__(self, py_func, py_file):
+            super().__init__(py_func, py_file)
+            from numba.core import config
+            self._cache_path = os.path.join(config.CACHE_DIR, package_subfolder(py_file))
+
+        @classmethod
+        def from_function(cls, py_func, py_file):
+            return super().from_function(py_func, py_file) if package_subfolder(py_file) else None
+
+    caching.CacheImpl._locator_classes.insert(0, PackageLocator)
+    return True
 
 
 CACHE_WARNING = r"Cannot cache compiled function"

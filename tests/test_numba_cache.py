@@ -82,3 +82,44 @@ def test_numbas_cannot_cache_warning_never_reaches_stderr(tmp_path):
         p = subprocess.run([sys.executable, str(mod)], env=env, capture_output=True, text=True, timeout=120)
         assert p.returncode == 0, p.stderr
         assert ("Cannot cache compiled function" in p.stderr) == shown, p.stderr
+
+
+def test_the_cache_sub_folder_is_named_by_the_place_in_the_package_not_the_absolute_path(tmp_path):
+    from nsd_core.numba_cache import ROOT, package_subfolder
+    assert package_subfolder(str(ROOT / "nsd_core" / "engine" / "rk.py")) == "nsd_core_engine"
+    assert package_subfolder(str(ROOT / "comparisons" / "engines" / "mujoco_native.py")) == "comparisons_engines"
+    assert package_subfolder(str(tmp_path / "elsewhere.py")) is None   # numba's own naming
+
+
+def _copy_of_the_packages(dest: Path) -> None:
+    import shutil
+    from nsd_core.numba_cache import ROOT
+    for pkg in ("nsd_core", "comparisons"):
+        shutil.copytree(ROOT / pkg, dest / pkg, ignore=shutil.ignore_patterns("__pycache__"))
+
+
+def test_a_copy_of_the_same_version_elsewhere_loads_what_another_compiled(tmp_path):
+    """Two installs of one version at two paths (two clones): the second compiles nothing."""
+    code = textwrap.dedent("""
+        import numpy as np
+        from numba.core import event
+        seen = []
+        class L(event.Listener):
+            def on_start(self, ev):
+                seen.append(ev.data["dispatcher"].py_func.__qualname__)
+            def on_end(self, ev):
+                pass
+        event.register("numba:compile", L())
+        from nsd_core.device.forces import rope_tension_scalar
+        print(rope_tension_scalar(0.1, 0.09, 1e5), len(seen))
+    """)
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env["XDG_CACHE_HOME"] = str(tmp_path / "cache")
+    outs = []
+    for place in ("one", "two"):
+        _copy_of_the_packages(tmp_path / place)
+        p = subprocess.run([sys.executable, "-c", code], cwd=tmp_path / place, env=env, capture_output=True,
+                           text=True, timeout=300)
+        assert p.returncode == 0, p.stderr
+        outs.append(p.stdout.split())
+    assert outs[0][0] == outs[1][0] and int(outs[0][1]) >= 1 and int(outs[1][1]) == 0, outs

@@ -56,6 +56,12 @@ def _notice(stream=None, part: str = "engine") -> None:
 _NOTICE_LOCK: list = []  # the open lock file, held until the process ends
 
 
+def quiet_notices() -> None:
+    """No notice from this process (nsd_core.engine.warm_all prints the one line of its compilation)."""
+    global _announced
+    _announced = True
+
+
 def _first_to_announce(part: str = "engine") -> bool:
     """True unless another live process has printed the notice of this part (a pool's other worker):
     the first keeps a lock file in the cache folder until it ends, so a user sees one line, not one

@@ -1,0 +1,163 @@
+"""Every mode compiled once per version of the source, on every core, with one line (issue 35, item 1).
+
+Before, each command compiled what it used at its first use: the first ``nsd cycle`` the drive mode
+(32 s), a first seismic run the seismic kernels with a line of its own, the gate's workers the peers'
+callbacks. Now the first in-house run of a version in any process (``device.warmup.warm_and_time``,
+around every in-house run, and a pool worker's warm-up, ``device.worker_warmup``, call ``ensure_all``)
+compiles the in-house engine for every mode: its units and a tiny run of every drive path, of the
+seismic mode, with the restrainer and under a building. ``nsd warm`` (``peers=True``) adds the peers'
+tiny runs (``PROVIDERS``: the layer that knows the peers names them): an install step, or a CI runner's
+first step, after which no command of this version compiles anything.
+
+The work runs in this process and ``cpu_count - 1`` helper processes that share the items out
+(``compile_once.share_work``: no two processes compile the same item at once), prints one line, and
+leaves a mark in the cache folder: a later process of the same version, or a new install of it (the
+folder is keyed by the source's content and named independently of where it is installed,
+nsd_core.numba_cache), finds the mark and compiles nothing. Processes started while one compiles (a
+pool's other worker) wait for it, then load.
+
+Measured (benchmarks/bench_cold.py): every mode with the peers costs ~95 s CPU, the in-house modes
+alone about half of that, against ~34 s CPU for the drive mode alone; so the peers are compiled on
+first use only by ``nsd warm`` (a gate's workers compile their own peers side by side as before).
+Nothing compiles at import, nor for a bad input (the command stops before its first run).
+NSD_WARM_ALL=0 goes back to compiling what each run uses, at its first use.
+"""
+from __future__ import annotations
+
+import importlib
+import os
+import subprocess
+import sys
+import time
+from functools import partial
+from pathlib import Path
+
+from nsd_core.engine import compile_once as co
+
+MARK = ".compiled-every-mode"      # the in-house engine's modes and the peers' callbacks (``nsd warm``)
+MARK_IN_HOUSE = ".compiled-in-house"   # the in-house engine's modes (any command's first run)
+LOCK = "warm-all"
+ENV = "NSD_WARM_ALL"
+HELPER = "NSD_WARM_HELPER"
+# tiny runs of the layers above, as "module:function" returning a list of callables (the gate's
+# peers); an import failure (a peer not installed) leaves them to their first use
+PROVIDERS = ("comparisons.warmup:every_mode_calls",)
+NOTICE = ("nsd: compiling the in-house engine{peers} once for this version of the source, every mode, on "
+          "{processes} processes (about {seconds} s on 2 cores; later commands and new installs of this version "
+          "load it from the cache) ...")
+PEERS = " and the peers' callbacks"
+# measured, 2 cores, load ~9 (benchmarks/results/bench_cold.json): the in-house modes ~50 s CPU, with the
+# peers' callbacks ~95 s CPU; over two processes on a quiet machine about half of that in wall seconds
+NOTICE_SECONDS = {False: 25, True: 50}
+_STATE: dict = {}   # kind (peers or not) -> done in this process
+
+
+def cache_dir() -> str | None:
+    from numba.core import config
+    return os.environ.get("NUMBA_CACHE_DIR") or config.CACHE_DIR or None
+
+
+def complete(peers: bool = False) -> bool:
+    """Whether the in-house modes (and with ``peers`` the peers' callbacks) of this version are compiled
+    in the cache folder (their mark; every mode's mark covers the in-house one)."""
+    folder = cache_dir()
+    marks = (MARK,) if peers else (MARK, MARK_IN_HOUSE)
+    return bool(folder) and any((Path(folder) / m).exists() for m in marks)
+
+
+def ensure_all(peers: bool = False, stream=None) -> float:
+    """Compile the in-house engine's every mode (with ``peers``: and the peers' callbacks) once for this
+    version unless done (the mark), being done by another process (then wait for it), switched off
+    (NSD_WARM_ALL=0) or running in a helper. Returns the seconds this process spent on it (0 when
+    there was nothing to do). Once per process and kind."""
+    if _STATE.get(peers) or os.environ.get(ENV) == "0" or os.environ.get(HELPER):
+        return 0.0
+    _STATE[peers] = True   # before the work: the items' runs come back here
+    if complete(peers):
+        return 0.0
+    t0 = time.perf_counter()
+    with co._locked(LOCK, block=False) as held:
+        if held:
+            if not complete(peers):
+                _warm_here(peers, stream or sys.stderr)
+            return time.perf_counter() - t0
+    with co._locked(LOCK, block=True):   # another process compiles: load what it leaves
+        pass
+    return time.perf_counter() - t0
+
+
+def _warm_here(peers: bool, stream) -> None:
+    co.quiet_notices()   # this line is the only one: the units' own notices would repeat it
+    t0 = time.perf_counter()
+    n = max(0, (os.cpu_count() or 1) - 1)
+    print(NOTICE.format(peers=PEERS if peers else "", processes=n + 1, seconds=NOTICE_SECONDS[peers]), end="",
+          file=stream, flush=True)
+    env = {**os.environ, HELPER: "1"}
+    code = f"from nsd_core.engine.warm_all import helper; helper({peers})"
+    helpers = [subprocess.Popen([sys.executable, "-c", code], env=env, stdout=subprocess.DEVNULL,
+                                stderr=subprocess.DEVNULL) for _ in range(n)]
+    try:
+        co.share_work(items(peers))
+    finally:
+        for h in helpers:
+            h.wait()
+    folder = cache_dir()
+    if folder:
+        for mark in (MARK, MARK_IN_HOUSE) if peers else (MARK_IN_HOUSE,):
+            (Path(folder) / mark).write_text(f"{time.perf_counter() - t0:.1f} s\n")
+    print(f" done in {time.perf_counter() - t0:.0f} s", file=stream, flush=True)
+
+
+def helper(peers: bool = False) -> None:
+    """A helper process: the same items, shared out with the process that started it."""
+    co.quiet_notices()
+    co.share_work(items(peers))
+
+
+def _tiny_structure_run(structure: str) -> None:
+    """A tiny seismic run with the restrainer or a 3-story building (their own force kernels)."""
+    from nsd_core.device.isolation import default_structure
+    from nsd_core.device.params import Params
+    from nsd_core.device.seismic import simulate_seismic
+    from nsd_core.device.warmup import TINY_DT_OUT, TINY_DURATION, tiny_ground
+    p = Params()
+    st = default_structure(p)
+    if structure == "restrainer":
+        from nsd_core.device.restrainer import with_restrainer
+        st = with_restrainer(st, p, True, {})
+    else:
+        from nsd_core.device.building import building_from
+        st = st.with_building(building_from(st.mass, {"stories": 3}))
+    simulate_seismic(p, st, tiny_ground(), duration=TINY_DURATION, dt_out=TINY_DT_OUT)
+
+
+def _quietly(fn, block: bool = True) -> None:
+    try:
+        fn()
+    except Exception:  # noqa: BLE001 (a failure is left to the run that meets it, with its own inputs)
+        pass
+
+
+def items(peers: bool = True) -> list:
+    """``share_work`` items: the engine's units, then a tiny run of every mode, then (``peers``) the
+    peers' tiny runs."""
+    from nsd_core.device.model import DEFAULT_SOLVER, simulate
+    from nsd_core.device.seismic import simulate_seismic
+    from nsd_core.device.warmup import PATHS, warm
+    from nsd_core.engine.rk import engine_units
+    out = [(f"warm-unit-{u}", partial(co.compile_now, u)) for u in engine_units()]
+    m, b = DEFAULT_SOLVER["method"], DEFAULT_SOLVER["backend"]
+    # one lock per mode and per peer: the runs under one lock compile the same kernels (every drive
+    # path the drive's), so two processes never compile them side by side; the modes go on meanwhile
+    out += [("warm-all-drive", partial(_quietly, partial(warm, "drive", simulate, m, b, p))) for p in PATHS]
+    out.append(("warm-all-seismic", partial(_quietly, partial(warm, "seismic", simulate_seismic, m, b, "line"))))
+    out += [("warm-all-seismic", partial(_quietly, partial(_tiny_structure_run, s))) for s in ("restrainer", "building")]
+    from nsd_core.device.worker_warmup import _name
+    for name in PROVIDERS if peers else ():
+        module, fn = name.split(":")
+        try:
+            calls = getattr(importlib.import_module(module), fn)()
+        except Exception:  # noqa: BLE001 (a peer not installed: compiled at its first use, if ever)
+            calls = []
+        out += [(f"warm-all-call-{_name(c)}", partial(_quietly, c)) for c in calls]
+    return out

@@ -1,0 +1,49 @@
+"""Every mode compiled once per version (nsd_core.engine.warm_all): one line on a cold cache, then no
+compilation by any command of that version (a drive cycle, a seismic run, a building)."""
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import pytest
+
+from nsd_core.engine import warm_all
+
+NOTICE_START = "nsd: compiling"
+
+
+def _nsd(args, cache, timeout=1800):
+    env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR", "NSD_WARM_ALL")}
+    env.update(XDG_CACHE_HOME=str(cache), MPLBACKEND="Agg")
+    return subprocess.run([sys.executable, "-m", "nsd_cli.main", *args], env=env, capture_output=True, text=True,
+                          timeout=timeout)
+
+
+def test_the_items_cover_every_mode_and_both_peers():
+    names = {lock for lock, _ in warm_all.items(peers=True)}
+    assert {"warm-all-drive", "warm-all-seismic", "warm-unit-evaluate", "warm-unit-step_loop"} <= names
+    assert {"warm-all-call-mujoco", "warm-all-call-exudyn"} <= names
+    assert not any(n.startswith("warm-all-call") for n, _ in warm_all.items(peers=False))   # any command's first run
+
+
+def test_nothing_to_do_when_switched_off(monkeypatch):
+    monkeypatch.setenv(warm_all.ENV, "0")
+    monkeypatch.setattr(warm_all, "_STATE", {})
+    assert warm_all.ensure_all() == 0.0
+
+
+@pytest.mark.slow
+def test_one_line_on_a_cold_cache_then_no_command_compiles(tmp_path):
+    first = _nsd(["cycle", "--amplitude", "0.01", "--frequency", "10", "--out", str(tmp_path / "c")], tmp_path)
+    assert first.returncode == 0, first.stderr[-2000:]
+    lines = [ln for ln in first.stderr.splitlines() if ln.startswith(NOTICE_START)]
+    assert len(lines) == 1 and lines[0].startswith(warm_all.NOTICE.split("{")[0]) and " done in " in lines[0], lines
+    building = _nsd(["seismic", "--ground", "harmonic:amplitude=1,frequency=2,duration=0.05", "--building",
+                     "stories=3", "--out", str(tmp_path / "b")], tmp_path)
+    assert building.returncode == 0, building.stderr[-2000:]
+    assert NOTICE_START not in building.stderr, building.stderr
+    warm = _nsd(["warm"], tmp_path)   # the peers' callbacks: compiled now, with the one line of nsd warm
+    assert warm.returncode == 0 and warm.stdout.startswith("every mode compiled"), warm.stdout + warm.stderr
+    again = _nsd(["warm"], tmp_path)
+    assert again.returncode == 0 and "already compiled" in again.stdout and NOTICE_START not in again.stderr
