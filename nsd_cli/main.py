@@ -33,7 +33,7 @@ docs/limits.md lists every bound. Run `nsd COMMAND --help` for each command's op
 DISK_ERRNOS = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EROFS, errno.EIO}
 
 SUBCOMMANDS = ("cycle", "seismic", "compare", "report", "sweep", "tables", "calibrate", "benchmark", "polar", "params",
-               "ida", "p695")
+               "ida", "p695", "warm")
 # many runs of one structure: worth compiling its generated evaluation (nsd_core.engine.codegen). Not
 # `sweep`: its designs change the structure (n_ropes, n_wires: 14 structures in --paper) and each runs
 # ~0.1 s, so compiling a generated evaluation per structure (12-25 s CPU each) cost it ~100 s on a cold
