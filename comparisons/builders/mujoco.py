@@ -5,7 +5,14 @@ comparisons.builders.mujoco_mjcf (nested bodies, one hinge/slide per joint coord
 as equality connects; see there). Every engine starts from ``initial_state(model)``: qpos from its
 coordinates, qvel from its rates.
 
-Forces: one ``mjcb_passive`` callback (Python; installed for the run only, the previous one restored)
+Two paths, one model (setting ``passive``): "python", the readable reference described here (Passive,
+a Python loop), and "compiled" (default): a numba C callback generated from the description that calls
+each element's registry law function directly, and this loop in native code (mujoco_compiled,
+mujoco_codegen, mujoco_kernels); outputs equal to round-off (tests/test_mujoco_codegen.py). nsd_drive,
+2 cycles, h = 1e-5 s, stepping: Euler 0.70 s, 1.13x the hand-written device adapter's 0.62 s; RK4 2.75 s
+(benchmarks/bench_model_builders.py, load 7 on 2 cores); the Python path: ~60 s per model second.
+
+Forces: one ``mjcb_passive`` callback (installed for the run only, the previous one restored)
 evaluates every force element through the law registry and nothing else: a points element's two
 world points and velocities come from MuJoCo's state (mj_jac of each point), then L, L', the tension
 T = ``element.force(L, L')`` and +T u on point a, -T u on point b (u from a to b; T > 0 pulls them
@@ -13,7 +20,7 @@ together), added to qfrc_passive through the points' Jacobians; a joint element 
 ``element.force(q, q')`` to its coordinate. No line here knows which laws exist. Coincident points
 (L = 0) have no direction: their tension is not applied.
 
-A law with an internal state (``Law.state``) keeps it in a zero-force actuator's activation
+A law with an internal state (``Law.state``) keeps it in an activation of a zero-force actuator
 (mujoco_mjcf): MuJoCo integrates it with the motion, its rate ``element.rate(x, x', s)`` computed by
 the passive callback of the same stage and handed over by ``mjcb_act_dyn``.
 
@@ -72,7 +79,8 @@ import time
 import mujoco
 import numpy as np
 
-from comparisons.builders.mujoco_mjcf import build_mjcf, connects, joint_name
+from comparisons.builders import mujoco_codegen, mujoco_compiled
+from comparisons.builders.mujoco_mjcf import build_mjcf, connects, joint_name, state_activations
 from comparisons.engines.base import EngineError, check_step_count
 from nsd_core.model.assemble import initial_state
 from nsd_core.model.description import GROUND, Model
@@ -92,8 +100,10 @@ default_settings = {
     "drive_armature": 1e6,      # virtual drive inertia of a prescribed coordinate / its own at t = 0
     "inertia_floor": 1e-12,     # [kg m^2] smallest principal moment passed to MuJoCo (point masses)
     "closure_limit": 1e-2,      # [m] a larger loop gap at an output time is an instability (EngineError)
+    "passive": "compiled",      # compiled: generated C callback and native loop (mujoco_compiled); python: Passive
 }
 INTEGRATORS = ("RK4", "Euler")
+PASSIVE = ("compiled", "python")
 RK4_WEIGHTS = np.array([1.0, 2.0, 2.0, 1.0]) / 6.0   # the classic RK4 stages' weights, as MuJoCo's
 _POSITIVE = ("timestep", "solref_factor", "drive_armature", "inertia_floor", "closure_limit", "solver_tolerance")
 
@@ -107,6 +117,8 @@ def merged_settings(settings: dict | None) -> dict:
         if k not in default_settings:
             raise ModelError(f"mujoco.{k}: unknown setting; allowed: {', '.join(sorted(default_settings))}")
         s[k] = v
+    if s["passive"] not in PASSIVE:
+        raise ModelError(f"mujoco.passive = {s['passive']!r}: allowed: {', '.join(PASSIVE)}")
     if s["integrator"] not in INTEGRATORS:
         raise ModelError(f"mujoco.integrator = {s['integrator']!r}: allowed: {', '.join(INTEGRATORS)}")
     for k in _POSITIVE:
@@ -130,9 +142,8 @@ class Passive:
         self.nv = m.nv
         self.jac = np.zeros((2, 3, m.nv))
         self.points, self.joints = [], []
-        # a law with a state keeps it in its actuator's activation (mujoco_mjcf); -1: no state
-        self.act = {f.name: int(m.actuator_actadr[m.actuator(f"state:{f.name}").id])
-                    for f in model.forces if f.law.state is not None}
+        # a law with a state keeps it in an activation of the states actuator (mujoco_mjcf); -1: none
+        self.act = state_activations(model, m)
         self.rates = np.zeros(m.na)   # each state's rate at the last evaluation, for mjcb_act_dyn
         for f in model.forces:
             slot = self.act.get(f.name, -1)
@@ -184,8 +195,10 @@ class Passive:
         return out
 
     def act_dyn(self, m, d, actuator: int) -> float:
-        """mjcb_act_dyn: a state's rate, computed by this stage's passive call (MuJoCo evaluates the
-        passive forces before the actuators)."""
+        """mjcb_act_dyn: the states' rates, computed by this stage's passive call (MuJoCo evaluates the
+        passive forces before the actuators), written into act_dot (MuJoCo's rule for an actuator of
+        several activations; with one, it takes the value returned)."""
+        d.act_dot[:] = self.rates
         return float(self.rates[m.actuator_actadr[actuator]])
 
     def __call__(self, m, d):
@@ -210,17 +223,37 @@ def simulate(model: Model, duration: float, dt_out: float, settings: dict | None
     h = float(t_out[1] - t_out[0]) / n_sub
     n_steps = n_sub * (len(t_out) - 1)
     check_step_count(name, n_steps)
-    m, d, drives = _compile(model, s, h, init)
-    forces = Passive(model, m, drives)
+    compiled = s["passive"] == "compiled"
+    m, d, drives = _compile(model, s, h, init, mujoco_codegen.layout(model).size if compiled else 0)
     pairs = [(m.site(f"{c[0]}:a").id, m.site(f"{c[0]}:b").id) for c in connects(model, init.rotation)]
+    weights = RK4_WEIGHTS if s["integrator"] == "RK4" else np.ones(1)
+    uses = point_from_averages(n_steps, n_sub) if drives else {}
+    if compiled:
+        data, drive_at, wall, closure, tracking = mujoco_compiled.run(
+            model, s, m, d, drives, pairs, t_out, n_sub, h, n_steps, weights, uses,
+            lambda forces: _sampler(model, m, d, forces))
+    else:
+        data, drive_at, wall, closure, tracking = _run_python(model, s, m, d, drives, pairs, t_out, n_sub, h,
+                                                               n_steps, weights, uses)
+    for k, o in enumerate(model.outputs):
+        if o.kind == "drive_force":
+            data[:, k] = drive_at[:, [p.name for p in model.prescribed].index(o.element)]
+    return ModelRun(name, t_out, {o.name: data[:, k] for k, o in enumerate(model.outputs)},
+                    {o.name: o.unit for o in model.outputs},
+                    {"wall_time": wall, "steps": n_steps, "timestep": h, "closure_max": closure,
+                     "tracking_error": tracking, "mujoco_version": mujoco.__version__, **s})
+
+
+def _run_python(model, s, m, d, drives, pairs, t_out, n_sub, h, n_steps, weights, uses):
+    """The readable reference loop (``passive = "python"``): Passive as mjcb_passive, one Python
+    iteration per step. Returns as mujoco_compiled.run."""
+    forces = Passive(model, m, drives)
     sample = _sampler(model, m, d, forces)
     advance = {"RK4": lambda: mujoco.mj_RungeKutta(m, d, 4), "Euler": lambda: mujoco.mj_Euler(m, d)}[s["integrator"]]
-    weights = RK4_WEIGHTS if s["integrator"] == "RK4" else np.ones(1)
     armature = np.array([A for *_, A in drives])
     drive_dof = [da for _, _, da, _ in drives]
     rows, closure, tracking = [], 0.0, 0.0
     drive_at = np.zeros((len(t_out), len(drives)))   # the drive forces at the output times
-    uses = point_from_averages(n_steps, n_sub) if drives else {}
     previous = mujoco.get_mjcb_passive(), mujoco.get_mjcb_act_dyn()
     try:
         mujoco.set_mjcb_passive(forces)
@@ -263,14 +296,7 @@ def simulate(model: Model, duration: float, dt_out: float, settings: dict | None
     finally:
         mujoco.set_mjcb_passive(previous[0])
         mujoco.set_mjcb_act_dyn(previous[1])
-    data = np.array(rows)
-    for k, o in enumerate(model.outputs):
-        if o.kind == "drive_force":
-            data[:, k] = drive_at[:, [p.name for p in model.prescribed].index(o.element)]
-    return ModelRun(name, t_out, {o.name: data[:, k] for k, o in enumerate(model.outputs)},
-                    {o.name: o.unit for o in model.outputs},
-                    {"wall_time": wall, "steps": n_steps, "timestep": h, "closure_max": closure,
-                     "tracking_error": tracking, "mujoco_version": mujoco.__version__, **s})
+    return np.array(rows, dtype=float), drive_at, wall, closure, tracking
 
 
 def point_from_averages(n_steps: int, n_sub: int) -> dict[int, list[tuple[int, float]]]:
@@ -293,13 +319,13 @@ def point_from_averages(n_steps: int, n_sub: int) -> dict[int, list[tuple[int, f
     return uses
 
 
-def _compile(model: Model, s: dict, h: float, init):
+def _compile(model: Model, s: dict, h: float, init, nuserdata: int = 0):
     """The compiled model and its data at the initial state, and the drives as (Prescribed, qposadr,
     dofadr, armature). The model is compiled once without armature to read each driven coordinate's
     own inertia at the initial state, which scales its virtual drive."""
     def compiled(armature: dict):
         try:
-            m = mujoco.MjModel.from_xml_string(build_mjcf(model, s, h, init.rotation, armature))
+            m = mujoco.MjModel.from_xml_string(build_mjcf(model, s, h, init.rotation, armature, nuserdata))
         except ValueError as e:
             raise EngineError(f"mujoco: model rejected: {str(e).splitlines()[0]}") from None
         d = mujoco.MjData(m)
@@ -309,7 +335,7 @@ def _compile(model: Model, s: dict, h: float, init):
             d.qvel[j.dofadr[0]] = init.qd[(body, k)]
         for f in model.forces:
             if f.law.state is not None:
-                d.act[m.actuator_actadr[m.actuator(f"state:{f.name}").id]] = f.initial_state
+                d.act[state_activations(model, m)[f.name]] = f.initial_state
         return m, d
 
     armature = {}

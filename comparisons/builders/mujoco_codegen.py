@@ -1,0 +1,265 @@
+"""The compiled passive callback of comparisons.builders.mujoco, generated from a model description.
+
+No line here or in the generated code is written for a mechanism or a law: ``source`` writes, for the
+description's force elements in order, one call of each element's registry law function (its
+``Law.force`` and ``Law.rate``, bound by name in the generated module's namespace) between the
+generic helpers of mujoco_kernels, as comparisons.builders.mujoco.Passive does in Python. The
+generated ``mjcb_passive`` and ``mjcb_act_dyn`` are numba ``cfunc``s that read mjData's fields at
+offsets found by mujoco_cabi; every number of the description (points, body ids, dof addresses,
+law parameters, drive armatures) lives in ``mjData.userdata`` (``pack``), so the source depends on
+the description's *shape* only: the sequence of force elements (kind, law, state), the counts of
+coordinates, bodies, states and drives, and the MuJoCo build. Changing a parameter reuses the
+compiled callback.
+
+Compiled once per shape: the source is written to ``mujoco_passive_<hash>.py`` in numba's cache
+folder (nsd_core.numba_cache) and compiled with ``cache=True``, so a later process loads the machine
+code. numba's cache checks only that file, not the law functions it calls, so the hash covers, besides
+the source, each law's module, name and the source files of everything it calls (transitively through
+numba functions): an edit of a law (or of a device force it calls) gives a new file. A law defined
+inside a function (``<locals>``) cannot be told from another of the same name, so its object's
+identity enters the hash too (compiled again in each process).
+"""
+from __future__ import annotations
+
+import hashlib
+import importlib.util
+import inspect
+import os
+import sys
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import mujoco
+import numba
+import numpy as np
+
+from comparisons.builders import mujoco_kernels as K
+from comparisons.builders.mujoco_cabi import data_offsets, function_address
+from comparisons.builders.mujoco_mjcf import joint_name, state_activations
+from nsd_core.model.description import GROUND, Model
+from nsd_core.model.laws import POINTS
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Where each number sits in mjData.userdata (float64 indices)."""
+    size: int
+    nq: int
+    nv: int
+    na: int
+    drives_at: int
+    slots: tuple[str, ...]           # the bodies that carry an element end (mujoco_kernels' body slots)
+    slots_at: int
+    blocks: tuple[int, ...]          # each force element's block
+    params: tuple[tuple[int, int], ...]   # each element's parameters [start, end)
+    rates_at: int                    # the states' rates, by actuator id
+    values: np.ndarray               # each element's last law value
+
+
+def layout(model: Model) -> Layout:
+    """The layout of ``model``'s userdata (its sizes follow from the description alone, so the MJCF can
+    declare ``nuserdata`` before MuJoCo compiles it)."""
+    nq = sum(len(b.joint.dofs()) for b in model.bodies)
+    nv = nq   # hinges and slides only (mujoco_mjcf): one qpos per dof
+    na = sum(f.law.state is not None for f in model.forces)
+    slots = tuple(dict.fromkeys(b for f in model.forces if f.law.acts_on == POINTS
+                                for b in (f.body_a, f.body_b) if b != GROUND))
+    slots_at = K.HEADER + K.SCRATCH
+    drives_at = at = slots_at + K.slot_size(nv) * len(slots)
+    at += K.DRIVE_SIZE * len(model.prescribed)
+    blocks, params, values = [], [], []
+    for f in model.forces:
+        head, value = (K.POINTS_HEAD, K.P_VALUE) if f.law.acts_on == POINTS else (K.JOINT_HEAD, K.J_VALUE)
+        blocks.append(at)
+        values.append(at + value)
+        params.append((at + head, at + head + len(f.parameters)))
+        at += head + len(f.parameters)
+    return Layout(at + na, nq, nv, na, drives_at, slots, slots_at, tuple(blocks), tuple(params), at,
+                  np.array(values, dtype=np.int64))
+
+
+def pack(ud: np.ndarray, model: Model, m: mujoco.MjModel, drives: list, lay: Layout) -> None:
+    """Write every number the callback needs into ``ud`` (mjData.userdata); drives as
+    comparisons.builders.mujoco._compile gives them: (Prescribed, qposadr, dofadr, armature)."""
+    if (m.nq, m.nv, m.na, m.nuserdata) != (lay.nq, lay.nv, lay.na, lay.size):
+        raise RuntimeError(f"mujoco_codegen: the compiled model's sizes {(m.nq, m.nv, m.na, m.nuserdata)} "
+                           f"are not the layout's {(lay.nq, lay.nv, lay.na, lay.size)}")
+    ud[:] = 0.0
+    ud[K.JAC_FN] = function_address("mj_jac")   # < 2^53: exact as a float64
+    ud[K.N_DRIVES], ud[K.DRIVES_AT] = len(drives), lay.drives_at
+    ud[K.N_SLOTS], ud[K.SLOTS_AT] = len(lay.slots), lay.slots_at
+    for i, body in enumerate(lay.slots):
+        ud[lay.slots_at + K.slot_size(lay.nv) * i + K.S_BODY] = m.body(body).id
+    for i, (_, _, da, A) in enumerate(drives):
+        b = lay.drives_at + K.DRIVE_SIZE * i
+        ud[b + K.D_DOF], ud[b + K.D_ARM] = da, A
+    activations = state_activations(model, m)
+    for f, at, (p0, p1) in zip(model.forces, lay.blocks, lay.params):
+        slot = activations.get(f.name, -1)
+        if f.law.acts_on == POINTS:
+            for end, (body, p) in enumerate(((f.body_a, f.point_a), (f.body_b, f.point_b))):
+                ud[at + 4 * end] = -1 if body == GROUND else lay.slots.index(body)
+                ud[at + 4 * end + 1:at + 4 * end + 4] = np.asarray(p, float)
+            ud[at + K.P_SLOT] = slot
+        else:
+            j = m.joint(joint_name(f.joint, f.dof))
+            ud[at], ud[at + 1] = j.qposadr[0], j.dofadr[0]
+            ud[at + K.J_SLOT] = slot
+        ud[p0:p1] = f.parameters
+
+
+def _law_functions(model: Model) -> list:
+    """The distinct law functions of the description, in order of first use."""
+    out = []
+    for f in model.forces:
+        for fn in (f.law.force, f.law.rate):
+            if fn is not None and all(fn is not g for g in out):
+                out.append(fn)
+    return out
+
+
+def source(model: Model, lay: Layout, nbody: int) -> tuple[str, dict]:
+    """The generated module's text and the law functions it expects bound by name."""
+    fns = _law_functions(model)
+    names = {id(fn): f"law_{k}" for k, fn in enumerate(fns)}
+    o = data_offsets()
+    words = max(o.values()) + 1
+    ptr = lambda field, shape: f"carray(double_ptr(np.int64(w[{o[field]}])), {shape})"  # noqa: E731
+    lines = [
+        f'"""Generated by comparisons.builders.mujoco_codegen: do not edit. MuJoCo {mujoco.__version__}, '
+        f'numba {numba.__version__}.',
+        "Bound by the loader before this runs: " + ", ".join(
+            f"{names[id(fn)]} = {_identity(fn)}" for fn in fns) + '."""',
+        "import numpy as np",
+        "from numba import carray, cfunc, types",
+        "from comparisons.builders.mujoco_cabi import double_ptr",
+        "from comparisons.builders.mujoco_kernels import apply_points, drive_feeds, finish_bodies, points_state, "
+        "prepare_bodies",
+        "", "",
+        "@cfunc(types.void(types.voidptr, types.voidptr), cache=True)",
+        "def passive(m, d):",
+        f"    w = carray(d, ({words},), dtype=np.uint64)",
+        f"    ud_addr = np.int64(w[{o['userdata']}])",
+        f"    ud = carray(double_ptr(ud_addr), ({lay.size},))",
+        f"    qpos = {ptr('qpos', (lay.nq,))}",
+        f"    qvel = {ptr('qvel', (lay.nv,))}",
+        f"    qfrc = {ptr('qfrc_passive', (lay.nv,))}",
+        f"    xpos = {ptr('xpos', (nbody, 3))}",
+        f"    xmat = {ptr('xmat', (nbody, 9))}",
+    ]
+    if lay.na:
+        lines.append(f"    act = {ptr('act', (lay.na,))}")
+    if lay.slots:
+        lines.append(f"    prepare_bodies(m, d, ud, ud_addr, xpos, qvel, {lay.nv})")
+    for e, (f, at, (p0, p1)) in enumerate(zip(model.forces, lay.blocks, lay.params)):
+        law = names[id(f.law.force)]
+        lines.append(f"    # {f.name}: {f.law.name}")
+        if f.law.acts_on == POINTS:
+            lines.append(f"    x, xd = points_state(ud, {at}, xpos, xmat, {lay.nv})")
+            slot = at + K.P_SLOT
+        else:
+            lines.append(f"    x, xd = qpos[int(ud[{at}])], qvel[int(ud[{at + 1}])]")
+            slot = at + K.J_SLOT
+        if f.law.state is None:
+            lines.append(f"    f = {law}(x, xd, ud[{p0}:{p1}])")
+        else:   # the state's rate first, as Passive.law; mjcb_act_dyn hands it to MuJoCo
+            lines += [f"    s = act[int(ud[{slot}])]",
+                      f"    ud[{lay.rates_at} + int(ud[{slot}])] = {names[id(f.law.rate)]}(x, xd, s, ud[{p0}:{p1}])",
+                      f"    f = {law}(x, xd, s, ud[{p0}:{p1}])"]
+        lines.append(f"    ud[{lay.values[e]}] = f")
+        lines.append(f"    apply_points(ud, {at}, f, {lay.nv})" if f.law.acts_on == POINTS
+                     else f"    qfrc[int(ud[{at + 1}])] += f")
+    if lay.slots:
+        lines.append(f"    finish_bodies(ud, qfrc, {lay.nv})")
+    if model.prescribed:
+        lines.append(f"    drive_feeds(ud, qfrc, carray(d, ({o['time'] + 1},), dtype=np.float64)[{o['time']}])")
+    lines += ["", "",
+              "@cfunc(types.float64(types.voidptr, types.voidptr, types.int32), cache=True)",
+              "def act_dyn(m, d, actuator):",
+              "    # the states' rates into act_dot (one actuator holds them all: mujoco_mjcf)",
+              f"    w = carray(d, ({words},), dtype=np.uint64)",
+              f"    ud = carray(double_ptr(np.int64(w[{o['userdata']}])), ({lay.size},))",
+              *([f"    act_dot = {ptr('act_dot', (lay.na,))}",
+                 f"    for k in range({lay.na}):",
+                 f"        act_dot[k] = ud[{lay.rates_at} + k]",
+                 f"    return ud[{lay.rates_at}]"] if lay.na else ["    return 0.0"]),
+              ""]
+    return "\n".join(lines), {names[id(fn)]: fn for fn in fns}
+
+
+def _identity(fn) -> str:
+    py = getattr(fn, "py_func", fn)
+    return f"{py.__module__}.{py.__qualname__}"
+
+
+def _dependency_files(fn, seen: set) -> None:
+    """The source files of ``fn`` and of every numba function it names, transitively."""
+    py = getattr(fn, "py_func", fn)
+    if id(py) in seen:
+        return
+    seen.add(id(py))
+    try:
+        seen.add(inspect.getsourcefile(py))
+    except TypeError:
+        return
+    for name in py.__code__.co_names:
+        g = py.__globals__.get(name)
+        if isinstance(g, numba.core.registry.CPUDispatcher):
+            _dependency_files(g, seen)
+    for cell in py.__closure__ or ():
+        if isinstance(cell.cell_contents, numba.core.registry.CPUDispatcher):
+            _dependency_files(cell.cell_contents, seen)
+
+
+def fingerprint(text: str, bound: dict) -> str:
+    h = hashlib.sha256(text.encode())
+    for name, fn in sorted(bound.items()):
+        py = getattr(fn, "py_func", fn)
+        h.update(f"{name}={_identity(fn)}".encode())
+        if "<locals>" in py.__qualname__ or py.__closure__:
+            h.update(str(id(fn)).encode())
+        seen: set = set()
+        _dependency_files(fn, seen)
+        for path in sorted(p for p in seen if isinstance(p, str)):
+            h.update(path.encode())
+            h.update(Path(path).read_bytes())
+    return h.hexdigest()[:20]
+
+
+def _folder() -> Path:
+    base = numba.core.config.CACHE_DIR or os.environ.get("NUMBA_CACHE_DIR") or ""
+    for folder in ([Path(base) / "generated"] if base else []) + [
+            Path.home() / ".cache" / "nsd-harness" / "generated", Path(tempfile.gettempdir()) / "nsd-generated"]:
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+            return folder
+        except OSError:
+            continue
+    raise RuntimeError("mujoco_codegen: no writable folder for the generated callback")
+
+
+_LOADED: dict[str, object] = {}
+
+
+def callbacks(model: Model, lay: Layout, nbody: int):
+    """The generated module (``passive``, ``act_dyn``: numba cfuncs; keep it alive while installed),
+    compiled once per shape and process, from numba's disk cache when an earlier process compiled it."""
+    text, bound = source(model, lay, nbody)
+    key = fingerprint(text, bound)
+    if key in _LOADED:
+        return _LOADED[key]
+    path = _folder() / f"mujoco_passive_{key}.py"
+    if not path.exists():   # its name is its content's hash
+        tmp = path.with_suffix(f".{os.getpid()}.tmp")
+        tmp.write_text(text)
+        os.replace(tmp, path)   # atomic: a concurrent process sees the whole file or none
+    name = f"nsd_generated_mujoco_passive_{key}"
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    module.__dict__.update(bound)   # the law functions, by the names the source calls
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    _LOADED[key] = module
+    return module
+

@@ -1,0 +1,141 @@
+"""comparisons.builders.mujoco's compiled path (``passive = "compiled"``, the default): the passive
+callback generated from the description (mujoco_codegen) and the step loop in native code
+(mujoco_kernels.step_loop, calling mj_forward / mj_RungeKutta / mj_Euler by address): Python is
+entered once per run, not four times per step.
+
+It does exactly what the Python path (``passive = "python"``, the readable reference) does, in the same
+order; the outputs agree to round-off (tests/test_mujoco_codegen.py). Differences of form only:
+- the prescribed motions are tabulated before the run, at every half step (the RK4 stages' times),
+  from ``Prescribed.__call__``'s own code run on arrays (its ``math`` taken from numpy; checked
+  against scalar calls, and evaluated time by time where numpy cannot run it);
+- the loop records, at each output time, qpos, qvel, act and every element's law value of that
+  evaluation; coordinates and forces come from those records, and the other outputs (points, their
+  velocities, energies) from the Python sampler after the run, on the recorded states (their
+  kinematics are functions of qpos, qvel only).
+"""
+from __future__ import annotations
+
+import ctypes
+import time
+import types
+
+import mujoco
+import numba
+import numpy as np
+
+from comparisons.builders import mujoco_kernels as K
+from comparisons.builders.mujoco_cabi import data_offsets, function_address
+from comparisons.builders.mujoco_codegen import callbacks, layout, pack
+from comparisons.builders.mujoco_mjcf import joint_name
+from comparisons.engines.base import EngineError
+
+REPLAYED = ("point", "point_velocity", "energy")
+
+
+def motion_table(p, times: np.ndarray) -> np.ndarray:
+    """(q, q', q'') of prescribed motion ``p`` at ``times`` (3 x len(times))."""
+    call = type(p).__call__
+    arrays = types.FunctionType(call.__code__, {**call.__globals__, "math": np})
+    at = np.linspace(0, len(times) - 1, min(len(times), 7)).astype(int)
+    try:
+        table = np.array([np.broadcast_to(np.asarray(v, float), times.shape) for v in arrays(p, times)])
+        scalar = np.array([p(t) for t in times[at]]).T
+        scale = np.max(np.abs(scalar), axis=1, keepdims=True) + 1e-300
+        if table.shape == (3, len(times)) and np.all(np.abs(table[:, at] - scalar) <= 1e-14 * scale):
+            return table
+    except (TypeError, AttributeError, ValueError):
+        pass
+    return np.array([p(t) for t in times]).T   # numpy cannot run this motion's code: one call a time
+
+
+def _uses_arrays(uses: dict, n_steps: int):
+    """mujoco.point_from_averages' map as compressed rows: step n's (output, weight) pairs are
+    uses_k / uses_w[uses_ptr[n]:uses_ptr[n + 1]]."""
+    counts = np.zeros(n_steps + 1, dtype=np.int64)
+    for n, pairs in uses.items():
+        counts[n + 1] = len(pairs)
+    ptr = np.cumsum(counts)
+    flat = [pair for n in range(n_steps) for pair in uses.get(n, ())]
+    return ptr, np.array([k for k, _ in flat], dtype=np.int64), np.array([w for _, w in flat], dtype=float)
+
+
+class _Recorded:
+    """The sampler's law values at output k: those the loop recorded (no law is evaluated again)."""
+
+    def __init__(self, model, values):
+        self.names, self.values, self.k = [f.name for f in model.forces], values, 0
+
+    def law_values(self, m, d) -> dict:
+        return dict(zip(self.names, self.values[self.k]))
+
+
+def run(model, s: dict, m, d, drives: list, pairs: list, t_out: np.ndarray, n_sub: int, h: float,
+        n_steps: int, weights: np.ndarray, uses: dict, sampler) -> tuple:
+    """The run: (outputs at t_out (drive forces NaN), drive forces at t_out, wall time [s], largest loop
+    gap, tracking error). ``sampler(forces)`` is mujoco._sampler on (m, d) with law values ``forces``."""
+    lay = layout(model)
+    ud = d.userdata
+    pack(ud, model, m, drives, lay)
+    module = callbacks(model, lay, m.nbody)
+    nd, n_out = len(drives), len(t_out)
+    half = 0.5 * h * np.arange(2 * n_steps + 3)
+    tables = [motion_table(p, half) for p, *_ in drives]
+    acc_half = np.array([tb[2] for tb in tables]).reshape(nd, len(half))
+    q_at = np.array([tb[0, ::2] for tb in tables]).reshape(nd, n_steps + 2)
+    qd_at = np.array([tb[1, ::2] for tb in tables]).reshape(nd, n_steps + 2)
+    drive_qa = np.array([[qa, da] for _, qa, da, _ in drives], dtype=np.int64).reshape(nd, 2)
+    uses_ptr, uses_k, uses_w = _uses_arrays(uses, n_steps)
+    site_pairs = np.array(pairs, dtype=np.int64).reshape(-1, 2)
+    rec_qpos, rec_qvel = np.zeros((n_out, m.nq)), np.zeros((n_out, m.nv))
+    rec_act, rec_val = np.zeros((n_out, m.na)), np.zeros((n_out, len(model.forces)))
+    gaps, drive_at = np.zeros(n_out), np.zeros((n_out, nd))
+    clock = np.ctypeslib.as_array((ctypes.c_double * 1).from_address(d._address + 8 * data_offsets()["time"]))
+    rk4 = s["integrator"] == "RK4"
+    fn_forward = function_address("mj_forward")
+    fn_advance = function_address("mj_RungeKutta" if rk4 else "mj_Euler")
+    previous = mujoco.get_mjcb_passive(), mujoco.get_mjcb_act_dyn()
+    try:
+        mujoco.set_mjcb_passive(module.passive.ctypes)
+        mujoco.set_mjcb_act_dyn(module.act_dyn.ctypes)
+        ud[K.STEP], ud[K.T_STEP] = h, clock[0]
+        if nd:
+            K.set_stage_accelerations(ud, acc_half, 0)
+        for _ in range(3 if nd else 0):   # the drive force at t = 0, refined by its own measurement
+            ud[K.COUNT] = 0.0
+            mujoco.mj_forward(m, d)
+            for i, (_, _, da, A) in enumerate(drives):
+                b = lay.drives_at + K.DRIVE_SIZE * i
+                ud[b + K.D_TAU] = ud[b + K.D_FEED + int(ud[K.COUNT]) - 1] - A * d.qacc[da]
+        args = (fn_forward, fn_advance, rk4, m._address, d._address, clock, d.qpos, d.qvel, d.act, d.qacc,
+                d.site_xpos, ud, n_sub, n_steps, h, weights, acc_half, q_at, qd_at, drive_qa, uses_ptr, uses_k,
+                uses_w, site_pairs, float(s["closure_limit"]), lay.values, rec_qpos, rec_qvel, rec_act, rec_val,
+                gaps, drive_at)
+        K.step_loop.compile(tuple(numba.typeof(a) for a in args))   # (or load) before the clock starts
+        begin = time.perf_counter()
+        tracking, failed = K.step_loop(*args)
+        if failed == -2:
+            raise RuntimeError("mujoco_compiled: a step evaluated the passive forces an unexpected number of times")
+        if failed >= 0:
+            raise EngineError(f"mujoco: unstable at t = {t_out[failed]:.6g} s (loop gap {gaps[failed]:.3g} m); "
+                              "try a smaller timestep")
+        data = np.full((n_out, len(model.outputs)), np.nan)
+        names = [f.name for f in model.forces]
+        for c, o in enumerate(model.outputs):
+            if o.kind == "coordinate":
+                data[:, c] = rec_qpos[:, m.joint(joint_name(o.body, o.dof)).qposadr[0]]
+            elif o.kind == "force":
+                data[:, c] = rec_val[:, names.index(o.element)]
+        replayed = [c for c, o in enumerate(model.outputs) if o.kind in REPLAYED]
+        if replayed:
+            recorded = _Recorded(model, rec_val)
+            sample = sampler(recorded)
+            for k in range(n_out):   # the recorded state again: its kinematics, mass matrix, energies
+                d.qpos[:], d.qvel[:], d.act[:], d.time = rec_qpos[k], rec_qvel[k], rec_act[k], t_out[k]
+                mujoco.mj_forward(m, d)
+                recorded.k = k
+                data[k, replayed] = np.asarray(sample(), dtype=float)[replayed]
+        wall = time.perf_counter() - begin
+    finally:
+        mujoco.set_mjcb_passive(previous[0])
+        mujoco.set_mjcb_act_dyn(previous[1])
+    return data, drive_at, wall, float(gaps.max()), float(tracking)

@@ -1,0 +1,238 @@
+"""The compiled pieces of comparisons.builders.mujoco's compiled path that know no mechanism and no law:
+the layout of ``mjData.userdata``, the helpers the generated passive callback strings together
+(mujoco_codegen), and the native step loop.
+
+The helpers compute what comparisons.builders.mujoco.Passive computes, arranged for speed (the two
+paths agree to round-off: tests/test_mujoco_codegen.py):
+- ``prepare_bodies``: once per evaluation, for each body that carries an element end, MuJoCo's own
+  mj_jac at the body's origin (translational J_o and rotational J_w, 3 x nv each), its origin's
+  velocity v_o = J_o qvel and its angular velocity w = J_w qvel. Passive calls mj_jac at every end
+  (13 calls per evaluation for the device, ~1.2 us of its 1.7 us); a point at r from the origin has
+  J = J_o - [r x] J_w, the same numbers re-associated;
+- ``points_state``: an element's two world points (xpos + xmat p; ground: p), their velocities
+  v_o + w x r, L, L' and the unit vector a -> b (L = 0: no direction, as Passive);
+- ``apply_points``: the tension as wrenches on the two bodies, +T u at a, -T u at b, summed per body
+  about its origin (F, r x F); ``finish_bodies`` then adds J_o^T F + J_w^T M to qfrc_passive, which
+  is Passive's (T u) (J_a - J_b) summed over the elements;
+- ``drive_feeds``: the heavy virtual drives' feed-forward A q''(t) + tau + tau' (t - t_tau) at this
+  stage's time, each stage's value kept for the step's average drive force.
+
+The prescribed accelerations come from the step loop, which writes q'' at the step's start, middle
+and end before each step; a stage picks its own by its time (Euler and the first stage: start; RK4's
+two middle stages: middle; its last: end).
+
+userdata layout (float64): a header, scratch (the two ends' arms r and the unit vector), one block
+per body slot, per drive, per force element (its parameters last, so that a law receives them as one
+array view) and the states' rates (by act index, copied to act_dot by the generated mjcb_act_dyn).
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from comparisons.builders.mujoco_cabi import call_jac, call_md, call_md_int
+
+# header
+JAC_FN, COUNT, T_STEP, STEP, T_TAU, N_DRIVES, DRIVES_AT, N_SLOTS, SLOTS_AT, HEADER = range(10)
+SCRATCH = 9          # the ends' arms r_a, r_b and the unit vector u
+MAX_STAGES = 4       # RK4's; a step of more stages keeps only its first 4 feeds and the loop fails it
+# a body slot: body id, point (its origin), v_o, w, F, M, then J_o and J_w (3 x nv each)
+S_BODY, S_POINT, S_VEL, S_OMEGA, S_FORCE, S_MOMENT, S_JAC = 0, 1, 4, 7, 10, 13, 16
+# a drive: dof address, armature, tau, tau', q'' at the step's start / middle / end, the stages' feeds
+D_DOF, D_ARM, D_TAU, D_SLOPE, D_ACC, D_FEED, DRIVE_SIZE = 0, 1, 2, 3, 4, 7, 7 + MAX_STAGES
+# a points element: slot of body a (-1: ground), point a (3), slot of body b, point b (3), its state's
+# index in act (-1: none), (unused), last value, (unused), then the law's parameters; a joint element:
+# qpos and dof address, act index, (unused), value, (unused), parameters
+P_SLOT, P_VALUE, POINTS_HEAD = 8, 10, 12
+J_SLOT, J_VALUE, JOINT_HEAD = 2, 4, 6
+
+
+def slot_size(nv: int) -> int:
+    return S_JAC + 6 * nv
+
+
+@njit(cache=True)
+def prepare_bodies(m, d, ud, ud_addr, xpos, qvel, nv):
+    """Each body slot's Jacobians at its origin, origin velocity and angular velocity; F = M = 0."""
+    size = S_JAC + 6 * nv
+    at = int(ud[SLOTS_AT])
+    for i in range(int(ud[N_SLOTS])):
+        s = at + size * i
+        b = int(ud[s + S_BODY])
+        for c in range(3):
+            ud[s + S_POINT + c] = xpos[b, c]
+            ud[s + S_FORCE + c] = 0.0
+            ud[s + S_MOMENT + c] = 0.0
+        jo = s + S_JAC
+        jw = jo + 3 * nv
+        call_jac(np.int64(ud[JAC_FN]), m, d, ud_addr + 8 * jo, ud_addr + 8 * jw, ud_addr + 8 * (s + S_POINT), b)
+        for c in range(3):
+            v = w = 0.0
+            for j in range(nv):
+                v += ud[jo + c * nv + j] * qvel[j]
+                w += ud[jw + c * nv + j] * qvel[j]
+            ud[s + S_VEL + c] = v
+            ud[s + S_OMEGA + c] = w
+
+
+@njit(cache=True, inline="always")
+def _end(ud, at, end, xpos, xmat, nv):
+    """World point and velocity of one end of a points element; its arm r from the body's origin is
+    kept in scratch."""
+    slot = int(ud[at + 4 * end])
+    p0, p1, p2 = ud[at + 4 * end + 1], ud[at + 4 * end + 2], ud[at + 4 * end + 3]
+    r = HEADER + 3 * end
+    if slot < 0:
+        ud[r], ud[r + 1], ud[r + 2] = 0.0, 0.0, 0.0
+        return p0, p1, p2, 0.0, 0.0, 0.0
+    s = int(ud[SLOTS_AT]) + (S_JAC + 6 * nv) * slot
+    b = int(ud[s + S_BODY])
+    r0 = xmat[b, 0] * p0 + xmat[b, 1] * p1 + xmat[b, 2] * p2
+    r1 = xmat[b, 3] * p0 + xmat[b, 4] * p1 + xmat[b, 5] * p2
+    r2 = xmat[b, 6] * p0 + xmat[b, 7] * p1 + xmat[b, 8] * p2
+    ud[r], ud[r + 1], ud[r + 2] = r0, r1, r2
+    w0, w1, w2 = ud[s + S_OMEGA], ud[s + S_OMEGA + 1], ud[s + S_OMEGA + 2]
+    return (xpos[b, 0] + r0, xpos[b, 1] + r1, xpos[b, 2] + r2, ud[s + S_VEL] + (w1 * r2 - w2 * r1),
+            ud[s + S_VEL + 1] + (w2 * r0 - w0 * r2), ud[s + S_VEL + 2] + (w0 * r1 - w1 * r0))
+
+
+@njit(cache=True)
+def points_state(ud, at, xpos, xmat, nv):
+    """(L, L') of the points element whose block starts at ``at``; u and the arms stay in scratch."""
+    a0, a1, a2, va0, va1, va2 = _end(ud, at, 0, xpos, xmat, nv)
+    b0, b1, b2, vb0, vb1, vb2 = _end(ud, at, 1, xpos, xmat, nv)
+    r0, r1, r2 = b0 - a0, b1 - a1, b2 - a2
+    L = np.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
+    u = HEADER + 6
+    if L > 0.0:
+        ud[u], ud[u + 1], ud[u + 2] = r0 / L, r1 / L, r2 / L
+    else:
+        ud[u], ud[u + 1], ud[u + 2] = 0.0, 0.0, 0.0
+    return L, ud[u] * (vb0 - va0) + ud[u + 1] * (vb1 - va1) + ud[u + 2] * (vb2 - va2)
+
+
+@njit(cache=True)
+def apply_points(ud, at, T, nv):
+    """+T u on end a, -T u on end b, as forces and moments about each body's origin."""
+    u = HEADER + 6
+    for end in range(2):
+        slot = int(ud[at + 4 * end])
+        if slot < 0:
+            continue
+        sign = T if end == 0 else -T
+        f0, f1, f2 = sign * ud[u], sign * ud[u + 1], sign * ud[u + 2]
+        r = HEADER + 3 * end
+        r0, r1, r2 = ud[r], ud[r + 1], ud[r + 2]
+        s = int(ud[SLOTS_AT]) + (S_JAC + 6 * nv) * slot
+        ud[s + S_FORCE] += f0
+        ud[s + S_FORCE + 1] += f1
+        ud[s + S_FORCE + 2] += f2
+        ud[s + S_MOMENT] += r1 * f2 - r2 * f1
+        ud[s + S_MOMENT + 1] += r2 * f0 - r0 * f2
+        ud[s + S_MOMENT + 2] += r0 * f1 - r1 * f0
+
+
+@njit(cache=True)
+def finish_bodies(ud, qfrc, nv):
+    """qfrc_passive += J_o^T F + J_w^T M of every body slot."""
+    size = S_JAC + 6 * nv
+    at = int(ud[SLOTS_AT])
+    for i in range(int(ud[N_SLOTS])):
+        s = at + size * i
+        jo = s + S_JAC
+        jw = jo + 3 * nv
+        for j in range(nv):
+            q = 0.0
+            for c in range(3):
+                q += ud[jo + c * nv + j] * ud[s + S_FORCE + c] + ud[jw + c * nv + j] * ud[s + S_MOMENT + c]
+            qfrc[j] += q
+
+
+@njit(cache=True)
+def drive_feeds(ud, qfrc, t):
+    """Add each heavy virtual drive's feed-forward at stage time t; keep it for the step's average."""
+    count = int(ud[COUNT])
+    half = 0.5 * ud[STEP]
+    stage = min(2, max(0, int(np.floor((t - ud[T_STEP]) / half + 0.5)))) if half > 0.0 else 0
+    at = int(ud[DRIVES_AT])
+    for i in range(int(ud[N_DRIVES])):
+        b = at + DRIVE_SIZE * i
+        feed = ud[b + D_ARM] * ud[b + D_ACC + stage] + ud[b + D_TAU] + ud[b + D_SLOPE] * (t - ud[T_TAU])
+        qfrc[int(ud[b + D_DOF])] += feed
+        if count < MAX_STAGES:
+            ud[b + D_FEED + count] = feed
+    ud[COUNT] = count + 1
+
+
+@njit(cache=True)
+def set_stage_accelerations(ud, acc_half, n):
+    """q'' of every drive at step n's start, middle and end (acc_half: drives x half-steps)."""
+    at = int(ud[DRIVES_AT])
+    for i in range(int(ud[N_DRIVES])):
+        b = at + DRIVE_SIZE * i + D_ACC
+        ud[b], ud[b + 1], ud[b + 2] = acc_half[i, 2 * n], acc_half[i, 2 * n + 1], acc_half[i, 2 * n + 2]
+
+
+@njit(cache=True)
+def step_loop(fn_forward, fn_advance, rk4, m_addr, d_addr, time, qpos, qvel, act, qacc, site_xpos, ud,
+              n_sub, n_steps, h, weights, acc_half, q_at, qd_at, drive_qa, uses_ptr, uses_k, uses_w,
+              pairs, closure_limit, values, rec_qpos, rec_qvel, rec_act, rec_val, gaps, drive_at):
+    """comparisons.builders.mujoco.simulate's step loop, natively, in the same order of operations.
+
+    Records, at every output time, qpos, qvel, act, each element's last law value and the loop gap.
+    Returns (largest tracking error, failing output index or -1, -2 for a stage count that is not the
+    integrator's)."""
+    nd = drive_qa.shape[0]
+    at = int(ud[DRIVES_AT])
+    tracking = 0.0
+    for n in range(n_steps + 1):
+        t = n * h
+        time[0] = t
+        ud[COUNT] = 0.0
+        ud[T_STEP] = t
+        set_stage_accelerations(ud, acc_half, n)
+        call_md(fn_forward, m_addr, d_addr)
+        if n % n_sub == 0:
+            k = n // n_sub
+            gap = 0.0
+            for i in range(pairs.shape[0]):
+                a, b = pairs[i, 0], pairs[i, 1]
+                dx = site_xpos[a, 0] - site_xpos[b, 0]
+                dy = site_xpos[a, 1] - site_xpos[b, 1]
+                dz = site_xpos[a, 2] - site_xpos[b, 2]
+                gap = max(gap, np.sqrt(dx * dx + dy * dy + dz * dz))
+            gaps[k] = gap
+            rec_qpos[k, :] = qpos
+            rec_qvel[k, :] = qvel
+            rec_act[k, :] = act
+            for e in range(values.shape[0]):
+                rec_val[k, e] = ud[values[e]]
+            if not (np.all(np.isfinite(qpos)) and gap < closure_limit):
+                return tracking, k
+        if n == n_steps:
+            break
+        if rk4:
+            call_md_int(fn_advance, m_addr, d_addr, 4)
+        else:
+            call_md(fn_advance, m_addr, d_addr)
+        if nd:
+            if int(ud[COUNT]) != weights.shape[0]:
+                return tracking, -2
+            # the step's average drive force: the stages' weighted feed-forward less A x the step's
+            # average acceleration (comparisons.builders.mujoco.simulate says why)
+            for i in range(nd):
+                b = at + DRIVE_SIZE * i
+                bar = 0.0
+                for s in range(weights.shape[0]):
+                    bar += weights[s] * ud[b + D_FEED + s]
+                bar -= ud[b + D_ARM] * qacc[int(ud[b + D_DOF])]
+                for j in range(uses_ptr[n], uses_ptr[n + 1]):
+                    drive_at[uses_k[j], i] += uses_w[j] * bar
+                ud[b + D_SLOPE] = (bar - ud[b + D_TAU]) / h if n else 0.0
+                ud[b + D_TAU] = bar
+            ud[T_TAU] = t + 0.5 * h
+        for i in range(nd):   # the drive's coordinate, exactly on its path
+            qa, da = drive_qa[i, 0], drive_qa[i, 1]
+            tracking = max(tracking, abs(qpos[qa] - q_at[i, n + 1]))
+            qpos[qa], qvel[da] = q_at[i, n + 1], qd_at[i, n + 1]
+    return tracking, -1
