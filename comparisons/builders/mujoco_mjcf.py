@@ -51,6 +51,17 @@ def floored_inertia(J: np.ndarray, floor: float) -> np.ndarray:
     return (V * np.maximum(w, floor)) @ V.T
 
 
+def on_triangle(moments) -> list[float]:
+    """Principal moments that meet the triangle inequality up to rounding (a plate written in decimals,
+    Izz = Ixx + Iyy, can miss it by 1e-19 kg m^2), moved onto it: MuJoCo rejects A + B < C exactly. A
+    real violation (the description's loader allows 1e-12 of the largest) is left for MuJoCo to say."""
+    m = [float(x) for x in moments]
+    for i, j, k in ((0, 1, 2), (1, 2, 0), (0, 2, 1)):
+        if m[i] + m[j] < m[k] <= (m[i] + m[j]) * (1.0 + 1e-12):
+            m[k] = m[i] + m[j]
+    return m
+
+
 def mechanism_size(model: Model) -> float:
     """The largest joint offset or loop point [m] (at least 1 mm): the arm of a revolute closure."""
     lengths = [np.linalg.norm(b.joint.position) for b in model.bodies]
@@ -106,8 +117,12 @@ def build_mjcf(model: Model, s: dict, h: float, rotation: dict, armature: dict, 
     def body_xml(b, indent: str) -> list[str]:
         J = floored_inertia(b.inertia, float(s["inertia_floor"]))
         full = (J[0, 0], J[1, 1], J[2, 2], J[0, 1], J[0, 2], J[1, 2])
+        # a diagonal tensor goes as it is written: MuJoCo's eigen-decomposition of a fullinertia can put a
+        # plate's Izz = Ixx + Iyy (the description's advice for planar bodies) a rounding below the
+        # triangle inequality it then enforces
+        given = f'diaginertia="{_f(on_triangle(full[:3]))}"' if not any(full[3:]) else f'fullinertia="{_f(full)}"'
         lines = [f'{indent}<body name="{b.name}" pos="{_f(b.joint.position)}">',
-                 f'{indent}  <inertial pos="{_f(b.com)}" mass="{_f(b.mass)}" fullinertia="{_f(full)}"/>']
+                 f'{indent}  <inertial pos="{_f(b.com)}" mass="{_f(b.mass)}" {given}/>']
         for k, (kind, axis) in enumerate(b.joint.dofs()):
             extra = f' armature="{_f(armature[(b.name, k)])}"' if (b.name, k) in armature else ""
             lines.append(f'{indent}  <joint name="{joint_name(b.name, k)}" type="{"hinge" if kind == "R" else "slide"}" '
