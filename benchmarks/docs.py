@@ -280,7 +280,7 @@ def model_benchmarks() -> str:
             continue
         for case, c in m["cases"].items():
             for e, v in c["engines"].items():
-                step = ", ".join(f"{k} {plain(x)}" for k, x in v["settings"].items()) or "-"
+                step = ", ".join(f"{k} {plain(x) if isinstance(x, (int, float)) else x}" for k, x in v["settings"].items()) or "-"
                 rows.append([name, case, e, "PASS" if v["pass"] else "**FAIL**", g(v["worst_ratio"]),
                              g(v["worst_error"]), f"{plain(v['wall_time'])} ({step})" if v.get("wall_time") else "-"])
     return (provenance(rec) + "\n"
