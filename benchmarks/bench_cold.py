@@ -67,7 +67,33 @@ def timed(args: list[str], out: Path, cache: Path, root: Path = ROOT) -> dict:
     return row
 
 
+def record(before: Path, after: Path, commits: tuple[str, str], out: Path) -> None:
+    """benchmarks/results/bench_cold.json in benchmarks.measure's record format from two runs of this
+    script side by side (before and after a change, each on a `git archive` of its commit): the load is
+    the worst either saw, the command the two runs'."""
+    import json
+    b, a = json.loads(before.read_text()), json.loads(after.read_text())
+    worst = lambda k: [round(max(x, y), 2) for x, y in zip(b[k], a[k])]  # noqa: E731
+    rec = {"name": "bench_cold", "exit_code": 0,
+           "command": f"python benchmarks/bench_cold.py --root <git archive of each commit> --out DIR (before: "
+                      f"{commits[0][:12]}, after: {commits[1][:12]}, run side by side)",
+           "measured": {"date_utc": a["date_utc"], "machine": a["machine"], "processor": platform.machine(),
+                        "cpus": a["cpus"], "load_average_before": worst("load_average_start"),
+                        "load_average_after": worst("load_average_end"),
+                        "wall_s": sum(r["wall_s"] for d in (b, a) for runs in d["rows"].values()
+                                      for rr in runs.values() for r in rr),
+                        "versions": a["versions"], "git_commit": commits[1]},
+           "data": {"before": {**b, "commit": commits[0]}, "after": {**a, "commit": commits[1]}}}
+    from benchmarks.docs import loaded
+    rec["measured"]["loaded"] = loaded(rec["measured"])
+    atomic_write_json(out, rec)
+
+
 def main(argv=None) -> int:
+    if argv is None and sys.argv[1:2] == ["--record"]:   # --record BEFORE AFTER BEFORE_COMMIT AFTER_COMMIT OUT
+        b, a, cb, ca, out = sys.argv[2:7]
+        record(Path(b), Path(a), (cb, ca), Path(out))
+        return 0
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", required=True, help="folder for bench_cold.json")
     ap.add_argument("--repeats", type=int, default=1)

@@ -44,6 +44,9 @@ MEASUREMENTS = {
     "tables": (NSD + ["tables", "--out", "OUT"], "tables.csv", "csv"),
     # issue 32: every mechanism description in models/ through nsd compare --model, in every engine
     "bench_models": (PY + ["benchmarks/bench_models.py", "--out", "OUT"], "bench_models.json", "json"),
+    # the device's description in MuJoCo (compiled) against the hand-written adapter, side by side
+    "bench_model_builders": (PY + ["benchmarks/bench_model_builders.py", "--repeats", "3", "--out", "OUT"],
+                             "bench_model_builders.json", "json"),
     "benchmark": (NSD + ["benchmark", "--out", "OUT"], "results.json", "json"),
     "polar": (NSD + ["polar", "--out", "OUT"], "polar.json", "json"),
     "bench_cycle": (PY + ["benchmarks/bench_cycle.py", "--no-compile", "--repeats", "3", "--out", "OUT"],
@@ -58,8 +61,13 @@ MEASUREMENTS = {
                          "bench_record_set.json", "json"),
     "work_precision": (PY + ["benchmarks/work_precision.py", "--to-aim", "--no-compile", "--repeats", "3", "--out",
                              "OUT"], "work_precision.json", "json"),
+    # issue 35: a newcomer's first commands on an empty cache (and how often each compiles); the peers per
+    # model second on the gate's seismic cases
+    "bench_cold": (PY + ["benchmarks/bench_cold.py", "--out", "OUT"], "bench_cold.json", "json"),
+    "bench_peer_seismic": (PY + ["benchmarks/bench_peer_seismic.py", "--repeats", "3", "--out", "OUT"],
+                           "bench_peer_seismic.json", "json"),
 }
-SHORT = ("bench_start", "bench_record_set", "work_precision")   # their --short: fewer cases or records, 1 repeat
+SHORT = ("bench_start", "bench_record_set", "work_precision", "bench_peer_seismic")   # their --short: fewer cases or records, 1 repeat
 
 
 def _git_commit() -> str:
