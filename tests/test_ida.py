@@ -197,7 +197,7 @@ def test_small_ida_on_one_record(tmp_path, capsys):
             "--engines", "semirecursive", "--workers", "1", "--out", str(out)]
     assert main(argv) == 0
     assert sorted(p.name for p in out.glob("*.png")) == ["01_ida_curves.png", "02_fragility.png",
-                                                          "03_ida_cross_check.png"]  # its own figures
+                                                          "03_ida_cross_check.png", "limit_states.png"]  # its own
     rows = _csv(out / "ida.csv")
     assert [(r["device"], float(r["im [m/s^2]"]), r["limit_reached"]) for r in rows] == [
         ("yes", 0.5, "no"), ("yes", 0.9, "yes"), ("no", 0.5, "no"), ("no", 0.9, "yes")]
