@@ -99,6 +99,7 @@ def run(args) -> int:
     from nsd_core.study.ida import Trace, trace_all
     from nsd_core.study.ida_outputs import write_ida
     from nsd_core.study.intensity import component_sa
+    import numpy as np
     from nsd_core.study.p695_outputs import evaluation, print_lines, write_p695
     from nsd_core.study.seismic_set import parse_records
     from nsd_core.study.store import Store
@@ -108,6 +109,8 @@ def run(args) -> int:
     sdc = p695.check_sdc(args.sdc)
     ratings = p695.parse_ratings(args.quality)
     whole("--bootstrap", args.bootstrap, 100, 100000)
+    if args.seed is not None:
+        whole("--seed", args.seed, 0, 2 ** 32 - 1)
     workers = (os.cpu_count() or 1) if args.workers is None else args.workers
     whole("--workers", workers, 1, WORKERS_MAX)
     if args.duration is not None and not (0.1 <= args.duration <= 1000.0):
@@ -135,7 +138,7 @@ def run(args) -> int:
     durations = {r: min(m.duration, args.duration or m.duration) for r, m in motions.items()}
     check_ida_work(durations, hunt.max_runs, "--max-runs", structure.building.stories if structure.building else 0)
     # the set's median Sa at T (every component of the chosen records): a level is this x the common scale
-    s_nrt = float(__import__("numpy").median([component_sa(c.t, c.a, period) for m in motions.values() for c in m.comp]))
+    s_nrt = float(np.median([component_sa(c.t, c.a, period) for m in motions.values() for c in m.comp]))
     out = check_out_dir("--out", args.out)
     common = dict(ground=ground, params=params.to_dict(), duration=args.duration, dt_out=1e-3, settings=solver,
                   code=code_fingerprint(), states=states.to_dict(), set="farfield")

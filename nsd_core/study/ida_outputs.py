@@ -72,8 +72,10 @@ def ida_rows(traces: list[Trace], store: Store) -> list[dict]:
 def fragility(traces: list[Trace], measure: dict, limit_text: str) -> dict:
     """fragility.json's content: per configuration, the fit and the records behind it."""
     out = {"measure": measure, "limit": limit_text, "configurations": {}}
-    for dev, name in CONFIGS.items():
-        results = [trace_result(tr) for tr in traces if tr.device == dev]
+    # a trace's own configuration name where it carries one (nsd p695: device and each baseline apart)
+    names = list(dict.fromkeys(tr.config or CONFIGS[tr.device] for tr in traces)) or list(CONFIGS.values())
+    for name in names:
+        results = [trace_result(tr) for tr in traces if (tr.config or CONFIGS[tr.device]) == name]
         reached = [r for r in results if r["limit_im"] is not None]
         censored = [r for r in results if r["censored_at"] is not None]
         fit = fit_lognormal([r["limit_im"] for r in reached], [r["censored_at"] for r in censored])
