@@ -78,8 +78,11 @@ def main(argv=None) -> dict:
         out["runs"][k] = {"wall_s": walls[k], "median_wall_s": med, "ratio_to_adapter": med / median_a,
                           "load_average_before_after": loads[k],
                           "max_abs_dF_x_over_peak": float(np.max(np.abs(F - F_a)) / peak)}
-    Path(args.out).parent.mkdir(parents=True, exist_ok=True)
-    Path(args.out).write_text(json.dumps(out, indent=1) + "\n")
+    target = Path(args.out)
+    if target.suffix != ".json":   # a folder (python -m benchmarks.measure passes one)
+        target = target / "bench_model_builders.json"
+    target.parent.mkdir(parents=True, exist_ok=True)
+    target.write_text(json.dumps(out, indent=1) + "\n")
     for k, r in out["runs"].items():
         print(f"{k:18s} median {r['median_wall_s']:.3f} s  x{r['ratio_to_adapter']:.2f}  "
               f"dF_x/peak {r['max_abs_dF_x_over_peak']:.2e}")

@@ -288,6 +288,22 @@ def model_benchmarks() -> str:
                      "wall s (settings)"], rows))
 
 
+def model_builders() -> str:
+    """The device's description in MuJoCo against the hand-written adapter (bench_model_builders)."""
+    rec = load("bench_model_builders")
+    d = rec["data"]
+    names = {"a_adapter": "hand-written adapter (Euler)", "b_builder_euler": "description builder, compiled, Euler",
+             "b_builder_rk4": "description builder, compiled, RK4 (its default)"}
+    rows = [[names.get(k, k), g(v["median_wall_s"]), g(v["ratio_to_adapter"]), g(v["max_abs_dF_x_over_peak"])]
+            for k, v in d["runs"].items()]
+    c = d["case"]
+    return (provenance(rec) + "\n"
+            + f"The device driven at {g(c['amplitude_m'] * 1e3)} mm, {g(c['frequency_hz'])} Hz, {c['cycles']} cycles, "
+              f"h = {g(c['timestep_s'])} s, the runs interleaved; wall seconds of the stepping (median), and F_x "
+              "against the adapter's over its peak.\n\n"
+            + table(["MuJoCo model", "wall s", "ratio to the adapter", "max abs ΔF_x / peak"], rows))
+
+
 def direction_study() -> str:
     rec = load("polar")
     d = rec["data"]
@@ -447,13 +463,61 @@ def work_precision() -> str:
                      "ratio best peer / in-house"], rows))
 
 
+def bench_cold() -> str:
+    rec = load("bench_cold")
+    d = rec["data"]
+    names = [n for n in d["after"]["median"] if n in d["before"]["median"]]
+    rows = []
+    for n in names:
+        for state in ("cold", "warm"):
+            b, a = d["before"]["median"][n].get(state), d["after"]["median"][n].get(state)
+            if not (a and b):
+                continue
+            rows.append([n.replace("sequence:", "one cache: "), state, g(b["wall_s"]), g(a["wall_s"]), g(b["cpu_s"]),
+                         g(a["cpu_s"]), f"{g(b['compile_notices'])} / {g(a['compile_notices'])}",
+                         f"{g(b['load_before'])} / {g(a['load_before'])}"] + [g(x.get("compare_wall_s")) for x in (b, a)])
+    return (provenance(rec) + "\n"
+            + "A newcomer's first commands, before and after issue 35 (each commit a `git archive`, the two run side "
+              "by side so that they share the load): `cycle` (`nsd cycle --amplitude 0.015 --frequency 1`), `sweep` "
+              "(`nsd sweep --paper`) and `compare` (the README's first command, `nsd compare --convergence --report`) "
+              "each on its own empty cache folder, cold then warm; `one cache:` a drive cycle, a seismic window and "
+              "the same window under a 3-story building one after another on one empty cache (how many times each "
+              "compiles). Wall and CPU seconds of the whole command (its workers and helpers included), the "
+              "\"nsd: compiling\" lines it printed and the 1-minute load when it started. On a loaded machine the "
+              "CPU seconds are the figure to compare; wall seconds stretch with the load.\n\n"
+            + table(["command", "cache", "wall s before", "wall s after", "CPU s before", "CPU s after",
+                     "compile lines before / after", "load before / after", "compare wall s before",
+                     "compare wall s after"], rows))
+
+
+def bench_peer_seismic() -> str:
+    rec = load("bench_peer_seismic")
+    d = rec["data"]
+    rows, diffs = [], {}
+    for r in d["rows"]:
+        if "largest_relative_difference" in r:
+            diffs[r["case"]] = r["largest_relative_difference"]
+            continue
+        rows.append([r["case"], r["variant"], g(r["model_s"]), g(r["wall_s_per_model_s"]), g(r["cpu_s_per_model_s"]),
+                     _setting(r["settings"])])
+    return (provenance(rec) + "\n"
+            + f"Each peer on each seismic case of comparisons/cases.toml at the case's settings, the whole window, "
+              f"median of {d['repeats']} (variants interleaved); seconds per model second. MuJoCo runs its native "
+              "step loop by default (comparisons/engines/mujoco_seismic_native.py) and its Python loop as the check: "
+              "the largest difference between the two over every column, relative to the column's peak, "
+              + ", ".join(f"{c} {g(v)}" for c, v in diffs.items()) + ". Aim: each peer ≤ 1 wall s per model s on a "
+              "quiet machine (CPU s per model s is what a quiet machine's wall s would be).\n\n"
+            + table(["case", "engine", "model s", "wall s / model s", "CPU s / model s", "settings"], rows))
+
+
 RENDER = {"compare-gate": compare_gate, "convergence": convergence, "tables-5-6": tables_5_6,
           "engine-benchmarks": engine_benchmarks, "direction-study": direction_study, "bench-cycle": bench_cycle,
           "bench-rhs": bench_rhs, "bench-seismic": bench_seismic,
           "gate-times": gate_times, "bench-start": bench_start, "compile-units": compile_units,
           "bench-record-set": bench_record_set, "compare-variant": compare_variant, "power": power,
           "verdict-cost": verdict_cost, "model-benchmarks": model_benchmarks,
-          "work-precision": work_precision}
+          "model-builders": model_builders,
+          "work-precision": work_precision, "bench-cold": bench_cold, "bench-peer-seismic": bench_peer_seismic}
 
 
 def regenerate(text: str) -> str:
