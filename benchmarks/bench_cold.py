@@ -76,7 +76,7 @@ def record(before: Path, after: Path, commits: tuple[str, str], out: Path) -> No
     worst = lambda k: [round(max(x, y), 2) for x, y in zip(b[k], a[k])]  # noqa: E731
     rec = {"name": "bench_cold", "exit_code": 0,
            "command": f"python benchmarks/bench_cold.py --root <git archive of each commit> --out DIR (before: "
-                      f"{commits[0][:12]}, after: {commits[1][:12]}, run side by side)",
+                      f"{commits[0][:12]}, after: {commits[1][:12]}, run one after the other)",
            "measured": {"date_utc": a["date_utc"], "machine": a["machine"], "processor": platform.machine(),
                         "cpus": a["cpus"], "load_average_before": worst("load_average_start"),
                         "load_average_after": worst("load_average_end"),

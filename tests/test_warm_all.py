@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -14,10 +15,18 @@ NOTICE_START = "nsd: compiling"
 
 
 def _nsd(args, cache, timeout=1800):
+    """``nsd ARGS`` from a copy of the packages (an edit to the working tree meanwhile would change the
+    source's fingerprint, hence the cache folder, between two commands of the test)."""
+    import shutil
+    src = cache / "src"
+    if not src.exists():
+        root = Path(__file__).resolve().parents[1]
+        for pkg in ("nsd_core", "comparisons", "nsd_cli"):
+            shutil.copytree(root / pkg, src / pkg, ignore=shutil.ignore_patterns("__pycache__"))
     env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR", "NSD_WARM_ALL")}
     env.update(XDG_CACHE_HOME=str(cache), MPLBACKEND="Agg")
-    return subprocess.run([sys.executable, "-m", "nsd_cli.main", *args], env=env, capture_output=True, text=True,
-                          timeout=timeout)
+    return subprocess.run([sys.executable, "-m", "nsd_cli.main", *args], cwd=src, env=env, capture_output=True,
+                          text=True, timeout=timeout)
 
 
 def test_the_items_cover_every_mode_and_both_peers():
