@@ -64,7 +64,7 @@ def test_unloading_is_elastic_with_the_initial_stiffness():
 
 def test_friction_pendulum_free_vibration_loses_4_mu_R_per_cycle():
     from comparisons.seismic import parse_ground
-    from nsd_core.device.design import designed_structure
+    from nsd_core.device.isolation import designed_structure
     from nsd_core.device.seismic import simulate_seismic
     s = designed_structure()
     W = s.mass * 9.81
@@ -83,7 +83,7 @@ def test_friction_pendulum_free_vibration_loses_4_mu_R_per_cycle():
 
 
 def test_the_lead_rubber_sizing_matches_the_design_period_and_damping():
-    from nsd_core.device.design import designed_structure
+    from nsd_core.device.isolation import designed_structure
     s = designed_structure(True)
     iso = sized("bilinear", s.mass)
     T_model, beta = 2 * math.pi * math.sqrt(3743.7968184920674 / 147799.17422629456), 0.20   # model scale
@@ -115,7 +115,7 @@ def test_a_device_variant_leaves_the_designed_structure_unchanged():
 @pytest.mark.parametrize("kind", ["bilinear", "friction-pendulum"])
 def test_mujoco_agrees_with_the_in_house_engine_on_a_short_record(kind):
     from comparisons.isolator_mujoco import isolator_metrics, run_isolator
-    from nsd_core.device.design import designed_structure
+    from nsd_core.device.isolation import designed_structure
     from nsd_core.device.ground import SIMILITUDE_TIME_FACTOR, fema_record
     from nsd_core.device.seismic import simulate_seismic
     s = designed_structure(True)

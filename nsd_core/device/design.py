@@ -99,11 +99,12 @@ def design() -> dict:
             "similitude_length_scale": s, "source": str(BASIS.name)}
 
 
-def designed_structure(design_level: bool = False):
-    """The isolated structure of the design basis at model scale (nsd_core.device.isolation.Structure):
-    the same for every device. design_level: the isolation level's damping is the design's
-    supplemental damping (``design_damping_ratio``), else the supports' own ``damping_ratio``."""
-    from nsd_core.device.isolation import Structure
+def designed_structure_args(design_level: bool = False) -> tuple:
+    """The isolated structure of the design basis at model scale, as the arguments of
+    nsd_core.device.isolation.Structure (``isolation.designed_structure`` builds it: this module does
+    not import isolation, which imports it): the same for every device. design_level: the isolation
+    level's damping is the design's supplemental damping (``design_damping_ratio``), else the
+    supports' own ``damping_ratio``."""
     s = scale()
     M = float(value("structure", "mass")) * s ** 3
     k = float(value("structure", "stiffness")) * s ** 2
@@ -118,4 +119,4 @@ def designed_structure(design_level: bool = False):
             "support_radius": f"{src} slab_side x {s:g} / 2",
             "params": "fixed by the design basis: the same for every device (--resize derives it from the device)",
             "design_level": bool(design_level)}
-    return Structure(M, side / math.sqrt(6.0), k, 2.0 * zeta * math.sqrt(k * M), side / 2.0, prov)
+    return (M, side / math.sqrt(6.0), k, 2.0 * zeta * math.sqrt(k * M), side / 2.0, prov)

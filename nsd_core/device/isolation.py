@@ -272,12 +272,18 @@ def default_structure(params: Params | None = None, k_dev: dict | None = None) -
     return Structure(M, r_g, k_b, c_b, r_b, prov)
 
 
+def designed_structure(design_level: bool = False) -> Structure:
+    """The isolated structure of the design basis at model scale (nsd_core.device.design): the same for
+    every device. design_level: the isolation level's damping is the design's supplemental damping."""
+    from nsd_core.device.design import designed_structure_args
+    return Structure(*designed_structure_args(design_level))
+
+
 def designed_structure_with(params: Params, own: dict, resize: bool = False, design_level: bool = False) -> Structure:
     """The structure of the design basis (nsd_core.device.design: the same for every device) with the
     overrides ``own``; resize: derived from the device instead (``structure_with``, the model
     document's rule), as before issue 33."""
     if resize:
         return structure_with(params, own)
-    from nsd_core.device.design import designed_structure
     structure = designed_structure(design_level)
     return structure.replace(**own) if own else structure
