@@ -57,7 +57,7 @@ def peer_calls(specs) -> list:
 
 def every_mode_calls() -> list:
     """The peers' tiny jobs of every kind the default cases run (each peer's drive along a line and a
-    circle, MuJoCo's RK4, the seismic mode): what nsd_core.engine.warm_all compiles once per version."""
+    circle, MuJoCo's RK4, the seismic mode): what nsd_core.device.warm_all (``nsd warm``) compiles once per version."""
     from comparisons.engines import ENGINES
     peers = [e for e in ENGINES if e != REFERENCE]
     specs = [spec(e, False, tiny_drive(p), {}) for e in peers for p in ("line", "circle")]

@@ -1,26 +1,28 @@
-"""Every mode compiled once per version of the source, on every core, with one line (issue 35, item 1).
+"""``nsd warm``: every mode compiled once per version of the source, on every core, with one line
+(issue 35, item 1).
 
-Before, each command compiled what it used at its first use: the first ``nsd cycle`` the drive mode
-(32 s), a first seismic run the seismic kernels with a line of its own, the gate's workers the peers'
-callbacks. Now the first in-house run of a version in any process (``device.warmup.warm_and_time``,
-around every in-house run, and a pool worker's warm-up, ``device.worker_warmup``, call ``ensure_all``)
-compiles the in-house engine for every mode: its units and a tiny run of every drive path, of the
-seismic mode, with the restrainer and under a building. ``nsd warm`` (``peers=True``) adds the peers'
-tiny runs (``PROVIDERS``: the layer that knows the peers names them): an install step, or a CI runner's
-first step, after which no command of this version compiles anything.
+Without it each command compiles what it uses at its first use (nsd_core.engine.compile_once: the
+first ``nsd cycle`` the drive mode, a first seismic run the seismic kernels with a line of its own, the
+gate's workers the peers' callbacks). ``ensure_all`` compiles the in-house engine for every mode: its
+units and a tiny run of every drive path, of the seismic mode, with the restrainer and under a
+building; with ``peers`` (``nsd warm``) the peers' tiny runs too (``PROVIDERS``: the layer that knows
+the peers names them). It is an explicit step (``nsd warm``: an install step, or a CI runner's first
+step, ``.ci/run``), after which no command of this version compiles anything.
+
+It is not run automatically at a command's first run. That was tried (issue 35) and measured
+(docs/performance.md, "A newcomer's first commands"): the first ``nsd cycle`` on a cold cache went
+from 27.9 to 38.7 s wall (28 to 65 s CPU: the two processes compile ~40 shared callee kernels twice,
+a unit's lock not covering the kernels it calls) and the README's first compare from 79 to 139 s.
 
 The work runs in this process and ``cpu_count - 1`` helper processes that share the items out
 (``compile_once.share_work``: no two processes compile the same item at once), prints one line, and
-leaves a mark in the cache folder: a later process of the same version, or a new install of it (the
-folder is keyed by the source's content and named independently of where it is installed,
-nsd_core.numba_cache), finds the mark and compiles nothing. Processes started while one compiles (a
-pool's other worker) wait for it, then load.
+leaves a mark in the cache folder: a later ``nsd warm`` of the same version, or of a new install of it
+(the folder is keyed by the source's content and named independently of where it is installed,
+nsd_core.numba_cache), finds the mark and compiles nothing. A second ``nsd warm`` started while one
+compiles waits for it, then loads.
 
-Measured (benchmarks/bench_cold.py): every mode with the peers costs ~95 s CPU, the in-house modes
-alone about half of that, against ~34 s CPU for the drive mode alone; so the peers are compiled on
-first use only by ``nsd warm`` (a gate's workers compile their own peers side by side as before).
-Nothing compiles at import, nor for a bad input (the command stops before its first run).
-NSD_WARM_ALL=0 goes back to compiling what each run uses, at its first use.
+This module sits in the device layer (it runs the device's tiny problems); the generic engine
+(nsd_core.engine) knows nothing of it.
 """
 from __future__ import annotations
 
@@ -35,9 +37,8 @@ from pathlib import Path
 from nsd_core.engine import compile_once as co
 
 MARK = ".compiled-every-mode"      # the in-house engine's modes and the peers' callbacks (``nsd warm``)
-MARK_IN_HOUSE = ".compiled-in-house"   # the in-house engine's modes (any command's first run)
+MARK_IN_HOUSE = ".compiled-in-house"   # the in-house engine's modes (``ensure_all(peers=False)``)
 LOCK = "warm-all"
-ENV = "NSD_WARM_ALL"
 HELPER = "NSD_WARM_HELPER"
 # tiny runs of the layers above, as "module:function" returning a list of callables (the gate's
 # peers); an import failure (a peer not installed) leaves them to their first use
@@ -67,12 +68,12 @@ def complete(peers: bool = False) -> bool:
 
 def ensure_all(peers: bool = False, stream=None) -> float:
     """Compile the in-house engine's every mode (with ``peers``: and the peers' callbacks) once for this
-    version unless done (the mark), being done by another process (then wait for it), switched off
-    (NSD_WARM_ALL=0) or running in a helper. Returns the seconds this process spent on it (0 when
+    version unless done (the mark), being done by another process (then wait for it) or running in a
+    helper. Returns the seconds this process spent on it (0 when
     there was nothing to do). Once per process and kind."""
-    if _STATE.get(peers) or os.environ.get(ENV) == "0" or os.environ.get(HELPER):
+    if _STATE.get(peers) or os.environ.get(HELPER):
         return 0.0
-    _STATE[peers] = True   # before the work: the items' runs come back here
+    _STATE[peers] = True
     if complete(peers):
         return 0.0
     t0 = time.perf_counter()
@@ -93,7 +94,7 @@ def _warm_here(peers: bool, stream) -> None:
     print(NOTICE.format(peers=PEERS if peers else "", processes=n + 1, seconds=NOTICE_SECONDS[peers]), end="",
           file=stream, flush=True)
     env = {**os.environ, HELPER: "1"}
-    code = f"from nsd_core.engine.warm_all import helper; helper({peers})"
+    code = f"from nsd_core.device.warm_all import helper; helper({peers})"
     helpers = [subprocess.Popen([sys.executable, "-c", code], env=env, stdout=subprocess.DEVNULL,
                                 stderr=subprocess.DEVNULL) for _ in range(n)]
     try:
@@ -140,7 +141,7 @@ def _quietly(fn, block: bool = True) -> None:
 
 def items(peers: bool = True) -> list:
     """``share_work`` items: the engine's units, then a tiny run of every mode, then (``peers``) the
-    peers' tiny runs."""
+    peers' tiny runs (``peers=False``: the in-house modes alone)."""
     from nsd_core.device.model import DEFAULT_SOLVER, simulate
     from nsd_core.device.seismic import simulate_seismic
     from nsd_core.device.warmup import PATHS, warm

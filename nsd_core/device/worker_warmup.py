@@ -16,7 +16,6 @@ from nsd_core.device.seismic import simulate_seismic
 from nsd_core.device.warmup import PATHS, warm
 from nsd_core.engine.compile_once import compile_now, share_work
 from nsd_core.engine.rk import engine_units
-from nsd_core.engine.warm_all import ensure_all
 
 
 def kind(mode: str, settings: dict | None = None, path: str = "line") -> tuple:
@@ -35,7 +34,6 @@ def warm_worker(kinds=(), record_sets=(), calls=()) -> None:
     (``share_work``): while one compiles an item the others take the next ones instead of waiting,
     so two workers are ready in about half the time one would take. A failure is left to the job
     that meets it, with its own inputs."""
-    ensure_all()   # every mode, once per version of the source: the pool's first worker compiles, the others wait
     items = []
     if kinds:
         items += [(f"warm-unit-{u}", partial(compile_now, u)) for u in engine_units()]

@@ -57,7 +57,7 @@ _NOTICE_LOCK: list = []  # the open lock file, held until the process ends
 
 
 def quiet_notices() -> None:
-    """No notice from this process (nsd_core.engine.warm_all prints the one line of its compilation)."""
+    """No notice from this process (a caller that prints its own line, as ``nsd warm`` does)."""
     global _announced
     _announced = True
 
