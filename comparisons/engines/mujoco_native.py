@@ -31,10 +31,9 @@ import os
 
 import mujoco
 import numpy as np
-from llvmlite import ir
 from numba import carray, cfunc, njit, types
-from numba.extending import intrinsic
 
+from comparisons.builders.mujoco_cabi import call_md, double_ptr
 from nsd_core.device.forces import (advance_spring_zeta_scalar, advance_wire_stress_scalar, bouc_wen_slope_scalar,
                              rope_tension_scalar, sma_slope_scalar, spring_push_scalar, wire_tension_scalar)
 
@@ -183,24 +182,8 @@ def passive_forces(q, qfrc, ud):
 
 
 # ---- the C callback --------------------------------------------------------------------------------
-@intrinsic
-def _as_double_ptr(typingctx, addr):
-    """An integer address as a float64 pointer (MuJoCo's mjtNum*)."""
-    def codegen(context, builder, sig, args):
-        return builder.inttoptr(args[0], context.get_value_type(types.CPointer(types.float64)))
-    return types.CPointer(types.float64)(addr), codegen
-
-
-@intrinsic
-def _call_model_data(typingctx, fn, m, d):
-    """Call the C function at address fn as void fn(const mjModel*, mjData*)."""
-    def codegen(context, builder, sig, args):
-        i8p = ir.IntType(8).as_pointer()
-        fnty = ir.FunctionType(ir.VoidType(), [i8p, i8p])
-        f = builder.inttoptr(args[0], fnty.as_pointer())
-        builder.call(f, [builder.inttoptr(args[1], i8p), builder.inttoptr(args[2], i8p)])
-        return context.get_dummy_value()
-    return types.void(fn, m, d), codegen
+# the two LLVM intrinsics every compiled MuJoCo path uses have one home, the builders' C-ABI module
+_as_double_ptr, _call_model_data = double_ptr, call_md
 
 
 def _pointer_fields() -> tuple[int, int, int]:
