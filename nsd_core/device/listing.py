@@ -77,9 +77,11 @@ _RESTRAINER_BOUNDS = {"restrainer_gap": "(0, rod_length)", "restrainer_stiffness
 
 def structure_fields() -> list[str]:
     """The isolated structure's own fields (``--structure NAME=VALUE``, a case's ``structure``); the building
-    has its own table (``--building``, docs/building.md)."""
+    has its own table (``--building``, docs/building.md), the baseline isolator is chosen by ``--isolator``
+    and sized by the design basis (docs/design.md), neither a number ``--structure`` sets."""
     from nsd_core.device.isolation import Structure
-    return [f.name for f in dataclasses.fields(Structure) if f.name not in ("provenance", "restrainer", "building")]
+    return [f.name for f in dataclasses.fields(Structure)
+            if f.name not in ("provenance", "restrainer", "building", "isolator")]
 
 
 def restrainer_fields() -> list[str]:

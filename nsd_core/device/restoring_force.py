@@ -108,6 +108,10 @@ def restoring_force_check(params: Params, structure, design_displacement: float 
             with np.errstate(all="ignore"):
                 f_dev = quasi_static_path(params, u, psi, substeps=4)["F_device"]
             half = (POINTS - 1) // 2
+            if not (math.isfinite(float(f_dev[-1])) and math.isfinite(float(f_dev[half]))):
+                # a device the quasi-static path cannot follow (e.g. precompression_force = 1e8): no number
+                raise FloatingPointError(f"F_device = {float(f_dev[half])!r} at D/2, {float(f_dev[-1])!r} at D "
+                                         f"(direction {psi:g} deg)")
             per[f"{psi:g}"] = {**_entry(k_b * d + float(f_dev[-1]), k_b * d / 2.0 + float(f_dev[half]), w),
                                "device_F_D": float(f_dev[-1]), "device_F_half_D": float(f_dev[half])}
             if x_max is not None:
