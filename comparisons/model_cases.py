@@ -19,7 +19,6 @@ scale (default 0: exact).
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -27,6 +26,7 @@ import numpy as np
 
 from nsd_core.model.description import Model
 from nsd_core.model.errors import ModelError
+from nsd_core.model.load import read_toml
 from nsd_core.model.run import output_times
 
 MAX_OUTPUTS = 1_000_000
@@ -56,12 +56,7 @@ class ModelCase:
 def load_model_cases(model: Model, cases_path: str | None, engines) -> list[ModelCase]:
     """The cases of ``cases_path`` (a TOML file of [[case]] tables), or of the model file itself."""
     path = Path(cases_path or model.path)
-    try:
-        raw = tomllib.loads(path.read_text())
-    except OSError as e:
-        raise ModelError(f"--cases {path}: cannot read ({e.strerror or e})") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
-        raise ModelError(f"--cases {path}: not valid TOML ({e})") from None
+    raw = read_toml(path, "--cases")
     if cases_path:
         extra = [k for k in raw if k != "case"]
         if extra:

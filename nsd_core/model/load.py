@@ -22,14 +22,17 @@ TOP = {"model", "bodies", "loops", "forces", "prescribed", "outputs", "initial",
 
 def load_model(path) -> Model:
     """The description in file ``path`` (ModelError for a missing file, bad TOML or any mistake)."""
-    p = Path(path)
+    return parse_model(read_toml(path, "--model"), str(Path(path)))
+
+
+def read_toml(path, flag: str) -> dict:
+    """A TOML file as a dict; unreadable or not TOML is one ModelError line naming ``flag``."""
     try:
-        raw = tomllib.loads(p.read_text())
+        return tomllib.loads(Path(path).read_text())
     except OSError as e:
-        raise ModelError(f"--model {path}: cannot read ({e.strerror or e})") from None
+        raise ModelError(f"{flag} {path}: cannot read ({e.strerror or e})") from None
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
-        raise ModelError(f"--model {path}: not valid TOML ({e})") from None
-    return parse_model(raw, str(p))
+        raise ModelError(f"{flag} {path}: not valid TOML ({e})") from None
 
 
 def _fields(where: str, table, allowed: set, required: tuple = ()) -> dict:
