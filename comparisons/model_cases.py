@@ -133,6 +133,10 @@ def _reference(where: str, t, model: Model, folder: Path, grid: np.ndarray) -> R
     if not keep.any() or np.any(np.abs(grid[np.clip(index, 0, len(grid) - 1)] - times[keep]) > 1e-9 * max(1.0, grid[-1])):
         raise ModelError(f"{where}.reference.file = {t['file']!r}: its times must lie on the output grid "
                          f"0, {grid[1] - grid[0]:g}, ... {grid[-1]:g} s (and at least one within the duration)")
+    for n in names:
+        if not np.all(np.isfinite(data[n])):
+            raise ModelError(f"{where}.reference.file = {t['file']!r}: column {n!r} holds a value that is not a "
+                             "finite number (every value must be one)")
     accuracy = t.get("accuracy", 0.0)
     if isinstance(accuracy, bool) or not isinstance(accuracy, (int, float)) or not 0 <= accuracy < 1:
         raise ModelError(f"{where}.reference.accuracy = {accuracy!r}: must be a number in [0, 1)")

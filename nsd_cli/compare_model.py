@@ -9,7 +9,8 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
-from comparisons.engines.base import check_settings
+from comparisons.engines.base import MAX_FIXED_STEPS, check_settings
+from comparisons.estimate import STEP_SETTING
 from comparisons.model_compare import BUILDERS, REFERENCE, builder, compare_model, table
 from nsd_cli.options import check_out_dir, check_out_file
 from nsd_core.device.params import ParameterError
@@ -40,7 +41,14 @@ def run(args) -> int:
         if hasattr(b, "check"):
             b.check(model)   # a joint type or feature this engine lacks: bad input, before any run
         for c in cases:
-            check_settings(b, c.settings.get(e) or None, f"case.{c.name}.{e}")
+            merged = check_settings(b, c.settings.get(e) or None, f"case.{c.name}.{e}")
+            if e in STEP_SETTING:   # bounded work: the h/2 run takes twice the steps, found before any run
+                key = STEP_SETTING[e]
+                steps = 2 * c.duration / float(merged[key])
+                if steps > MAX_FIXED_STEPS:
+                    raise ParameterError(f"case.{c.name}.{e}.{key} = {merged[key]!r}: {steps:.3g} steps for "
+                                         f"{c.duration:g} s and its h/2 run; at most {MAX_FIXED_STEPS} (a larger step "
+                                         "or a shorter duration)")
     out = check_out_dir("--out", args.out)
     check_out_file("--junit", args.junit)
     print(f"nsd compare --model {args.model}: {len(cases)} cases x {len(engines)} engines -> {out}")

@@ -74,3 +74,16 @@ def test_bad_case_setting_exit_2(tmp_path):
             "--out", str(tmp_path / "o"))
     assert p.returncode == 2 and "case.c.semirecursive.rtol = -1.0" in p.stderr, p.stderr
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("case,expected", [
+    ('duration = 0.1\ndt_out = 0.002\nreference = { file = "ref.csv" }\n', "holds a value that is not a finite number"),
+    ('duration = 1e4\ndt_out = 0.01\nmujoco = { timestep = 1e-8 }\n', "case.c.mujoco.timestep = 1e-08: 2e+12 steps"),
+], ids=["nan-reference", "unbounded-steps"])
+def test_hostile_cases_exit_2_nothing_written(tmp_path, case, expected):
+    (tmp_path / "ref.csv").write_text("t,slider_x\n0,nan\n")
+    (tmp_path / "cases.toml").write_text('[[case]]\nname = "c"\n' + case)
+    p = nsd("compare", "--model", str(MODELS / "slider_crank.toml"), "--cases", str(tmp_path / "cases.toml"),
+            "--engines", "semirecursive,mujoco", "--out", str(tmp_path / "o"))
+    assert p.returncode == 2 and expected in p.stderr and len(p.stderr.strip().splitlines()) == 1, p.stderr
+    assert not (tmp_path / "o").exists()

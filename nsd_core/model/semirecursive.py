@@ -18,6 +18,7 @@ from nsd_core.model.description import Model
 from nsd_core.model.run import ModelRun, output_times
 
 name = "semirecursive"
+MAX_STEPS = 20_000_000   # a runaway or a needlessly long case stops with a SolverError (its case's failure)
 default_settings = {"method": "DOP853", "rtol": 1e-10, "atol": 1e-12, "max_step": 0.01}
 
 
@@ -75,7 +76,8 @@ def simulate(model: Model, duration: float, dt_out: float, settings: dict | None
         steps, nfev, parts = 0, len(t_eval), 0
     else:
         traj = integrate(system, ws, y0, t_eval, method=s["method"], rtol=s["rtol"], atol=s["atol"],
-                         max_step=s["max_step"], outputs=record, first_step=min(dt_out, s["max_step"]) / 10)
+                         max_step=s["max_step"], outputs=record, first_step=min(dt_out, s["max_step"]) / 10,
+                         max_steps=MAX_STEPS)
         steps, nfev, parts = traj.steps, traj.nfev, len(traj.partitions) - 1
     wall = time.perf_counter() - begin
     data = np.array(rows).reshape(len(t_eval), len(model.outputs))
