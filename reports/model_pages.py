@@ -45,8 +45,9 @@ def _summary_page(model, summary: dict):
     lines += textwrap.wrap(summary["rule"]["text"], 95) + [""]
     for name, c in summary["cases"].items():
         ref = c.get("reference")
-        lines.append(f"case {name}: {c['duration']:g} s, outputs every {c['dt_out']:g} s"
-                     + (f"; reference solution: {ref['source']}" if ref else "; no reference solution"))
+        lines += textwrap.wrap(f"case {name}: {c['duration']:g} s, outputs every {c['dt_out']:g} s"
+                               + (f"; reference solution: {ref['source']}" if ref else "; no reference solution"),
+                               95, subsequent_indent="      ")
         for e, v in c["verdicts"].items():
             lines += textwrap.wrap(f"  {e}: {'PASS' if v['pass'] else 'FAIL'} - {v.get('text', '')}", 95,
                                    subsequent_indent="      ")
