@@ -43,7 +43,6 @@ def device_description(params: Params, amplitude: float, frequency: float, direc
     """The drive-mode device under a line drive (u = A sin(2 pi f t) along the direction), as TOML."""
     g = device_geometry(params)
     psi = math.radians(direction_deg)
-    w, s = g.wire, g.spring
     lines = [f'''# The negative-stiffness device (Dai et al. 2024) in drive mode, as a model description.
 # Written by `python -m nsd_core.device.describe` from the device's parameters (nsd params lists each
 # with its unit and provenance; docs/model.md gives the equations). Parameters that differ from the
@@ -104,37 +103,8 @@ frequency = {frequency!r}
 coordinates = {{ cap = [0.0, 0.0, {g.cap_rest_z!r}], wall = {g.wall_rest_z!r} }}
 free = ["cap"]
 ''']
-    for k in range(g.n_ropes):
-        lines.append(f'''
-[[forces]]   # rope {k}: base point -> cap point (Eq. 16)
-name = "rope{k}"
-law = "rope"
-body_a = "cap"
-point_a = {_v(g.rope_cap_points[k])}
-body_b = "ground"
-point_b = {_v(g.rope_base_points[k])}
-parameters = {{ stiffness = {g.rope_stiffness!r}, free_length = {float(g.rope_natural_length[k])!r} }}
-''')
-    stress0 = g.initial_wire_stress()
-    for k in range(g.n_wires):
-        lines.append(f'''
-[[forces]]   # SMA wire {k}: cap point -> wall point (Eq. 17)
-name = "wire{k}"
-law = "sma_wire"
-body_a = "cap"
-point_a = {_v(g.wire_cap_points[k])}
-body_b = "wall"
-point_b = {_v(g.wire_wall_points[k])}
-parameters = {{ area = {w.area!r}, natural_length = {w.natural_length!r}, E = {w.E!r}, Y = {w.Y!r}, alpha = {w.alpha!r}, n = {w.n!r}, fT = {w.fT!r}, a = {w.a!r}, Em = {w.Em!r}, eps_t = {w.eps_t!r}, c = {w.c!r}, initial_stress = {float(stress0[k])!r} }}
-''')
+    lines.append(device_forces(g))
     lines.append(f'''
-[[forces]]   # the precompressed push spring: wall reference -> base origin, along Z (Eq. 18)
-name = "spring"
-law = "push_spring"
-body_a = "wall"
-body_b = "ground"
-parameters = {{ kse = {s.kse!r}, ksd = {s.ksd!r}, beta = {s.beta!r}, gamma = {s.gamma!r}, n = {s.n!r}, free_length = {s.free_length!r}, initial_zeta = {g.spring_zeta0!r} }}
-
 [[outputs]]
 name = "F_x"
 kind = "drive_force"
@@ -176,6 +146,45 @@ dt_out = {1.0 / (frequency * samples_per_cycle)!r}
 # runs say whether another device or drive needs less)
 mujoco = {{ timestep = 5e-5 }}
 exudyn = {{ step_size = 1e-3 }}
+''')
+    return "".join(lines)
+
+
+def device_forces(g) -> str:
+    """The device's force elements as TOML: ropes (Eq. 16) base -> cap, SMA wires (Eq. 17) cap ->
+    wall, the push spring (Eq. 18) wall -> base; the cap's points are in the cap's frame."""
+    w, s = g.wire, g.spring
+    lines = []
+    for k in range(g.n_ropes):
+        lines.append(f'''
+[[forces]]   # rope {k}: base point -> cap point (Eq. 16)
+name = "rope{k}"
+law = "rope"
+body_a = "cap"
+point_a = {_v(g.rope_cap_points[k])}
+body_b = "ground"
+point_b = {_v(g.rope_base_points[k])}
+parameters = {{ stiffness = {g.rope_stiffness!r}, free_length = {float(g.rope_natural_length[k])!r} }}
+''')
+    stress0 = g.initial_wire_stress()
+    for k in range(g.n_wires):
+        lines.append(f'''
+[[forces]]   # SMA wire {k}: cap point -> wall point (Eq. 17)
+name = "wire{k}"
+law = "sma_wire"
+body_a = "cap"
+point_a = {_v(g.wire_cap_points[k])}
+body_b = "wall"
+point_b = {_v(g.wire_wall_points[k])}
+parameters = {{ area = {w.area!r}, natural_length = {w.natural_length!r}, E = {w.E!r}, Y = {w.Y!r}, alpha = {w.alpha!r}, n = {w.n!r}, fT = {w.fT!r}, a = {w.a!r}, Em = {w.Em!r}, eps_t = {w.eps_t!r}, c = {w.c!r}, initial_stress = {float(stress0[k])!r} }}
+''')
+    lines.append(f'''
+[[forces]]   # the precompressed push spring: wall reference -> base origin, along Z (Eq. 18)
+name = "spring"
+law = "push_spring"
+body_a = "wall"
+body_b = "ground"
+parameters = {{ kse = {s.kse!r}, ksd = {s.ksd!r}, beta = {s.beta!r}, gamma = {s.gamma!r}, n = {s.n!r}, free_length = {s.free_length!r}, initial_zeta = {g.spring_zeta0!r} }}
 ''')
     return "".join(lines)
 

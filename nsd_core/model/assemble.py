@@ -79,7 +79,7 @@ class InitialState:
 class Forces:
     """The description's force elements on the in-house engine: every law through the registry. The
     states of the laws that have one (``stateful``, in the description's order) are the ODE's extra
-    states."""
+    states. A description with an excitation adds -m a_g(t) at every body's centre of mass."""
 
     def __init__(self, model: Model, tree: Tree):
         pts = [f for f in model.forces if f.law.acts_on == POINTS]
@@ -87,14 +87,44 @@ class Forces:
         self.joints = [(f, tree.coordinate[(f.joint, f.dof)]) for f in model.forces if f.law.acts_on == JOINT]
         self.elements = AxialElements([tree.body[f.body_a] for f in pts], [f.point_a for f in pts],
                                       [tree.body[f.body_b] for f in pts], [f.point_b for f in pts], tree.mech.n)
+        self.directed = [(j, tree.body[f.body_a], tree.body[f.body_b], np.asarray(f.direction))
+                         for j, f in enumerate(pts) if f.direction is not None]
         self.stateful = [f.name for f in model.forces if f.law.state is not None]
         self.slot = {name: k for k, name in enumerate(self.stateful)}
         self.initial = np.array([f.initial_state for f in model.forces if f.law.state is not None])
+        self.excitation, self.mech = model.excitation, tree.mech
+
+    def _lengths(self, kin):
+        """x and x' of every points element: the distance and its rate, or, for an element with a
+        direction e, (p_a - p_b) . e and its rate (its unit vector set to e). A line element whose
+        points coincide gets a zero unit vector: its force has no direction there (a stop at rest)."""
+        el = self.elements
+        try:
+            L, Ld = el.state(kin)
+        except ZeroDivisionError:   # two points coincide (the compiled kernel divides by the length)
+            L, Ld = self._lengths_at_contact(kin)
+        for j, a, b, e in self.directed:
+            L[j] = (el.P_up[j] - el.P_lo[j]) @ e
+            Ld[j] = (kin.point_velocity(a, el.P_up[j]) - kin.point_velocity(b, el.P_lo[j])) @ e
+            el.N[j] = e
+        return L, Ld
+
+    def _lengths_at_contact(self, kin):
+        """The elements' geometry one by one, a zero unit vector where the points coincide."""
+        el = self.elements
+        for e in range(len(el.body_up)):
+            a, b = int(el.body_up[e]), int(el.body_lo[e])
+            el.P_up[e], el.P_lo[e] = kin.point(a, el.pts_up[e]), kin.point(b, el.pts_lo[e])
+            d = el.P_up[e] - el.P_lo[e]
+            el.L[e] = float(np.linalg.norm(d))
+            el.N[e] = d / el.L[e] if el.L[e] > 0.0 else 0.0
+            el.Ld[e] = (kin.point_velocity(a, el.P_up[e]) - kin.point_velocity(b, el.P_lo[e])) @ el.N[e]
+        return el.L, el.Ld
 
     def _each(self, kin, z, zd, extra):
         """(element, x, x', state slot or -1) for every element."""
         if self.points:
-            L, Ld = self.elements.state(kin)
+            L, Ld = self._lengths(kin)
             for i, f in enumerate(self.points):
                 yield f, L[i], Ld[i], self.slot.get(f.name, -1)
         for f, i in self.joints:
@@ -103,6 +133,17 @@ class Forces:
     def values(self, kin, z, zd, extra=()) -> dict:
         """Each element's force: tension [N] of a points law, generalized force of a joint law."""
         return {f.name: f.force(x, xd, extra[k] if k >= 0 else 0.0) for f, x, xd, k in self._each(kin, z, zd, extra)}
+
+    def ground_load(self, t, kin, wrench):
+        """-m a_g(t) at every body's centre of mass, as wrenches about the origin (the excitation)."""
+        a = self.excitation.acceleration(t)
+        m = self.mech
+        for i in range(self.n):
+            if m.mass[i] == 0.0:
+                continue
+            f = -m.mass[i] * a
+            wrench[i, :3] += f
+            wrench[i, 3:] += np.cross(kin.r[i] + kin.A[i] @ m.com[i], f)
 
     def __call__(self, t, kin, z, zd, extra):
         gen = np.zeros(self.n)
@@ -117,6 +158,8 @@ class Forces:
             else:
                 gen[self.joints[j - len(self.points)][1]] += value
         wrench = self.elements.wrench(T) if self.points else np.zeros((self.n, 6))
+        if self.excitation is not None:
+            self.ground_load(t, kin, wrench)
         return wrench, gen, rates
 
 

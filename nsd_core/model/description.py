@@ -8,9 +8,16 @@ The conventions every builder follows (docs/models.md):
 - a joint's coordinates, in order: revolute q about ``axis``; prismatic q along ``axis``; universal
   q1 about ``axis``, then q2 about ``axis2`` (turned by q1); spherical three turns about x, then the
   turned y, then the turned z; planar two slides along u, v (u, v, normal right-handed), then a turn
-  about ``normal`` (axes in the parent's frame); translational three slides along the parent's x, y, z;
+  about ``normal``; planar_translation the two slides alone (u: the parent's x projected onto the
+  plane, its y when the normal is along x; v = normal x u); translational three slides along the
+  parent's x, y, z;
 - a loop closure (``point``: two body points coincide; ``revolute``: they coincide and two body axes
   stay parallel) cuts a closed chain; ``ground`` can be either side;
+- a points force element acts along the line between its points, or, with a ``direction`` e (in the
+  ground's frame), along e: x = (p_a - p_b) . e, its rate likewise, and the tension T pulls a by -T e
+  and b by +T e (a per-direction spring: a shear building's story);
+- an excitation (``[excitation]``, nsd_core.model.excitation) moves the frame with the ground: every
+  body feels -m a_g(t) besides gravity, i.e. the uniform field g - a_g(t);
 - SI units everywhere: m, kg, kg m^2, s, rad, N, N m.
 """
 from __future__ import annotations
@@ -24,7 +31,8 @@ from nsd_core.model.errors import ModelError
 from nsd_core.model.laws import JOINT, POINTS, Law
 
 GROUND = "ground"
-JOINT_DOFS = {"revolute": 1, "prismatic": 1, "universal": 2, "spherical": 3, "planar": 3, "translational": 3}
+JOINT_DOFS = {"revolute": 1, "prismatic": 1, "universal": 2, "spherical": 3, "planar": 3, "planar_translation": 2,
+              "translational": 3}
 OUTPUT_KINDS = ("coordinate", "point", "point_velocity", "force", "drive_force", "energy")
 MOTION_KINDS = {"constant_speed": ("start", "speed"), "harmonic": ("centre", "amplitude", "frequency", "phase")}
 COMPONENTS = {"x": 0, "y": 1, "z": 2}
@@ -56,9 +64,20 @@ class Joint:
             return [("R", np.eye(3)[0]), ("R", np.eye(3)[1]), ("R", np.eye(3)[2])]
         if self.type == "translational":
             return [("P", np.eye(3)[0]), ("P", np.eye(3)[1]), ("P", np.eye(3)[2])]
-        u = np.cross(a, np.eye(3)[int(np.argmin(np.abs(a)))])
-        u /= np.linalg.norm(u)
-        return [("P", u), ("P", np.cross(a, u)), ("R", a)]   # planar
+        u, v = plane_axes(a)
+        if self.type == "planar_translation":
+            return [("P", u), ("P", v)]
+        return [("P", u), ("P", v), ("R", a)]   # planar
+
+
+def plane_axes(normal) -> tuple[np.ndarray, np.ndarray]:
+    """(u, v) of a plane: u the x axis projected onto it (y when the normal is along x), v = n x u;
+    a plane normal to z has u = x, v = y."""
+    n = unit(normal)
+    e = np.eye(3)[0] if abs(n[0]) < 0.9 else np.eye(3)[1]
+    u = e - (e @ n) * n
+    u /= np.linalg.norm(u)
+    return u, np.cross(n, u)
 
 
 @dataclass(frozen=True)
@@ -96,6 +115,7 @@ class ForceElement:
     point_b: tuple = (0.0, 0.0, 0.0)
     joint: str = ""          # joint laws: the body whose joint, and which of its coordinates
     dof: int = 0
+    direction: tuple | None = None   # points laws: act along this unit vector (ground frame), not the line
 
     def force(self, x: float, xd: float, s: float = 0.0) -> float:
         """The law's force at (x, x') (and its state s, for a law with one)."""
@@ -159,6 +179,13 @@ class Model:
     initial_velocities: dict = field(default_factory=dict)
     free: tuple = ()                                         # (body, dof) kept independent
     path: str = ""
+    excitation: object = None    # nsd_core.model.excitation.Excitation, or None: the frame is inertial
+
+    def gravity_at(self, t: float) -> np.ndarray:
+        """The uniform field every body feels at t [m/s^2]: gravity, less the ground's acceleration."""
+        if self.excitation is None:
+            return np.asarray(self.gravity, dtype=float)
+        return self.excitation.gravity(self.gravity, t)
 
     def body(self, name: str) -> Body:
         return next(b for b in self.bodies if b.name == name)

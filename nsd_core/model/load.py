@@ -15,9 +15,10 @@ import numpy as np
 from nsd_core.model.description import (COMPONENTS, GROUND, JOINT_DOFS, MOTION_KINDS, OUTPUT_KINDS, Body,
                                         ForceElement, Joint, Loop, Model, Output, Prescribed)
 from nsd_core.model.errors import ModelError
+from nsd_core.model.excitation import parse_excitation
 from nsd_core.model.laws import JOINT, POINTS, get_law
 
-TOP = {"model", "bodies", "loops", "forces", "prescribed", "outputs", "initial", "case"}
+TOP = {"model", "bodies", "loops", "forces", "prescribed", "outputs", "initial", "case", "excitation"}
 
 
 def load_model(path) -> Model:
@@ -103,7 +104,8 @@ def parse_model(raw: dict, path: str = "") -> Model:
         taken[(p.joint, p.dof)] = p.name
     model = Model(name=str(head.get("name", Path(path).stem or "model")), source=str(head.get("source", "")),
                   gravity=_vec("[model].gravity", head.get("gravity", [0.0, 0.0, 0.0])), bodies=bodies,
-                  loops=loops, forces=forces, prescribed=prescribed, outputs=(), path=path)
+                  loops=loops, forces=forces, prescribed=prescribed, outputs=(), path=path,
+                  excitation=parse_excitation(raw.get("excitation")))
     outputs = tuple(_output(i, t, model) for i, t in enumerate(_list("outputs", raw.get("outputs", []))))
     if not outputs:
         raise ModelError("[[outputs]]: missing; name at least one quantity to compare")
@@ -148,7 +150,7 @@ def _bodies(items) -> tuple[Body, ...]:
         jt = _fields(f"{where}.joint", t["joint"], {"type", "position", "axis", "axis2", "normal"}, ("type",))
         if jt["type"] not in JOINT_DOFS:
             raise ModelError(f"{where}.joint.type = {jt['type']!r}: allowed: {', '.join(JOINT_DOFS)}")
-        axis = jt.get("normal" if jt["type"] == "planar" else "axis", [0.0, 0.0, 1.0])
+        axis = jt.get("normal" if jt["type"].startswith("planar") else "axis", [0.0, 0.0, 1.0])
         joint = Joint(jt["type"], _vec(f"{where}.joint.position", jt.get("position", [0.0, 0.0, 0.0])),
                       _vec(f"{where}.joint.axis", axis, nonzero=True),
                       _vec(f"{where}.joint.axis2", jt.get("axis2", [0.0, 1.0, 0.0]), nonzero=True))
@@ -211,8 +213,8 @@ def _dof(where: str, t: dict, bodies, key="joint") -> tuple[str, int]:
 
 def _force(i: int, t: dict, bodies) -> ForceElement:
     where = f"forces[{i}]"
-    _fields(where, t, {"name", "law", "body_a", "point_a", "body_b", "point_b", "joint", "dof", "parameters"},
-            ("law",))
+    _fields(where, t, {"name", "law", "body_a", "point_a", "body_b", "point_b", "joint", "dof", "parameters",
+                       "direction"}, ("law",))
     name = _name(f"{where}.name", t.get("name", f"force{i}"))
     where = f"forces.{name}"
     law = get_law(t["law"], where)
@@ -229,9 +231,13 @@ def _force(i: int, t: dict, bodies) -> ForceElement:
         b = _body_ref(f"{where}.body_b", t.get("body_b", GROUND), names)
         if a == b:
             raise ModelError(f"{where}.body_b = {b!r}: must differ from body_a")
+        direction = None
+        if "direction" in t:
+            e = np.asarray(_vec(f"{where}.direction", t["direction"], nonzero=True))
+            direction = tuple(e / np.linalg.norm(e))
         return ForceElement(name, law, packed, dict(params), a, _vec(f"{where}.point_a", t.get("point_a", [0, 0, 0])),
-                            b, _vec(f"{where}.point_b", t.get("point_b", [0, 0, 0])))
-    for k in ("body_a", "point_a", "body_b", "point_b"):
+                            b, _vec(f"{where}.point_b", t.get("point_b", [0, 0, 0])), direction=direction)
+    for k in ("body_a", "point_a", "body_b", "point_b", "direction"):
         if k in t:
             raise ModelError(f"{where}.{k}: law {law.name!r} acts on a joint coordinate (joint, dof)")
     body, dof = _dof(where, t, bodies)

@@ -1,0 +1,252 @@
+"""The device in seismic mode, with or without a shear building, as a model description
+(docs/models.md): the same file format as every mechanism, built by every engine's builder.
+
+The frame translates with the ground ([excitation]: every body feels -m a_g(t)), so the described
+coordinates are the seismic mode's relative ones (docs/model.md, "Seismic mode"):
+- the plate carries the isolated mass M (polar inertia M r_g^2) on a planar joint (x, y, turn about
+  Z); the cap hangs on the plate by a prismatic joint along Z and turns with it, so its rope and wire
+  points turn with the plate; the wall slides along Z on the base; the rod hangs on the wall by a
+  universal joint and a point closure joins its upper end to the cap (Eq. 13), as in drive mode;
+- the supports are joint springs and dashpots on the plate's coordinates: k_b, c_b along x and y,
+  k_b r_b^2, c_b r_b^2 about Z;
+- the restrainer (when the structure has one) is a Hunt-Crossley stop between the plate's centre and
+  the base's: the distance is |u|, the force radial, as nsd_core.device.restrainer says;
+- a building's floors slide in the plane (planar_translation, relative to the ground); each story is
+  two per-direction spring-dashpots (k_i, c_i, along x and along y) between floor i and the floor
+  below (the slab is the plate), and the Rayleigh mass-proportional part is a dashpot b_i between
+  floor i and the slab in each direction (nsd_core.device.building's forces).
+The device's elements are the drive description's (describe.device_forces).
+
+    python -m nsd_core.device.describe_seismic --ground "harmonic:amplitude=2,frequency=1.5,azimuth=30" \
+        --duration 1 --out models/nsd_seismic.toml [--stories 3] [--restrainer]
+"""
+from __future__ import annotations
+
+import argparse
+import math
+
+from nsd_core.device.describe import _changed, _inertia, _v, device_forces
+from nsd_core.device.geometry import device_geometry
+from nsd_core.device.isolation import Structure
+from nsd_core.device.params import Params
+
+
+def _structure_lines(st: Structure) -> str:
+    J = st.polar_inertia
+    kt, ct = st.stiffness * st.support_radius ** 2, st.damping * st.support_radius ** 2
+    out = f'''
+[[bodies]]   # the plate with the isolated structure: x, y relative to the ground, a turn about Z
+name = "plate"
+joint = {{ type = "planar", position = [0.0, 0.0, 0.0], normal = [0.0, 0.0, 1.0] }}
+mass = {st.mass!r}
+com = [0.0, 0.0, 0.0]
+inertia = {_v([J / 2, J / 2, J])}
+'''
+    forces = "".join(f'''
+[[forces]]   # the supports {label} (k_b{extra}, c_b{extra})
+name = "support_{label}"
+law = "joint_spring_damper"
+joint = "plate"
+dof = {dof}
+parameters = {{ stiffness = {k!r}, damping = {c!r} }}
+''' for label, dof, k, c, extra in (("x", 0, st.stiffness, st.damping, ""), ("y", 1, st.stiffness, st.damping, ""),
+                                    ("turn", 2, kt, ct, " r_b^2")))
+    r = st.restrainer
+    if r is not None:
+        forces += f'''
+[[forces]]   # the displacement restrainer: radial, past the gap u_gap (Hunt-Crossley; nsd_core.device.restrainer)
+name = "restrainer"
+law = "hunt_crossley_stop"
+body_a = "plate"
+body_b = "ground"
+parameters = {{ gap = {r.gap!r}, stiffness = {r.stiffness!r}, exponent = {r.exponent!r}, damping = {r.damping!r} }}
+'''
+    return out, forces
+
+
+def _building_lines(st: Structure) -> tuple[str, str, str]:
+    b = st.building
+    bodies, forces, outputs = [], [], []
+    r_g = st.radius_of_gyration
+    for i in range(b.stories):
+        m = b.masses[i]
+        below = "plate" if i == 0 else f"floor{i}"
+        bodies.append(f'''
+[[bodies]]   # floor {i + 1}: slides in the plane (no torsion), relative to the ground
+name = "floor{i + 1}"
+joint = {{ type = "planar_translation", position = [0.0, 0.0, {float(sum(b.heights[:i + 1]))!r}], normal = [0.0, 0.0, 1.0] }}
+mass = {float(m)!r}
+inertia = {_v([m * r_g ** 2 / 2, m * r_g ** 2 / 2, m * r_g ** 2])}   # never felt: the floor does not turn
+''')
+        for axis, e in (("x", "[1.0, 0.0, 0.0]"), ("y", "[0.0, 1.0, 0.0]")):
+            forces.append(f'''
+[[forces]]   # story {i + 1} along {axis}: k_i, c_i on the drift d_i - d_(i-1)
+name = "story{i + 1}_{axis}"
+law = "linear_spring_damper"
+body_a = "floor{i + 1}"
+body_b = "{below}"
+direction = {e}
+parameters = {{ stiffness = {float(b.stiffnesses[i])!r}, damping = {float(b.story_damping[i])!r}, free_length = 0.0 }}
+''')
+            if b.slab_damping[i] > 0:
+                forces.append(f'''
+[[forces]]   # Rayleigh's mass-proportional part along {axis}: b_i on d_i - d_0
+name = "slab_damper{i + 1}_{axis}"
+law = "linear_spring_damper"
+body_a = "floor{i + 1}"
+body_b = "plate"
+direction = {e}
+parameters = {{ stiffness = 0.0, damping = {float(b.slab_damping[i])!r}, free_length = 0.0 }}
+''')
+            outputs.append(f'''
+[[outputs]]
+name = "floor{i + 1}_{axis}"
+kind = "coordinate"
+joint = "floor{i + 1}"
+dof = {0 if axis == "x" else 1}
+''')
+    return "".join(bodies), "".join(forces), "".join(outputs)
+
+
+def seismic_description(params: Params, st: Structure, ground: str, duration: float, dt_out: float = 1e-3,
+                        name: str = "nsd_seismic") -> str:
+    """The seismic-mode device on the structure ``st`` (its building, its restrainer) under the closed
+    form ``ground`` (``nsd seismic --ground``'s syntax), as TOML with one case of ``duration`` s."""
+    g = device_geometry(params)
+    plate, supports = _structure_lines(st)
+    floors, stories, floor_outputs = _building_lines(st) if st.building is not None else ("", "", "")
+    head = f'''# The negative-stiffness device (Dai et al. 2024) in seismic mode{" under a " + str(st.building.stories) + "-story building" if st.building else ""}, as a model description.
+# Written by `python -m nsd_core.device.describe_seismic` from the device's parameters and the isolated
+# structure (docs/seismic.md; every value with its provenance in `nsd params`). Device parameters that
+# differ from the nominal ones: {", ".join(f"{k} = {v!r}" for k, v in _changed(params).items()) or "none"}.
+# Coordinates are relative to the ground: the frame moves with it ([excitation]).
+
+[model]
+name = "{name}"
+source = "Dai et al. 2024 (doi:10.1002/msd2.12118); structure: nsd_core.device.isolation (assumed rules)"
+gravity = {_v(g.gravity_vector)}
+
+[excitation]   # every body feels -m a_g(t): a_g from the ground motion below
+type = "ground_acceleration"
+ground = "{ground}"
+{plate}
+[[bodies]]   # the cap: rides on the plate (turns with it), its height free
+name = "cap"
+parent = "plate"
+joint = {{ type = "prismatic", position = [0.0, 0.0, 0.0], axis = [0.0, 0.0, 1.0] }}
+mass = {g.cap.mass!r}
+com = {_v(g.cap.com)}
+inertia = {_inertia(g.cap.inertia)}
+
+[[bodies]]   # the wall: slides along Z in the base's guide, on the spring
+name = "wall"
+joint = {{ type = "prismatic", position = [0.0, 0.0, 0.0], axis = [0.0, 0.0, 1.0] }}
+mass = {g.wall.mass!r}
+com = {_v(g.wall.com)}
+inertia = {_inertia(g.wall.inertia)}
+
+[[bodies]]   # the rod: a universal joint at the wall's reference point
+name = "rod"
+parent = "wall"
+joint = {{ type = "universal", position = [0.0, 0.0, 0.0], axis = [1.0, 0.0, 0.0], axis2 = [0.0, 1.0, 0.0] }}
+mass = {g.rod.mass!r}
+com = {_v(g.rod.com)}
+inertia = {_inertia(g.rod.inertia)}
+{floors}
+[[loops]]    # the rod's upper joint: the cut spherical joint of Eq. 13
+name = "cap_rod"
+body_a = "cap"
+point_a = [0.0, 0.0, 0.0]
+body_b = "rod"
+point_b = [0.0, 0.0, {params.rod_length!r}]
+
+[initial]    # relative rest, the device precompressed
+coordinates = {{ cap = {g.cap_rest_z!r}, wall = {g.wall_rest_z!r} }}
+free = ["plate", "cap"]
+'''
+    outputs = '''
+[[outputs]]
+name = "u_x"
+kind = "coordinate"
+joint = "plate"
+dof = 0
+
+[[outputs]]
+name = "u_y"
+kind = "coordinate"
+joint = "plate"
+dof = 1
+
+[[outputs]]
+name = "theta"
+kind = "coordinate"
+joint = "plate"
+dof = 2
+scale = 1e-3   # rad: a rotation below a milliradian is judged against one
+
+[[outputs]]
+name = "cap_z"
+kind = "coordinate"
+joint = "cap"
+
+[[outputs]]
+name = "support_x"
+kind = "force"
+element = "support_x"
+
+[[outputs]]
+name = "rope0_tension"
+kind = "force"
+element = "rope0"
+
+[[outputs]]
+name = "spring_tension"
+kind = "force"
+element = "spring"
+''' + floor_outputs
+    if st.restrainer is not None:
+        outputs += '''
+[[outputs]]
+name = "restrainer_force"
+kind = "force"
+element = "restrainer"
+scale = 1.0   # N: zero until the plate reaches the gap
+'''
+    case = f'''
+[[case]]
+name = "{name}_{duration:g}s"
+duration = {duration!r}
+dt_out = {dt_out!r}
+mujoco = {{ timestep = 2e-5 }}
+exudyn = {{ step_size = 1e-4 }}
+'''
+    return head + device_forces(g) + supports + stories + outputs + case
+
+
+def main(argv=None) -> None:
+    from nsd_core.device.building import building_from
+    from nsd_core.device.isolation import structure_with
+    from nsd_core.device.params import parse_set, with_overrides
+    from nsd_core.device.restrainer import default_restrainer
+    from nsd_core.device.results import atomic_write_text
+    p = argparse.ArgumentParser(description="write the device in seismic mode as a model description (TOML)")
+    p.add_argument("--ground", required=True, help="a closed form, nsd seismic --ground's syntax")
+    p.add_argument("--duration", type=float, required=True, help="s")
+    p.add_argument("--dt-out", type=float, default=1e-3, help="s")
+    p.add_argument("--stories", type=int, default=0, help="a shear building of this many stories (default: none)")
+    p.add_argument("--restrainer", action="store_true", help="with the default displacement restrainer")
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE")
+    p.add_argument("--name", default="nsd_seismic")
+    p.add_argument("--out", required=True)
+    a = p.parse_args(argv)
+    params = with_overrides(Params(), parse_set(a.set))
+    st = structure_with(params, {})
+    if a.restrainer:
+        st = Structure(**{**st.__dict__, "restrainer": default_restrainer(params, st)})
+    if a.stories:
+        st = Structure(**{**st.__dict__, "building": building_from(st.mass, {"stories": a.stories})})
+    atomic_write_text(a.out, seismic_description(params, st, a.ground, a.duration, a.dt_out, a.name))
+
+
+if __name__ == "__main__":
+    main()
