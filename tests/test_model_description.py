@@ -52,10 +52,6 @@ def test_slider_crank_description_against_the_closed_form():
     assert np.ptp(r.outputs["drive_torque"]) > 1.0   # the drive works against the masses
 
 
-def test_a_law_added_in_one_place_reaches_the_in_house_builder():
-    pass
-
-
 @pytest.fixture
 def cubic_law():
     """A law registered by a test, as a user would: one function and one register call."""
