@@ -13,12 +13,12 @@ mujoco_codegen, mujoco_kernels); outputs equal to round-off (tests/test_mujoco_c
 (benchmarks/bench_model_builders.py, load 7 on 2 cores); the Python path: ~60 s per model second.
 
 Forces: one ``mjcb_passive`` callback (installed for the run only, the previous one restored)
-evaluates every force element through the law registry and nothing else: a points element's two
-world points and velocities come from MuJoCo's state (mj_jac of each point), then L, L', the tension
-T = ``element.force(L, L')`` and +T u on point a, -T u on point b (u from a to b; T > 0 pulls them
-together), added to qfrc_passive through the points' Jacobians; a joint element adds
-``element.force(q, q')`` to its coordinate. No line here knows which laws exist. Coincident points
-(L = 0) have no direction: their tension is not applied.
+evaluates every force element through the law registry and nothing else (mujoco_passive.Passive,
+which says how: points elements along their line or along a ``direction``, joint elements on their
+coordinate); no line here knows which laws exist. An excitation (``[excitation]``: the frame moves
+with the ground) adds -m a_g(t) at every body's centre of mass in the same callback, at each
+integrator stage's own time, so RK4 keeps its order (measured on models/nsd_seismic.toml: see
+tests/test_model_mujoco_seismic.py).
 
 A law with an internal state (``Law.state``) keeps it in an activation of a zero-force actuator
 (mujoco_mjcf): MuJoCo integrates it with the motion, its rate ``element.rate(x, x', s)`` computed by
@@ -80,12 +80,12 @@ import mujoco
 import numpy as np
 
 from comparisons.builders import mujoco_codegen, mujoco_compiled
+from comparisons.builders.mujoco_passive import Passive
 from comparisons.builders.mujoco_mjcf import build_mjcf, connects, joint_name, state_activations
 from comparisons.engines.base import EngineError, check_step_count
 from nsd_core.model.assemble import initial_state
 from nsd_core.model.description import GROUND, Model
 from nsd_core.model.errors import ModelError
-from nsd_core.model.laws import POINTS
 from nsd_core.model.run import ModelRun, output_times
 
 name = "mujoco"
@@ -133,86 +133,6 @@ def merged_settings(settings: dict | None) -> dict:
     if isinstance(it, bool) or not isinstance(it, int) or it < 1:
         raise ModelError(f"mujoco.solver_iterations = {it!r}: must be a whole number >= 1")
     return s
-
-
-class Passive:
-    """The mjcb_passive callback: every force element through its law, plus the drives' feed-forward."""
-
-    def __init__(self, model: Model, m: mujoco.MjModel, drives: list):
-        self.nv = m.nv
-        self.jac = np.zeros((2, 3, m.nv))
-        self.points, self.joints = [], []
-        # a law with a state keeps it in an activation of the states actuator (mujoco_mjcf); -1: none
-        self.act = state_activations(model, m)
-        self.rates = np.zeros(m.na)   # each state's rate at the last evaluation, for mjcb_act_dyn
-        for f in model.forces:
-            slot = self.act.get(f.name, -1)
-            if f.law.acts_on == POINTS:
-                ends = tuple((-1 if b == GROUND else m.body(b).id, np.asarray(p, float))
-                             for b, p in ((f.body_a, f.point_a), (f.body_b, f.point_b)))
-                self.points.append((f, ends, slot))
-            else:
-                j = m.joint(joint_name(f.joint, f.dof))
-                self.joints.append((f, int(j.qposadr[0]), int(j.dofadr[0]), slot))
-        self.drives = drives                    # (Prescribed, qposadr, dofadr, armature)
-        nd = len(drives)
-        self.tau = np.zeros(nd)                 # the drive forces' estimate at t_tau ...
-        self.tau_slope = np.zeros(nd)           # ... and its rate [per s]
-        self.t_tau = 0.0
-        self.feeds: list[np.ndarray] = []       # the feed-forward of each evaluation since the step began
-
-    def point(self, m, d, body: int, p: np.ndarray, jac: np.ndarray):
-        """World position and velocity of body point p; ``jac`` gets its 3 x nv Jacobian (ground: 0)."""
-        if body < 0:
-            jac[:] = 0.0
-            return p, np.zeros(3)
-        x = d.xpos[body] + d.xmat[body].reshape(3, 3) @ p
-        mujoco.mj_jac(m, d, jac, None, x, body)
-        return x, jac @ d.qvel
-
-    def element_state(self, m, d, ends):
-        """(L, L', unit vector a -> b) of a points element; the Jacobians stay in self.jac."""
-        (ba, pa), (bb, pb) = ends
-        xa, va = self.point(m, d, ba, pa, self.jac[0])
-        xb, vb = self.point(m, d, bb, pb, self.jac[1])
-        r = xb - xa
-        L = float(np.linalg.norm(r))
-        u = r / L if L > 0.0 else np.zeros(3)
-        return L, float(u @ (vb - va)), u
-
-    def law(self, d, f, x: float, xd: float, slot: int) -> float:
-        """The element's force at (x, x') and its state; the state's rate is kept for mjcb_act_dyn."""
-        if slot < 0:
-            return f.force(x, xd)
-        s = float(d.act[slot])
-        self.rates[slot] = f.rate(x, xd, s)
-        return f.force(x, xd, s)
-
-    def law_values(self, m, d) -> dict:
-        """Each element's force at d's state (tension [N], or generalized force)."""
-        out = {f.name: self.law(d, f, *self.element_state(m, d, ends)[:2], slot) for f, ends, slot in self.points}
-        out.update({f.name: self.law(d, f, d.qpos[qa], d.qvel[da], slot) for f, qa, da, slot in self.joints})
-        return out
-
-    def act_dyn(self, m, d, actuator: int) -> float:
-        """mjcb_act_dyn: the states' rates, computed by this stage's passive call (MuJoCo evaluates the
-        passive forces before the actuators), written into act_dot (MuJoCo's rule for an actuator of
-        several activations; with one, it takes the value returned)."""
-        d.act_dot[:] = self.rates
-        return float(self.rates[m.actuator_actadr[actuator]])
-
-    def __call__(self, m, d):
-        qfrc = d.qfrc_passive
-        for f, ends, slot in self.points:
-            L, Ld, u = self.element_state(m, d, ends)
-            qfrc += (self.law(d, f, L, Ld, slot) * u) @ (self.jac[0] - self.jac[1])
-        for f, qa, da, slot in self.joints:
-            qfrc[da] += self.law(d, f, d.qpos[qa], d.qvel[da], slot)
-        if self.drives:
-            t = d.time
-            feed = np.array([A * p(t)[2] for p, _, _, A in self.drives]) + self.tau + self.tau_slope * (t - self.t_tau)
-            qfrc[[da for _, _, da, _ in self.drives]] += feed
-            self.feeds.append(feed)
 
 
 def simulate(model: Model, duration: float, dt_out: float, settings: dict | None = None) -> ModelRun:

@@ -18,6 +18,12 @@ the source, each law's module, name and the source files of everything it calls 
 numba functions): an edit of a law (or of a device force it calls) gives a new file. A law defined
 inside a function (``<locals>``) cannot be told from another of the same name, so its object's
 identity enters the hash too (compiled again in each process).
+The helper modules the source imports (mujoco_kernels, mujoco_cabi, nsd_core.device.ground) enter it
+as well: their code is compiled into the generated file's cache.
+
+The description's shape includes which points elements have a ``direction`` (points_state_along) and
+whether it has an excitation (ground_values at the stage's time, then ground_load on the body slots,
+which then include every body with a mass); the ground motion's block is data (userdata's tail).
 """
 from __future__ import annotations
 
@@ -35,10 +41,15 @@ import numba
 import numpy as np
 
 from comparisons.builders import mujoco_kernels as K
+from comparisons.builders import mujoco_cabi
 from comparisons.builders.mujoco_cabi import data_offsets, function_address
+from nsd_core.device import ground as ground_motion
 from comparisons.builders.mujoco_mjcf import joint_name, state_activations
 from nsd_core.model.description import GROUND, Model
 from nsd_core.model.laws import POINTS
+
+
+HELPERS = (K, mujoco_cabi, ground_motion)   # the modules the generated source calls into
 
 
 @dataclass(frozen=True)
@@ -55,6 +66,12 @@ class Layout:
     params: tuple[tuple[int, int], ...]   # each element's parameters [start, end)
     rates_at: int                    # the states' rates, by actuator id
     values: np.ndarray               # each element's last law value
+    excitation_at: int               # the excitation's ground_values block, last (0: none)
+
+    @property
+    def core(self) -> int:
+        """The userdata the generated source addresses as ``ud`` (all but the excitation's block)."""
+        return self.excitation_at or self.size
 
 
 def layout(model: Model) -> Layout:
@@ -65,6 +82,8 @@ def layout(model: Model) -> Layout:
     na = sum(f.law.state is not None for f in model.forces)
     slots = tuple(dict.fromkeys(b for f in model.forces if f.law.acts_on == POINTS
                                 for b in (f.body_a, f.body_b) if b != GROUND))
+    if model.excitation is not None:   # every body with a mass feels -m a_g: a slot holds its Jacobians
+        slots += tuple(b.name for b in model.bodies if b.mass > 0.0 and b.name not in slots)
     slots_at = K.HEADER + K.SCRATCH
     drives_at = at = slots_at + K.slot_size(nv) * len(slots)
     at += K.DRIVE_SIZE * len(model.prescribed)
@@ -75,8 +94,9 @@ def layout(model: Model) -> Layout:
         values.append(at + value)
         params.append((at + head, at + head + len(f.parameters)))
         at += head + len(f.parameters)
-    return Layout(at + na, nq, nv, na, drives_at, slots, slots_at, tuple(blocks), tuple(params), at,
-                  np.array(values, dtype=np.int64))
+    exc = 0 if model.excitation is None else len(model.excitation.block)
+    return Layout(at + na + exc, nq, nv, na, drives_at, slots, slots_at, tuple(blocks), tuple(params), at,
+                  np.array(values, dtype=np.int64), at + na if exc else 0)
 
 
 def pack(ud: np.ndarray, model: Model, m: mujoco.MjModel, drives: list, lay: Layout) -> None:
@@ -90,7 +110,15 @@ def pack(ud: np.ndarray, model: Model, m: mujoco.MjModel, drives: list, lay: Lay
     ud[K.N_DRIVES], ud[K.DRIVES_AT] = len(drives), lay.drives_at
     ud[K.N_SLOTS], ud[K.SLOTS_AT] = len(lay.slots), lay.slots_at
     for i, body in enumerate(lay.slots):
-        ud[lay.slots_at + K.slot_size(lay.nv) * i + K.S_BODY] = m.body(body).id
+        s, b = lay.slots_at + K.slot_size(lay.nv) * i, m.body(body).id
+        ud[s + K.S_BODY] = b
+        if model.excitation is not None:   # MuJoCo's own mass and centre (body frame), as its gravity's
+            ud[s + K.S_MASS] = m.body_mass[b]
+            ud[s + K.S_COM:s + K.S_COM + 3] = m.body_ipos[b]
+    if model.excitation is not None:
+        block = model.excitation.block
+        ud[K.EXCITATION_SIZE] = len(block)
+        ud[lay.excitation_at:lay.excitation_at + len(block)] = block
     for i, (_, _, da, A) in enumerate(drives):
         b = lay.drives_at + K.DRIVE_SIZE * i
         ud[b + K.D_DOF], ud[b + K.D_ARM] = da, A
@@ -102,6 +130,8 @@ def pack(ud: np.ndarray, model: Model, m: mujoco.MjModel, drives: list, lay: Lay
                 ud[at + 4 * end] = -1 if body == GROUND else lay.slots.index(body)
                 ud[at + 4 * end + 1:at + 4 * end + 4] = np.asarray(p, float)
             ud[at + K.P_SLOT] = slot
+            if f.direction is not None:
+                ud[at + K.P_DIRECTION:at + K.P_DIRECTION + 3] = np.asarray(f.direction, float)
         else:
             j = m.joint(joint_name(f.joint, f.dof))
             ud[at], ud[at + 1] = j.qposadr[0], j.dofadr[0]
@@ -134,14 +164,15 @@ def source(model: Model, lay: Layout, nbody: int) -> tuple[str, dict]:
         "import numpy as np",
         "from numba import carray, cfunc, types",
         "from comparisons.builders.mujoco_cabi import double_ptr",
-        "from comparisons.builders.mujoco_kernels import apply_points, drive_feeds, finish_bodies, points_state, "
-        "prepare_bodies",
+        "from comparisons.builders.mujoco_kernels import apply_points, drive_feeds, finish_bodies, ground_load, "
+        "points_state, points_state_along, prepare_bodies",
+        "from nsd_core.device.ground import ground_values",
         "", "",
         "@cfunc(types.void(types.voidptr, types.voidptr), cache=True)",
         "def passive(m, d):",
         f"    w = carray(d, ({words},), dtype=np.uint64)",
         f"    ud_addr = np.int64(w[{o['userdata']}])",
-        f"    ud = carray(double_ptr(ud_addr), ({lay.size},))",
+        f"    ud = carray(double_ptr(ud_addr), ({lay.core},))",
         f"    qpos = {ptr('qpos', (lay.nq,))}",
         f"    qvel = {ptr('qvel', (lay.nv,))}",
         f"    qfrc = {ptr('qfrc_passive', (lay.nv,))}",
@@ -156,7 +187,8 @@ def source(model: Model, lay: Layout, nbody: int) -> tuple[str, dict]:
         law = names[id(f.law.force)]
         lines.append(f"    # {f.name}: {f.law.name}")
         if f.law.acts_on == POINTS:
-            lines.append(f"    x, xd = points_state(ud, {at}, xpos, xmat, {lay.nv})")
+            state = "points_state" if f.direction is None else "points_state_along"
+            lines.append(f"    x, xd = {state}(ud, {at}, xpos, xmat, {lay.nv})")
             slot = at + K.P_SLOT
         else:
             lines.append(f"    x, xd = qpos[int(ud[{at}])], qvel[int(ud[{at + 1}])]")
@@ -170,6 +202,11 @@ def source(model: Model, lay: Layout, nbody: int) -> tuple[str, dict]:
         lines.append(f"    ud[{lay.values[e]}] = f")
         lines.append(f"    apply_points(ud, {at}, f, {lay.nv})" if f.law.acts_on == POINTS
                      else f"    qfrc[int(ud[{at + 1}])] += f")
+    if model.excitation is not None:   # -m a_g(t) at every body's centre, t: this stage's time
+        lines += [f"    ground = carray(double_ptr(ud_addr + {8 * lay.excitation_at}), "
+                  f"(np.int64(ud[{K.EXCITATION_SIZE}]),))",
+                  f"    ag = ground_values(carray(d, ({o['time'] + 1},), dtype=np.float64)[{o['time']}], ground, 0)",
+                  f"    ground_load(ud, xmat, ag[4], ag[5], {lay.nv})"]
     if lay.slots:
         lines.append(f"    finish_bodies(ud, qfrc, {lay.nv})")
     if model.prescribed:
@@ -179,7 +216,7 @@ def source(model: Model, lay: Layout, nbody: int) -> tuple[str, dict]:
               "def act_dyn(m, d, actuator):",
               "    # the states' rates into act_dot (one actuator holds them all: mujoco_mjcf)",
               f"    w = carray(d, ({words},), dtype=np.uint64)",
-              f"    ud = carray(double_ptr(np.int64(w[{o['userdata']}])), ({lay.size},))",
+              f"    ud = carray(double_ptr(np.int64(w[{o['userdata']}])), ({lay.core},))",
               *([f"    act_dot = {ptr('act_dot', (lay.na,))}",
                  f"    for k in range({lay.na}):",
                  f"        act_dot[k] = ud[{lay.rates_at} + k]",
@@ -214,6 +251,10 @@ def _dependency_files(fn, seen: set) -> None:
 
 def fingerprint(text: str, bound: dict) -> str:
     h = hashlib.sha256(text.encode())
+    # the helpers the source imports are compiled into the generated file's cache too, which numba
+    # keys on that file alone: an edit of their layout or code must give a new file
+    for module in HELPERS:
+        h.update(Path(module.__file__).read_bytes())
     for name, fn in sorted(bound.items()):
         py = getattr(fn, "py_func", fn)
         h.update(f"{name}={_identity(fn)}".encode())

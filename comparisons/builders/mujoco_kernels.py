@@ -11,6 +11,11 @@ paths agree to round-off: tests/test_mujoco_codegen.py):
   J = J_o - [r x] J_w, the same numbers re-associated;
 - ``points_state``: an element's two world points (xpos + xmat p; ground: p), their velocities
   v_o + w x r, L, L' and the unit vector a -> b (L = 0: no direction, as Passive);
+- ``points_state_along``: the same for an element with a direction e: x = (p_a - p_b) . e, x' its
+  rate, and u = -e (the law's -T e on a);
+- ``ground_load``: the excitation's -m a_g(t) at the centre of mass of every body slot that carries
+  a mass, as F and M about the origin (a_g from nsd_core.device.ground.ground_values, called by the
+  generated callback at the stage's time);
 - ``apply_points``: the tension as wrenches on the two bodies, +T u at a, -T u at b, summed per body
   about its origin (F, r x F); ``finish_bodies`` then adds J_o^T F + J_w^T M to qfrc_passive, which
   is Passive's (T u) (J_a - J_b) summed over the elements;
@@ -23,7 +28,9 @@ two middle stages: middle; its last: end).
 
 userdata layout (float64): a header, scratch (the two ends' arms r and the unit vector), one block
 per body slot, per drive, per force element (its parameters last, so that a law receives them as one
-array view) and the states' rates (by act index, copied to act_dot by the generated mjcb_act_dyn).
+array view), the states' rates (by act index, copied to act_dot by the generated mjcb_act_dyn) and
+the excitation's ground motion block (its length in the header: a record's length is data, not the
+description's shape, so the generated source does not depend on it).
 """
 from __future__ import annotations
 
@@ -32,18 +39,20 @@ from numba import njit
 
 from comparisons.builders.mujoco_cabi import call_jac, call_md, call_md_int
 
-# header
-JAC_FN, COUNT, T_STEP, STEP, T_TAU, N_DRIVES, DRIVES_AT, N_SLOTS, SLOTS_AT, HEADER = range(10)
+# header (EXCITATION_SIZE: the length of the excitation's ground_values block, last in userdata)
+JAC_FN, COUNT, T_STEP, STEP, T_TAU, N_DRIVES, DRIVES_AT, N_SLOTS, SLOTS_AT, EXCITATION_SIZE, HEADER = range(11)
 SCRATCH = 9          # the ends' arms r_a, r_b and the unit vector u
 MAX_STAGES = 4       # RK4's; a step of more stages keeps only its first 4 feeds and the loop fails it
-# a body slot: body id, point (its origin), v_o, w, F, M, then J_o and J_w (3 x nv each)
-S_BODY, S_POINT, S_VEL, S_OMEGA, S_FORCE, S_MOMENT, S_JAC = 0, 1, 4, 7, 10, 13, 16
+# a body slot: body id, point (its origin), v_o, w, F, M, the mass the excitation loads (0: none) and
+# its centre in the body's frame, then J_o and J_w (3 x nv each)
+S_BODY, S_POINT, S_VEL, S_OMEGA, S_FORCE, S_MOMENT, S_MASS, S_COM, S_JAC = 0, 1, 4, 7, 10, 13, 16, 17, 20
 # a drive: dof address, armature, tau, tau', q'' at the step's start / middle / end, the stages' feeds
 D_DOF, D_ARM, D_TAU, D_SLOPE, D_ACC, D_FEED, DRIVE_SIZE = 0, 1, 2, 3, 4, 7, 7 + MAX_STAGES
 # a points element: slot of body a (-1: ground), point a (3), slot of body b, point b (3), its state's
-# index in act (-1: none), (unused), last value, (unused), then the law's parameters; a joint element:
-# qpos and dof address, act index, (unused), value, (unused), parameters
-P_SLOT, P_VALUE, POINTS_HEAD = 8, 10, 12
+# index in act (-1: none), (unused), last value, (unused), its direction e (ground frame; zero for a
+# line element), then the law's parameters; a joint element: qpos and dof address, act index,
+# (unused), value, (unused), parameters
+P_SLOT, P_VALUE, P_DIRECTION, POINTS_HEAD = 8, 10, 12, 15
 J_SLOT, J_VALUE, JOINT_HEAD = 2, 4, 6
 
 
@@ -109,6 +118,43 @@ def points_state(ud, at, xpos, xmat, nv):
     else:
         ud[u], ud[u + 1], ud[u + 2] = 0.0, 0.0, 0.0
     return L, ud[u] * (vb0 - va0) + ud[u + 1] * (vb1 - va1) + ud[u + 2] * (vb2 - va2)
+
+
+@njit(cache=True)
+def points_state_along(ud, at, xpos, xmat, nv):
+    """(x, x') of a points element with a direction e: x = (p_a - p_b) . e and its rate. The scratch
+    unit vector is u = -e, so that apply_points' +T u on a is the law's -T e on a, +T e on b."""
+    a0, a1, a2, va0, va1, va2 = _end(ud, at, 0, xpos, xmat, nv)
+    b0, b1, b2, vb0, vb1, vb2 = _end(ud, at, 1, xpos, xmat, nv)
+    e0, e1, e2 = ud[at + P_DIRECTION], ud[at + P_DIRECTION + 1], ud[at + P_DIRECTION + 2]
+    u = HEADER + 6
+    ud[u], ud[u + 1], ud[u + 2] = -e0, -e1, -e2
+    return (e0 * (a0 - b0) + e1 * (a1 - b1) + e2 * (a2 - b2),
+            e0 * (va0 - vb0) + e1 * (va1 - vb1) + e2 * (va2 - vb2))
+
+
+@njit(cache=True)
+def ground_load(ud, xmat, ax, ay, nv):
+    """The excitation: -m a_g at every loaded slot's centre of mass, added to its F and M (about the
+    body's origin: r_c x F, r_c = xmat c). a_g = (ax, ay, 0)."""
+    size = S_JAC + 6 * nv
+    at = int(ud[SLOTS_AT])
+    for i in range(int(ud[N_SLOTS])):
+        s = at + size * i
+        mass = ud[s + S_MASS]
+        if mass == 0.0:
+            continue
+        b = int(ud[s + S_BODY])
+        c0, c1, c2 = ud[s + S_COM], ud[s + S_COM + 1], ud[s + S_COM + 2]
+        r0 = xmat[b, 0] * c0 + xmat[b, 1] * c1 + xmat[b, 2] * c2
+        r1 = xmat[b, 3] * c0 + xmat[b, 4] * c1 + xmat[b, 5] * c2
+        r2 = xmat[b, 6] * c0 + xmat[b, 7] * c1 + xmat[b, 8] * c2
+        f0, f1 = -mass * ax, -mass * ay
+        ud[s + S_FORCE] += f0
+        ud[s + S_FORCE + 1] += f1
+        ud[s + S_MOMENT] += -r2 * f1
+        ud[s + S_MOMENT + 1] += r2 * f0
+        ud[s + S_MOMENT + 2] += r0 * f1 - r1 * f0
 
 
 @njit(cache=True)

@@ -1,0 +1,124 @@
+"""comparisons.builders.mujoco's readable passive path (``passive = "python"``): the mjcb_passive
+callback as a Python class. The compiled path (mujoco_codegen, mujoco_kernels) computes the same
+numbers in the same order; tests/test_mujoco_codegen.py holds them equal to round-off.
+
+- A points element's two world points and velocities come from MuJoCo's state (mj_jac of each point).
+  Along the line (no ``direction``): L = |p_b - p_a|, L' its rate, u the unit vector a -> b, and the
+  tension T = ``element.force(L, L')`` gives +T u on a, -T u on b (T > 0 pulls them together).
+  Coincident points (L = 0, a stop at rest) have no direction: u = 0, L' = 0, no force applied.
+  With a ``direction`` e (ground frame): x = (p_a - p_b) . e, x' its rate, and the law's tension acts
+  as -T e on a, +T e on b, i.e. the same arithmetic with u = -e and L = (p_b - p_a) . u.
+- A joint element adds ``element.force(q, q')`` to its coordinate.
+- An excitation (the frame translates with the ground) adds -m a_g(t) at every body's centre of
+  mass, J_com^T (-m a_g(t)), with t = mjData.time: the passive callback runs at every integrator
+  stage with the stage's time (mj_RungeKutta sets it), so the forcing is as accurate as the
+  integrator (setting opt.gravity once per step would hold a_g constant over the step, first order).
+- Prescribed motions: the heavy virtual drives' feed-forward (comparisons.builders.mujoco says why).
+"""
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+from comparisons.builders.mujoco_mjcf import joint_name, state_activations
+from nsd_core.model.description import GROUND, Model
+from nsd_core.model.laws import POINTS
+
+
+class Passive:
+    """The mjcb_passive callback: every force element through its law, the excitation's load, plus the
+    drives' feed-forward."""
+
+    def __init__(self, model: Model, m: mujoco.MjModel, drives: list):
+        self.nv = m.nv
+        self.jac = np.zeros((2, 3, m.nv))
+        self.points, self.joints = [], []
+        # a law with a state keeps it in an activation of the states actuator (mujoco_mjcf); -1: none
+        self.act = state_activations(model, m)
+        self.rates = np.zeros(m.na)   # each state's rate at the last evaluation, for mjcb_act_dyn
+        for f in model.forces:
+            slot = self.act.get(f.name, -1)
+            if f.law.acts_on == POINTS:
+                ends = tuple((-1 if b == GROUND else m.body(b).id, np.asarray(p, float))
+                             for b, p in ((f.body_a, f.point_a), (f.body_b, f.point_b)))
+                u = None if f.direction is None else -np.asarray(f.direction, float)
+                self.points.append((f, ends, slot, u))
+            else:
+                j = m.joint(joint_name(f.joint, f.dof))
+                self.joints.append((f, int(j.qposadr[0]), int(j.dofadr[0]), slot))
+        self.excitation = model.excitation
+        # the bodies the excitation loads: every one with a mass (MuJoCo's own, as its gravity uses)
+        self.loaded = [(b, float(m.body_mass[b])) for b in range(1, m.nbody) if m.body_mass[b] > 0.0]
+        self.jac_com = np.zeros((3, m.nv))
+        self.drives = drives                    # (Prescribed, qposadr, dofadr, armature)
+        nd = len(drives)
+        self.tau = np.zeros(nd)                 # the drive forces' estimate at t_tau ...
+        self.tau_slope = np.zeros(nd)           # ... and its rate [per s]
+        self.t_tau = 0.0
+        self.feeds: list[np.ndarray] = []       # the feed-forward of each evaluation since the step began
+
+    def point(self, m, d, body: int, p: np.ndarray, jac: np.ndarray):
+        """World position and velocity of body point p; ``jac`` gets its 3 x nv Jacobian (ground: 0)."""
+        if body < 0:
+            jac[:] = 0.0
+            return p, np.zeros(3)
+        x = d.xpos[body] + d.xmat[body].reshape(3, 3) @ p
+        mujoco.mj_jac(m, d, jac, None, x, body)
+        return x, jac @ d.qvel
+
+    def element_state(self, m, d, ends, along=None):
+        """(x, x', u) of a points element, the force on a being +T u: along the line, (L, L', the unit
+        vector a -> b); with a direction e, along = -e: ((p_b - p_a) . along, its rate, along). The
+        Jacobians stay in self.jac."""
+        (ba, pa), (bb, pb) = ends
+        xa, va = self.point(m, d, ba, pa, self.jac[0])
+        xb, vb = self.point(m, d, bb, pb, self.jac[1])
+        r = xb - xa
+        if along is not None:
+            return float(r @ along), float(along @ (vb - va)), along
+        L = float(np.linalg.norm(r))
+        u = r / L if L > 0.0 else np.zeros(3)
+        return L, float(u @ (vb - va)), u
+
+    def law(self, d, f, x: float, xd: float, slot: int) -> float:
+        """The element's force at (x, x') and its state; the state's rate is kept for mjcb_act_dyn."""
+        if slot < 0:
+            return f.force(x, xd)
+        s = float(d.act[slot])
+        self.rates[slot] = f.rate(x, xd, s)
+        return f.force(x, xd, s)
+
+    def law_values(self, m, d) -> dict:
+        """Each element's force at d's state (tension [N], or generalized force)."""
+        out = {f.name: self.law(d, f, *self.element_state(m, d, ends, u)[:2], slot) for f, ends, slot, u in self.points}
+        out.update({f.name: self.law(d, f, d.qpos[qa], d.qvel[da], slot) for f, qa, da, slot in self.joints})
+        return out
+
+    def act_dyn(self, m, d, actuator: int) -> float:
+        """mjcb_act_dyn: the states' rates, computed by this stage's passive call (MuJoCo evaluates the
+        passive forces before the actuators), written into act_dot (MuJoCo's rule for an actuator of
+        several activations; with one, it takes the value returned)."""
+        d.act_dot[:] = self.rates
+        return float(self.rates[m.actuator_actadr[actuator]])
+
+    def ground_load(self, m, d, qfrc) -> None:
+        """J_com^T (-m a_g(t)) of every body, at this stage's time."""
+        a = self.excitation.acceleration(d.time)
+        for b, mass in self.loaded:
+            mujoco.mj_jacBodyCom(m, d, self.jac_com, None, b)
+            qfrc += (-mass * a) @ self.jac_com
+
+    def __call__(self, m, d):
+        qfrc = d.qfrc_passive
+        for f, ends, slot, along in self.points:
+            L, Ld, u = self.element_state(m, d, ends, along)
+            qfrc += (self.law(d, f, L, Ld, slot) * u) @ (self.jac[0] - self.jac[1])
+        for f, qa, da, slot in self.joints:
+            qfrc[da] += self.law(d, f, d.qpos[qa], d.qvel[da], slot)
+        if self.excitation is not None:
+            self.ground_load(m, d, qfrc)
+        if self.drives:
+            t = d.time
+            feed = np.array([A * p(t)[2] for p, _, _, A in self.drives]) + self.tau + self.tau_slope * (t - self.t_tau)
+            qfrc[[da for _, _, da, _ in self.drives]] += feed
+            self.feeds.append(feed)
