@@ -39,8 +39,10 @@ def _changed(params: Params) -> dict:
 
 
 def device_description(params: Params, amplitude: float, frequency: float, direction_deg: float = 0.0,
-                       cycles: int = 2, samples_per_cycle: int = 500) -> str:
-    """The drive-mode device under a line drive (u = A sin(2 pi f t) along the direction), as TOML."""
+                       cycles: int = 2, samples_per_cycle: int = 500, drive=None, case: str | None = None) -> str:
+    """The drive-mode device under a line drive (u = A sin(2 pi f t) along the direction), as TOML.
+    drive: a nsd_core.device.drive.Drive whose plate path (circle, figure8, ... with its ramp) the cap
+    follows instead (motion "device_path"); case: the [[case]] table's text instead of the default."""
     g = device_geometry(params)
     psi = math.radians(direction_deg)
     lines = [f'''# The negative-stiffness device (Dai et al. 2024) in drive mode, as a model description.
@@ -83,23 +85,7 @@ point_a = [0.0, 0.0, 0.0]
 body_b = "rod"
 point_b = [0.0, 0.0, {params.rod_length!r}]
 
-[[prescribed]]
-name = "drive_x"
-joint = "cap"
-dof = 0
-motion = "harmonic"
-amplitude = {amplitude * math.cos(psi)!r}
-frequency = {frequency!r}
-
-[[prescribed]]
-name = "drive_y"
-joint = "cap"
-dof = 1
-motion = "harmonic"
-amplitude = {amplitude * math.sin(psi)!r}
-frequency = {frequency!r}
-
-[initial]    # the precompressed rest state
+{_prescribed(amplitude, frequency, psi, drive)}[initial]    # the precompressed rest state
 coordinates = {{ cap = [0.0, 0.0, {g.cap_rest_z!r}], wall = {g.wall_rest_z!r} }}
 free = ["cap"]
 ''']
@@ -137,7 +123,47 @@ name = "spring_tension"
 kind = "force"
 element = "spring"
 
-[[case]]
+{case if case is not None else _default_case(amplitude, frequency, cycles, samples_per_cycle)}''')
+    return "".join(lines)
+
+
+def _prescribed(amplitude: float, frequency: float, psi: float, drive) -> str:
+    """The cap's X and Y drives: harmonic along the line, or the components of ``drive``'s path."""
+    if drive is None:
+        return f'''[[prescribed]]
+name = "drive_x"
+joint = "cap"
+dof = 0
+motion = "harmonic"
+amplitude = {amplitude * math.cos(psi)!r}
+frequency = {frequency!r}
+
+[[prescribed]]
+name = "drive_y"
+joint = "cap"
+dof = 1
+motion = "harmonic"
+amplitude = {amplitude * math.sin(psi)!r}
+frequency = {frequency!r}
+
+'''
+    minor = "" if drive.path in ("line", "circle") else f"\nminor = {drive.minor_axis!r}"
+    return "".join(f'''[[prescribed]]
+name = "drive_{c}"
+joint = "cap"
+dof = {k}
+motion = "device_path"   # the plate's {drive.path} path (nsd cycle --path), its {c} coordinate
+path = "{drive.path}"
+amplitude = {drive.amplitude!r}
+frequency = {drive.frequency!r}
+direction = {drive.direction_deg!r}
+component = "{c}"{minor}
+
+''' for k, c in enumerate("xy"))
+
+
+def _default_case(amplitude: float, frequency: float, cycles: int, samples_per_cycle: int) -> str:
+    return f'''[[case]]
 name = "drive_A{amplitude * 1e3:g}mm_f{frequency:g}Hz"
 duration = {cycles / frequency!r}   # s: {cycles} cycles
 dt_out = {1.0 / (frequency * samples_per_cycle)!r}
@@ -146,8 +172,7 @@ dt_out = {1.0 / (frequency * samples_per_cycle)!r}
 # runs say whether another device or drive needs less)
 mujoco = {{ timestep = 5e-5 }}
 exudyn = {{ step_size = 1e-3 }}
-''')
-    return "".join(lines)
+'''
 
 
 def device_forces(g) -> str:

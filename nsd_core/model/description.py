@@ -34,7 +34,8 @@ GROUND = "ground"
 JOINT_DOFS = {"revolute": 1, "prismatic": 1, "universal": 2, "spherical": 3, "planar": 3, "planar_translation": 2,
               "translational": 3}
 OUTPUT_KINDS = ("coordinate", "point", "point_velocity", "force", "drive_force", "energy")
-MOTION_KINDS = {"constant_speed": ("start", "speed"), "harmonic": ("centre", "amplitude", "frequency", "phase")}
+MOTION_KINDS = {"constant_speed": ("start", "speed"), "harmonic": ("centre", "amplitude", "frequency", "phase"),
+                "device_path": ("path", "amplitude", "minor", "frequency", "direction", "component")}
 COMPONENTS = {"x": 0, "y": 1, "z": 2}
 
 
@@ -143,6 +144,9 @@ class Prescribed:
 
     def __call__(self, t: float) -> tuple[float, float, float]:
         v = self.values
+        if self.kind == "device_path":   # one component of the device's plate path (nsd_core.device.drive)
+            at, c = v["drive"].plate_at(t), v["component"]
+            return at[c], at[2 + c], at[4 + c]
         if self.kind == "constant_speed":
             return v["start"] + v["speed"] * t, v["speed"], 0.0
         w = 2.0 * math.pi * v["frequency"]

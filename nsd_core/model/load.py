@@ -254,6 +254,8 @@ def _prescribed(i: int, t: dict, bodies) -> Prescribed:
     kind = t["motion"]
     if kind not in MOTION_KINDS:
         raise ModelError(f"{where}.motion = {kind!r}: allowed: {', '.join(MOTION_KINDS)}")
+    if kind == "device_path":
+        return Prescribed(name, body, dof, kind, _device_path(where, t))
     values = {}
     for k in MOTION_KINDS[kind]:
         default = 0.0 if k in ("start", "centre", "phase") else None
@@ -265,6 +267,29 @@ def _prescribed(i: int, t: dict, bodies) -> Prescribed:
         if k in {x for v in MOTION_KINDS.values() for x in v} and k not in MOTION_KINDS[kind]:
             raise ModelError(f"{where}.{k}: not a value of motion {kind!r}; allowed: {', '.join(MOTION_KINDS[kind])}")
     return Prescribed(name, body, dof, kind, values)
+
+
+def _device_path(where: str, t: dict) -> dict:
+    """A component of the device's plate path (``nsd cycle --path``'s named paths, their ramps and
+    bounds): {"drive": Drive, "component": 0 or 1}."""
+    from nsd_core.device.drive import Drive
+    from nsd_core.device.params import ParameterError
+    path, comp = t.get("path"), t.get("component")
+    if path not in ("line", "circle", "ellipse", "figure8"):
+        raise ModelError(f"{where}.path = {path!r}: allowed: line, circle, ellipse, figure8")
+    if comp not in ("x", "y"):
+        raise ModelError(f"{where}.component = {comp!r}: allowed: x, y (the plate path's coordinate)")
+    for k in ("amplitude", "frequency"):
+        if k not in t:
+            raise ModelError(f"{where}.{k}: missing (motion 'device_path' needs it)")
+    minor = t.get("minor")
+    try:
+        drive = Drive(amplitude=_num(f"{where}.amplitude", t["amplitude"]), frequency=_num(f"{where}.frequency", t["frequency"]),
+                      direction_deg=_num(f"{where}.direction", t.get("direction", 0.0)), path=path,
+                      minor=None if minor is None else _num(f"{where}.minor", minor))
+    except ParameterError as e:
+        raise ModelError(f"{where}: {e}") from None
+    return {"drive": drive, "component": COMPONENTS[comp]}
 
 
 def _output(i: int, t: dict, model: Model) -> Output:
