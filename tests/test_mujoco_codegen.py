@@ -147,3 +147,32 @@ def test_a_bad_passive_setting_is_a_one_line_model_error():
     with pytest.raises(ModelError, match=r"^mujoco\.passive = 'native': allowed: compiled, python$"):
         mj_builder.simulate(model, 0.1, 0.01, {"passive": "native"})
 
+
+
+@pytest.mark.parametrize("name", ["nsd_seismic", "nsd_building"])
+def test_the_seismic_descriptions_run_the_same_compiled_and_in_python(name):
+    """The excitation (-m a_g at each stage's time), per-direction story springs, planar_translation
+    floors and the restrainer, whose two points coincide at the start (nsd_building)."""
+    model = load_model(MODELS / f"{name}.toml")
+    compiled, python = both(model, 0.05, 0.005, {"timestep": 5e-5})
+    assert np.ptp(python.outputs["u_x"]) > 1e-6 and np.ptp(python.outputs["u_y"]) > 1e-6   # the ground moves it
+    if name == "nsd_building":
+        assert np.ptp(python.outputs["floor3_x"]) > 1e-6
+    assert_same(model, compiled, python)
+
+
+def test_the_ground_motion_is_data_but_an_excitation_or_a_direction_is_shape():
+    """A ground motion's numbers (a harmonic's amplitude, a pulse instead) live in userdata and reuse
+    the compiled callback; adding an excitation or a direction changes the source."""
+    raw = _cart_pendulum("linear_spring_damper", "joint_spring_damper")
+    raw["forces"][0]["parameters"] = {"stiffness": 100.0, "free_length": 0.4}
+    raw["forces"][1]["parameters"] = {"stiffness": 3.0}
+
+    def key(**extra):
+        model = parse_model({**raw, **extra}, "k")
+        return mujoco_codegen.fingerprint(*mujoco_codegen.source(model, mujoco_codegen.layout(model), 3))
+    harmonic = {"excitation": {"ground": "harmonic:amplitude=1,frequency=2"}}
+    pulse = {"excitation": {"ground": "pulse:velocity=0.5,frequency=1,gamma=2,phase=0"}}
+    forces = [{**raw["forces"][0], "direction": [1.0, 0.0, 0.0]}, raw["forces"][1]]
+    assert key(**harmonic) == key(excitation={"ground": "harmonic:amplitude=3,frequency=0.5"}) == key(**pulse)
+    assert len({key(), key(**harmonic), key(forces=forces)}) == 3
