@@ -135,15 +135,13 @@ class Forces:
         return {f.name: f.force(x, xd, extra[k] if k >= 0 else 0.0) for f, x, xd, k in self._each(kin, z, zd, extra)}
 
     def ground_load(self, t, kin, wrench):
-        """-m a_g(t) at every body's centre of mass, as wrenches about the origin (the excitation)."""
-        a = self.excitation.acceleration(t)
+        """-m a_g(t) at every body's centre of mass, as wrenches about the origin (the excitation);
+        massless auxiliary bodies get nothing (their mass is zero)."""
         m = self.mech
-        for i in range(self.n):
-            if m.mass[i] == 0.0:
-                continue
-            f = -m.mass[i] * a
-            wrench[i, :3] += f
-            wrench[i, 3:] += np.cross(kin.r[i] + kin.A[i] @ m.com[i], f)
+        f = -m.mass[:, None] * self.excitation.acceleration(t)[None, :]
+        com = kin.r + np.einsum("nij,nj->ni", kin.A, m.com)
+        wrench[:, :3] += f
+        wrench[:, 3:] += np.cross(com, f)
 
     def __call__(self, t, kin, z, zd, extra):
         gen = np.zeros(self.n)
