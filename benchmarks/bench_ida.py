@@ -43,14 +43,17 @@ def main() -> None:
     ap.add_argument("--limit", default="stroke=0.025")
     ap.add_argument("--workers", default="2")
     ap.add_argument("--records", default="1-14")
+    ap.add_argument("--record-set", default="nearfield-pulse", help="farfield: issue 35's 22 pairs")
+    ap.add_argument("--engines", default="semirecursive", help="semirecursive,mujoco,exudyn with --extra "
+                    "'--cross-check median': the peers re-run the median record (issue 35's aim includes it)")
     ap.add_argument("--extra", default="", help="more nsd ida options, space-separated")
     ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results" / "bench_ida.json"))
     args = ap.parse_args()
     subprocess.run([sys.executable, "-c", WARM], check=True, cwd=ROOT)  # numba's cache loaded/filled, untimed
     nsd = [sys.executable, "-m", "nsd_cli"]
     with tempfile.TemporaryDirectory(prefix="bench_ida_") as tmp:
-        cmd = ["ida", "--record-set", "nearfield-pulse", "--records", args.records, "--limit", args.limit,
-               "--engines", "semirecursive", "--workers", args.workers, "--out", tmp] + args.extra.split()
+        cmd = ["ida", "--record-set", args.record_set, "--records", args.records, "--limit", args.limit,
+               "--engines", args.engines, "--workers", args.workers, "--out", tmp] + args.extra.split()
         from benchmarks.measure import _git_commit
         commit = _git_commit()  # the code that runs
         load_before, cpu0 = os.getloadavg(), _children_cpu()
@@ -79,6 +82,8 @@ def main() -> None:
             "runs": len(runs), "runs_ok": sum(r["status"] == "ok" for r in runs),
             "runs_stopped": sum(r["status"] != "ok" for r in runs), "model_seconds_completed_runs": model_s,
             "sum_of_run_wall_s": sum(r["wall_time"] for r in runs),
+            "cross_check": index.get("cross_check"), "cross_check_cost": index.get("cross_check_cost"),
+            "elapsed_cross_check_s": index.get("elapsed_cross_check_s"),
             "fragility": index["fragility"], "hunt": index["hunt"], "traces": [
                 {k: t[k] for k in ("name", "runs", "limit_im", "below_im", "censored_at", "undetermined")}
                 for t in index["traces"]],
