@@ -29,6 +29,9 @@ starts from; joints and loop closures are constraints with Lagrange multipliers 
   (``on_newton_failure = "relax"``, the default; "fail" keeps the error); ``stats
   ["newton_relaxed_after"]`` says where the first run failed, ``wall_time`` includes it. The
   relaxed tolerance is not the default: the drive forces are multipliers, which it leaves noisier.
+- An excitation (``[excitation]``): -m a_g(t) on every body, a mass-proportional load set to
+  -a_g(t_end) before each step (generalized-alpha's equations hold at the step's end): second order
+  (tests/test_model_exudyn_seismic.py: a forced oscillator's error falls 4.0x per halving).
 Outputs are read from the bodies' world poses at the output times (a pre-step function; the step
 divides the output interval): joint coordinates (angles continuous across +-pi), points and their
 velocities, the laws' values (at the committed states), the drive's generalized force (the locked
@@ -56,6 +59,11 @@ time of the solve on a loaded 2-core machine):
                            (the Richardson estimate from h, h/2 equals the error); the positions and
                            other forces stay at ~2e-5 of their peaks at every step down to 5e-5 s (the
                            in-house run keeps the ~250 Hz vertical ringing generalized-alpha damps).
+  nsd_seismic (1 s):       h = 1e-3 s: 1.0e-4 (rope0 tension; u_x 5.1e-5), 1.3 s;  5e-4 s: 6.4e-5 (u_x 1.2e-5);
+                           2.5e-4 s: 8.3e-5 (u_x 3.2e-6): the plate's motion second order (2.1, 1.9), the
+                           device's forces at the same ringing floor (~1e-4) at every step.
+  nsd_building (1 s):      h = 1e-3 s: 1.4e-3 (restrainer force over its peak), 1.3 s;  5e-4 s: 3.8e-4 (rope0
+                           3.8e-4), 2.8 s;  2.5e-4 s: 1.1e-4; floors and plate second order (2.0, 2.0).
 """
 from __future__ import annotations
 
@@ -66,12 +74,14 @@ import numpy as np
 
 import exudyn as exu
 import exudyn.solver
-from exudyn.itemInterface import MarkerBodyRigid, ObjectGround, ObjectJointGeneric
+from exudyn.itemInterface import (LoadMassProportional, MarkerBodyMass, MarkerBodyRigid, ObjectGround,
+                                  ObjectJointGeneric)
 from exudyn.rigidBodyUtilities import RigidBodyInertia
 
-from comparisons.builders.exudyn_forces import LawStates, add_force, law_arguments, point
-from comparisons.builders.exudyn_frames import (AXIS_OF_DOF, Continuous, constrained_axes, frame_with_z,
-                                                joint_coordinates, joint_frame, planar_normal)
+from comparisons.builders.exudyn_forces import LawStates, add_force
+from comparisons.builders.exudyn_frames import (AXIS_OF_DOF, constrained_axes, frame_with_z, joint_coordinates,
+                                                joint_frame, planar_normal)
+from comparisons.builders.exudyn_outputs import Sampler
 from comparisons.engines.base import EngineError
 from comparisons.engines.exudyn_quiet import quiet_allocation_warning
 from nsd_core.model.assemble import initial_state
@@ -147,6 +157,8 @@ class Build:
                                     gravity=grav, nodeType=exu.NodeType.RotationEulerParameters,
                                     returnDict=True, show=False)
             self.node[b.name], self.obj[b.name] = d["nodeNumber"], d["bodyNumber"]
+        self.excitation = model.excitation
+        self.ground_loads = [self._ground_load(b.name) for b in model.bodies] if model.excitation is not None else []
         self.frames = {b.name: joint_frame(b) for b in model.bodies}
         self.joints = {b.name: self._tree_joint(b) for b in model.bodies}
         self.normal = planar_normal(model, st) if model.loops else None
@@ -154,6 +166,23 @@ class Build:
             self._closure(lp)
         self.states = LawStates(h)
         self.connectors = [add_force(self, f, self.states) for f in model.forces]
+
+    def _ground_load(self, body: str):
+        """-m a_g at the body's centre of mass (the excitation): a mass-proportional load, set to
+        -a_g(t) at the end of every step (``excite``); it starts at a_g(0), which the initial
+        accelerations see."""
+        marker = self.mbs.AddMarker(MarkerBodyMass(bodyNumber=self.obj[body]))
+        return self.mbs.AddLoad(LoadMassProportional(markerNumber=marker,
+                                                     loadVector=list(-self.excitation.acceleration(0.0))))
+
+    def excite(self, t: float) -> None:
+        """The excitation's load for the step ending at t. Generalized-alpha solves the equations of
+        motion at the step's end (its alpha averaging acts on the accelerations, not the loads), so a
+        load that depends on time alone is exact there, set once a step."""
+        if self.ground_loads:
+            a = list(-self.excitation.acceleration(t))
+            for ld in self.ground_loads:
+                self.mbs.SetLoadParameter(ld, "loadVector", a)
 
     def marker(self, body: str, point, frame=np.eye(3)):
         """A rigid marker at ``point`` of ``body`` (in the body's frame), axes ``frame`` (its columns
@@ -234,75 +263,6 @@ class Build:
         return float(v[k % 3]) if k >= 3 else -float(v[k])
 
 
-class Sampler:
-    """Every named output, the largest closure distance and the largest drive tracking error; and,
-    every step, the converged arguments of the laws with a state (``commit``)."""
-
-    def __init__(self, build: Build):
-        self.b = build
-        m = build.model
-        rotational = {(b.name, k) for b in m.bodies for k, (kind, _) in enumerate(b.joint.dofs()) if kind == "R"}
-        self.continuous = Continuous(build.state.q, rotational)
-        self.rows, self.closure, self.tracking = [], 0.0, 0.0
-        self.forces = {f.name: f for f in m.forces}
-        self.drives = {p.name: p for p in m.prescribed}
-        self.stateful = build.states.elements
-        self.slot = {f.name: k for k, f in enumerate(self.stateful)}
-        self.q = {}
-
-    def read(self, bodies) -> dict:
-        """The poses, and the coordinates of ``bodies``' joints into self.q (continuous in time)."""
-        P = self.b.poses()
-        for body in bodies:
-            for k, x in enumerate(self.b.coordinates(P, body)):
-                self.q[(body, k)] = self.continuous((body, k), x)
-        return P
-
-    def commit(self) -> None:
-        """The step converged: the laws' states move on (exudyn_forces.LawStates)."""
-        P = self.read({f.joint for f in self.stateful if f.joint})
-        self.b.states.commit([law_arguments(self.b, P, self.q, f) for f in self.stateful])
-
-    def law_value(self, P, f) -> float:
-        k = self.slot.get(f.name)
-        return f.force(*law_arguments(self.b, P, self.q, f), 0.0 if k is None else self.b.states.s[k])
-
-    def energy(self, P, term) -> float:
-        e = 0.0
-        g = np.asarray(self.b.model.gravity, dtype=float)
-        for b in self.b.model.bodies:
-            R, r, v, w = P[b.name]
-            c, vc = point(P, b.name, b.com)
-            if term == "kinetic":
-                e += 0.5 * b.mass * float(vc @ vc) + 0.5 * float(w @ (R @ b.inertia @ R.T @ w))
-            else:
-                e -= b.mass * float(g @ c)
-        return e
-
-    def __call__(self, t: float) -> None:
-        m = self.b.model
-        P = self.read({o.body for o in m.outputs if o.kind == "coordinate"} | {f.joint for f in m.forces if f.joint} |
-                      {p.joint for p in m.prescribed})
-        row = []
-        for o in m.outputs:
-            if o.kind == "coordinate":
-                row.append(self.q[(o.body, o.dof)])
-            elif o.kind in ("point", "point_velocity"):
-                row.append(float(point(P, o.body, o.point)[o.kind == "point_velocity"][o.component]))
-            elif o.kind == "force":
-                row.append(self.law_value(P, self.forces[o.element]))
-            elif o.kind == "drive_force":
-                row.append(self.b.drive_force(self.drives[o.element]))
-            else:
-                row.append(self.energy(P, o.term))
-        self.rows.append(row)
-        for lp in m.loops:
-            gap = point(P, lp.body_a, lp.point_a)[0] - point(P, lp.body_b, lp.point_b)[0]
-            self.closure = max(self.closure, float(np.linalg.norm(gap)))
-        for p in m.prescribed:
-            self.tracking = max(self.tracking, abs(self.q[(p.joint, p.dof)] - p(t)[0]))
-
-
 def _redundant(build: Build, ss) -> int:
     """Exudyn's count of dependent constraint equations at t = 0 (its rank test of the Jacobian)."""
     info = exudyn.solver.ComputeSystemDegreeOfFreedom(build.mbs, ss, autoAssemble=False)
@@ -336,6 +296,7 @@ def _run(model: Model, s: dict, duration: float, dt_out: float) -> ModelRun:
         """t is the END of the step (Exudyn's convention); the state is the converged one at t - h."""
         n = counter[0]
         counter[0] += 1
+        build.excite(t)
         if sample.stateful:
             sample.commit()
         if n % per_out == 0:

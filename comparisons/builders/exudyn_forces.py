@@ -1,8 +1,12 @@
 """The description's force elements as Exudyn connectors (used by comparisons.builders.exudyn), and the
 laws' internal states integrated along with Exudyn's motion, nothing here knowing which laws exist.
 
-Connectors. A points law is a SpringDamper connector of reference length 0 (so its deltaL is the
-distance L) whose force user function returns the law's tension. A joint law on a slide (prismatic,
+Connectors. A points law is a CartesianSpringDamper connector (markers: b's point, then a's, so its
+displacement is d = p_a - p_b, its velocity d') whose force user function returns the law's tension
+T times the element's unit vector: d / |d| for a line element (x = |d|, x' = d . d' / |d|; zero where
+the points coincide, a stop at rest, where Exudyn's own SpringDamper would divide by zero), or the
+element's fixed ``direction`` e (x = d . e, x' = d' . e). The connector pulls marker 1 (a) by minus
+that vector and pushes marker 0 (b) by it: -T e on a, +T e on b, the description's sign. A joint law on a slide (prismatic,
 translational, planar u or v) is a linear spring-damper connector along the slide's axis, on a
 revolute or planar turn a torsional one about it; its user function returns ``-law.force(q, q', ...)``
 (the connector's force opposes its coordinate; the law's drives it up). Exudyn evaluates them at
@@ -29,7 +33,7 @@ import math
 
 import numpy as np
 
-from exudyn.itemInterface import (NodeGenericData, ObjectConnectorLinearSpringDamper, ObjectConnectorSpringDamper,
+from exudyn.itemInterface import (NodeGenericData, ObjectConnectorCartesianSpringDamper, ObjectConnectorLinearSpringDamper,
                                   ObjectConnectorTorsionalSpringDamper)
 
 from comparisons.builders.exudyn_frames import joint_rate, law_axis
@@ -83,9 +87,14 @@ def add_force(build, f, states: LawStates):
     mbs = build.mbs
     if f.law.acts_on == POINTS:
         tension = law_function(f, states, 1.0)
-        return mbs.AddObject(ObjectConnectorSpringDamper(
-            markerNumbers=[build.marker(f.body_a, f.point_a), build.marker(f.body_b, f.point_b)], referenceLength=0.0,
-            springForceUserFunction=lambda mbs_, t, item, L, L_t, k, d, f0: tension(L, L_t)))
+        e = None if f.direction is None else np.asarray(f.direction, dtype=float)
+
+        def vector(mbs_, t, item, d, d_t, k, c, offset):
+            x, xd, n = axial(np.asarray(d), np.asarray(d_t), e)
+            return list(tension(x, xd) * n)
+        return mbs.AddObject(ObjectConnectorCartesianSpringDamper(
+            markerNumbers=[build.marker(f.body_b, f.point_b), build.marker(f.body_a, f.point_a)],
+            springForceUserFunction=vector))
     b = build.model.body(f.joint)
     axis = law_axis(b, f.dof)
     if axis is None:
@@ -108,6 +117,18 @@ def add_force(build, f, states: LawStates):
                                                               springTorqueUserFunction=user))
 
 
+def axial(d, d_t, e):
+    """(x, x', unit vector) of a points element from d = p_a - p_b and its rate: along the fixed
+    direction e, or along the line (a zero vector where the points coincide: no direction there)."""
+    if e is not None:
+        return float(d @ e), float(d_t @ e), e
+    L = math.sqrt(float(d @ d))
+    if L == 0.0:
+        return 0.0, 0.0, d * 0.0
+    n = d / L
+    return L, float(d_t @ n), n
+
+
 def point(P, body, p):
     """World position and velocity of body point p, from the poses P (Build.poses)."""
     R, r, v, w = P[body]
@@ -116,14 +137,13 @@ def point(P, body, p):
 
 
 def law_arguments(build, P, q, f) -> tuple[float, float]:
-    """(x, x') of force element f: the distance and its rate, or the joint coordinate (from q, kept
-    continuous by the caller) and its rate."""
+    """(x, x') of force element f: the distance (or the offset along its direction) and its rate, or
+    the joint coordinate (from q, kept continuous by the caller) and its rate."""
     if f.law.acts_on == POINTS:
         pa, va = point(P, f.body_a, f.point_a)
         pb, vb = point(P, f.body_b, f.point_b)
-        d = pa - pb
-        L = float(np.linalg.norm(d))
-        return L, (float(d @ (va - vb)) / L if L > 0 else 0.0)
+        x, xd, _ = axial(pa - pb, va - vb, None if f.direction is None else np.asarray(f.direction, dtype=float))
+        return x, xd
     b = build.model.body(f.joint)
     Rp, rp, vp, wp = P[b.parent]
     _, rc, vc, wc = P[b.name]

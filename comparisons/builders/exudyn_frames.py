@@ -20,7 +20,7 @@ from nsd_core.model.errors import ModelError
 
 # which of GenericJoint's six axes (translations 0-2, rotations 3-5 of J) each coordinate moves
 AXIS_OF_DOF = {"revolute": (5,), "prismatic": (2,), "universal": (3, 4), "spherical": (3, 4, 5), "planar": (0, 1, 5),
-               "translational": (0, 1, 2)}
+               "planar_translation": (0, 1), "translational": (0, 1, 2)}
 
 
 def perpendicular(a: np.ndarray) -> np.ndarray:
@@ -50,7 +50,8 @@ def joint_frame(body: Body) -> np.ndarray:
         return np.column_stack([x, y, np.cross(x, y)])
     if j.type in ("spherical", "translational"):   # the parent's own axes
         return np.eye(3)
-    return np.column_stack([dofs[0][1], dofs[1][1], dofs[2][1]])   # planar: u, v, normal
+    u, v = dofs[0][1], dofs[1][1]
+    return np.column_stack([u, v, np.cross(u, v)])   # planar, planar_translation: u, v, normal
 
 
 def constrained_axes(body: Body) -> list[int]:
@@ -79,6 +80,8 @@ def joint_coordinates(body: Body, J, Rp, rp, Rc, rc) -> list[float]:
     if t == "spherical":          # M = Rx(q1) Ry(q2) Rz(q3)
         return [math.atan2(-M[1, 2], M[2, 2]), math.atan2(M[0, 2], math.hypot(M[0, 0], M[0, 1])),
                 math.atan2(-M[0, 1], M[0, 0])]
+    if t == "planar_translation":
+        return [float(d[0]), float(d[1])]
     return [float(d[0]), float(d[1]), math.atan2(M[1, 0], M[0, 0])]   # planar
 
 

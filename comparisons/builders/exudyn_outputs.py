@@ -1,0 +1,78 @@
+"""The Exudyn builder's outputs (used by comparisons.builders.exudyn): every described quantity read
+back from the bodies' world poses at the output times, and the converged arguments of the laws with a
+state, committed every step."""
+from __future__ import annotations
+
+import numpy as np
+
+from comparisons.builders.exudyn_forces import law_arguments, point
+from comparisons.builders.exudyn_frames import Continuous
+
+
+class Sampler:
+    """Every named output, the largest closure distance and the largest drive tracking error; and,
+    every step, the converged arguments of the laws with a state (``commit``)."""
+
+    def __init__(self, build: Build):
+        self.b = build
+        m = build.model
+        rotational = {(b.name, k) for b in m.bodies for k, (kind, _) in enumerate(b.joint.dofs()) if kind == "R"}
+        self.continuous = Continuous(build.state.q, rotational)
+        self.rows, self.closure, self.tracking = [], 0.0, 0.0
+        self.forces = {f.name: f for f in m.forces}
+        self.drives = {p.name: p for p in m.prescribed}
+        self.stateful = build.states.elements
+        self.slot = {f.name: k for k, f in enumerate(self.stateful)}
+        self.q = {}
+
+    def read(self, bodies) -> dict:
+        """The poses, and the coordinates of ``bodies``' joints into self.q (continuous in time)."""
+        P = self.b.poses()
+        for body in bodies:
+            for k, x in enumerate(self.b.coordinates(P, body)):
+                self.q[(body, k)] = self.continuous((body, k), x)
+        return P
+
+    def commit(self) -> None:
+        """The step converged: the laws' states move on (exudyn_forces.LawStates)."""
+        P = self.read({f.joint for f in self.stateful if f.joint})
+        self.b.states.commit([law_arguments(self.b, P, self.q, f) for f in self.stateful])
+
+    def law_value(self, P, f) -> float:
+        k = self.slot.get(f.name)
+        return f.force(*law_arguments(self.b, P, self.q, f), 0.0 if k is None else self.b.states.s[k])
+
+    def energy(self, P, term) -> float:
+        e = 0.0
+        g = np.asarray(self.b.model.gravity, dtype=float)
+        for b in self.b.model.bodies:
+            R, r, v, w = P[b.name]
+            c, vc = point(P, b.name, b.com)
+            if term == "kinetic":
+                e += 0.5 * b.mass * float(vc @ vc) + 0.5 * float(w @ (R @ b.inertia @ R.T @ w))
+            else:
+                e -= b.mass * float(g @ c)
+        return e
+
+    def __call__(self, t: float) -> None:
+        m = self.b.model
+        P = self.read({o.body for o in m.outputs if o.kind == "coordinate"} | {f.joint for f in m.forces if f.joint} |
+                      {p.joint for p in m.prescribed})
+        row = []
+        for o in m.outputs:
+            if o.kind == "coordinate":
+                row.append(self.q[(o.body, o.dof)])
+            elif o.kind in ("point", "point_velocity"):
+                row.append(float(point(P, o.body, o.point)[o.kind == "point_velocity"][o.component]))
+            elif o.kind == "force":
+                row.append(self.law_value(P, self.forces[o.element]))
+            elif o.kind == "drive_force":
+                row.append(self.b.drive_force(self.drives[o.element]))
+            else:
+                row.append(self.energy(P, o.term))
+        self.rows.append(row)
+        for lp in m.loops:
+            gap = point(P, lp.body_a, lp.point_a)[0] - point(P, lp.body_b, lp.point_b)[0]
+            self.closure = max(self.closure, float(np.linalg.norm(gap)))
+        for p in m.prescribed:
+            self.tracking = max(self.tracking, abs(self.q[(p.joint, p.dof)] - p(t)[0]))
