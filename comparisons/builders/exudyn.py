@@ -18,8 +18,10 @@ starts from; joints and loop closures are constraints with Lagrange multipliers 
   (``linearSolver.ignoreSingularJacobian``), which gives the dependent multipliers a least-squares
   share and leaves the motion unique. The number found is ``stats["redundant_found"]``.
 - Force elements, every law through the registry (nsd_core.model.laws), nothing here knowing which
-  laws exist: connectors whose user functions call the law (comparisons.builders.exudyn_forces),
-  evaluated at every Newton iteration (implicit). A law's internal state (the SMA wire's stress,
+  laws exist, evaluated at every Newton iteration (implicit): by default one ObjectGenericODE2 over all
+  nodes whose force function runs compiled kernels (comparisons.builders.exudyn_compiled); with
+  ``forces = "connectors"`` one connector per element whose user function calls the law
+  (comparisons.builders.exudyn_forces), the readable reference (same equations, ~1e-13 apart). A law's internal state (the SMA wire's stress,
   the Bouc-Wen zeta) is integrated with the motion by Heun's method at Exudyn's step, second order
   as generalized-alpha is: the connector sees the state at the end of the step for the
   configuration Newton tries, the pre-step function commits it (exudyn_forces' docstring).
@@ -78,8 +80,9 @@ from exudyn.itemInterface import (LoadMassProportional, MarkerBodyMass, MarkerBo
                                   ObjectJointGeneric)
 from exudyn.rigidBodyUtilities import RigidBodyInertia
 
+from comparisons.builders.exudyn_compiled import CompiledForces
 from comparisons.builders.exudyn_forces import LawStates, add_force
-from comparisons.builders.exudyn_frames import (AXIS_OF_DOF, constrained_axes, frame_with_z, joint_coordinates,
+from comparisons.builders.exudyn_frames import (AXIS_OF_DOF, constrained_axes, cross, frame_with_z, joint_coordinates,
                                                 joint_frame, planar_normal)
 from comparisons.builders.exudyn_outputs import Sampler
 from comparisons.engines.base import EngineError
@@ -102,9 +105,13 @@ default_settings = {
     "redundant_constraints": "auto",  # "auto": Exudyn's rank test at t = 0 picks the full-pivot LU when
                                       # it finds any; "ignore": always; "fail": never (singular -> error)
     "on_newton_failure": "relax",  # with closures: "relax" reruns once at RELAXED_REL_TOL; "fail"
+    "forces": "compiled",          # the force elements: one object for all, its forces from compiled
+                                   # kernels (exudyn_compiled; 2-4x faster), or "connectors": one connector
+                                   # each with a Python user function (exudyn_forces, the readable
+                                   # reference; the same equations, agreeing to ~1e-13)
 }
 CHOICES = {"solver": ("generalized_alpha", "trapezoidal_index2"), "redundant_constraints": ("auto", "ignore", "fail"),
-           "on_newton_failure": ("relax", "fail")}
+           "on_newton_failure": ("relax", "fail"), "forces": ("connectors", "compiled")}
 # near a singular position Newton's relative residual stalls above 1e-10 (A02: h = 1e-3 s passes at
 # 1e-9 and 1e-8, fails at 1e-10); 1e-8 still leaves A02's error second order in h (module docstring)
 RELAXED_REL_TOL = 1e-8
@@ -165,7 +172,10 @@ class Build:
         for lp in model.loops:
             self._closure(lp)
         self.states = LawStates(h)
-        self.connectors = [add_force(self, f, self.states) for f in model.forces]
+        if s["forces"] == "compiled":
+            self.connectors, self.compiled = [], CompiledForces(self, self.states)
+        else:
+            self.connectors, self.compiled = [add_force(self, f, self.states) for f in model.forces], None
 
     def _ground_load(self, body: str):
         """-m a_g at the body's centre of mass (the excitation): a mass-proportional load, set to
@@ -242,7 +252,7 @@ class Build:
             w = np.asarray(mbs.GetNodeOutput(n, OV.AngularVelocity))
             c = R @ np.asarray(b.com, dtype=float)
             out[b.name] = (R, mbs.GetNodeOutput(n, OV.Position) - c,
-                           mbs.GetNodeOutput(n, OV.Velocity) - np.cross(w, c), w)
+                           mbs.GetNodeOutput(n, OV.Velocity) - cross(w, c), w)
         return out
 
     def coordinates(self, P: dict, body: str) -> list[float]:

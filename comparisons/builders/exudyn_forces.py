@@ -36,7 +36,7 @@ import numpy as np
 from exudyn.itemInterface import (NodeGenericData, ObjectConnectorCartesianSpringDamper, ObjectConnectorLinearSpringDamper,
                                   ObjectConnectorTorsionalSpringDamper)
 
-from comparisons.builders.exudyn_frames import joint_rate, law_axis
+from comparisons.builders.exudyn_frames import cross, joint_rate, law_axis
 from nsd_core.model.errors import ModelError
 from nsd_core.model.laws import POINTS
 
@@ -133,7 +133,7 @@ def point(P, body, p):
     """World position and velocity of body point p, from the poses P (Build.poses)."""
     R, r, v, w = P[body]
     x = R @ np.asarray(p, dtype=float)
-    return r + x, v + np.cross(w, x)
+    return r + x, v + cross(w, x)
 
 
 def law_arguments(build, P, q, f) -> tuple[float, float]:

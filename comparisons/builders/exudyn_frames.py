@@ -23,6 +23,12 @@ AXIS_OF_DOF = {"revolute": (5,), "prismatic": (2,), "universal": (3, 4), "spheri
                "planar_translation": (0, 1), "translational": (0, 1, 2)}
 
 
+def cross(a, b) -> np.ndarray:
+    """a x b of two 3-vectors: numpy.cross's arithmetic without its axis handling (which cost most of
+    the outputs' time, read at every step)."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
 def perpendicular(a: np.ndarray) -> np.ndarray:
     u = np.cross(a, np.eye(3)[int(np.argmin(np.abs(a)))])
     return u / np.linalg.norm(u)
@@ -93,7 +99,7 @@ def joint_rate(body: Body, dof: int, J, Rp, rp, vp, wp, rc, vc, wc) -> float:
     a = Rp @ J[:, k % 3]
     if k >= 3:
         return float(a @ (wc - wp))
-    return float(a @ (vc - vp - np.cross(wp, rc - rp)))   # the slide seen from the turning parent
+    return float(a @ (vc - vp - cross(wp, rc - rp)))   # the slide seen from the turning parent
 
 
 def law_axis(body: Body, dof: int) -> int | None:

@@ -35,6 +35,9 @@ class Sampler:
 
     def commit(self) -> None:
         """The step converged: the laws' states move on (exudyn_forces.LawStates)."""
+        if self.b.compiled is not None:
+            self.b.states.commit(self.b.compiled.converged(self.b.mbs))
+            return
         P = self.read({f.joint for f in self.stateful if f.joint})
         self.b.states.commit([law_arguments(self.b, P, self.q, f) for f in self.stateful])
 
