@@ -70,6 +70,15 @@ builder at rtol 1e-11 over the model's case; wall = stepping and outputs, loaded
 - slider_crank (0.4 s, prescribed crank): h = 2e-3 s (the output interval) 7.9e-5 (drive torque),
   tracking error 3e-11 rad; 5e-4: 1.5e-5.
 - fourbar_spring (2 s): h = 1e-2 s 1.5e-3, 5e-3 s 9.5e-5, 0.03 s wall.
+- nsd_seismic (1 s, harmonic ground acceleration): the error is the soft loop closure's, set by its
+  time constant tau = solref_factor x h alone (factor 2 at h = 1e-4 s and factor 4 at 5e-5 s give the
+  same 2.9e-4 of u_y's peak), order 1.97 (RK4; Euler: 1.1-1.35 at h = 2e-5 ... 5e-6 s); case setting
+  h = 1e-4 s, factor 2 (loop gap 7.6e-7 m), 0.14 s wall. Euler at h = 1e-5 s, factor 2: 0.36 s, 0.82x
+  the hand-written seismic adapter (comparisons/engines/mujoco_seismic.py, native loop) on the same
+  device and ground motion (0.44 s; load 1.2 on 2 cores).
+- nsd_building (1 s, 3 stories, restrainer): at tau = 2e-4 s the restrainer's force misses by 45 N of
+  its ~37 kN impact; its output scale of 1 N (1 mN tolerance) needs h = 4e-7 s, factor 2 (8.0e-4 N,
+  every other output ~1e-8), 45 s wall.
 """
 from __future__ import annotations
 
