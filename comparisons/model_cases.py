@@ -29,6 +29,8 @@ from nsd_core.model.errors import ModelError
 from nsd_core.model.load import read_toml
 from nsd_core.model.run import output_times
 
+ALL_ENGINES = ("semirecursive", "mujoco", "exudyn")
+
 MAX_OUTPUTS = 1_000_000
 
 
@@ -76,7 +78,8 @@ def _case(i: int, t: dict, model: Model, folder: Path, engines) -> ModelCase:
     where = f"case[{i}]"
     if not isinstance(t, dict):
         raise ModelError(f"{where} = {t!r}: must be a table")
-    allowed = {"name", "duration", "dt_out", "reference"} | set(engines)
+    # every engine's table is allowed (a file names settings for all three; --engines picks which run)
+    allowed = {"name", "duration", "dt_out", "reference"} | set(engines) | set(ALL_ENGINES)
     for k in t:
         if k not in allowed:
             raise ModelError(f"{where}.{k}: unknown field; allowed: {', '.join(sorted(allowed))}")

@@ -139,3 +139,17 @@ def test_a_bad_seismic_description_is_one_line_naming_the_field(label, change, e
     with pytest.raises(ModelError) as e:
         parse_model(d)
     assert expected in str(e.value) and "\n" not in str(e.value), str(e.value)
+
+
+@pytest.mark.parametrize("name,stories", [("nsd_seismic", 0), ("nsd_building", 3)])
+def test_the_committed_seismic_descriptions_are_the_generators(name, stories):
+    """models/nsd_seismic.toml and nsd_building.toml are what their recorded command writes (the
+    nominal device, the default structure; the building with the default restrainer)."""
+    from nsd_core.device.describe_seismic import seismic_description, structure_for
+    from nsd_core.device.params import Params
+    text = (MODELS / f"{name}.toml").read_text()
+    command = next(line[4:] for line in text.splitlines() if line.startswith("#   python -m"))
+    ground = "harmonic:amplitude=1,frequency=2,azimuth=30,duration=1"
+    assert f"--ground '{ground}' --duration 1" in command
+    assert text == seismic_description(Params(), structure_for(Params(), stories, stories > 0), ground, 1.0, 1e-3,
+                                       name, command)

@@ -23,7 +23,7 @@ The device's elements are the drive description's (describe.device_forces).
 from __future__ import annotations
 
 import argparse
-import math
+import sys
 
 from nsd_core.device.describe import _changed, _inertia, _v, device_forces
 from nsd_core.device.geometry import device_geometry
@@ -109,7 +109,7 @@ dof = {0 if axis == "x" else 1}
 
 
 def seismic_description(params: Params, st: Structure, ground: str, duration: float, dt_out: float = 1e-3,
-                        name: str = "nsd_seismic") -> str:
+                        name: str = "nsd_seismic", command: str = "") -> str:
     """The seismic-mode device on the structure ``st`` (its building, its restrainer) under the closed
     form ``ground`` (``nsd seismic --ground``'s syntax), as TOML with one case of ``duration`` s."""
     g = device_geometry(params)
@@ -119,7 +119,7 @@ def seismic_description(params: Params, st: Structure, ground: str, duration: fl
 # Written by `python -m nsd_core.device.describe_seismic` from the device's parameters and the isolated
 # structure (docs/seismic.md; every value with its provenance in `nsd params`). Device parameters that
 # differ from the nominal ones: {", ".join(f"{k} = {v!r}" for k, v in _changed(params).items()) or "none"}.
-# Coordinates are relative to the ground: the frame moves with it ([excitation]).
+# Coordinates are relative to the ground: the frame moves with it ([excitation]).{chr(10) + "#   " + command if command else ""}
 
 [model]
 name = "{name}"
@@ -204,23 +204,24 @@ name = "spring_tension"
 kind = "force"
 element = "spring"
 ''' + floor_outputs
-    if st.restrainer is not None:
-        outputs += '''
+    if st.restrainer is not None:   # judged against the supports' force at the gap, k_b u_gap
+        outputs += f'''
 [[outputs]]
 name = "restrainer_force"
 kind = "force"
 element = "restrainer"
-scale = 1.0   # N: zero until the plate reaches the gap
+scale = {st.stiffness * st.restrainer.gap!r}   # N: k_b u_gap, the supports' force when the stop engages
 '''
     # Exudyn's step: the largest dividing dt_out whose own (Richardson) error estimate meets 1e-3 of every
-    # output's peak: 1e-3 s on the device alone; 5e-4 s with the building (its restrainer's impacts)
-    exudyn_step = 5e-4 if st.building is not None else 1e-3
+    # output's scale: 1e-3 s on the device alone; 2e-4 s with the building and its restrainer (at 5e-4 s
+    # the restrainer's force estimate is 4.0e-3 of k_b u_gap; the compare asked for <= 2.23e-4 s)
+    exudyn_step = 2e-4 if st.building is not None else 1e-3
     # MuJoCo (RK4): its error here is the soft loop closure's, set by the time constant solref_factor x
     # timestep alone, so MuJoCo's floor factor 2 needs half the steps of the default 4. The largest step
     # dividing dt_out whose own (Richardson) estimate meets the tolerances and whose loop gap stays
-    # below 1e-6 m: 1e-4 s on the device (estimate 2.9e-4 of u_y's peak, gap 7.6e-7 m); the restrainer's
-    # force (scale 1 N: 1 mN, on a ~37 kN impact) needs 4e-7 s (estimate 8.0e-4 N)
-    mujoco_step = 4e-7 if st.restrainer is not None else 1e-4
+    # below 1e-6 m: 1e-4 s on the device (estimate 2.9e-4 of u_y's peak, gap 7.6e-7 m); with the
+    # restrainer's impacts 2.5e-5 s (its force's estimate 8.4e-4 of k_b u_gap)
+    mujoco_step = 2.5e-5 if st.restrainer is not None else 1e-4
     case = f'''
 [[case]]
 name = "{name}_{duration:g}s"
@@ -232,11 +233,22 @@ exudyn = {{ step_size = {exudyn_step!r} }}
     return head + device_forces(g) + supports + stories + outputs + case
 
 
-def main(argv=None) -> None:
+def structure_for(params: Params, stories: int = 0, restrainer: bool = False) -> Structure:
+    """The default isolated structure of ``params`` (nsd_core.device.isolation), with the default
+    restrainer and a default building of ``stories`` stories when asked."""
     from nsd_core.device.building import building_from
     from nsd_core.device.isolation import structure_with
-    from nsd_core.device.params import parse_set, with_overrides
     from nsd_core.device.restrainer import default_restrainer
+    st = structure_with(params, {})
+    if restrainer:
+        st = Structure(**{**st.__dict__, "restrainer": default_restrainer(params, st)})
+    if stories:
+        st = Structure(**{**st.__dict__, "building": building_from(st.mass, {"stories": stories})})
+    return st
+
+
+def main(argv=None) -> None:
+    from nsd_core.device.params import parse_set, with_overrides
     from nsd_core.device.results import atomic_write_text
     p = argparse.ArgumentParser(description="write the device in seismic mode as a model description (TOML)")
     p.add_argument("--ground", required=True, help="a closed form, nsd seismic --ground's syntax")
@@ -249,12 +261,10 @@ def main(argv=None) -> None:
     p.add_argument("--out", required=True)
     a = p.parse_args(argv)
     params = with_overrides(Params(), parse_set(a.set))
-    st = structure_with(params, {})
-    if a.restrainer:
-        st = Structure(**{**st.__dict__, "restrainer": default_restrainer(params, st)})
-    if a.stories:
-        st = Structure(**{**st.__dict__, "building": building_from(st.mass, {"stories": a.stories})})
-    atomic_write_text(a.out, seismic_description(params, st, a.ground, a.duration, a.dt_out, a.name))
+    st = structure_for(params, a.stories, a.restrainer)
+    command = "python -m nsd_core.device.describe_seismic " + " ".join(
+        f"'{x}'" if any(c in x for c in " :,") else x for x in (argv if argv is not None else sys.argv[1:]))
+    atomic_write_text(a.out, seismic_description(params, st, a.ground, a.duration, a.dt_out, a.name, command))
 
 
 if __name__ == "__main__":
