@@ -63,28 +63,8 @@ mass = {g.cap.mass!r}
 com = {_v(g.cap.com)}
 inertia = {_inertia(g.cap.inertia)}
 
-[[bodies]]   # the wall: slides along Z in the base's guide, on the spring
-name = "wall"
-joint = {{ type = "prismatic", position = [0.0, 0.0, 0.0], axis = [0.0, 0.0, 1.0] }}
-mass = {g.wall.mass!r}
-com = {_v(g.wall.com)}
-inertia = {_inertia(g.wall.inertia)}
-
-[[bodies]]   # the rod: a universal joint at the wall's reference point (no spin about its own axis)
-name = "rod"
-parent = "wall"
-joint = {{ type = "universal", position = [0.0, 0.0, 0.0], axis = [1.0, 0.0, 0.0], axis2 = [0.0, 1.0, 0.0] }}
-mass = {g.rod.mass!r}
-com = {_v(g.rod.com)}
-inertia = {_inertia(g.rod.inertia)}
-
-[[loops]]    # the rod's upper joint: the cut spherical joint of Eq. 13
-name = "cap_rod"
-body_a = "cap"
-point_a = [0.0, 0.0, 0.0]
-body_b = "rod"
-point_b = [0.0, 0.0, {params.rod_length!r}]
-
+{wall_and_rod(g)}
+{rod_loop(params)}
 {_prescribed(amplitude, frequency, psi, drive)}[initial]    # the precompressed rest state
 coordinates = {{ cap = [0.0, 0.0, {g.cap_rest_z!r}], wall = {g.wall_rest_z!r} }}
 free = ["cap"]
@@ -113,7 +93,12 @@ name = "wall_z"
 kind = "coordinate"
 joint = "wall"
 
-[[outputs]]
+{ELEMENT_OUTPUTS}
+{case if case is not None else _default_case(amplitude, frequency, cycles, samples_per_cycle)}''')
+    return "".join(lines)
+
+
+ELEMENT_OUTPUTS = '''[[outputs]]
 name = "rope0_tension"
 kind = "force"
 element = "rope0"
@@ -122,9 +107,37 @@ element = "rope0"
 name = "spring_tension"
 kind = "force"
 element = "spring"
+'''
 
-{case if case is not None else _default_case(amplitude, frequency, cycles, samples_per_cycle)}''')
-    return "".join(lines)
+
+def rod_loop(params) -> str:
+    """The loop closure joining the rod's upper end to the cap's reference point."""
+    return f'''[[loops]]    # the rod's upper joint: the cut spherical joint of Eq. 13
+name = "cap_rod"
+body_a = "cap"
+point_a = [0.0, 0.0, 0.0]
+body_b = "rod"
+point_b = [0.0, 0.0, {params.rod_length!r}]
+'''
+
+
+def wall_and_rod(g) -> str:
+    """The wall (prismatic along Z on the base) and the rod (universal on the wall) as TOML bodies."""
+    return f'''[[bodies]]   # the wall: slides along Z in the base's guide, on the spring
+name = "wall"
+joint = {{ type = "prismatic", position = [0.0, 0.0, 0.0], axis = [0.0, 0.0, 1.0] }}
+mass = {g.wall.mass!r}
+com = {_v(g.wall.com)}
+inertia = {_inertia(g.wall.inertia)}
+
+[[bodies]]   # the rod: a universal joint at the wall's reference point (no spin about its own axis)
+name = "rod"
+parent = "wall"
+joint = {{ type = "universal", position = [0.0, 0.0, 0.0], axis = [1.0, 0.0, 0.0], axis2 = [0.0, 1.0, 0.0] }}
+mass = {g.rod.mass!r}
+com = {_v(g.rod.com)}
+inertia = {_inertia(g.rod.inertia)}
+'''
 
 
 def _prescribed(amplitude: float, frequency: float, psi: float, drive) -> str:

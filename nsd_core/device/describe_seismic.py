@@ -25,7 +25,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from nsd_core.device.describe import _changed, _inertia, _v, device_forces
+from nsd_core.device.describe import ELEMENT_OUTPUTS, _changed, _inertia, _v, device_forces, rod_loop, wall_and_rod
 from nsd_core.device.geometry import device_geometry
 from nsd_core.device.isolation import Structure
 from nsd_core.device.params import Params
@@ -138,28 +138,8 @@ mass = {g.cap.mass!r}
 com = {_v(g.cap.com)}
 inertia = {_inertia(g.cap.inertia)}
 
-[[bodies]]   # the wall: slides along Z in the base's guide, on the spring
-name = "wall"
-joint = {{ type = "prismatic", position = [0.0, 0.0, 0.0], axis = [0.0, 0.0, 1.0] }}
-mass = {g.wall.mass!r}
-com = {_v(g.wall.com)}
-inertia = {_inertia(g.wall.inertia)}
-
-[[bodies]]   # the rod: a universal joint at the wall's reference point
-name = "rod"
-parent = "wall"
-joint = {{ type = "universal", position = [0.0, 0.0, 0.0], axis = [1.0, 0.0, 0.0], axis2 = [0.0, 1.0, 0.0] }}
-mass = {g.rod.mass!r}
-com = {_v(g.rod.com)}
-inertia = {_inertia(g.rod.inertia)}
-{floors}
-[[loops]]    # the rod's upper joint: the cut spherical joint of Eq. 13
-name = "cap_rod"
-body_a = "cap"
-point_a = [0.0, 0.0, 0.0]
-body_b = "rod"
-point_b = [0.0, 0.0, {params.rod_length!r}]
-
+{wall_and_rod(g)}{floors}
+{rod_loop(params)}
 [initial]    # relative rest, the device precompressed
 coordinates = {{ cap = {g.cap_rest_z!r}, wall = {g.wall_rest_z!r} }}
 free = ["plate", "cap"]
@@ -194,16 +174,7 @@ name = "support_x"
 kind = "force"
 element = "support_x"
 
-[[outputs]]
-name = "rope0_tension"
-kind = "force"
-element = "rope0"
-
-[[outputs]]
-name = "spring_tension"
-kind = "force"
-element = "spring"
-''' + floor_outputs
+''' + ELEMENT_OUTPUTS + floor_outputs
     if st.restrainer is not None:   # judged against the supports' force at the gap, k_b u_gap
         outputs += f'''
 [[outputs]]
