@@ -17,7 +17,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 MODELS = ("andrews", "iftomm_a01_pendulum", "iftomm_a02_fourbar", "iftomm_a04_bricard", "slider_crank",
-          "fourbar_spring", "nsd_drive")
+          "fourbar_spring", "nsd_drive", "nsd_seismic", "nsd_building")
 
 
 def summarise(results: dict) -> dict:

@@ -304,6 +304,32 @@ def model_builders() -> str:
             + table(["MuJoCo model", "wall s", "ratio to the adapter", "max abs ΔF_x / peak"], rows))
 
 
+def described_gate() -> str:
+    """The gate's drive cases: each peer's hand-written adapter against its description builder
+    (benchmarks/bench_described_gate.py)."""
+    rec = load("bench_described_gate")
+    d = rec["data"]
+    names = {"adapter": "hand-written adapter", "described": "builder, the adapter's settings",
+             "described_rk4": "builder, RK4 at the adapter's step", "described_rk4_2h": "builder, RK4 at twice the step"}
+    rows = []
+    for case, row in d["cases"].items():
+        for engine, runs in row["engines"].items():
+            for path, r in runs.items():
+                if not isinstance(r, dict):
+                    continue
+                step = r["settings"].get("timestep", r["settings"].get("step_size"))
+                how = f"{r['settings'].get('integrator', '')} {g(step)} s".strip() if step else "-"
+                rows.append([case, engine, names.get(path, path), how, "PASS" if r["passes"] else "FAIL",
+                             g(r["difference"]), g(r["estimate"]), plain(r["wall_s"]),
+                             g(r["time_ratio"]) if "time_ratio" in r else "1"])
+    return (provenance(rec) + "\n"
+            + f"Rule: {d['rule']}; the difference is the steady cycle's max \\|F − F_ref\\| / peak \\|F_ref\\| against "
+              "the gate's converged in-house reference; the estimate Richardson from h and h/2; wall seconds of the h "
+              "run's stepping.\n\n"
+            + table(["case", "engine", "model", "integrator, step", "verdict", "difference", "estimate", "wall s",
+                     "time / adapter's"], rows))
+
+
 def direction_study() -> str:
     rec = load("polar")
     d = rec["data"]
@@ -516,7 +542,7 @@ RENDER = {"compare-gate": compare_gate, "convergence": convergence, "tables-5-6"
           "gate-times": gate_times, "bench-start": bench_start, "compile-units": compile_units,
           "bench-record-set": bench_record_set, "compare-variant": compare_variant, "power": power,
           "verdict-cost": verdict_cost, "model-benchmarks": model_benchmarks,
-          "model-builders": model_builders,
+          "model-builders": model_builders, "described-gate": described_gate,
           "work-precision": work_precision, "bench-cold": bench_cold, "bench-peer-seismic": bench_peer_seismic}
 
 

@@ -47,6 +47,9 @@ MEASUREMENTS = {
     # the device's description in MuJoCo (compiled) against the hand-written adapter, side by side
     "bench_model_builders": (PY + ["benchmarks/bench_model_builders.py", "--repeats", "3", "--out", "OUT"],
                              "bench_model_builders.json", "json"),
+    # issue 32: the gate's drive cases through each peer's hand-written adapter and its description builder
+    "bench_described_gate": (PY + ["benchmarks/bench_described_gate.py", "--out", "OUT"], "bench_described_gate.json",
+                             "json"),
     "benchmark": (NSD + ["benchmark", "--out", "OUT"], "results.json", "json"),
     "polar": (NSD + ["polar", "--out", "OUT"], "polar.json", "json"),
     "bench_cycle": (PY + ["benchmarks/bench_cycle.py", "--no-compile", "--repeats", "3", "--out", "OUT"],
