@@ -209,6 +209,34 @@ def test_a_law_with_a_state_registered_here_reaches_mujoco_unchanged():
         assert relative(run.outputs[name], inhouse.outputs[name]) < 1e-5, name
 
 
+def test_euler_advances_a_state_along_its_element_s_actual_change():
+    """With Euler the callback advances a law's state along its element's actual change of x since
+    the last evaluation (comparisons.builders.mujoco_passive): a state whose rate is k x' (the Maxwell
+    element with c -> infinity) then stays s_0 + k (L - L_0) to round-off on a prescribed path, where
+    MuJoCo's own act += h rate(x_n, x'_n) lags it by one step's change (~k h |x'|: 0.05 N here)."""
+    tag = uuid.uuid4().hex[:8]
+    maxwell = laws.register(laws.Law(f"test_maxwell_euler_{tag}", laws.POINTS, (
+        laws.LawParameter("k", "N/m", 0.0), laws.LawParameter("c", "N s/m", 0.0),
+        laws.LawParameter("initial_tension", "N", -np.inf, default=0.0)),
+        _maxwell_tension, "a Maxwell element", laws.StateSpec("tension", "N", "initial_tension"), _maxwell_rate))
+    try:
+        raw = _cart_pendulum("linear_spring_damper", "joint_spring_damper")
+        raw["forces"] = [{"name": "maxwell", "law": maxwell.name, "body_a": "cart", "body_b": "ground",
+                          "point_b": [-0.5, 0.0, 0.0], "parameters": {"k": 400.0, "c": 1e300, "initial_tension": 5.0}}]
+        raw["prescribed"] = [{"name": "push", "joint": "cart", "motion": "harmonic", "centre": 0.0,
+                              "amplitude": 0.05, "frequency": 2.0, "phase": 0.3}]
+        raw["outputs"][2:4] = [{"name": "tension", "kind": "force", "element": "maxwell"}]
+        model = parse_model(raw, "cart_pendulum_maxwell_driven")
+        runs = [mj_builder.simulate(model, 0.5, 0.01, {"timestep": 2e-4, "integrator": "Euler", "passive": p})
+                for p in ("compiled", "python")]
+    finally:
+        laws.LAWS.pop(maxwell.name, None)
+    for run in runs:
+        x = run.outputs["x"]
+        assert np.ptp(x) > 0.05
+        assert np.max(np.abs(run.outputs["tension"] - (5.0 + 400.0 * (x - x[0])))) < 1e-9
+
+
 def test_spherical_universal_planar_and_translational_joints_follow_the_description():
     """Every multi-coordinate joint (two on a turning parent), tumbling under gravity from a general
     state: MuJoCo's joints of one body, applied in order, must turn each axis as the description's

@@ -21,8 +21,12 @@ integrator stage's own time, so RK4 keeps its order (measured on models/nsd_seis
 tests/test_model_mujoco_seismic.py).
 
 A law with an internal state (``Law.state``) keeps it in an activation of a zero-force actuator
-(mujoco_mjcf): MuJoCo integrates it with the motion, its rate ``element.rate(x, x', s)`` computed by
-the passive callback of the same stage and handed over by ``mjcb_act_dyn``.
+(mujoco_mjcf). RK4: MuJoCo integrates it with the motion, its rate ``element.rate(x, x', s)`` computed
+by the passive callback of the same stage and handed over by ``mjcb_act_dyn``. Euler: the callback
+advances it itself, at each evaluation, along the actual change of its element's x since the last
+one (mujoco_passive), before the force uses it. MuJoCo's Euler would add h rate(x_n, x'_n, s_n): the
+state then lags the configuration by about one step's change (a stiff hysteretic wire: a force error
+of first order in h with a large constant), and x'_n can have the wrong sign at a reversal.
 
 Prescribed motions (the heavy virtual drive): a driven coordinate gets an armature A =
 ``drive_armature`` x its own inertia at t = 0, and the callback adds, at every stage (each stage's
@@ -31,7 +35,8 @@ extrapolated linearly. The driven coordinate's acceleration then misses q''(t) b
 (tau - tau_est) / A, and after each step its qpos/qvel are reset to q(t), q'(t) exactly;
 ``tracking_error`` is the largest miss before the reset (slider-crank, RK4, h = 1.25e-4 s: 7e-15 rad).
 The drive force (the sign of the in-house engine's ``Evaluation.drive_force``: positive drives q up)
-is measured per step as its average over the step: the stages' feed-forward (RK4 weights) less A
+is measured per step (Euler: at its one evaluation, the step's start state, so an output time's force
+is that step's; RK4 as follows) as its average over the step: the stages' feed-forward (RK4 weights) less A
 times the step's average acceleration (MuJoCo's qacc after the step), i.e. the impulse the virtual
 drive gave the real mechanism / h. One evaluation's force would not do: RK4 leaves the soft loop
 constraints with a velocity offset at the step's ends (their time constant is a few steps), and the
@@ -43,7 +48,9 @@ the run's ends), fourth order like RK4.
 The step: MuJoCo's own pieces, in a plain loop: mj_forward (the step's first stage, whose state also
 gives the outputs at output times) then mj_RungeKutta (RK4) or mj_Euler, as mj_step does. The step
 used divides the output interval (<= ``timestep``). The loop constraints are soft: solref time
-constant ``solref_factor`` x h. With RK4 a factor of 2 (MuJoCo's floor) leaves that velocity offset
+constant ``solref_factor`` x h; its default is the integrator's (SOLREF_FACTOR): Euler 2, the
+stiffest, as the hand-written device adapter (the cause measured below); RK4 4. With RK4 a factor of
+2 (MuJoCo's floor) leaves that velocity offset
 largest (an error of first order in h in velocities and the drive force); 4 is the compromise
 measured: slider-crank drive torque at h = 1.25e-4 s: 2.8e-5 (factor 2), 3.9e-6 (4), 2.2e-6 (8);
 Andrews at h = 1e-5 s: 5.3e-7 (2), 1.3e-6 (4), 6.9e-6 (8) (the position-level softness grows as
@@ -101,7 +108,8 @@ name = "mujoco"
 default_settings = {
     "timestep": 1e-5,           # [s] largest step; the step used divides the output interval
     "integrator": "RK4",        # RK4 | Euler (semi-implicit)
-    "solref_factor": 4.0,       # connect time constant = factor x step (>= 2, MuJoCo's smallest; see above)
+    "solref_factor": None,      # connect time constant = factor x step (>= 2, MuJoCo's smallest); None:
+                                # the integrator's (SOLREF_FACTOR, see above)
     "solref_dampratio": 1.0,    # connect damping ratio (1: critical)
     "solimp": [0.9999, 0.9999, 0.001, 0.5, 2.0],   # connect impedance (closer to 1: harder)
     "solver_tolerance": 1e-12,  # MuJoCo's constraint solver (Newton) tolerance
@@ -112,6 +120,7 @@ default_settings = {
     "passive": "compiled",      # compiled: generated C callback and native loop (mujoco_compiled); python: Passive
 }
 INTEGRATORS = ("RK4", "Euler")
+SOLREF_FACTOR = {"RK4": 4.0, "Euler": 2.0}   # the default solref_factor of each integrator (see above)
 PASSIVE = ("compiled", "python")
 RK4_WEIGHTS = np.array([1.0, 2.0, 2.0, 1.0]) / 6.0   # the classic RK4 stages' weights, as MuJoCo's
 _POSITIVE = ("timestep", "solref_factor", "drive_armature", "inertia_floor", "closure_limit", "solver_tolerance")
@@ -130,6 +139,8 @@ def merged_settings(settings: dict | None) -> dict:
         raise ModelError(f"mujoco.passive = {s['passive']!r}: allowed: {', '.join(PASSIVE)}")
     if s["integrator"] not in INTEGRATORS:
         raise ModelError(f"mujoco.integrator = {s['integrator']!r}: allowed: {', '.join(INTEGRATORS)}")
+    if s["solref_factor"] is None:
+        s["solref_factor"] = SOLREF_FACTOR[s["integrator"]]
     for k in _POSITIVE:
         v = s[k]
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
@@ -156,7 +167,7 @@ def simulate(model: Model, duration: float, dt_out: float, settings: dict | None
     m, d, drives = _compile(model, s, h, init, mujoco_codegen.layout(model).size if compiled else 0)
     pairs = [(m.site(f"{c[0]}:a").id, m.site(f"{c[0]}:b").id) for c in connects(model, init.rotation)]
     weights = RK4_WEIGHTS if s["integrator"] == "RK4" else np.ones(1)
-    uses = point_from_averages(n_steps, n_sub) if drives else {}
+    uses = drive_force_uses(n_steps, n_sub, s["integrator"]) if drives else {}
     if compiled:
         data, drive_at, wall, closure, tracking = mujoco_compiled.run(
             model, s, m, d, drives, pairs, t_out, n_sub, h, n_steps, weights, uses,
@@ -176,13 +187,26 @@ def simulate(model: Model, duration: float, dt_out: float, settings: dict | None
 def _run_python(model, s, m, d, drives, pairs, t_out, n_sub, h, n_steps, weights, uses):
     """The readable reference loop (``passive = "python"``): Passive as mjcb_passive, one Python
     iteration per step. Returns as mujoco_compiled.run."""
-    forces = Passive(model, m, drives)
+    forces = Passive(model, m, drives, advance=s["integrator"] == "Euler")
     sample = _sampler(model, m, d, forces)
     advance = {"RK4": lambda: mujoco.mj_RungeKutta(m, d, 4), "Euler": lambda: mujoco.mj_Euler(m, d)}[s["integrator"]]
     armature = np.array([A for *_, A in drives])
     drive_dof = [da for _, _, da, _ in drives]
     rows, closure, tracking = [], 0.0, 0.0
     drive_at = np.zeros((len(t_out), len(drives)))   # the drive forces at the output times
+    rk4 = s["integrator"] == "RK4"
+
+    def measure(n, t):
+        # the step's average drive force (its impulse / h; RK4: at the step's middle): the weighted
+        # feed-forward of the stages less the armature times the step's average acceleration (MuJoCo's
+        # qacc after the step). Unlike one evaluation's force, it carries no share of the soft loop
+        # constraints' velocity offset, which RK4 leaves at the step's ends. Euler: its one
+        # evaluation's, the force at the step's start
+        bar = weights @ np.array(forces.feeds) - armature * d.qacc[drive_dof]
+        for k, w in uses.get(n, ()):
+            drive_at[k] += w * bar
+        forces.tau_slope[:] = (bar - forces.tau) / h if n else 0.0
+        forces.tau[:], forces.t_tau = bar, t + (0.5 * h if rk4 else 0.0)
     previous = mujoco.get_mjcb_passive(), mujoco.get_mjcb_act_dyn()
     try:
         mujoco.set_mjcb_passive(forces)
@@ -205,18 +229,12 @@ def _run_python(model, s, m, d, drives, pairs, t_out, n_sub, h, n_steps, weights
                                       "try a smaller timestep")
                 rows.append(sample())
             if n == n_steps:
+                if drives and not rk4:   # Euler's last output: this evaluation's (qacc is mj_forward's)
+                    measure(n, t)
                 break
             advance()
             if drives:
-                # the step's average drive force (its impulse / h): the weighted feed-forward of the
-                # stages less the armature times the step's average acceleration (MuJoCo's qacc after
-                # the step). Unlike one evaluation's force, it carries no share of the soft loop
-                # constraints' velocity offset, which RK4 leaves at the step's ends.
-                bar = weights @ np.array(forces.feeds) - armature * d.qacc[drive_dof]
-                for k, w in uses.get(n, ()):
-                    drive_at[k] += w * bar
-                forces.tau_slope[:] = (bar - forces.tau) / h if n else 0.0
-                forces.tau[:], forces.t_tau = bar, t + 0.5 * h
+                measure(n, t)
             for p, qa, da, _ in drives:   # the drive's coordinate, exactly on its path
                 q, qd, _ = p(t + h)
                 tracking = max(tracking, abs(d.qpos[qa] - q))
@@ -226,6 +244,16 @@ def _run_python(model, s, m, d, drives, pairs, t_out, n_sub, h, n_steps, weights
         mujoco.set_mjcb_passive(previous[0])
         mujoco.set_mjcb_act_dyn(previous[1])
     return np.array(rows, dtype=float), drive_at, wall, closure, tracking
+
+
+def drive_force_uses(n_steps: int, n_sub: int, integrator: str) -> dict[int, list[tuple[int, float]]]:
+    """How the drive force at each output time comes from the steps' measured forces: step n -> [(output
+    index, weight)]. Euler's measurement is the force at the step's start (its one evaluation): output k
+    is step k n_sub's own, the last one included (the loops measure it at n = n_steps). RK4's is the
+    step's average: point_from_averages."""
+    if integrator == "Euler":
+        return {k * n_sub: [(k, 1.0)] for k in range(n_steps // n_sub + 1)}
+    return point_from_averages(n_steps, n_sub)
 
 
 def point_from_averages(n_steps: int, n_sub: int) -> dict[int, list[tuple[int, float]]]:

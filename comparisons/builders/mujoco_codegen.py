@@ -21,6 +21,11 @@ identity enters the hash too (compiled again in each process).
 The helper modules the source imports (mujoco_kernels, mujoco_cabi, nsd_core.device.ground) enter it
 as well: their code is compiled into the generated file's cache.
 
+A law with a state gets, besides its rate's call (RK4: handed to MuJoCo), a generated
+``advance_<rate>`` (one RK4 step in time along x linear over the interval, calling that same rate
+function: its source is in the generated text, so the hash covers it): with Euler (userdata's ADVANCE)
+the callback advances the state itself at each later evaluation, as mujoco_passive.Passive does.
+
 The description's shape includes which points elements have a ``direction`` (points_state_along) and
 whether it has an excitation (ground_values at the stage's time, then ground_load on the body slots,
 which then include every body with a mass); the ground motion's block is data (userdata's tail).
@@ -107,6 +112,7 @@ def pack(ud: np.ndarray, model: Model, m: mujoco.MjModel, drives: list, lay: Lay
                            f"are not the layout's {(lay.nq, lay.nv, lay.na, lay.size)}")
     ud[:] = 0.0
     ud[K.JAC_FN] = function_address("mj_jac")   # < 2^53: exact as a float64
+    ud[K.T_COMMIT] = np.nan   # the states not advanced yet (ADVANCE is the run's: mujoco_compiled)
     ud[K.N_DRIVES], ud[K.DRIVES_AT] = len(drives), lay.drives_at
     ud[K.N_SLOTS], ud[K.SLOTS_AT] = len(lay.slots), lay.slots_at
     for i, body in enumerate(lay.slots):
@@ -162,12 +168,13 @@ def source(model: Model, lay: Layout, nbody: int) -> tuple[str, dict]:
         "Bound by the loader before this runs: " + ", ".join(
             f"{names[id(fn)]} = {_identity(fn)}" for fn in fns) + '."""',
         "import numpy as np",
-        "from numba import carray, cfunc, types",
+        "from numba import carray, cfunc, njit, types",
         "from comparisons.builders.mujoco_cabi import double_ptr",
         "from comparisons.builders.mujoco_kernels import apply_points, drive_feeds, finish_bodies, ground_load, "
         "points_state, points_state_along, prepare_bodies",
         "from nsd_core.device.ground import ground_values",
         "", "",
+        *[line for fn in fns if any(fn is f.law.rate for f in model.forces) for line in _advance_source(names[id(fn)])],
         "@cfunc(types.void(types.voidptr, types.voidptr), cache=True)",
         "def passive(m, d):",
         f"    w = carray(d, ({words},), dtype=np.uint64)",
@@ -179,8 +186,12 @@ def source(model: Model, lay: Layout, nbody: int) -> tuple[str, dict]:
         f"    xpos = {ptr('xpos', (nbody, 3))}",
         f"    xmat = {ptr('xmat', (nbody, 9))}",
     ]
-    if lay.na:
-        lines.append(f"    act = {ptr('act', (lay.na,))}")
+    if lay.na:   # the states' advance along the actual change of x since the last one (Euler; see Passive)
+        lines += [f"    act = {ptr('act', (lay.na,))}",
+                  f"    advance = ud[{K.ADVANCE}] != 0.0",
+                  f"    now = carray(d, ({o['time'] + 1},), dtype=np.float64)[{o['time']}]",
+                  f"    dt = now - ud[{K.T_COMMIT}]",
+                  "    moved = advance and not dt <= 0.0   # (NaN before the first: x recorded, no advance)"]
     if lay.slots:
         lines.append(f"    prepare_bodies(m, d, ud, ud_addr, xpos, qvel, {lay.nv})")
     for e, (f, at, (p0, p1)) in enumerate(zip(model.forces, lay.blocks, lay.params)):
@@ -189,19 +200,27 @@ def source(model: Model, lay: Layout, nbody: int) -> tuple[str, dict]:
         if f.law.acts_on == POINTS:
             state = "points_state" if f.direction is None else "points_state_along"
             lines.append(f"    x, xd = {state}(ud, {at}, xpos, xmat, {lay.nv})")
-            slot = at + K.P_SLOT
+            slot, previous = at + K.P_SLOT, at + K.P_PREVIOUS
         else:
             lines.append(f"    x, xd = qpos[int(ud[{at}])], qvel[int(ud[{at + 1}])]")
-            slot = at + K.J_SLOT
+            slot, previous = at + K.J_SLOT, at + K.J_PREVIOUS
         if f.law.state is None:
             lines.append(f"    f = {law}(x, xd, ud[{p0}:{p1}])")
-        else:   # the state's rate first, as Passive.law; mjcb_act_dyn hands it to MuJoCo
+        else:   # as Passive.law: advanced (Euler), or its rate handed to MuJoCo by mjcb_act_dyn (RK4)
             lines += [f"    s = act[int(ud[{slot}])]",
-                      f"    ud[{lay.rates_at} + int(ud[{slot}])] = {names[id(f.law.rate)]}(x, xd, s, ud[{p0}:{p1}])",
+                      "    if moved:",
+                      f"        if dt > 0.0:",
+                      f"            s = advance_{names[id(f.law.rate)]}(ud[{previous}], x, s, dt, ud[{p0}:{p1}])",
+                      f"            act[int(ud[{slot}])] = s",
+                      f"        ud[{previous}] = x",
+                      "    elif not advance:",
+                      f"        ud[{lay.rates_at} + int(ud[{slot}])] = {names[id(f.law.rate)]}(x, xd, s, ud[{p0}:{p1}])",
                       f"    f = {law}(x, xd, s, ud[{p0}:{p1}])"]
         lines.append(f"    ud[{lay.values[e]}] = f")
         lines.append(f"    apply_points(ud, {at}, f, {lay.nv})" if f.law.acts_on == POINTS
                      else f"    qfrc[int(ud[{at + 1}])] += f")
+    if lay.na:
+        lines += ["    if moved:", f"        ud[{K.T_COMMIT}] = now"]
     if model.excitation is not None:   # -m a_g(t) at every body's centre, t: this stage's time
         lines += [f"    ground = carray(double_ptr(ud_addr + {8 * lay.excitation_at}), "
                   f"(np.int64(ud[{K.EXCITATION_SIZE}]),))",
@@ -223,6 +242,22 @@ def source(model: Model, lay: Layout, nbody: int) -> tuple[str, dict]:
                  f"    return ud[{lay.rates_at}]"] if lay.na else ["    return 0.0"]),
               ""]
     return "\n".join(lines), {names[id(fn)]: fn for fn in fns}
+
+
+def _advance_source(rate: str) -> list[str]:
+    """The generated advance of a state whose rate function is bound as ``rate``: one RK4 step in time
+    over dt along x linear from x0 to x1 (Passive.advance, the same arithmetic in the same order)."""
+    return [
+        "@njit(cache=True)",
+        f"def advance_{rate}(x0, x1, s, dt, p):",
+        "    xd = (x1 - x0) / dt",
+        "    xm = 0.5 * (x0 + x1)",
+        f"    k1 = {rate}(x0, xd, s, p)",
+        f"    k2 = {rate}(xm, xd, s + 0.5 * dt * k1, p)",
+        f"    k3 = {rate}(xm, xd, s + 0.5 * dt * k2, p)",
+        f"    k4 = {rate}(x1, xd, s + dt * k3, p)",
+        "    return s + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)",
+        "", ""]
 
 
 def _identity(fn) -> str:

@@ -51,11 +51,11 @@ def motion_table(p, times: np.ndarray) -> np.ndarray:
 def _uses_arrays(uses: dict, n_steps: int):
     """mujoco.point_from_averages' map as compressed rows: step n's (output, weight) pairs are
     uses_k / uses_w[uses_ptr[n]:uses_ptr[n + 1]]."""
-    counts = np.zeros(n_steps + 1, dtype=np.int64)
+    counts = np.zeros(n_steps + 2, dtype=np.int64)   # n = n_steps: Euler's last evaluation
     for n, pairs in uses.items():
         counts[n + 1] = len(pairs)
     ptr = np.cumsum(counts)
-    flat = [pair for n in range(n_steps) for pair in uses.get(n, ())]
+    flat = [pair for n in range(n_steps + 1) for pair in uses.get(n, ())]
     return ptr, np.array([k for k, _ in flat], dtype=np.int64), np.array([w for _, w in flat], dtype=float)
 
 
@@ -98,6 +98,7 @@ def run(model, s: dict, m, d, drives: list, pairs: list, t_out: np.ndarray, n_su
         mujoco.set_mjcb_passive(module.passive.ctypes)
         mujoco.set_mjcb_act_dyn(module.act_dyn.ctypes)
         ud[K.STEP], ud[K.T_STEP] = h, clock[0]
+        ud[K.ADVANCE] = 0.0 if rk4 else 1.0   # Euler: the callback advances the laws' states (Passive)
         if nd:
             K.set_stage_accelerations(ud, acc_half, 0)
         for _ in range(3 if nd else 0):   # the drive force at t = 0, refined by its own measurement
@@ -126,6 +127,7 @@ def run(model, s: dict, m, d, drives: list, pairs: list, t_out: np.ndarray, n_su
             elif o.kind == "force":
                 data[:, c] = rec_val[:, names.index(o.element)]
         replayed = [c for c, o in enumerate(model.outputs) if o.kind in REPLAYED]
+        ud[K.ADVANCE] = 0.0   # the replay below reads the recorded states: nothing is advanced
         if replayed:
             recorded = _Recorded(model, rec_val)
             sample = sampler(recorded)

@@ -22,6 +22,9 @@ paths agree to round-off: tests/test_mujoco_codegen.py):
 - ``drive_feeds``: the heavy virtual drives' feed-forward A q''(t) + tau + tau' (t - t_tau) at this
   stage's time, each stage's value kept for the step's average drive force.
 
+- ``_measure``: each step's drive force (RK4: the step's average; Euler: its one evaluation's, the
+  last output's taken at n = n_steps) into the outputs that use it, and the feed-forward's estimate.
+
 The prescribed accelerations come from the step loop, which writes q'' at the step's start, middle
 and end before each step; a stage picks its own by its time (Euler and the first stage: start; RK4's
 two middle stages: middle; its last: end).
@@ -39,8 +42,11 @@ from numba import njit
 
 from comparisons.builders.mujoco_cabi import call_jac, call_md, call_md_int
 
-# header (EXCITATION_SIZE: the length of the excitation's ground_values block, last in userdata)
-JAC_FN, COUNT, T_STEP, STEP, T_TAU, N_DRIVES, DRIVES_AT, N_SLOTS, SLOTS_AT, EXCITATION_SIZE, HEADER = range(11)
+# header (EXCITATION_SIZE: the length of the excitation's ground_values block, last in userdata;
+# ADVANCE: 1 where the passive callback advances the laws' states itself (Euler), 0 where MuJoCo
+# integrates them from their rates (RK4); T_COMMIT: the time of the states' last advance, NaN before it)
+(JAC_FN, COUNT, T_STEP, STEP, T_TAU, N_DRIVES, DRIVES_AT, N_SLOTS, SLOTS_AT, EXCITATION_SIZE, ADVANCE, T_COMMIT,
+ HEADER) = range(13)
 SCRATCH = 9          # the ends' arms r_a, r_b and the unit vector u
 MAX_STAGES = 4       # RK4's; a step of more stages keeps only its first 4 feeds and the loop fails it
 # a body slot: body id, point (its origin), v_o, w, F, M, the mass the excitation loads (0: none) and
@@ -49,11 +55,11 @@ S_BODY, S_POINT, S_VEL, S_OMEGA, S_FORCE, S_MOMENT, S_MASS, S_COM, S_JAC = 0, 1,
 # a drive: dof address, armature, tau, tau', q'' at the step's start / middle / end, the stages' feeds
 D_DOF, D_ARM, D_TAU, D_SLOPE, D_ACC, D_FEED, DRIVE_SIZE = 0, 1, 2, 3, 4, 7, 7 + MAX_STAGES
 # a points element: slot of body a (-1: ground), point a (3), slot of body b, point b (3), its state's
-# index in act (-1: none), (unused), last value, (unused), its direction e (ground frame; zero for a
-# line element), then the law's parameters; a joint element: qpos and dof address, act index,
-# (unused), value, (unused), parameters
-P_SLOT, P_VALUE, P_DIRECTION, POINTS_HEAD = 8, 10, 12, 15
-J_SLOT, J_VALUE, JOINT_HEAD = 2, 4, 6
+# index in act (-1: none), its x at the states' last advance (ADVANCE), last value, (unused), its
+# direction e (ground frame; zero for a line element), then the law's parameters; a joint element: qpos
+# and dof address, act index, x at the last advance, value, (unused), parameters
+P_SLOT, P_PREVIOUS, P_VALUE, P_DIRECTION, POINTS_HEAD = 8, 9, 10, 12, 15
+J_SLOT, J_PREVIOUS, J_VALUE, JOINT_HEAD = 2, 3, 4, 6
 
 
 def slot_size(nv: int) -> int:
@@ -220,6 +226,30 @@ def set_stage_accelerations(ud, acc_half, n):
 
 
 @njit(cache=True)
+def _measure(ud, weights, qacc, uses_ptr, uses_k, uses_w, drive_at, n, h, t, rk4):
+    """Step n's drive forces, added to the outputs that use them, and the feed-forward's estimate
+    updated; False when the step evaluated the passive forces other than the integrator's number of
+    times. RK4: the step's average, the stages' weighted feed-forward less A x the step's average
+    acceleration (comparisons.builders.mujoco says why), at the step's middle; Euler: the same
+    arithmetic on its one evaluation, the force at the step's start."""
+    if int(ud[COUNT]) != weights.shape[0]:
+        return False
+    at = int(ud[DRIVES_AT])
+    for i in range(int(ud[N_DRIVES])):
+        b = at + DRIVE_SIZE * i
+        bar = 0.0
+        for s in range(weights.shape[0]):
+            bar += weights[s] * ud[b + D_FEED + s]
+        bar -= ud[b + D_ARM] * qacc[int(ud[b + D_DOF])]
+        for j in range(uses_ptr[n], uses_ptr[n + 1]):
+            drive_at[uses_k[j], i] += uses_w[j] * bar
+        ud[b + D_SLOPE] = (bar - ud[b + D_TAU]) / h if n else 0.0
+        ud[b + D_TAU] = bar
+    ud[T_TAU] = t + 0.5 * h if rk4 else t
+    return True
+
+
+@njit(cache=True)
 def step_loop(fn_forward, fn_advance, rk4, m_addr, d_addr, time, qpos, qvel, act, qacc, site_xpos, ud,
               n_sub, n_steps, h, weights, acc_half, q_at, qd_at, drive_qa, uses_ptr, uses_k, uses_w,
               pairs, closure_limit, values, rec_qpos, rec_qvel, rec_act, rec_val, gaps, drive_at):
@@ -229,7 +259,6 @@ def step_loop(fn_forward, fn_advance, rk4, m_addr, d_addr, time, qpos, qvel, act
     Returns (largest tracking error, failing output index or -1, -2 for a stage count that is not the
     integrator's)."""
     nd = drive_qa.shape[0]
-    at = int(ud[DRIVES_AT])
     tracking = 0.0
     for n in range(n_steps + 1):
         t = n * h
@@ -256,27 +285,17 @@ def step_loop(fn_forward, fn_advance, rk4, m_addr, d_addr, time, qpos, qvel, act
             if not (np.all(np.isfinite(qpos)) and gap < closure_limit):
                 return tracking, k
         if n == n_steps:
+            # Euler's measurement is its one evaluation's, the step's start state: the last output's
+            # comes from this evaluation (MuJoCo's Euler leaves qacc as mj_forward computed it)
+            if nd and not rk4 and not _measure(ud, weights, qacc, uses_ptr, uses_k, uses_w, drive_at, n, h, t, rk4):
+                return tracking, -2
             break
         if rk4:
             call_md_int(fn_advance, m_addr, d_addr, 4)
         else:
             call_md(fn_advance, m_addr, d_addr)
-        if nd:
-            if int(ud[COUNT]) != weights.shape[0]:
-                return tracking, -2
-            # the step's average drive force: the stages' weighted feed-forward less A x the step's
-            # average acceleration (comparisons.builders.mujoco.simulate says why)
-            for i in range(nd):
-                b = at + DRIVE_SIZE * i
-                bar = 0.0
-                for s in range(weights.shape[0]):
-                    bar += weights[s] * ud[b + D_FEED + s]
-                bar -= ud[b + D_ARM] * qacc[int(ud[b + D_DOF])]
-                for j in range(uses_ptr[n], uses_ptr[n + 1]):
-                    drive_at[uses_k[j], i] += uses_w[j] * bar
-                ud[b + D_SLOPE] = (bar - ud[b + D_TAU]) / h if n else 0.0
-                ud[b + D_TAU] = bar
-            ud[T_TAU] = t + 0.5 * h
+        if nd and not _measure(ud, weights, qacc, uses_ptr, uses_k, uses_w, drive_at, n, h, t, rk4):
+            return tracking, -2
         for i in range(nd):   # the drive's coordinate, exactly on its path
             qa, da = drive_qa[i, 0], drive_qa[i, 1]
             tracking = max(tracking, abs(qpos[qa] - q_at[i, n + 1]))

@@ -14,6 +14,12 @@ numbers in the same order; tests/test_mujoco_codegen.py holds them equal to roun
   stage with the stage's time (mj_RungeKutta sets it), so the forcing is as accurate as the
   integrator (setting opt.gravity once per step would hold a_g constant over the step, first order).
 - Prescribed motions: the heavy virtual drives' feed-forward (comparisons.builders.mujoco says why).
+- A law's state (``advance``, Euler): advanced by the callback itself at each evaluation at a later
+  time, along the actual change of its element's x since the last one (x linear in time over the
+  interval dt, x' = dx/dt: one RK4 step of ``rate(x(tau), x', s)``), before the force uses it; MuJoCo's
+  Euler evaluates once per step, at its start, so the state always matches the configuration the
+  force sees (comparisons.builders.mujoco says why). Otherwise (RK4) MuJoCo integrates it from the
+  rate handed over by ``act_dyn``.
 """
 from __future__ import annotations
 
@@ -29,13 +35,16 @@ class Passive:
     """The mjcb_passive callback: every force element through its law, the excitation's load, plus the
     drives' feed-forward."""
 
-    def __init__(self, model: Model, m: mujoco.MjModel, drives: list):
+    def __init__(self, model: Model, m: mujoco.MjModel, drives: list, advance: bool = False):
         self.nv = m.nv
         self.jac = np.zeros((2, 3, m.nv))
         self.points, self.joints = [], []
         # a law with a state keeps it in an activation of the states actuator (mujoco_mjcf); -1: none
         self.act = state_activations(model, m)
         self.rates = np.zeros(m.na)   # each state's rate at the last evaluation, for mjcb_act_dyn
+        self.advance = advance        # the states advanced here (Euler), not by MuJoCo (rates stay 0)
+        self.previous = np.zeros(m.na)   # each state's element's x at the last advance ...
+        self.t_commit = np.nan           # ... and its time (NaN: none yet)
         for f in model.forces:
             slot = self.act.get(f.name, -1)
             if f.law.acts_on == POINTS:
@@ -80,13 +89,35 @@ class Passive:
         u = r / L if L > 0.0 else np.zeros(3)
         return L, float(u @ (vb - va)), u
 
-    def law(self, d, f, x: float, xd: float, slot: int) -> float:
-        """The element's force at (x, x') and its state; the state's rate is kept for mjcb_act_dyn."""
+    def law(self, d, f, x: float, xd: float, slot: int, dt: float | None = None) -> float:
+        """The element's force at (x, x') and its state. From the callback (dt: the time since the last
+        advance, NaN before the first), the state is first advanced to this configuration
+        (``advance``), or its rate is kept for mjcb_act_dyn; with dt None (outputs) it is only read."""
         if slot < 0:
             return f.force(x, xd)
         s = float(d.act[slot])
-        self.rates[slot] = f.rate(x, xd, s)
+        if dt is None:
+            pass
+        elif self.advance:
+            if not dt <= 0.0:   # a later time (NaN before the first: x recorded only)
+                if dt > 0.0:
+                    s = d.act[slot] = self.step(f, self.previous[slot], x, s, dt)
+                self.previous[slot] = x
+        else:
+            self.rates[slot] = f.rate(x, xd, s)
         return f.force(x, xd, s)
+
+    @staticmethod
+    def step(f, x0: float, x1: float, s: float, dt: float) -> float:
+        """The state advanced over dt along x linear from x0 to x1: one RK4 step in time (the generated
+        ``advance_*`` of mujoco_codegen, the same arithmetic)."""
+        xd = (x1 - x0) / dt
+        xm = 0.5 * (x0 + x1)
+        k1 = f.rate(x0, xd, s)
+        k2 = f.rate(xm, xd, s + 0.5 * dt * k1)
+        k3 = f.rate(xm, xd, s + 0.5 * dt * k2)
+        k4 = f.rate(x1, xd, s + dt * k3)
+        return s + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
 
     def law_values(self, m, d) -> dict:
         """Each element's force at d's state (tension [N], or generalized force)."""
@@ -110,11 +141,14 @@ class Passive:
 
     def __call__(self, m, d):
         qfrc = d.qfrc_passive
+        dt = d.time - self.t_commit
         for f, ends, slot, along in self.points:
             L, Ld, u = self.element_state(m, d, ends, along)
-            qfrc += (self.law(d, f, L, Ld, slot) * u) @ (self.jac[0] - self.jac[1])
+            qfrc += (self.law(d, f, L, Ld, slot, dt) * u) @ (self.jac[0] - self.jac[1])
         for f, qa, da, slot in self.joints:
-            qfrc[da] += self.law(d, f, d.qpos[qa], d.qvel[da], slot)
+            qfrc[da] += self.law(d, f, d.qpos[qa], d.qvel[da], slot, dt)
+        if self.advance and not dt <= 0.0:
+            self.t_commit = d.time
         if self.excitation is not None:
             self.ground_load(m, d, qfrc)
         if self.drives:
