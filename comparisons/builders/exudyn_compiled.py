@@ -4,11 +4,12 @@ reference: the same equations, one connector per element).
 
 One ObjectGenericODE2 spans every body's node (3 positions + 4 Euler parameters each) with a zero mass
 matrix; its force user function returns the generalized forces of all elements at the coordinates
-Newton is trying (implicit, as the connectors; Exudyn differentiates it numerically). Per call: one
-compiled kernel (numba) takes Exudyn's coordinates to every element's (x, x') and the bodies'
-poses, the laws are called from the registry (their states through exudyn_forces.LawStates, Heun's
-method at the step, the connectors' scheme), and one kernel maps the laws' values to generalized
-forces. So the discrete equations are the connectors' and the two paths agree to Newton's tolerance,
+Newton is trying (implicit, as the connectors). Per call one compiled function generated for the
+model (exudyn_codegen) takes Exudyn's coordinates to every element's (x, x') and the bodies' poses
+(``arguments``), calls the registry's laws (their states by Heun's method at the step, the
+connectors' scheme, exudyn_forces.LawStates) and maps the laws' values to generalized forces
+(``forces``); its Jacobian is a compiled forward difference of the same function (Exudyn's would
+call the Python function twice per coordinate). So the discrete equations are the connectors' and the two paths agree to Newton's tolerance,
 except one detail where this path follows the description's virtual work: a joint law on a slide
 pushes the parent at the child's frame origin (the connector pushes it at the parent's joint point;
 the two differ by a moment when the child is off the slide's line, which no joint of the device or
@@ -87,23 +88,25 @@ def _point(i, p, R, r, v, w, out):
 
 
 @njit(cache=True)
-def _load(f, G, i, F, s):
-    """Force F at world arm s of body i onto the generalized forces f (nothing for the ground)."""
+def _load(f, G, i, c, F, j, S, k, m):
+    """Force c F[j] at world arm S[k, m] of body i onto the generalized forces f (nothing for the
+    ground); scalar arithmetic: no array is allocated (it runs ~10 times a Newton iteration)."""
     if i < 0:
         return
     o = 7 * i
-    tx, ty, tz = s[1] * F[2] - s[2] * F[1], s[2] * F[0] - s[0] * F[2], s[0] * F[1] - s[1] * F[0]
-    for k in range(3):
-        f[o + k] += F[k]
-    for m in range(4):
-        f[o + 3 + m] += G[i, 0, m] * tx + G[i, 1, m] * ty + G[i, 2, m] * tz
+    Fx, Fy, Fz = c * F[j, 0], c * F[j, 1], c * F[j, 2]
+    sx, sy, sz = S[k, m, 0], S[k, m, 1], S[k, m, 2]
+    tx, ty, tz = sy * Fz - sz * Fy, sz * Fx - sx * Fz, sx * Fy - sy * Fx
+    f[o], f[o + 1], f[o + 2] = f[o] + Fx, f[o + 1] + Fy, f[o + 2] + Fz
+    for n in range(4):
+        f[o + 3 + n] += G[i, 0, n] * tx + G[i, 1, n] * ty + G[i, 2, n] * tz
 
 
 @njit(cache=True)
-def _torque(f, G, i, t):
+def _torque(f, G, i, c, t, j):
     if i >= 0:
-        for m in range(4):
-            f[7 * i + 3 + m] += G[i, 0, m] * t[0] + G[i, 1, m] * t[1] + G[i, 2, m] * t[2]
+        for n in range(4):
+            f[7 * i + 3 + n] += c * (G[i, 0, n] * t[j, 0] + G[i, 1, n] * t[j, 1] + G[i, 2, n] * t[j, 2])
 
 
 @njit(cache=True)
@@ -169,22 +172,20 @@ def forces(T, ia, ib, jc, jp, turn, R, G, r, N, S, f):
     (or a torque Q N) and the opposite on the parent, there."""
     f[:] = 0.0
     npts = ia.shape[0]
-    F = np.empty(3)
     for j in range(npts):
-        for k in range(3):
-            F[k] = -T[j] * N[j, k]
-        _load(f, G, ia[j], F, S[j, 0])
-        _load(f, G, ib[j], -F, S[j, 1])
+        _load(f, G, ia[j], -T[j], N, j, S, j, 0)
+        _load(f, G, ib[j], T[j], N, j, S, j, 1)
     for m in range(jc.shape[0]):
         j, c, p = npts + m, jc[m], jp[m]
-        F = T[j] * N[j]
         if turn[m]:
-            _torque(f, G, c, F)
-            _torque(f, G, p, -F)
+            _torque(f, G, c, T[j], N, j)
+            _torque(f, G, p, -T[j], N, j)
         else:
-            _load(f, G, c, F, S[j, 1])
-            if p >= 0:
-                _load(f, G, p, -F, S[j, 0] - r[p])
+            _load(f, G, c, T[j], N, j, S, j, 1)
+            if p >= 0:   # the parent is pushed at the same world point: its arm from its own centre
+                for k in range(3):
+                    S[j, 0, k] -= r[p, k]
+                _load(f, G, p, -T[j], N, j, S, j, 0)
 
 
 class CompiledForces:
@@ -223,41 +224,51 @@ class CompiledForces:
                                                              for i in range(2, 7))
         self.turn = np.array([c[7] for c in cols], dtype=np.bool_)
         self.last = np.array([c[8] for c in cols], float)   # each turn's angle at the last call
-        nb, ne = len(self.bodies), len(self.elements)
-        self.R, self.G = np.zeros((nb, 3, 3)), np.zeros((nb, 3, 4))
-        self.r, self.v, self.w = np.zeros((nb, 3)), np.zeros((nb, 3)), np.zeros((nb, 3))
-        self.x, self.xd, self.T = np.zeros(ne), np.zeros(ne), np.zeros(ne)
-        self.N, self.S, self.f = np.zeros((ne, 3)), np.zeros((ne, 2, 3)), np.zeros(7 * nb)
+        nb = len(self.bodies)
+        self.f = np.zeros(7 * nb)   # the generalized forces Exudyn gets back
         self.states = states
-        self.laws = [(f.law.force, f.parameters, states.add(f) if f.law.state is not None else -1)
-                     for f in self.elements]
-        self.stateful = [j for j, (_, _, k) in enumerate(self.laws) if k >= 0]
+        for f in self.elements:
+            if f.law.state is not None:
+                states.add(f)
         self.nodes, self.index = [build.node[name] for name in self.bodies], None
         self.ref = np.concatenate([np.asarray(mbs.GetNodeParameter(n, "referenceCoordinates"), float)
                                    for n in self.nodes])
+        # one generated function per model shape: laws and states inside the compiled call (exudyn_codegen)
+        from comparisons.builders.exudyn_codegen import module_for, pack, source   # it imports this module
+        self.F, self.I, self.W, sizes, params = pack(self)
+        self.gen = module_for(*source(self.elements, nb, len(pts), len(jts), params, len(states.elements), sizes))
+        self.s_at, self.ns = sizes["s"], len(states.elements)
+        self.J = np.zeros((7 * nb, 7 * nb))
+        # load (or compile) the machine code now, not in the timed run's first call; on copies of the states
+        z = np.zeros(7 * nb)
+        self.gen.jacobian(z, z, self.F, self.I, self.W.copy(), 1.0, 1.0, self.J.copy())
+        self.gen.commit(z, z, self.F, self.I, self.W.copy())
+        force, jacobian = self.user_functions()
         self.object = mbs.AddObject(ObjectGenericODE2(nodeNumbers=self.nodes, massMatrix=np.zeros((7 * nb, 7 * nb)),
-                                                      forceUserFunction=self))
+                                                      forceUserFunction=force, jacobianUserFunction=jacobian))
 
-    def converged(self, mbs) -> list:
-        """(x, x') of the laws with a state at Exudyn's current (converged) coordinates, in LawStates'
-        order: their commit, with no pose read back in Python."""
+    def commit(self, mbs) -> None:
+        """The step converged: the laws' states move on at Exudyn's current coordinates (in the compiled
+        call); LawStates keeps a copy for the outputs' law values."""
         if self.index is None:   # the nodes' first ODE2 indices, known once the system is assembled
             self.index = np.concatenate([np.arange(i, i + 7) for i in map(mbs.GetNodeODE2Index, self.nodes)])
         sd = mbs.systemData
-        self._arguments(np.asarray(sd.GetODE2Coordinates())[self.index],
-                        np.asarray(sd.GetODE2Coordinates_t())[self.index])
-        return [(self.x[j], self.xd[j]) for j in self.stateful]
+        self.gen.commit(np.asarray(sd.GetODE2Coordinates())[self.index], np.asarray(sd.GetODE2Coordinates_t())[self.index],
+                        self.F, self.I, self.W)
+        st, a, n = self.states, self.s_at, self.ns
+        st.s[:], st.r[:], st.started = self.W[a:a + n].tolist(), self.W[a + n:a + 2 * n].tolist(), True
 
-    def __call__(self, mbs, t, item, q, q_t):
-        """Exudyn's force user function: the generalized forces at (q, q')."""
-        self._arguments(np.asarray(q), np.asarray(q_t))
-        x, xd, T, at = self.x, self.xd, self.T, self.states.at
-        for j, (law, p, k) in enumerate(self.laws):
-            T[j] = law(x[j], xd[j], p) if k < 0 else law(x[j], xd[j], at(k, x[j], xd[j]), p)
-        forces(T, self.ia, self.ib, self.jc, self.jp, self.turn, self.R, self.G, self.r, self.N, self.S, self.f)
-        return self.f
+    def user_functions(self):
+        """Exudyn's force and Jacobian user functions: plain closures around the compiled calls (the
+        force function runs ~5 times a step: no attribute look-ups, Exudyn's lists as arrays)."""
+        evaluate, jacobian, F, I, W, f, J = self.gen.evaluate, self.gen.jacobian, self.F, self.I, self.W, self.f, self.J
+        array = np.array
 
-    def _arguments(self, q, q_t):
-        arguments(q, q_t, self.ref, self.ia, self.pa, self.ib, self.pb, self.e, self.jc,
-                  self.jp, self.jax, self.jx, self.jy, self.jpos, self.jorig, self.turn, self.last, self.R, self.G,
-                  self.r, self.v, self.w, self.x, self.xd, self.N, self.S)
+        def force(mbs, t, item, q, q_t):
+            """The generalized forces at (q, q')."""
+            return evaluate(array(q), array(q_t), F, I, W, f)
+
+        def jacobian_of(mbs, t, item, q, q_t, fq, fv):
+            """-(fq df/dq + fv df/dq'), differentiated in the compiled call."""
+            return jacobian(array(q), array(q_t), F, I, W, float(fq), float(fv), J)
+        return force, jacobian_of
