@@ -51,13 +51,24 @@ def parse_mode(text) -> str:
     return text
 
 
+# Each peer's step on a whole record: the gate's on its seismic cases (comparisons/cases.toml, judged by
+# the per-run rule there: MuJoCo Euler 2e-5 s, 1e-5 s under a building; Exudyn 1e-4 s). Each is run at
+# that step and at half of it, so that its own error estimate on this record is measured, not assumed.
+PEER_STEPS = {"mujoco": ("timestep", 2e-5, 1e-5), "exudyn": ("step_size", 1e-4, 1e-4)}
+METRIC_TOLERANCE = {"du": "max_du_rel", "dF": "max_dF_device_rel", "da": "peak_a_rel"}
+
+
+def peer_settings(engine: str, building: bool, half: bool = False) -> dict:
+    """The settings of a peer's cross-check run: its step on a whole record (``PEER_STEPS``), halved
+    for the run that estimates its error."""
+    key, h, h_building = PEER_STEPS[engine]
+    step = h_building if building else h
+    return {key: step / 2 if half else step}
+
+
 def peer_step(engine: str) -> float:
-    """A peer's default fixed step [s] on a seismic run (comparisons.engines.<engine>_seismic.DEFAULTS)."""
-    if engine == "mujoco":
-        from comparisons.engines.mujoco_seismic import DEFAULTS
-        return float(DEFAULTS["timestep"])
-    from comparisons.engines.exudyn_seismic import DEFAULTS
-    return float(DEFAULTS["step_size"])
+    """A peer's cross-check step [s] on a seismic run without a building (PEER_STEPS)."""
+    return PEER_STEPS[engine][1]
 
 
 def check_work(mode: str, durations: dict, peers: list[str]) -> dict:
@@ -67,7 +78,7 @@ def check_work(mode: str, durations: dict, peers: list[str]) -> dict:
         return {"mode": mode, "peer_steps": 0, "records": 0}
     n = len(durations) if mode == "all" else 1
     seconds = sum(durations.values()) if mode == "all" else max(durations.values())
-    steps = sum(seconds / peer_step(e) for e in peers)
+    steps = sum(3.0 * seconds / peer_step(e) for e in peers)   # the run at h and its check at h/2
     if steps > STEPS_MAX:
         raise ParameterError(f"--cross-check all: {n} records x {len(peers)} engines ({', '.join(peers)}) over "
                              f"{seconds:.4g} model s would take about {steps:.3g} peer steps; allowed: at most "
@@ -200,7 +211,9 @@ def cross_check(traces: list[Trace], store: Store, frag: dict, peers: list[str],
         tr, level = pick["trace"], pick["level"]
         jobs.append(tr.point(level, keep_series=True))
         if tr.device:
-            jobs += [tr.point(level, keep_series=True, engine=e) for e in peers]
+            building = tr.common["structure"].get("building") is not None
+            jobs += [tr.point(level, keep_series=True, engine=e, settings=peer_settings(e, building, half))
+                     for e in peers for half in (False, True)]
     if not jobs:
         return out, 0.0
     fresh = {j.key for j in jobs if (rec := store.load(j.key)) is None or rec["status"] == "failed"}
@@ -237,19 +250,47 @@ def _entry(pick: dict, store: Store, peers: list[str], folder: Path, fresh: set)
             write_columns(folder / "exact.csv", cols)
         entry["engines"]["exact"] = metrics
         return entry
+    building = tr.common["structure"].get("building") is not None
     for e in peers:
-        key = tr.point(level, keep_series=True, engine=e).key
-        rec = store.load(key)
-        timing = {"wall_time": (rec or {}).get("wall_time"), "run_now": key in fresh}
-        if rec is None or rec["status"] != "ok":
-            entry["engines"][e] = {"status": "failed", "error": (rec or {}).get("error"), **timing}
+        runs = {}
+        for half in (False, True):
+            key = tr.point(level, keep_series=True, engine=e, settings=peer_settings(e, building, half)).key
+            runs[half] = (key, store.load(key))
+        (key, rec), (key2, rec2) = runs[False], runs[True]
+        timing = {"wall_time": (rec or {}).get("wall_time"), "run_now": key in fresh,
+                  "check_wall_time": (rec2 or {}).get("wall_time"), "check_run_now": key2 in fresh,
+                  "settings": peer_settings(e, building)}
+        if rec is None or rec["status"] != "ok" or rec2 is None or rec2["status"] != "ok":
+            bad = rec if rec is None or rec["status"] != "ok" else rec2
+            entry["engines"][e] = {"status": "failed", "error": (bad or {}).get("error"), **timing}
             continue
         _copy(store.folder(key) / "seismic.csv", folder / f"seismic_{e}.csv")
         peer = _stored_series(folder / f"seismic_{e}.csv", store.folder(key), e)
-        entry["engines"][e] = {**seismic_metrics(ref, peer), **timing}
+        check = _stored_series(store.folder(key2) / "seismic.csv", store.folder(key2), e)
+        entry["engines"][e] = {**seismic_metrics(ref, peer), **timing,
+                               **judged(e, seismic_metrics(ref, peer), seismic_metrics(check, peer), rec, rec2)}
         if "floor1_x" in ref.columns:   # a building on the slab: its floors and stories too
             entry["engines"][e]["building"] = building_metrics(ref, peer)
     return entry
+
+
+def judged(engine: str, diff: dict, h_vs_h2: dict, rec: dict, rec2: dict) -> dict:
+    """The peer's own error estimate on this record (Richardson from its h and h/2 runs, the gate's
+    order for its method) and the gate's rule on du, dF and da (comparisons/tolerances.toml): consistent
+    when the difference from the in-house run is within k (3) x the estimate, accurate when both are
+    within the tolerance. (The in-house run's own error, at the IDA's tolerance, is inside the difference.)"""
+    from comparisons.config import load_tolerances
+    from comparisons.estimate import nominal_order, richardson_factor, step_ratio
+    stats, stats2 = (r.get("metrics", {}).get("solver") or {} for r in (rec, rec2))
+    factor = richardson_factor(nominal_order(engine, stats.get("settings") or {}), step_ratio(stats, stats2))
+    rule = load_tolerances().rule
+    out, ok = {}, True
+    for m, name in METRIC_TOLERANCE.items():
+        est, tol = h_vs_h2[m] * factor, float(rule.engineering[name])
+        consistent, accurate = diff[m] <= rule.k * est, max(est, diff[m]) <= tol
+        out[m] = {"estimate": est, "tolerance": tol, "consistent": consistent, "accurate": accurate}
+        ok = ok and consistent and accurate
+    return {"estimates": out, "verdict": "PASS" if ok else "FAIL"}
 
 
 def entries(check: dict) -> list[tuple[str, dict]]:
@@ -267,7 +308,10 @@ def describe_entry(name: str, c: dict) -> str:
     def when(m):
         t = m.get("wall_time")
         return "" if not isinstance(t, (int, float)) else f" ({t:.1f} s" + ("" if m.get("run_now") else ", stored") + ")"
-    parts = [(f"{e} du {m['du']:.2e}" if "du" in m else f"{e} {m.get('status')}") + when(m)
+    def est(m):
+        d = (m.get("estimates") or {}).get("du")
+        return "" if d is None else f" (estimate {d['estimate']:.1e}, {m['verdict']})"
+    parts = [(f"{e} du {m['du']:.2e}" + est(m) if "du" in m else f"{e} {m.get('status')}") + when(m)
              for e, m in c["engines"].items()]
     own = (c.get("wall_time") or {}).get("semirecursive")
     if isinstance(own, (int, float)):
@@ -282,7 +326,8 @@ def cost(check: dict) -> dict:
     for _, c in entries(check):
         timed = [("semirecursive", (c.get("wall_time") or {}).get("semirecursive"),
                   (c.get("run_now") or {}).get("semirecursive"))]
-        timed += [(e, m.get("wall_time"), m.get("run_now")) for e, m in (c.get("engines") or {}).items() if e != "exact"]
+        timed += [(e, m.get(w), m.get(n)) for e, m in (c.get("engines") or {}).items() if e != "exact"
+                  for w, n in (("wall_time", "run_now"), ("check_wall_time", "check_run_now"))]
         for e, t, now in timed:
             if now and isinstance(t, (int, float)):
                 n, s = per.get(e, (0, 0.0))

@@ -139,6 +139,10 @@ def fragility_figure(index: dict, frag: dict):
     return fig
 
 
+def _step(settings) -> str:
+    return ", ".join(f"{k} {v:g} s" for k, v in (settings or {}).items()) or "its defaults"
+
+
 def cross_check_figure(index: dict, root: Path):
     """The table of the cross-checks and, for the supports alone, u(t) against the exact solution."""
     check = index.get("cross_check") or {}
@@ -161,6 +165,10 @@ def cross_check_figure(index: dict, root: Path):
                                          + (f", dF {m['dF']:.3e}, da {m['da']:.3e}" if "dF" in m else "")
                                          + (f", {m['wall_time']:.1f} s" if m.get("wall_time") else "")
                                          if "du" in m else f"{m.get('status')}: {m.get('error')}"))
+            if isinstance(m.get("estimates"), dict):   # its own error estimate (h and h/2) and the gate's rule
+                est = ", ".join(f"{k} {v['estimate']:.1e}" for k, v in m["estimates"].items())
+                lines.append(f"    {' ' * len(e)}  own estimate ({_step(m.get('settings'))}, and half): {est}; "
+                             f"{m.get('verdict')}")
             b = m.get("building")
             if isinstance(b, dict) and {"dfloor", "ddrift", "dfloor_a"} <= set(b):   # the worst floor / story
                 lines.append(f"    {' ' * len(e)}  building: floors {b['dfloor']:.3e}, drifts {b['ddrift']:.3e}, "

@@ -72,13 +72,21 @@ def test_all_checks_every_record_and_the_last_line_adds_both_times(tmp_path, cap
 
 
 @pytest.mark.slow
-def test_a_peer_re_run_is_printed_with_its_time(tmp_path, capsys):
-    """MuJoCo re-runs the device's median record (record 9, 6.3 model s at MuJoCo's 1e-5 s step: 86 s
-    measured on the loaded machine); its line and the last line carry its time."""
+def test_a_peer_re_run_is_printed_with_its_time_and_judged_by_its_own_estimate(tmp_path, capsys):
+    """MuJoCo re-runs the device's median record (record 9, 6.3 model s) at its cross-check step and at
+    half of it; its line carries the difference, its own Richardson estimate and the gate's verdict,
+    and the last line both runs' time."""
     out = tmp_path / "ida"
     assert main(BASE + ["--records", "9", "--engines", "semirecursive,mujoco", "--out", str(out)]) == 0
     printed = capsys.readouterr().out
     line = [ln for ln in printed.splitlines() if ln.startswith("cross-check device: record 9")][0]
-    assert re.search(r"mujoco du [\d.e+-]+ \(([\d.]+) s\)", line), line
-    cost = json.loads((out / "ida.json").read_text())["cross_check_cost"]
-    assert cost["mujoco"]["runs"] == 1 and f"mujoco 1 in {cost['mujoco']['wall_s']:.1f} s" in printed
+    assert re.search(r"mujoco du [\d.e+-]+ \(estimate [\d.e+-]+, (PASS|FAIL)\) \(([\d.]+) s\)", line), line
+    index = json.loads((out / "ida.json").read_text())
+    m = index["cross_check"]["device"]["engines"]["mujoco"]
+    assert m["settings"] == {"timestep": 2e-5} and m["check_wall_time"] > 0
+    for metric in ("du", "dF", "da"):   # the rule, recomputed from the entry
+        e = m["estimates"][metric]
+        assert e["estimate"] > 0 and e["consistent"] == (m[metric] <= 3.0 * e["estimate"])
+        assert e["accurate"] == (max(e["estimate"], m[metric]) <= e["tolerance"])
+    cost = index["cross_check_cost"]
+    assert cost["mujoco"]["runs"] == 2 and f"mujoco 2 in {cost['mujoco']['wall_s']:.1f} s" in printed

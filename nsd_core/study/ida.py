@@ -155,11 +155,12 @@ class Trace:
             return f"{self.common['set']}_{self.record}_{self.config}"
         return f"{self.common['set']}_{self.record}" + ("" if self.device else "_nodevice")
 
-    def point(self, level: float, keep_series: bool = False, engine: str = "semirecursive") -> IdaRun:
+    def point(self, level: float, keep_series: bool = False, engine: str = "semirecursive",
+              settings: dict | None = None) -> IdaRun:
         c = dict(self.common)
         ground = {**c.pop("ground"), "scale": level / self.im1}
         if engine != "semirecursive":
-            c["settings"] = {}  # the in-house solver's settings are not a peer's (its own defaults)
+            c["settings"] = dict(settings or {})  # a peer's own (the in-house solver's settings are not its)
         return IdaRun(record=self.record, device=self.device, ground=ground, keep_series=keep_series,
                       engine=engine, **c)
 
