@@ -109,14 +109,17 @@ default_settings = {
     "forces": "compiled",          # the force elements: one object for all, its forces from compiled
                                    # kernels (exudyn_compiled; 2-4x faster), or "connectors": one connector
                                    # each with a Python user function (exudyn_forces, the readable
-                                   # reference; the same equations, agreeing to ~1e-13)
+                                   # reference; the same equations, agreeing to Newton's tolerance);
+                                   # "predicted": the compiled forces once a step at the Taylor-predicted
+                                   # end of the step, constant in it (the hand-written adapter's scheme:
+                                   # no Python in Newton's iterations; explicit in the forces)
 }
 CHOICES = {"solver": ("generalized_alpha", "trapezoidal_index2"), "redundant_constraints": ("auto", "ignore", "fail"),
-           "on_newton_failure": ("relax", "fail"), "forces": ("connectors", "compiled")}
+           "on_newton_failure": ("relax", "fail"), "forces": ("connectors", "compiled", "predicted")}
 # near a singular position Newton's relative residual stalls above 1e-10 (A02: h = 1e-3 s passes at
 # 1e-9 and 1e-8, fails at 1e-10); 1e-8 still leaves A02's error second order in h (module docstring)
 RELAXED_REL_TOL = 1e-8
-MAX_MODIFIED_NEWTON = 4   # modified Newton iterations before a new Jacobian (_solver_settings)
+MAX_MODIFIED_NEWTON = 3   # modified Newton iterations before a new Jacobian (_solver_settings)
 POSITIVE = ("step_size", "spectral_radius", "newton_rel_tol", "newton_abs_tol")
 
 
@@ -175,8 +178,9 @@ class Build:
         for lp in model.loops:
             self._closure(lp)
         self.states = LawStates(h)
-        if s["forces"] == "compiled" and model.forces:   # no elements: no object (its calls cost)
-            self.connectors, self.compiled = [], CompiledForces(self, self.states)
+        if s["forces"] != "connectors" and model.forces:   # no elements: no object (its calls cost)
+            self.connectors = []
+            self.compiled = CompiledForces(self, self.states, predicted=s["forces"] == "predicted")
         else:
             self.connectors, self.compiled = [add_force(self, f, self.states) for f in model.forces], None
 
@@ -327,6 +331,7 @@ def _run(model: Model, s: dict, duration: float, dt_out: float) -> ModelRun:
     build = Build(model, s, duration / n_steps)
     sample = Sampler(build)
     counter = [0]
+    h, predicted = duration / n_steps, build.compiled is not None and build.compiled.predicted
 
     def pre_step(mbs, t):
         """t is the END of the step (Exudyn's convention); the state is the converged one at t - h."""
@@ -336,12 +341,16 @@ def _run(model: Model, s: dict, duration: float, dt_out: float) -> ModelRun:
         build.drive(t)
         if sample.stateful:
             sample.commit()
+        if predicted:
+            build.compiled.predict(mbs, h)
         if n % per_out == 0:
             sample.record(t_out[n // per_out])
         return True
 
     build.mbs.SetPreStepUserFunction(pre_step)
     build.mbs.Assemble()
+    if predicted:   # the initial accelerations see the forces at the initial state
+        build.compiled.predict(build.mbs, 0.0)
     ss = _solver_settings(s, n_steps, duration)
     redundant = _redundant(build, ss) if model.loops and build.normal is None and s["redundant_constraints"] == "auto" else 0
     if redundant or s["redundant_constraints"] == "ignore":

@@ -191,7 +191,7 @@ def forces(T, ia, ib, jc, jp, turn, R, G, r, N, S, f):
 class CompiledForces:
     """All of a Build's force elements as one ObjectGenericODE2 (the module's docstring)."""
 
-    def __init__(self, build, states):
+    def __init__(self, build, states, predicted: bool = False):
         model, mbs = build.model, build.mbs
         self.bodies = [b.name for b in model.bodies]
         index = {name: i for i, name in enumerate(self.bodies)}
@@ -243,9 +243,29 @@ class CompiledForces:
         z = np.zeros(7 * nb)
         self.gen.jacobian(z, z, self.F, self.I, self.W.copy(), 1.0, 1.0, self.J.copy())
         self.gen.commit(z, z, self.F, self.I, self.W.copy())
-        force, jacobian = self.user_functions()
+        self.predicted = predicted
+        if predicted:   # a constant force vector, set before each step (``predict``)
+            kw = {"forceVector": np.zeros(7 * nb)}
+        else:
+            force, jacobian = self.user_functions()
+            kw = {"forceUserFunction": force, "jacobianUserFunction": jacobian}
         self.object = mbs.AddObject(ObjectGenericODE2(nodeNumbers=self.nodes, massMatrix=np.zeros((7 * nb, 7 * nb)),
-                                                      forceUserFunction=force, jacobianUserFunction=jacobian))
+                                                      **kw))
+
+    def predict(self, mbs, h: float) -> None:
+        """forces = "predicted": the forces for the step of size h starting at the converged state, at
+        its Taylor-predicted end (q + h q' + h^2/2 q'', q' + h q''; the states by Heun from the
+        committed ones, as ``evaluate``), held through the step. The prediction's error is O(h^3) in
+        the positions and O(h^2) in the rates, so the forces' error adds O(h^2) to the motion: second
+        order, as generalized-alpha (the adapter's per_step scheme, generic here)."""
+        if self.index is None:
+            self.index = np.concatenate([np.arange(i, i + 7) for i in map(mbs.GetNodeODE2Index, self.nodes)])
+        sd, ix = mbs.systemData, self.index
+        q, v = np.asarray(sd.GetODE2Coordinates())[ix], np.asarray(sd.GetODE2Coordinates_t())[ix]
+        if h > 0.0:
+            a = np.asarray(sd.GetODE2Coordinates_tt())[ix]
+            q, v = q + h * v + (0.5 * h * h) * a, v + h * a
+        mbs.SetObjectParameter(self.object, "forceVector", self.gen.evaluate(q, v, self.F, self.I, self.W, self.f))
 
     def commit(self, mbs) -> None:
         """The step converged: the laws' states move on at Exudyn's current coordinates (in the compiled
