@@ -463,6 +463,34 @@ def bench_record_set() -> str:
                      "single CPU s (solver)", "set CPU s (solver)"], rows))
 
 
+def bench_ida_farfield() -> str:
+    """The far-field set through nsd ida with the peers' cross-check (benchmarks/bench_ida.py)."""
+    rec = load("bench_ida_farfield")
+    m, d = rec["measured"], rec["data"]
+    check = d.get("elapsed_cross_check_s") or 0.0
+    n_check = sum(c["runs"] for c in (d.get("cross_check_cost") or {}).values())
+    rows = [["the IDA's runs (in-house, 2 workers)", str(d["runs"] - n_check), plain(m["wall_s"] - check),
+             "elapsed, start-up included"]]
+    for e, c in (d.get("cross_check_cost") or {}).items():
+        rows.append([f"cross-check: {e}", str(c["runs"]), plain(c["wall_s"]), "each run's own wall s"])
+    rows.append(["cross-check, elapsed", "-", plain(check), f"{100 * check / m['wall_s']:.0f} % of the whole"])
+    rows.append(["whole command", "-", plain(m["wall_s"]), f"aim ≤ 600 s: {'met' if m['wall_s'] <= 600 else 'not met'}"])
+    dev = ((d.get("cross_check") or {}).get("device") or {})
+    verdicts = ", ".join(f"{e} du {v['du']:.1e}" + (f" (estimate {v['estimates']['du']['estimate']:.1e}, {v['verdict']})"
+                                                     if isinstance(v.get("estimates"), dict) else "")
+                         for e, v in (dev.get("engines") or {}).items() if "du" in v)
+    load_text = (f"load average {m['load_average_before'][0]:g} before, {m['load_average_after'][0]:g} after"
+                 + (" (**loaded**)" if m.get("loaded") else ""))
+    return (f"*Measured {m['date_utc']} UTC by `{rec['command']}` (exit {rec['exit_code']}), "
+            f"`python benchmarks/bench_ida.py --record-set farfield --records 1-22 --engines semirecursive,mujoco,exudyn "
+            f"--out benchmarks/results/bench_ida_farfield.json`; {m['cpus']} CPUs, {load_text}; "
+            f"commit {m.get('git_commit', '')[:12]}.*\n\n"
+            + f"{d['runs']} runs in all ({d['runs_stopped']} stopped by the rod's reach), "
+              f"{plain(d['model_seconds_completed_runs'])} model s in the completed ones; the median record "
+              f"({dev.get('record')}) with the device: {verdicts or 'not cross-checked'}.\n\n"
+            + table(["part", "runs", "wall s", "note"], rows))
+
+
 def _setting(s: dict) -> str:
     return ", ".join(f"{k} {g(v) if isinstance(v, float) else v}" for k, v in s.items()) or "case default"
 
@@ -543,7 +571,8 @@ RENDER = {"compare-gate": compare_gate, "convergence": convergence, "tables-5-6"
           "bench-record-set": bench_record_set, "compare-variant": compare_variant, "power": power,
           "verdict-cost": verdict_cost, "model-benchmarks": model_benchmarks,
           "model-builders": model_builders, "described-gate": described_gate,
-          "work-precision": work_precision, "bench-cold": bench_cold, "bench-peer-seismic": bench_peer_seismic}
+          "work-precision": work_precision, "bench-cold": bench_cold, "bench-peer-seismic": bench_peer_seismic,
+          "bench-ida-farfield": bench_ida_farfield}
 
 
 def regenerate(text: str) -> str:
