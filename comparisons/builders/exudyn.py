@@ -19,12 +19,24 @@ starts from; joints and loop closures are constraints with Lagrange multipliers 
   share and leaves the motion unique. The number found is ``stats["redundant_found"]``.
 - Force elements, every law through the registry (nsd_core.model.laws), nothing here knowing which
   laws exist, evaluated at every Newton iteration (implicit): by default one ObjectGenericODE2 over all
-  nodes whose force function runs compiled kernels (comparisons.builders.exudyn_compiled); with
-  ``forces = "connectors"`` one connector per element whose user function calls the law
-  (comparisons.builders.exudyn_forces), the readable reference (same equations, ~1e-13 apart). A law's internal state (the SMA wire's stress,
-  the Bouc-Wen zeta) is integrated with the motion by Heun's method at Exudyn's step, second order
-  as generalized-alpha is: the connector sees the state at the end of the step for the
-  configuration Newton tries, the pre-step function commits it (exudyn_forces' docstring).
+  nodes whose force function is one compiled call generated for the model (exudyn_compiled,
+  exudyn_codegen; a compiled Jacobian); ``forces = "connectors"``: one connector per element whose
+  user function calls the law (exudyn_forces), the readable reference (the same equations, apart by
+  Newton's tolerance); ``forces = "predicted"``: the compiled forces once a step at the Taylor-
+  predicted end of the step, held through it (the hand-written adapter's scheme: second order, but
+  explicit in the forces: on the device stable at the gate's 2.5e-4 s, not at 1e-3 s). A law's
+  internal state (the SMA wire's stress, the Bouc-Wen zeta) is integrated with the motion by Heun's
+  method at Exudyn's step, second order as generalized-alpha is: the force sees the state at the end
+  of the step for the configuration Newton tries, the pre-step function commits it (exudyn_forces).
+  Cost on the device's gate drive cases (interleaved, median of 3; 2-core machine), against the
+  hand-written adapter at the same step: "compiled" ~1.6x (A15mm_f1Hz, h = 2.5e-4 s: 0.52 vs 0.32 s;
+  A15mm_f10Hz, 2.5e-5 s: 0.52 vs 0.35 s), "predicted" ~1.0x (0.34 s both). What bounds "compiled":
+  ~4.9 force calls a step (3.9 modified-Newton iterations at newton_rel_tol 1e-10, each a Python
+  callback of ~5 us: Exudyn's lists to arrays, numba's dispatch, ~1.5 us of compiled work) and
+  Exudyn's solver itself (~39 us a step, profiled, as much as the adapter's whole step).
+- Prescribed motions: the joint's offset is a symbolic user function returning its parameters (run in
+  C++), set to q(t_end) before each step: generalized-alpha (index 3) evaluates the constraint at the
+  step's end only, so this is exact.
 - Singular positions (IFToMM A02: all cranks aligned, the closures' Jacobian loses rank for an
   instant): Newton's relative residual stalls above 1e-10 near them and the step fails. With
   closures, a failed run is rerun once at newton_rel_tol = RELAXED_REL_TOL = 1e-8
@@ -75,7 +87,6 @@ import time
 import numpy as np
 
 import exudyn as exu
-import exudyn.solver
 from exudyn.advancedUtilities import CreateSymbolicUserFunction
 from exudyn.itemInterface import (LoadMassProportional, MarkerBodyMass, MarkerBodyRigid, ObjectGround,
                                   ObjectJointGeneric)
@@ -86,6 +97,7 @@ from comparisons.builders.exudyn_forces import LawStates, add_force
 from comparisons.builders.exudyn_frames import (AXIS_OF_DOF, constrained_axes, cross, frame_with_z, joint_coordinates,
                                                 joint_frame, planar_normal)
 from comparisons.builders.exudyn_outputs import Sampler
+from comparisons.builders.exudyn_solver import redundant_constraints, solver_settings
 from comparisons.engines.base import EngineError
 from comparisons.engines.exudyn_quiet import quiet_allocation_warning
 from nsd_core.model.assemble import initial_state
@@ -119,7 +131,6 @@ CHOICES = {"solver": ("generalized_alpha", "trapezoidal_index2"), "redundant_con
 # near a singular position Newton's relative residual stalls above 1e-10 (A02: h = 1e-3 s passes at
 # 1e-9 and 1e-8, fails at 1e-10); 1e-8 still leaves A02's error second order in h (module docstring)
 RELAXED_REL_TOL = 1e-8
-MAX_MODIFIED_NEWTON = 3   # modified Newton iterations before a new Jacobian (_solver_settings)
 POSITIVE = ("step_size", "spectral_radius", "newton_rel_tol", "newton_abs_tol")
 
 
@@ -298,32 +309,6 @@ def _offsets(slots: dict, t: float) -> list[float]:
     return out
 
 
-def _redundant(build: Build, ss) -> int:
-    """Exudyn's count of dependent constraint equations at t = 0 (its rank test of the Jacobian)."""
-    info = exudyn.solver.ComputeSystemDegreeOfFreedom(build.mbs, ss, autoAssemble=False)
-    return int(info["redundantConstraints"])
-
-
-def _solver_settings(s: dict, n_steps: int, duration: float):
-    ss = exu.SimulationSettings()
-    ti = ss.timeIntegration
-    ti.numberOfSteps, ti.endTime, ti.verboseMode, ti.adaptiveStep = n_steps, duration, 0, False
-    ti.newton.relativeTolerance, ti.newton.absoluteTolerance = float(s["newton_rel_tol"]), float(s["newton_abs_tol"])
-    ti.newton.useModifiedNewton = True
-    # a new Jacobian after 4 modified iterations (Exudyn's default 8): the device's drive converged in
-    # 7.0 iterations a step on Jacobians kept from t = 0, in 4.6 with this (and 128 Jacobians in 8000
-    # steps, cheap since the force object's Jacobian is compiled): 1.4x faster, the same solution to
-    # Newton's tolerance (2e-8 of the peak force)
-    ti.newton.maxModifiedNewtonIterations = MAX_MODIFIED_NEWTON
-    ti.generalizedAlpha.spectralRadius = float(s["spectral_radius"])
-    ti.generalizedAlpha.computeInitialAccelerations = True
-    ss.linearSolver.solverType = exu.LinearSolverType.EigenDense
-    ss.solution.file.write = False
-    ss.solution.sensors.active = False   # outputs are read in the pre-step function, never written
-    ss.show.statistics = ss.show.computationTime = False
-    return ss
-
-
 def _run(model: Model, s: dict, duration: float, dt_out: float) -> ModelRun:
     t_out = output_times(duration, dt_out)
     per_out = max(1, int(math.ceil((t_out[1] - t_out[0]) / s["step_size"] - 1e-9)))
@@ -351,8 +336,8 @@ def _run(model: Model, s: dict, duration: float, dt_out: float) -> ModelRun:
     build.mbs.Assemble()
     if predicted:   # the initial accelerations see the forces at the initial state
         build.compiled.predict(build.mbs, 0.0)
-    ss = _solver_settings(s, n_steps, duration)
-    redundant = _redundant(build, ss) if model.loops and build.normal is None and s["redundant_constraints"] == "auto" else 0
+    ss = solver_settings(s, n_steps, duration)
+    redundant = redundant_constraints(build.mbs, ss) if model.loops and build.normal is None and s["redundant_constraints"] == "auto" else 0
     if redundant or s["redundant_constraints"] == "ignore":
         ss.linearSolver.ignoreSingularJacobian = True
     solver = {"generalized_alpha": exu.DynamicSolverType.GeneralizedAlpha,
