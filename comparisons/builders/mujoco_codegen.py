@@ -248,7 +248,7 @@ def _advance_source(rate: str) -> list[str]:
     """The generated advance of a state whose rate function is bound as ``rate``: one RK4 step in time
     over dt along x linear from x0 to x1 (Passive.advance, the same arithmetic in the same order)."""
     return [
-        "@njit(cache=True)",
+        "@njit(cache=True, inline=\"always\")",
         f"def advance_{rate}(x0, x1, s, dt, p):",
         "    xd = (x1 - x0) / dt",
         "    xm = 0.5 * (x0 + x1)",
