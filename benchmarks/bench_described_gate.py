@@ -86,6 +86,8 @@ def main(argv=None) -> dict:
             given = case.settings.get(engine, {})
             shared = {k: v for k, v in {**ADAPTER_DEFAULTS[engine], **given}.items() if k in SHARED[engine]}
             runs = [("adapter", adapter_run, given), ("described", described_run, shared)]
+            if engine == "exudyn":   # the forces once a step at its predicted end (the adapter's scheme)
+                runs.append(("described_predicted", described_run, {**shared, "forces": "predicted"}))
             if engine == "mujoco":   # the builder's own integrator, at the case's step and at twice it
                 h = float(shared.get("timestep", 1e-5))
                 runs += [("described_rk4", described_run, {"timestep": h, "integrator": "RK4"}),

@@ -310,7 +310,8 @@ def described_gate() -> str:
     rec = load("bench_described_gate")
     d = rec["data"]
     names = {"adapter": "hand-written adapter", "described": "builder, the adapter's settings",
-             "described_rk4": "builder, RK4 at the adapter's step", "described_rk4_2h": "builder, RK4 at twice the step"}
+             "described_rk4": "builder, RK4 at the adapter's step", "described_rk4_2h": "builder, RK4 at twice the step",
+             "described_predicted": "builder, forces once a step (predicted)"}
     rows = []
     for case, row in d["cases"].items():
         for engine, runs in row["engines"].items():
