@@ -3,7 +3,7 @@ back from the bodies' world poses at the output times, and the converged argumen
 state, committed every step.
 
 During the run an output time only records Exudyn's state (``record``: the ODE2 coordinates and
-their rates, the algebraic ones, i.e. the multipliers the drive forces are read from, and the laws'
+their rates and accelerations, the algebraic ones, i.e. the multipliers the drive forces are read from, and the laws'
 committed states); the outputs are read from them after the run (``replay``: each state set back
 into the system, then read as before), as the hand-written adapter records sensors in the run and
 builds its columns after it. Reading every output in the pre-step cost as much as the stepping at
@@ -15,7 +15,8 @@ import exudyn as exu
 import numpy as np
 
 from comparisons.builders.exudyn_forces import law_arguments, point
-from comparisons.builders.exudyn_frames import Continuous
+from comparisons.builders.exudyn_frames import Continuous, cross
+from nsd_core.model.description import GROUND
 
 
 class Sampler:
@@ -34,19 +35,21 @@ class Sampler:
         self.slot = {f.name: k for k, f in enumerate(self.stateful)}
         self.q = {}
         self.recorded = []
+        self.t = 0.0
 
     def record(self, t: float) -> None:
         """The converged state at output time t, for ``replay``."""
         sd = self.b.mbs.systemData
-        self.recorded.append((t, sd.GetODE2Coordinates(), sd.GetODE2Coordinates_t(), sd.GetAECoordinates(),
-                              list(self.b.states.s)))
+        self.recorded.append((t, sd.GetODE2Coordinates(), sd.GetODE2Coordinates_t(), sd.GetODE2Coordinates_tt(),
+                              sd.GetAECoordinates(), list(self.b.states.s)))
 
     def replay(self) -> None:
         """Every output at the recorded states, in time order (angles continuous across samples)."""
         sd, now = self.b.mbs.systemData, exu.ConfigurationType.Current
-        for t, q, q_t, lam, s in self.recorded:
+        for t, q, q_t, q_tt, lam, s in self.recorded:
             sd.SetODE2Coordinates(q, now)
             sd.SetODE2Coordinates_t(q_t, now)
+            sd.SetODE2Coordinates_tt(q_tt, now)
             sd.SetAECoordinates(lam, now)
             self.b.states.s[:] = s
             self(t)
@@ -72,6 +75,22 @@ class Sampler:
         k = self.slot.get(f.name)
         return f.force(*law_arguments(self.b, P, self.q, f), 0.0 if k is None else self.b.states.s[k])
 
+    def acceleration(self, P, o) -> np.ndarray:
+        """The body point's absolute acceleration: the node's (its centre of mass) from Exudyn's
+        accelerations of the converged step (generalized-alpha's q'' that satisfies the equations of
+        motion at the step's end, not its algorithmic acceleration), carried to the point,
+        a_c + alpha x r + w x (w x r), plus the frame's a_g(t) with an excitation."""
+        a = np.zeros(3)
+        if o.body != GROUND:
+            OV, b = exu.OutputVariableType, self.b.model.body(o.body)
+            n = self.b.node[o.body]
+            R, _, _, w = P[o.body]
+            r = R @ (np.asarray(o.point, dtype=float) - np.asarray(b.com, dtype=float))
+            alpha = np.asarray(self.b.mbs.GetNodeOutput(n, OV.AngularAcceleration))
+            a = np.asarray(self.b.mbs.GetNodeOutput(n, OV.Acceleration)) + cross(alpha, r) + cross(w, cross(w, r))
+        exc = self.b.model.excitation
+        return a + exc.acceleration(self.t) if exc is not None else a
+
     def energy(self, P, term) -> float:
         e = 0.0
         g = np.asarray(self.b.model.gravity, dtype=float)
@@ -85,7 +104,7 @@ class Sampler:
         return e
 
     def __call__(self, t: float) -> None:
-        m = self.b.model
+        m, self.t = self.b.model, t
         P = self.read({o.body for o in m.outputs if o.kind == "coordinate"} | {f.joint for f in m.forces if f.joint} |
                       {p.joint for p in m.prescribed})
         row = []
@@ -94,8 +113,12 @@ class Sampler:
                 row.append(self.q[(o.body, o.dof)])
             elif o.kind in ("point", "point_velocity"):
                 row.append(float(point(P, o.body, o.point)[o.kind == "point_velocity"][o.component]))
+            elif o.kind == "point_acceleration":
+                row.append(float(self.acceleration(P, o)[o.component]))
             elif o.kind == "force":
                 row.append(self.law_value(P, self.forces[o.element]))
+            elif o.kind == "state":   # the committed state its force value uses
+                row.append(float(self.b.states.s[self.slot[o.element]]))
             elif o.kind == "drive_force":
                 row.append(self.b.drive_force(self.drives[o.element]))
             else:

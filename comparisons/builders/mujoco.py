@@ -63,7 +63,9 @@ Andrews at h = 1e-5 s: 5.3e-7 (2), 1.3e-6 (4), 6.9e-6 (8) (the position-level so
 (factor h)^2).
 
 Outputs: coordinate = qpos (hinges are not wrapped: angles stay continuous); point and
-point_velocity from the body's pose and mj_jac; force = the law's value at that state; drive_force as
+point_velocity from the body's pose and mj_jac; point_acceleration = J qacc + J' qvel (mj_jac,
+mj_jacDot; qacc of the output time's own mj_forward) plus a_g(t); force = the law's value at that
+state; state = the law's activation after that evaluation (the value its force used); drive_force as
 above; kinetic energy = 1/2 v^T M v less the virtual drives' armature share; gravity potential =
 -sum m g . r_com (both as nsd_core.engine.dynamics). stats: wall_time (steps and outputs only),
 steps, timestep, closure_max (largest distance between the two sites of any connect at the output
@@ -114,8 +116,10 @@ name = "mujoco"
 default_settings = {
     "timestep": 1e-5,           # [s] largest step; the step used divides the output interval
     "integrator": "RK4",        # RK4 | Euler (semi-implicit)
-    "solref_factor": None,      # connect time constant = factor x step (>= 2, MuJoCo's smallest); None:
-                                # the integrator's (SOLREF_FACTOR, see above)
+    "solref_factor": 0.0,       # connect time constant = factor x step (>= 2, MuJoCo's smallest); not
+                                # given (or None): the integrator's (SOLREF_FACTOR, see above). A float
+                                # default: the CLI types a case's settings by the defaults' (a None
+                                # default is checked as a count, rejecting solref_factor = 2.0)
     "solref_dampratio": 1.0,    # connect damping ratio (1: critical)
     "solimp": [0.9999, 0.9999, 0.001, 0.5, 2.0],   # connect impedance (closer to 1: harder)
     "solver_tolerance": 1e-12,  # MuJoCo's constraint solver (Newton) tolerance
@@ -145,7 +149,7 @@ def merged_settings(settings: dict | None) -> dict:
         raise ModelError(f"mujoco.passive = {s['passive']!r}: allowed: {', '.join(PASSIVE)}")
     if s["integrator"] not in INTEGRATORS:
         raise ModelError(f"mujoco.integrator = {s['integrator']!r}: allowed: {', '.join(INTEGRATORS)}")
-    if s["solref_factor"] is None:
+    if (settings or {}).get("solref_factor") is None:
         s["solref_factor"] = SOLREF_FACTOR[s["integrator"]]
     for k in _POSITIVE:
         v = s[k]
@@ -321,7 +325,8 @@ def _compile(model: Model, s: dict, h: float, init, nuserdata: int = 0):
 def _sampler(model: Model, m: mujoco.MjModel, d: mujoco.MjData, forces: Passive):
     """A function giving every named output at d's state, in the description's order (a drive force
     is left NaN: simulate fills it from the steps on either side)."""
-    jac = np.zeros((3, m.nv))
+    jac, jacdot = np.zeros((3, m.nv)), np.zeros((3, m.nv))
+    acts = state_activations(model, m)
     Mv = np.zeros(m.nv)
     coordinate = {}
     for o in model.outputs:
@@ -338,6 +343,17 @@ def _sampler(model: Model, m: mujoco.MjModel, d: mujoco.MjData, forces: Passive)
         mujoco.mj_jac(m, d, jac, None, x, b)
         return x, jac @ d.qvel
 
+    def acceleration(o):
+        """J qacc + J' qvel at the body point (qacc: this evaluation's, the soft loop constraints'
+        forces included), plus the frame's a_g(t) with an excitation: the absolute acceleration."""
+        a = np.zeros(3)
+        if o.body != GROUND:
+            x = point(o)[0]
+            b = m.body(o.body).id
+            mujoco.mj_jacDot(m, d, jacdot, None, x, b)
+            a = jac @ d.qacc + jacdot @ d.qvel
+        return a + model.excitation.acceleration(d.time) if model.excitation is not None else a
+
     def kinetic():
         mujoco.mj_mulM(m, d, Mv, d.qvel)
         return 0.5 * float(d.qvel @ Mv - m.dof_armature @ d.qvel ** 2)
@@ -349,8 +365,12 @@ def _sampler(model: Model, m: mujoco.MjModel, d: mujoco.MjData, forces: Passive)
             return point(o)[0][o.component]
         if o.kind == "point_velocity":
             return point(o)[1][o.component]
+        if o.kind == "point_acceleration":
+            return acceleration(o)[o.component]
         if o.kind == "force":
             return laws[o.element]
+        if o.kind == "state":   # the activation the law's state lives in (after this evaluation's advance)
+            return d.act[acts[o.element]]
         if o.kind == "drive_force":
             return math.nan
         if o.term == "kinetic":

@@ -8,10 +8,11 @@ order; the outputs agree to round-off (tests/test_mujoco_codegen.py). Difference
 - the prescribed motions are tabulated before the run, at every half step (the RK4 stages' times),
   from ``Prescribed.__call__``'s own code run on arrays (its ``math`` taken from numpy; checked
   against scalar calls, and evaluated time by time where numpy cannot run it);
-- the loop records, at each output time, qpos, qvel, act and every element's law value of that
-  evaluation; coordinates and forces come from those records, and the other outputs (points, their
-  velocities, energies) from the Python sampler after the run, on the recorded states (their
-  kinematics are functions of qpos, qvel only).
+- the loop records, at each output time, qpos, qvel, act, qacc and every element's law value of that
+  evaluation; coordinates, forces and states come from those records, and the other outputs (points,
+  their velocities and accelerations, energies) from the Python sampler after the run, on the
+  recorded states (their kinematics are functions of qpos, qvel only; the accelerations take the
+  recorded qacc, since mj_forward run again would see the drives' feed-forward of the run's end).
 """
 from __future__ import annotations
 
@@ -26,10 +27,10 @@ import numpy as np
 from comparisons.builders import mujoco_kernels as K
 from comparisons.builders.mujoco_cabi import data_offsets, function_address
 from comparisons.builders.mujoco_codegen import callbacks, layout, pack
-from comparisons.builders.mujoco_mjcf import joint_name
+from comparisons.builders.mujoco_mjcf import joint_name, state_activations
 from comparisons.engines.base import EngineError
 
-REPLAYED = ("point", "point_velocity", "energy")
+REPLAYED = ("point", "point_velocity", "point_acceleration", "energy")
 
 
 def motion_table(p, times: np.ndarray) -> np.ndarray:
@@ -88,6 +89,7 @@ def run(model, s: dict, m, d, drives: list, pairs: list, t_out: np.ndarray, n_su
     site_pairs = np.array(pairs, dtype=np.int64).reshape(-1, 2)
     rec_qpos, rec_qvel = np.zeros((n_out, m.nq)), np.zeros((n_out, m.nv))
     rec_act, rec_val = np.zeros((n_out, m.na)), np.zeros((n_out, len(model.forces)))
+    rec_qacc = np.zeros((n_out, m.nv))
     gaps, drive_at = np.zeros(n_out), np.zeros((n_out, nd))
     clock = np.ctypeslib.as_array((ctypes.c_double * 1).from_address(d._address + 8 * data_offsets()["time"]))
     rk4 = s["integrator"] == "RK4"
@@ -110,7 +112,7 @@ def run(model, s: dict, m, d, drives: list, pairs: list, t_out: np.ndarray, n_su
         args = (fn_forward, fn_advance, rk4, m._address, d._address, clock, d.qpos, d.qvel, d.act, d.qacc,
                 d.site_xpos, ud, n_sub, n_steps, h, weights, acc_half, q_at, qd_at, drive_qa, uses_ptr, uses_k,
                 uses_w, site_pairs, float(s["closure_limit"]), lay.values, rec_qpos, rec_qvel, rec_act, rec_val,
-                gaps, drive_at)
+                rec_qacc, gaps, drive_at)
         K.step_loop.compile(tuple(numba.typeof(a) for a in args))   # (or load) before the clock starts
         begin = time.perf_counter()
         tracking, failed = K.step_loop(*args)
@@ -120,12 +122,14 @@ def run(model, s: dict, m, d, drives: list, pairs: list, t_out: np.ndarray, n_su
             raise EngineError(f"mujoco: unstable at t = {t_out[failed]:.6g} s (loop gap {gaps[failed]:.3g} m); "
                               "try a smaller timestep")
         data = np.full((n_out, len(model.outputs)), np.nan)
-        names = [f.name for f in model.forces]
+        names, acts = [f.name for f in model.forces], state_activations(model, m)
         for c, o in enumerate(model.outputs):
             if o.kind == "coordinate":
                 data[:, c] = rec_qpos[:, m.joint(joint_name(o.body, o.dof)).qposadr[0]]
             elif o.kind == "force":
                 data[:, c] = rec_val[:, names.index(o.element)]
+            elif o.kind == "state":
+                data[:, c] = rec_act[:, acts[o.element]]
         replayed = [c for c, o in enumerate(model.outputs) if o.kind in REPLAYED]
         ud[K.ADVANCE] = 0.0   # the replay below reads the recorded states: nothing is advanced
         if replayed:
@@ -134,6 +138,7 @@ def run(model, s: dict, m, d, drives: list, pairs: list, t_out: np.ndarray, n_su
             for k in range(n_out):   # the recorded state again: its kinematics, mass matrix, energies
                 d.qpos[:], d.qvel[:], d.act[:], d.time = rec_qpos[k], rec_qvel[k], rec_act[k], t_out[k]
                 mujoco.mj_forward(m, d)
+                d.qacc[:] = rec_qacc[k]
                 recorded.k = k
                 data[k, replayed] = np.asarray(sample(), dtype=float)[replayed]
         wall = time.perf_counter() - begin

@@ -252,10 +252,10 @@ def _measure(ud, weights, qacc, uses_ptr, uses_k, uses_w, drive_at, n, h, t, rk4
 @njit(cache=True)
 def step_loop(fn_forward, fn_advance, rk4, m_addr, d_addr, time, qpos, qvel, act, qacc, site_xpos, ud,
               n_sub, n_steps, h, weights, acc_half, q_at, qd_at, drive_qa, uses_ptr, uses_k, uses_w,
-              pairs, closure_limit, values, rec_qpos, rec_qvel, rec_act, rec_val, gaps, drive_at):
+              pairs, closure_limit, values, rec_qpos, rec_qvel, rec_act, rec_val, rec_qacc, gaps, drive_at):
     """comparisons.builders.mujoco.simulate's step loop, natively, in the same order of operations.
 
-    Records, at every output time, qpos, qvel, act, each element's last law value and the loop gap.
+    Records, at every output time, qpos, qvel, act, qacc, each element's last law value and the loop gap.
     Returns (largest tracking error, failing output index or -1, -2 for a stage count that is not the
     integrator's)."""
     nd = drive_qa.shape[0]
@@ -280,6 +280,7 @@ def step_loop(fn_forward, fn_advance, rk4, m_addr, d_addr, time, qpos, qvel, act
             rec_qpos[k, :] = qpos
             rec_qvel[k, :] = qvel
             rec_act[k, :] = act
+            rec_qacc[k, :] = qacc
             for e in range(values.shape[0]):
                 rec_val[k, e] = ud[values[e]]
             if not (np.all(np.isfinite(qpos)) and gap < closure_limit):

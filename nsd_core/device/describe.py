@@ -94,6 +94,16 @@ kind = "coordinate"
 joint = "wall"
 
 {ELEMENT_OUTPUTS}
+[[outputs]]    # the laws' internal states (Eqs. 17, 18): the wire's stress [Pa] and the spring's zeta [N]
+name = "wire0_stress"
+kind = "state"
+element = "wire0"
+
+[[outputs]]
+name = "spring_zeta"
+kind = "state"
+element = "spring"
+
 {case if case is not None else _default_case(amplitude, frequency, cycles, samples_per_cycle)}''')
     return "".join(lines)
 

@@ -169,6 +169,20 @@ name = "cap_z"
 kind = "coordinate"
 joint = "cap"
 
+[[outputs]]    # the plate's absolute acceleration: relative to the ground plus a_g(t) [m/s^2]
+name = "a_x"
+kind = "point_acceleration"
+body = "plate"
+point = [0.0, 0.0, 0.0]
+component = "x"
+
+[[outputs]]
+name = "a_y"
+kind = "point_acceleration"
+body = "plate"
+point = [0.0, 0.0, 0.0]
+component = "y"
+
 [[outputs]]
 name = "support_x"
 kind = "force"

@@ -18,6 +18,8 @@ The conventions every builder follows (docs/models.md):
   and b by +T e (a per-direction spring: a shear building's story);
 - an excitation (``[excitation]``, nsd_core.model.excitation) moves the frame with the ground: every
   body feels -m a_g(t) besides gravity, i.e. the uniform field g - a_g(t);
+- outputs are in the file's frame (relative to the ground when it moves), except
+  ``point_acceleration``: the absolute (inertial) acceleration, the frame's relative one plus a_g(t);
 - SI units everywhere: m, kg, kg m^2, s, rad, N, N m.
 """
 from __future__ import annotations
@@ -33,7 +35,8 @@ from nsd_core.model.laws import JOINT, POINTS, Law
 GROUND = "ground"
 JOINT_DOFS = {"revolute": 1, "prismatic": 1, "universal": 2, "spherical": 3, "planar": 3, "planar_translation": 2,
               "translational": 3}
-OUTPUT_KINDS = ("coordinate", "point", "point_velocity", "force", "drive_force", "energy")
+OUTPUT_KINDS = ("coordinate", "point", "point_velocity", "point_acceleration", "force", "drive_force", "energy",
+                "state")
 MOTION_KINDS = {"constant_speed": ("start", "speed"), "harmonic": ("centre", "amplitude", "frequency", "phase"),
                 "device_path": ("path", "amplitude", "minor", "frequency", "direction", "component")}
 COMPONENTS = {"x": 0, "y": 1, "z": 2}
@@ -162,7 +165,7 @@ class Output:
     point: tuple = (0.0, 0.0, 0.0)
     component: int = 0
     dof: int = 0
-    element: str = ""        # force: a force element; drive_force: a prescribed motion
+    element: str = ""        # force, state: a force element; drive_force: a prescribed motion
     term: str = ""           # energy: kinetic or gravity
     tolerance: float = 1e-3  # engineering tolerance, a fraction of the scale
     scale: float = 0.0       # the quantity's scale [its unit]; 0: the reference's peak |value|

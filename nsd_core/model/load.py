@@ -18,6 +18,7 @@ from nsd_core.model.errors import ModelError
 from nsd_core.model.excitation import parse_excitation
 from nsd_core.model.laws import JOINT, POINTS, get_law
 
+POINT_UNITS = {"point": "m", "point_velocity": "m/s", "point_acceleration": "m/s^2"}
 TOP = {"model", "bodies", "loops", "forces", "prescribed", "outputs", "initial", "case", "excitation"}
 
 
@@ -307,13 +308,13 @@ def _output(i: int, t: dict, model: Model) -> Output:
     if kind == "coordinate":
         body, dof = _dof(where, t, model.bodies)
         return Output(name, kind, body=body, dof=dof, unit=model.coordinate_unit(body, dof), **common)
-    if kind in ("point", "point_velocity"):
+    if kind in ("point", "point_velocity", "point_acceleration"):
         body = _body_ref(f"{where}.body", t.get("body"), names)
         comp = t.get("component", "x")
         if comp not in COMPONENTS:
             raise ModelError(f"{where}.component = {comp!r}: allowed: x, y, z")
         return Output(name, kind, body=body, point=_vec(f"{where}.point", t.get("point", [0, 0, 0])),
-                      component=COMPONENTS[comp], unit="m" if kind == "point" else "m/s", **common)
+                      component=COMPONENTS[comp], unit=POINT_UNITS[kind], **common)
     if kind == "force":
         el = {f.name: f for f in model.forces}
         if t.get("element") not in el:
@@ -322,6 +323,15 @@ def _output(i: int, t: dict, model: Model) -> Output:
         f = el[t["element"]]
         u = "N" if f.law.acts_on == POINTS else ("N m" if model.coordinate_unit(f.joint, f.dof) == "rad" else "N")
         return Output(name, kind, element=f.name, unit=u, **common)
+    if kind == "state":
+        el = {f.name: f for f in model.forces}
+        stateful = [f.name for f in model.forces if f.law.state is not None]
+        if t.get("element") not in el or el[t["element"]].law.state is None:
+            what = "is a force element whose law has no state" if t.get("element") in el else "must name a force element"
+            raise ModelError(f"{where}.element = {t.get('element')!r}: {what}; allowed: the elements whose law has a "
+                             f"state: {', '.join(stateful) or '(none)'}")
+        f = el[t["element"]]
+        return Output(name, kind, element=f.name, unit=f.law.state.unit, **common)
     if kind == "drive_force":
         pr = {p.name: p for p in model.prescribed}
         if t.get("element") not in pr:

@@ -26,8 +26,25 @@ def sampler(model: Model, system, tree):
     """A function of one Evaluation giving every named output's value, in the description's order."""
     forces = system.forces
     drive_pos = {p.name: k for k, p in enumerate(model.prescribed)}
+    parent = system.m.arrays.parent
 
-    def one(ev, out, law_values):
+    def acceleration(ev, out):
+        """The body point's absolute acceleration: Z'_i = sum over i's path of b_j z''_j plus the
+        velocity products vp_i (Eq. 5), then d/dt (s' + w x p) = s'' + w' x p + w x v_p; with an
+        excitation the frame's own acceleration a_g(t) is added (outputs are otherwise relative)."""
+        kin, i = ev.kin, tree.body[out.body]
+        if i < 0:
+            a = np.zeros(3)
+        else:
+            Zd, j = kin.vp[i].copy(), i
+            while j >= 0:
+                Zd += kin.B[j] * ev.zdd[j]
+                j = parent[j]
+            p = kin.point(i, out.point)
+            a = Zd[:3] + np.cross(Zd[3:], p) + np.cross(kin.Z[i, 3:], kin.point_velocity(i, p))
+        return a + model.excitation.acceleration(ev.t) if model.excitation is not None else a
+
+    def one(ev, out, law_values, extra):
         kin = ev.kin
         if out.kind == "coordinate":
             return ev.z[tree.coordinate[(out.body, out.dof)]]
@@ -36,8 +53,12 @@ def sampler(model: Model, system, tree):
         if out.kind == "point_velocity":
             i = tree.body[out.body]
             return kin.point_velocity(i, kin.point(i, out.point))[out.component]
+        if out.kind == "point_acceleration":
+            return acceleration(ev, out)[out.component]
         if out.kind == "force":
             return law_values[out.element]
+        if out.kind == "state":
+            return extra[forces.slot[out.element]]
         if out.kind == "drive_force":
             return ev.drive_force[drive_pos[out.element]]
         if out.term == "kinetic":
@@ -46,7 +67,7 @@ def sampler(model: Model, system, tree):
 
     def sample(ev, extra=()):
         law_values = forces.values(ev.kin, ev.z, ev.zd, extra) if model.forces else {}
-        return [float(one(ev, o, law_values)) for o in model.outputs]
+        return [float(one(ev, o, law_values, extra)) for o in model.outputs]
     return sample
 
 
