@@ -24,13 +24,13 @@ from pathlib import Path
 
 import numpy as np
 
-from comparisons.estimate import nominal_order, richardson_factor, step_ratio
+from comparisons.engines import get_engine
+from comparisons.estimate import nominal_order, refined_settings, richardson_factor, step_ratio
 from nsd_core.device.cycle import last_cycle
 
 K, TOLERANCE = 3.0, 1e-3
 SHARED = {"mujoco": ("timestep", "integrator"), "exudyn": ("step_size",)}
 STEP = {"mujoco": "timestep", "exudyn": "step_size"}
-ADAPTER_DEFAULTS = {"mujoco": {"integrator": "Euler"}, "exudyn": {}}
 
 
 def _force(t, Fx, Fy, frequency):
@@ -84,21 +84,25 @@ def main(argv=None) -> dict:
         row = {"reference_error": ref_err, "engines": {}}
         for engine in ("mujoco", "exudyn"):
             given = case.settings.get(engine, {})
-            shared = {k: v for k, v in {**ADAPTER_DEFAULTS[engine], **given}.items() if k in SHARED[engine]}
+            merged = {**get_engine(engine).default_settings, **given}   # the adapter's settings in full
+            shared = {k: merged[k] for k in SHARED[engine] if k in merged}
+            if engine == "exudyn" and merged.get("min_steps_per_cycle"):   # the adapter's step cap per cycle
+                shared["step_size"] = min(float(merged["step_size"]), 1.0 / (merged["min_steps_per_cycle"] * f))
             runs = [("adapter", adapter_run, given), ("described", described_run, shared)]
             if engine == "exudyn":   # the forces once a step at its predicted end (the adapter's scheme)
                 runs.append(("described_predicted", described_run, {**shared, "forces": "predicted"}))
             if engine == "mujoco":   # the builder's own integrator, at the case's step and at twice it
-                h = float(shared.get("timestep", 1e-5))
+                h = float(shared["timestep"])
                 runs += [("described_rk4", described_run, {"timestep": h, "integrator": "RK4"}),
                          ("described_rk4_2h", described_run, {"timestep": 2 * h, "integrator": "RK4"})]
             for path, fn, settings in runs:
                 if (engine, fn) not in warmed:   # compile or load every kernel before anything is timed
                     fn(engine, case, settings)
                     warmed.add((engine, fn))
-                half = {**settings, STEP[engine]: float({**shared, **settings}.get(STEP[engine]) or 0) / 2}
-                if engine == "exudyn" and path == "adapter" and "min_steps_per_cycle" in settings:
-                    half["min_steps_per_cycle"] = 2 * int(settings["min_steps_per_cycle"])
+                if path == "adapter":   # the gate's own halving (every cap on the step halves too)
+                    half = refined_settings(engine, merged, given, 2.0)
+                else:
+                    half = {**settings, STEP[engine]: float(settings[STEP[engine]]) / 2}
                 order = nominal_order(engine, {**shared, **settings})
                 load = os.getloadavg()[0]
                 F_h, st_h = fn(engine, case, settings)
