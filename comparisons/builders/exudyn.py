@@ -235,23 +235,33 @@ class Build:
             slots = {AXIS_OF_DOF[b.joint.type][p.dof]: p for p in drives}
             for k in slots:
                 axes[k] = 1
+            # Exudyn takes the translation offsets in the joint frame J0 while a translation stays free,
+            # but in global coordinates once all three are locked (its GenericJoint equations): then
+            # they are turned by J here, which is exact on the ground only (a moving parent's J0 turns)
+            global_offsets = all(axes[:3]) and any(k < 3 for k in slots)
+            if global_offsets and b.parent != GROUND:
+                raise ModelError(f"prescribed.{next(p.name for p in drives if AXIS_OF_DOF[b.joint.type][p.dof] < 3)}: "
+                                 f"the Exudyn builder drives a slide of {b.name}'s {b.joint.type} joint on the ground "
+                                 f"or beside a free slide only (its parent {b.parent} moves, and Exudyn's joint then "
+                                 "takes the offset in global coordinates)")
+            J_offsets = J if global_offsets else np.eye(3)
             # the offset is its parameters, set to q(t_end) before each step (``drive``): generalized-
             # alpha (index 3) evaluates the constraint at the step's end only, so this is exact, and
             # the symbolic function runs in C++ (a Python offset function cost ~2 calls an iteration)
             sym = CreateSymbolicUserFunction(self.mbs, _offset, "offsetUserFunction", itemTypeName="ObjectJointGeneric")
             self.symbolic.append(sym)   # its expression tree must outlive the run
-            kw = {"offsetUserFunction": sym, "offsetUserFunctionParameters": _offsets(slots, 0.0)}
+            kw = {"offsetUserFunction": sym, "offsetUserFunctionParameters": _offsets(slots, 0.0, J_offsets)}
         m0 = self.marker(b.parent, b.joint.position, J)
         m1 = self.marker(b.name, (0.0, 0.0, 0.0), J)
         joint = self.mbs.AddObject(ObjectJointGeneric(markerNumbers=[m0, m1], constrainedAxes=axes, **kw))
         if drives:
-            self.driven.append((joint, slots))
+            self.driven.append((joint, slots, J_offsets))
         return joint
 
     def drive(self, t: float) -> None:
         """The prescribed offsets for the step ending at t (``_tree_joint``)."""
-        for joint, slots in self.driven:
-            self.mbs.SetObjectParameter(joint, "offsetUserFunctionParameters", _offsets(slots, t))
+        for joint, slots, J in self.driven:
+            self.mbs.SetObjectParameter(joint, "offsetUserFunctionParameters", _offsets(slots, t, J))
 
     def _rotation(self, body):
         return np.eye(3) if body == GROUND else self.state.rotation[body]
@@ -308,10 +318,13 @@ def _offset(mbs, t, itemNumber, offsetUserFunctionParameters):
     return offsetUserFunctionParameters
 
 
-def _offsets(slots: dict, t: float) -> list[float]:
+def _offsets(slots: dict, t: float, J: np.ndarray) -> list[float]:
+    """The six offsets at t: the prescribed coordinates in the joint frame, translations turned by J
+    (the joint frame, when Exudyn reads them in global coordinates; the identity otherwise)."""
     out = [0.0] * 6
     for k, p in slots.items():
         out[k] = p(t)[0]
+    out[:3] = [float(v) for v in J @ np.asarray(out[:3])]
     return out
 
 
