@@ -319,7 +319,7 @@ def described_gate() -> str:
                 if not isinstance(r, dict):
                     continue
                 step = r["settings"].get("timestep", r["settings"].get("step_size"))
-                how = f"{r['settings'].get('integrator', '')} {g(step)} s".strip() if step else "-"
+                how = f"{r['settings'].get('integrator', '')} {g(step)} s".strip() if step else "its defaults (the builder rows: the same step)"
                 rows.append([case, engine, names.get(path, path), how, "PASS" if r["passes"] else "FAIL",
                              g(r["difference"]), g(r["estimate"]), plain(r["wall_s"]),
                              g(r["time_ratio"]) if "time_ratio" in r else "1"])
