@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from comparisons.builders import exudyn as exudyn_builder
-from comparisons.builders import exudyn_codegen
+from comparisons.builders import exudyn_codegen, generated
 from comparisons.builders.exudyn import Build, check_settings
 from nsd_core.model import semirecursive
 from nsd_core.model.load import load_model
@@ -30,7 +30,7 @@ def test_generated_function_is_keyed_by_shape_and_laws():
     text, bound = exudyn_codegen.source(a.elements, len(a.bodies), len(a.ia), len(a.jc),
                                         *exudyn_codegen.pack(a)[4:], len(a.states.elements), exudyn_codegen.pack(a)[3])
     key = exudyn_codegen.fingerprint(text, bound)
-    assert (exudyn_codegen._folder() / f"exudyn_forces_{key}.py").read_text() == text
+    assert (generated.folder() / f"exudyn_forces_{key}.py").read_text() == text
     assert exudyn_codegen.fingerprint(text + "\n", bound) != key
     seismic = _build("nsd_seismic.toml").compiled   # joint laws (a turn among them): another shape
     assert seismic.gen is not a.gen

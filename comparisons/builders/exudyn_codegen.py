@@ -23,17 +23,9 @@ source files (transitively through the numba functions it calls), so an edit giv
 """
 from __future__ import annotations
 
-import hashlib
-import importlib.util
-import inspect
-import os
-import sys
-import tempfile
-from pathlib import Path
-
-import numba
 import numpy as np
 
+from comparisons.builders import generated
 from comparisons.builders import exudyn_compiled
 
 HELPERS = (exudyn_compiled,)
@@ -153,83 +145,15 @@ def source(elements, nb: int, npts: int, nj: int, params: list[tuple[int, int]],
     return "\n".join(head + body), {names[id(fn)]: fn for fn in fns}
 
 
-def _identity(fn) -> str:
-    py = getattr(fn, "py_func", fn)
-    return f"{py.__module__}.{py.__qualname__}"
-
-
-def _dependency_files(fn, seen: set) -> None:
-    """The source files of ``fn`` and of every numba function it names, transitively."""
-    py = getattr(fn, "py_func", fn)
-    if id(py) in seen:
-        return
-    seen.add(id(py))
-    try:
-        seen.add(inspect.getsourcefile(py))
-    except TypeError:
-        return
-    for name in py.__code__.co_names:
-        g = py.__globals__.get(name)
-        if isinstance(g, numba.core.registry.CPUDispatcher):
-            _dependency_files(g, seen)
-    for cell in py.__closure__ or ():
-        if isinstance(cell.cell_contents, numba.core.registry.CPUDispatcher):
-            _dependency_files(cell.cell_contents, seen)
-
-
 def fingerprint(text: str, bound: dict) -> str:
-    """numba's cache checks the generated file alone: the hash covers what it compiles in."""
-    h = hashlib.sha256(text.encode())
-    h.update(numba.__version__.encode())
-    for module in HELPERS:
-        h.update(Path(module.__file__).read_bytes())
-    for name, fn in sorted(bound.items()):
-        py = getattr(fn, "py_func", fn)
-        h.update(f"{name}={_identity(fn)}".encode())
-        if "<locals>" in py.__qualname__ or py.__closure__:   # not told apart by name: this process only
-            h.update(str(id(fn)).encode())
-        seen: set = set()
-        _dependency_files(fn, seen)
-        for path in sorted(p for p in seen if isinstance(p, str)):
-            h.update(path.encode())
-            h.update(Path(path).read_bytes())
-    return h.hexdigest()[:20]
-
-
-def _folder() -> Path:
-    base = numba.core.config.CACHE_DIR or os.environ.get("NUMBA_CACHE_DIR") or ""
-    for folder in ([Path(base) / "generated"] if base else []) + [
-            Path.home() / ".cache" / "nsd-harness" / "generated", Path(tempfile.gettempdir()) / "nsd-generated"]:
-        try:
-            folder.mkdir(parents=True, exist_ok=True)
-            return folder
-        except OSError:
-            continue
-    raise RuntimeError("exudyn_codegen: no writable folder for the generated force functions")
-
-
-_LOADED: dict[str, object] = {}
+    """The name of the generated file: its text, HELPERS and the laws it is bound to (generated.py)."""
+    return generated.fingerprint(text, bound, HELPERS)
 
 
 def module_for(text: str, bound: dict):
     """The generated module (evaluate, jacobian, commit), compiled once per shape, from numba's disk
     cache when an earlier process compiled it."""
-    key = fingerprint(text, bound)
-    if key in _LOADED:
-        return _LOADED[key]
-    path = _folder() / f"exudyn_forces_{key}.py"
-    if not path.exists():   # its name is its content's hash
-        tmp = path.with_suffix(f".{os.getpid()}.tmp")
-        tmp.write_text(text)
-        os.replace(tmp, path)   # atomic: a concurrent process sees the whole file or none
-    name = f"nsd_generated_exudyn_forces_{key}"
-    spec = importlib.util.spec_from_file_location(name, path)
-    module = importlib.util.module_from_spec(spec)
-    module.__dict__.update(bound)   # the law functions, by the names the source calls
-    sys.modules[name] = module
-    spec.loader.exec_module(module)
-    _LOADED[key] = module
-    return module
+    return generated.load(text, bound, HELPERS, "exudyn_forces")
 
 
 def pack(cf) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict, list]:

@@ -1,0 +1,98 @@
+"""Generated numba source, compiled once per shape: where it is written, what its name hashes, how it
+is loaded (the MuJoCo callback of mujoco_codegen and the Exudyn force functions of exudyn_codegen).
+
+numba's disk cache checks the generated file alone, not the functions it calls into: the file's
+name is a hash of its text, of the helper modules it imports, of numba's version and of the source
+files of every law it is bound to (and of every numba function those call, transitively), so an edit
+anywhere it depends on gives a new file and a fresh compile, never a stale one.
+"""
+from __future__ import annotations
+
+import hashlib
+import importlib.util
+import inspect
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+import numba
+
+_LOADED: dict[str, object] = {}
+
+
+def identity(fn) -> str:
+    py = getattr(fn, "py_func", fn)
+    return f"{py.__module__}.{py.__qualname__}"
+
+
+def _dependency_files(fn, seen: set) -> None:
+    """The source files of ``fn`` and of every numba function it names, transitively."""
+    py = getattr(fn, "py_func", fn)
+    if id(py) in seen:
+        return
+    seen.add(id(py))
+    try:
+        seen.add(inspect.getsourcefile(py))
+    except TypeError:
+        return
+    for name in py.__code__.co_names:
+        g = py.__globals__.get(name)
+        if isinstance(g, numba.core.registry.CPUDispatcher):
+            _dependency_files(g, seen)
+    for cell in py.__closure__ or ():
+        if isinstance(cell.cell_contents, numba.core.registry.CPUDispatcher):
+            _dependency_files(cell.cell_contents, seen)
+
+
+def fingerprint(text: str, bound: dict, helpers: tuple) -> str:
+    """The hash that names a generated file (see the module's docstring)."""
+    h = hashlib.sha256(text.encode())
+    h.update(numba.__version__.encode())
+    for module in helpers:
+        h.update(Path(module.__file__).read_bytes())
+    for name, fn in sorted(bound.items()):
+        py = getattr(fn, "py_func", fn)
+        h.update(f"{name}={identity(fn)}".encode())
+        if "<locals>" in py.__qualname__ or py.__closure__:   # not told apart by name: this process only
+            h.update(str(id(fn)).encode())
+        seen: set = set()
+        _dependency_files(fn, seen)
+        for path in sorted(p for p in seen if isinstance(p, str)):
+            h.update(path.encode())
+            h.update(Path(path).read_bytes())
+    return h.hexdigest()[:20]
+
+
+def folder() -> Path:
+    """A writable folder for generated source: beside numba's cache, else the user's cache, else tmp."""
+    base = numba.core.config.CACHE_DIR or os.environ.get("NUMBA_CACHE_DIR") or ""
+    for f in ([Path(base) / "generated"] if base else []) + [
+            Path.home() / ".cache" / "nsd-harness" / "generated", Path(tempfile.gettempdir()) / "nsd-generated"]:
+        try:
+            f.mkdir(parents=True, exist_ok=True)
+            return f
+        except OSError:
+            continue
+    raise RuntimeError("no writable folder for generated source")
+
+
+def load(text: str, bound: dict, helpers: tuple, prefix: str):
+    """The module of generated ``text`` with the functions ``bound`` by name, compiled once per shape
+    and process, from numba's disk cache when an earlier process compiled it."""
+    key = fingerprint(text, bound, helpers)
+    if key in _LOADED:
+        return _LOADED[key]
+    path = folder() / f"{prefix}_{key}.py"
+    if not path.exists():   # its name is its content's hash
+        tmp = path.with_suffix(f".{os.getpid()}.tmp")
+        tmp.write_text(text)
+        os.replace(tmp, path)   # atomic: a concurrent process sees the whole file or none
+    name = f"nsd_generated_{prefix}_{key}"
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    module.__dict__.update(bound)   # the law functions, by the names the source calls
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    _LOADED[key] = module
+    return module
