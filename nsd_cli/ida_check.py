@@ -280,17 +280,24 @@ def judged(engine: str, diff: dict, h_vs_h2: dict, rec: dict, rec2: dict) -> dic
     when the difference from the in-house run is within k (3) x the estimate, accurate when both are
     within the tolerance. (The in-house run's own error, at the IDA's tolerance, is inside the difference.)"""
     from comparisons.config import load_tolerances
-    from comparisons.estimate import nominal_order, richardson_factor, step_ratio
+    from comparisons.estimate import nominal_order, richardson_factor, step_needed, step_ratio
     stats, stats2 = (r.get("metrics", {}).get("solver") or {} for r in (rec, rec2))
-    factor = richardson_factor(nominal_order(engine, stats.get("settings") or {}), step_ratio(stats, stats2))
+    order = nominal_order(engine, stats.get("settings") or {})
+    factor = richardson_factor(order, step_ratio(stats, stats2))
     rule = load_tolerances().rule
-    out, ok = {}, True
+    key, step = PEER_STEPS[engine][0], (stats.get("settings") or {}).get(PEER_STEPS[engine][0])
+    out, ok, needed = {}, True, []
     for m, name in METRIC_TOLERANCE.items():
         est, tol = h_vs_h2[m] * factor, float(rule.engineering[name])
         consistent, accurate = diff[m] <= rule.k * est, max(est, diff[m]) <= tol
         out[m] = {"estimate": est, "tolerance": tol, "consistent": consistent, "accurate": accurate}
         ok = ok and consistent and accurate
-    return {"estimates": out, "verdict": "PASS" if ok else "FAIL"}
+        if not accurate and step:
+            needed.append(step_needed(float(step), max(est, diff[m]), tol, order))
+    verdict = {"estimates": out, "verdict": "PASS" if ok else "FAIL"}
+    if needed:   # what its own estimate asks for (as the gate's "not converged at these settings")
+        verdict["step_needed"] = {key: min(needed)}
+    return verdict
 
 
 def entries(check: dict) -> list[tuple[str, dict]]:
@@ -310,7 +317,10 @@ def describe_entry(name: str, c: dict) -> str:
         return "" if not isinstance(t, (int, float)) else f" ({t:.1f} s" + ("" if m.get("run_now") else ", stored") + ")"
     def est(m):
         d = (m.get("estimates") or {}).get("du")
-        return "" if d is None else f" (estimate {d['estimate']:.1e}, {m['verdict']})"
+        if d is None:
+            return ""
+        need = "".join(f"; not converged: needs {k} <= {v:.2g} s" for k, v in (m.get("step_needed") or {}).items())
+        return f" (estimate {d['estimate']:.1e}, {m['verdict']}{need})"
     parts = [(f"{e} du {m['du']:.2e}" + est(m) if "du" in m else f"{e} {m.get('status')}") + when(m)
              for e, m in c["engines"].items()]
     own = (c.get("wall_time") or {}).get("semirecursive")

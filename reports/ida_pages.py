@@ -167,8 +167,9 @@ def cross_check_figure(index: dict, root: Path):
                                          if "du" in m else f"{m.get('status')}: {m.get('error')}"))
             if isinstance(m.get("estimates"), dict):   # its own error estimate (h and h/2) and the gate's rule
                 est = ", ".join(f"{k} {v['estimate']:.1e}" for k, v in m["estimates"].items())
+                need = "".join(f" (not converged: needs {k} <= {v:.2g} s)" for k, v in (m.get("step_needed") or {}).items())
                 lines.append(f"    {' ' * len(e)}  own estimate ({_step(m.get('settings'))}, and half): {est}; "
-                             f"{m.get('verdict')}")
+                             f"{m.get('verdict')}{need}")
             b = m.get("building")
             if isinstance(b, dict) and {"dfloor", "ddrift", "dfloor_a"} <= set(b):   # the worst floor / story
                 lines.append(f"    {' ' * len(e)}  building: floors {b['dfloor']:.3e}, drifts {b['ddrift']:.3e}, "

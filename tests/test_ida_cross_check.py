@@ -90,3 +90,22 @@ def test_a_peer_re_run_is_printed_with_its_time_and_judged_by_its_own_estimate(t
         assert e["accurate"] == (max(e["estimate"], m[metric]) <= e["tolerance"])
     cost = index["cross_check_cost"]
     assert cost["mujoco"]["runs"] == 2 and f"mujoco 2 in {cost['mujoco']['wall_s']:.1f} s" in printed
+
+
+def test_a_peer_its_own_estimate_calls_unconverged_gets_the_step_it_needs():
+    """The rule on a cross-checked peer, from two synthetic runs: consistent but not accurate (the far-field
+    record 15's Exudyn numbers at 1e-4 s), so FAIL with the step its estimate asks for (order 2, to 0.8 x
+    the tolerance), and PASS when both are small; the printed line says which."""
+    from nsd_cli.ida_check import describe_entry, judged
+    rec = {"metrics": {"solver": {"settings": {"step_size": 1e-4}, "steps": 1000}}}
+    rec2 = {"metrics": {"solver": {"settings": {"step_size": 5e-5}, "steps": 2000}}}
+    diff = {"du": 2.7e-2, "dF": 4.6e-2, "da": 5.7e-2}
+    v = judged("exudyn", diff, {"du": 2.4e-2, "dF": 4.2e-2, "da": 3.1e-2}, rec, rec2)
+    assert v["verdict"] == "FAIL" and all(e["consistent"] and not e["accurate"] for e in v["estimates"].values())
+    worst = max(max(diff[k], v["estimates"][k]["estimate"]) for k in diff)
+    assert v["step_needed"]["step_size"] == pytest.approx(1e-4 * (0.8e-3 / worst) ** 0.5)
+    ok = judged("exudyn", {"du": 2e-5, "dF": 3e-5, "da": 4e-5}, {"du": 1e-5, "dF": 2e-5, "da": 2e-5}, rec, rec2)
+    assert ok["verdict"] == "PASS" and "step_needed" not in ok
+    entry = {"record": 15, "level": 0.78, "engines": {"exudyn": {**diff, **v, "wall_time": 26.4, "run_now": True}}}
+    assert "exudyn du 2.70e-02 (estimate 3.2e-02, FAIL; not converged: needs step_size <= 1.2e-05 s)" in \
+        describe_entry("device", entry)
