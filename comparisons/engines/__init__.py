@@ -59,7 +59,15 @@ def run_engine(name: str, params: Params, drive, settings: dict | None = None):
     The run's stats carry ``compile_time`` (a first, tiny run of the same kind) apart from its cost."""
     from nsd_core.device.warmup import tiny_drive
     from nsd_core.engine.workers import stdout_to_stderr
-    engine = get_engine(name)
+    settings = dict(settings or {})
+    model = settings.pop("model", "adapter")   # "described": the builder on the device's description
+    if model not in ("adapter", "described") or (model == "described" and name == REFERENCE):
+        raise ParameterError(f"{name}.model = {model!r}: allowed: adapter, described (the peers only)")
+    if model == "described":
+        from comparisons.engines.described import DescribedEngine
+        engine = DescribedEngine(name)
+    else:
+        engine = get_engine(name)
     with stdout_to_stderr():
         warm = _warm_peer("drive", name, drive.is_line, settings, lambda choices: engine.run(
             Params(), tiny_drive("line" if drive.is_line else "circle"), choices))

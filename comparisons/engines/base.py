@@ -83,6 +83,9 @@ def check_settings(engine, settings: dict[str, Any] | None, where: str) -> dict[
     for k, v in (settings or {}).items():
         d = engine.default_settings[k]
         name = f"{where}.{k} = {v!r}"
+        choices = {"model": ("adapter", "described"), "builder_forces": ("compiled", "predicted", "connectors")}.get(k)
+        if choices and v not in choices:
+            raise ParameterError(f"{name}: allowed: {', '.join(choices)}")
         if k == "perturb":   # an injected modelling error (nsd compare --power): its own checks
             from comparisons.engines.perturb import check as check_perturbation
             try:

@@ -233,6 +233,8 @@ class ExudynEngine:
         "perturb": None,              # a modelling error injected into this model only (engines/perturb.py)
         "force_code": "compiled",     # per_step loads: "compiled" (exudyn_native.step) or "python" (numpy)
         "linear_solver": "eigen_dense",  # Exudyn's linear solver: exudyn_dense | eigen_dense | eigen_sparse
+        "model": "adapter",            # "described": the builder on the device's description (engines/described.py)
+        "builder_forces": "compiled",  # model = "described" only: the builder's force path (compiled | predicted)
     }
 
     # a warm-up's tiny run (comparisons.engines._warm_peer) compiles what a run does without the

@@ -232,6 +232,7 @@ class MujocoEngine:
         "perturb": None,             # a modelling error injected into this model only (engines/perturb.py)
         "passive": "compiled",       # "compiled": C callback (mujoco_native); "python": _Device.passive
         "step_loop": "native",       # "native": compiled loop calling mj_step; "python": one call a step
+        "model": "adapter",          # "described": the builder on the device's description (engines/described.py)
     }
 
     @property

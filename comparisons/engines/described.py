@@ -1,0 +1,89 @@
+"""A peer's drive-mode run built from the device's description (issue 32): the gate's engine interface
+(``run(params, drive, settings) -> RunResult``) over a builder (comparisons/builders), so the gate can
+judge the generated models by the same rule and metrics as the hand-written adapters, side by side,
+before those go.
+
+The device is written as a description by ``nsd_core.device.describe.device_description`` (the case's
+parameters and plate path), with every output the gate's columns need: the drive force, the cap's
+position, the wall's height, every wire's stress and the spring's zeta (the laws' states). The columns
+then come from the device's one column builder (``nsd_core.device.outputs.device_columns``), as every
+adapter's do. Selected per engine by the setting ``model = "described"`` (comparisons.engines.run_engine).
+
+The adapters' settings are carried over where the builders have them: MuJoCo's ``timestep``,
+``integrator`` (its adapter's default Euler) and ``solref_factor``; Exudyn's ``step_size`` capped by
+``min_steps_per_cycle`` per drive cycle, as its adapter caps it, and its force path from
+``builder_forces`` (the adapter's own ``forces`` names its scheme).
+"""
+from __future__ import annotations
+
+import importlib
+import tomllib
+
+import numpy as np
+
+from comparisons.engines.base import EngineError
+from nsd_core.device.describe import device_description
+from nsd_core.device.drive import Drive
+from nsd_core.device.geometry import device_geometry
+from nsd_core.device.outputs import device_columns
+from nsd_core.device.params import Params
+from nsd_core.model.errors import ModelError
+from nsd_core.model.load import parse_model
+
+# the adapters' settings a builder has with the same meaning; the adapters' others describe their own
+# hand-written models (drive armature, commit cadence, Newton tolerances ...) and are left out
+SHARED = {"mujoco": ("timestep", "integrator", "solref_factor", "passive"), "exudyn": ("step_size",)}
+
+
+def builder_settings(engine: str, settings: dict | None, frequency: float) -> dict:
+    """The builder's settings for an adapter's ``settings`` (see the module's docstring)."""
+    from comparisons.engines import get_engine
+    s = {**get_engine(engine).default_settings, **(settings or {})}
+    out = {k: s[k] for k in SHARED[engine] if k in s and s[k] is not None}
+    if engine == "exudyn":   # its force path (the adapter's own "forces" is its scheme's name)
+        out["forces"] = s.get("builder_forces", "compiled")
+    if engine == "exudyn" and s.get("min_steps_per_cycle"):   # the adapter's cap on its step, per cycle
+        out["step_size"] = min(float(s["step_size"]), 1.0 / (float(s["min_steps_per_cycle"]) * frequency))
+    return out
+
+
+def _outputs(n_wires: int) -> str:
+    """The outputs the columns need beyond the description's own (cap_x, cap_y, every wire's stress)."""
+    blocks = [f'\n[[outputs]]\nname = "cap_{c}"\nkind = "coordinate"\njoint = "cap"\ndof = {k}\n'
+              for k, c in enumerate("xy")]
+    blocks += [f'\n[[outputs]]\nname = "wire{j}_stress"\nkind = "state"\nelement = "wire{j}"\n'
+               for j in range(1, n_wires)]
+    return "".join(blocks)
+
+
+def described_model(params: Params, drive: Drive):
+    """The device under ``drive`` as a parsed description with the columns' outputs."""
+    g = device_geometry(params)
+    text = device_description(params, drive.amplitude, drive.frequency, drive.direction_deg, drive.cycles,
+                              drive.samples_per_cycle, drive=drive, case="") + _outputs(g.n_wires)
+    return parse_model(tomllib.loads(text)), g
+
+
+class DescribedEngine:
+    """The gate's engine interface over ``comparisons.builders.<engine>`` (drive mode)."""
+
+    def __init__(self, engine: str):
+        self.name = engine
+        self.builder = importlib.import_module(f"comparisons.builders.{engine}")
+
+    def run(self, params: Params, drive: Drive, settings: dict | None = None):
+        try:
+            model, g = described_model(params, drive)
+            t_out = drive.output_times()
+            run = self.builder.simulate(model, drive.duration, float(t_out[1] - t_out[0]),
+                                        builder_settings(self.name, settings, drive.frequency))
+        except ModelError as e:
+            raise EngineError(f"{self.name} (described): {e}") from None
+        o = run.outputs
+        cap = np.column_stack([o["cap_x"], o["cap_y"], o["cap_z"]])
+        stress = np.column_stack([o[f"wire{j}_stress"] for j in range(g.n_wires)]) if g.n_wires else \
+            np.zeros((len(run.t), 0))
+        closure = np.full(len(run.t), float(run.stats.get("closure_max", 0.0)))
+        stats = {**run.stats, "model": "described", "tracking_error": float(run.stats.get("tracking_error", 0.0))}
+        return device_columns(self.name, g, drive, run.t, cap, o["wall_z"], stress, o["spring_zeta"], closure,
+                              drive_force=np.column_stack([o["F_x"], o["F_y"]]), stats=stats)
