@@ -70,7 +70,7 @@ def main() -> None:
     cpus = os.cpu_count() or 1
     # the schema of benchmarks/measure.py (name, command, measured, data): benchmarks.docs reads it
     report = {
-        "name": "bench_ida", "command": "nsd " + " ".join(c if c != cmd[-1] else "DIR" for c in cmd),
+        "name": Path(args.out).stem, "command": "nsd " + " ".join(c if c != cmd[-1] else "DIR" for c in cmd),
         "exit_code": proc.returncode,
         "measured": {"date_utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime()), "machine": platform.platform(),
                      "processor": platform.machine(), "cpus": cpus, "python": platform.python_version(),
