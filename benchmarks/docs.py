@@ -331,6 +331,24 @@ def described_gate() -> str:
                      "time / adapter's"], rows))
 
 
+def gate_described() -> str:
+    """The gate's drive cases through the adapters and through the builders (bench_gate_described)."""
+    rec = load("bench_gate_described")
+    d = rec["data"]
+    a, b = d["runs"]["adapters"], d["runs"]["described"]
+    rows = []
+    for case, engines in a["cases"].items():
+        for e, r in engines.items():
+            o = b["cases"][case][e]
+            rows.append([case, e, "PASS" if r["pass"] else "FAIL", "PASS" if o["pass"] else "FAIL",
+                         plain(r["cpu_s"]), plain(o["cpu_s"]), g(d["cpu_ratio_described_over_adapter"][case][e])])
+    return (provenance(rec) + "\n"
+            + f"`nsd compare --cases` on the gate's drive cases, every metric and the gate's rule, twice: the peers' "
+              f"adapters (verdict {a['verdict']}), then `model = \"described\"` with Exudyn's builder at `builder_forces = "
+              f"\"{d['exudyn_forces']}\"` (verdict {b['verdict']}); CPU seconds of each peer's h run in its warm worker.\n\n"
+            + table(["case", "peer", "adapter", "builder", "adapter CPU s", "builder CPU s", "builder / adapter"], rows))
+
+
 def direction_study() -> str:
     rec = load("polar")
     d = rec["data"]
@@ -572,6 +590,7 @@ RENDER = {"compare-gate": compare_gate, "convergence": convergence, "tables-5-6"
           "bench-record-set": bench_record_set, "compare-variant": compare_variant, "power": power,
           "verdict-cost": verdict_cost, "model-benchmarks": model_benchmarks,
           "model-builders": model_builders, "described-gate": described_gate,
+          "gate-described": gate_described,
           "work-precision": work_precision, "bench-cold": bench_cold, "bench-peer-seismic": bench_peer_seismic,
           "bench-ida-farfield": bench_ida_farfield}
 

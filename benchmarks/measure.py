@@ -50,6 +50,9 @@ MEASUREMENTS = {
     # issue 32: the gate's drive cases through each peer's hand-written adapter and its description builder
     "bench_described_gate": (PY + ["benchmarks/bench_described_gate.py", "--out", "OUT"], "bench_described_gate.json",
                              "json"),
+    # the gate itself on its drive cases, through the adapters and through the builders (model = "described")
+    "bench_gate_described": (PY + ["benchmarks/bench_gate_described.py", "--out", "OUT"], "bench_gate_described.json",
+                             "json"),
     "benchmark": (NSD + ["benchmark", "--out", "OUT"], "results.json", "json"),
     "polar": (NSD + ["polar", "--out", "OUT"], "polar.json", "json"),
     "bench_cycle": (PY + ["benchmarks/bench_cycle.py", "--no-compile", "--repeats", "3", "--out", "OUT"],
