@@ -8,9 +8,10 @@ coordinates, qvel from its rates.
 Two paths, one model (setting ``passive``): "python", the readable reference described here (Passive,
 a Python loop), and "compiled" (default): a numba C callback generated from the description that calls
 each element's registry law function directly, and this loop in native code (mujoco_compiled,
-mujoco_codegen, mujoco_kernels); outputs equal to round-off (tests/test_mujoco_codegen.py). nsd_drive,
-2 cycles, h = 1e-5 s, stepping: Euler 0.70 s, 1.13x the hand-written device adapter's 0.62 s; RK4 2.75 s
-(benchmarks/bench_model_builders.py, load 7 on 2 cores); the Python path: ~60 s per model second.
+mujoco_codegen, mujoco_kernels); outputs equal to round-off (tests/test_mujoco_codegen.py). On the
+gate's drive cases at the adapter's own step and Euler, the stepping costs 0.56-1.25x the hand-written
+device adapter's (benchmarks/bench_described_gate.py; docs/validation.md); the Python path: ~60 s per
+model second.
 
 Forces: one ``mjcb_passive`` callback (installed for the run only, the previous one restored)
 evaluates every force element through the law registry and nothing else (mujoco_passive.Passive,
