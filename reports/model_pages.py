@@ -1,7 +1,7 @@
 """The validation report of a described mechanism (``nsd compare --model ... --report``): a PDF and a
 PNG per page. Page 1: what PASS means, the verdict of every case and engine in words, the tolerances.
-Then one page per case: every output of every engine over time (the converged reference dashed) and
-each engine's difference from the converged reference against its bound k x (estimate + reference's)."""
+Then, per case, A4 pages of at most ``PER_PAGE`` outputs: every output of every engine over time (the
+converged reference dashed) and each engine's difference from the converged reference."""
 from __future__ import annotations
 
 import textwrap
@@ -16,12 +16,17 @@ import numpy as np  # noqa: E402
 
 
 COLORS = {"semirecursive": "C0", "mujoco": "C1", "exudyn": "C2", "converged": "k"}
+PER_PAGE = 6   # outputs on one A4 page (a building's 17 take three pages, not one page 4 m tall)
 
 
 def build_model_report(model, summary: dict, folder: Path) -> dict:
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    pages = [_summary_page(model, summary)] + [_case_page(model, summary, c) for c in summary["cases"]]
+    outs = list(model.outputs)
+    chunks = [outs[k:k + PER_PAGE] for k in range(0, len(outs), PER_PAGE)]
+    pages = [_summary_page(model, summary)] + [_case_page(summary, c, chunk, f" ({j + 1}/{len(chunks)})"
+                                                          if len(chunks) > 1 else "")
+                                                for c in summary["cases"] for j, chunk in enumerate(chunks)]
     tmp = folder / ".model_report.pdf.tmp"
     with PdfPages(tmp) as pdf:
         for fig in pages:
@@ -61,11 +66,10 @@ def _summary_page(model, summary: dict):
     return fig
 
 
-def _case_page(model, summary: dict, case: str):
+def _case_page(summary: dict, case: str, outs: list, part: str):
     runs = summary["runs"].get(case, {})
-    outs = [o for o in model.outputs]
     n = len(outs)
-    fig, axes = plt.subplots(n, 2, figsize=(8.27, max(3.0, 1.9 * n)), squeeze=False)
+    fig, axes = plt.subplots(n, 2, figsize=(8.27, 11.69 if n == PER_PAGE else max(3.0, 1.9 * n)), squeeze=False)
     conv = runs.get("converged")
     for k, o in enumerate(outs):
         ax, dx = axes[k]
@@ -83,7 +87,7 @@ def _case_page(model, summary: dict, case: str):
             a.tick_params(labelsize=6)
         if k == 0:
             ax.legend(fontsize=6)
-            ax.set_title(f"{case}: outputs", fontsize=8)
+            ax.set_title(f"{case}: outputs{part}", fontsize=8)
             dx.set_title("difference from the converged reference", fontsize=8)
     for a in axes[-1]:
         a.set_xlabel("t [s]", fontsize=7)

@@ -31,6 +31,29 @@ def test_compare_model_in_house_pass_with_reference_solution(tmp_path):
     assert 'failures="0"' in (tmp_path / "j.xml").read_text()
 
 
+def test_the_model_report_puts_at_most_six_outputs_on_an_a4_page(tmp_path):
+    """A description with more outputs than fit one page (a copy of the slider-crank with its 4 outputs
+    named twice more) gets its case drawn over A4 pages of at most 6 outputs, each page non-blank."""
+    import tomllib
+    import tomli_w
+    from PIL import Image
+    raw = tomllib.loads((MODELS / "slider_crank.toml").read_text())
+    raw["outputs"] += [{**o, "name": f"{o['name']}_{k}"} for k in (2, 3) for o in raw["outputs"]]
+    for c in raw["case"]:
+        c.pop("reference", None)
+    model = tmp_path / "many.toml"
+    model.write_text(tomli_w.dumps(raw))
+    out = tmp_path / "run"
+    p = nsd("compare", "--model", str(model), "--engines", "semirecursive", "--out", str(out), "--report")
+    assert p.returncode == 0, p.stdout + p.stderr
+    pngs = sorted((out / "report").glob("model_page*.png"))
+    assert [q.name for q in pngs] == [f"model_page{k}.png" for k in range(1, 4)]   # summary + 12 outputs / 6
+    for q in pngs[1:]:
+        w, h = Image.open(q).size
+        assert abs(h / w - 11.69 / 8.27) < 0.01   # A4
+        assert len(set(Image.open(q).convert("L").getdata())) > 50   # drawn, not blank
+
+
 def test_compare_model_fails_when_the_reference_solution_disagrees(tmp_path):
     """A reference solution shifted by 1 mm: every engine, and the converged reference, disagree with it
     beyond numerical error (exit 1), while the engines still agree with each other."""
