@@ -45,3 +45,23 @@ def test_the_device_description_loads_with_its_laws():
     laws = {f.law.name for f in m.forces}
     assert laws == {"rope", "sma_wire", "push_spring"}
     assert [b.joint.type for b in m.bodies] == ["translational", "prismatic", "universal"]
+
+
+@pytest.mark.parametrize("change,expected", [
+    ({"path": "spiral"}, "prescribed.drive_x.path = 'spiral': allowed: line, circle, ellipse, figure8"),
+    ({"component": "z"}, "prescribed.drive_x.component = 'z': allowed: x, y"),
+    ({"frequency": float("nan")}, "prescribed.drive_x.frequency = nan: must be a number"),
+    ({"amplitude": "big"}, "prescribed.drive_x.amplitude = 'big': must be a number"),
+    ({"frequency": 0.0}, "prescribed.drive_x: frequency = 0.0: must be in [0.05, 100.0] Hz"),
+    ({"path": "ellipse"}, "prescribed.drive_x: minor: missing"),
+])
+def test_a_bad_device_path_is_one_line_naming_the_field(change, expected):
+    """motion = "device_path": each mistake named once (the field, the value, what is allowed)."""
+    import tomllib
+    from nsd_core.model.errors import ModelError
+    d = tomllib.loads((MODELS / "nsd_drive.toml").read_text())
+    d["prescribed"][0] = {"name": "drive_x", "joint": "cap", "dof": 0, "motion": "device_path", "path": "circle",
+                          "amplitude": 0.01, "frequency": 1.0, "component": "x", **change}
+    with pytest.raises(ModelError) as e:
+        parse_model(d)
+    assert str(e.value).startswith(expected) and "\n" not in str(e.value) and str(e.value).count("prescribed.") == 1

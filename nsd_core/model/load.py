@@ -284,10 +284,11 @@ def _device_path(where: str, t: dict) -> dict:
         if k not in t:
             raise ModelError(f"{where}.{k}: missing (motion 'device_path' needs it)")
     minor = t.get("minor")
-    try:
-        drive = Drive(amplitude=_num(f"{where}.amplitude", t["amplitude"]), frequency=_num(f"{where}.frequency", t["frequency"]),
-                      direction_deg=_num(f"{where}.direction", t.get("direction", 0.0)), path=path,
-                      minor=None if minor is None else _num(f"{where}.minor", minor))
+    values = dict(amplitude=_num(f"{where}.amplitude", t["amplitude"]), frequency=_num(f"{where}.frequency", t["frequency"]),
+                  direction_deg=_num(f"{where}.direction", t.get("direction", 0.0)), path=path,
+                  minor=None if minor is None else _num(f"{where}.minor", minor))
+    try:   # the device's own bounds on a path (ModelError above is one already: checked first)
+        drive = Drive(**values)
     except ParameterError as e:
         raise ModelError(f"{where}: {e}") from None
     return {"drive": drive, "component": COMPONENTS[comp]}
