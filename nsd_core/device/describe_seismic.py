@@ -64,6 +64,19 @@ parameters = {{ gap = {r.gap!r}, stiffness = {r.stiffness!r}, exponent = {r.expo
     return out, forces
 
 
+def _spring_along(name: str, comment: str, a: str, b: str, e: str, k: float, c: float) -> str:
+    """A linear spring-dashpot between the origins of bodies a and b acting along the direction e."""
+    return f'''
+[[forces]]   # {comment}
+name = "{name}"
+law = "linear_spring_damper"
+body_a = "{a}"
+body_b = "{b}"
+direction = {e}
+parameters = {{ stiffness = {float(k)!r}, damping = {float(c)!r}, free_length = 0.0 }}
+'''
+
+
 def _building_lines(st: Structure) -> tuple[str, str, str]:
     b = st.building
     bodies, forces, outputs = [], [], []
@@ -79,25 +92,12 @@ mass = {float(m)!r}
 inertia = {_v([m * r_g ** 2 / 2, m * r_g ** 2 / 2, m * r_g ** 2])}   # never felt: the floor does not turn
 ''')
         for axis, e in (("x", "[1.0, 0.0, 0.0]"), ("y", "[0.0, 1.0, 0.0]")):
-            forces.append(f'''
-[[forces]]   # story {i + 1} along {axis}: k_i, c_i on the drift d_i - d_(i-1)
-name = "story{i + 1}_{axis}"
-law = "linear_spring_damper"
-body_a = "floor{i + 1}"
-body_b = "{below}"
-direction = {e}
-parameters = {{ stiffness = {float(b.stiffnesses[i])!r}, damping = {float(b.story_damping[i])!r}, free_length = 0.0 }}
-''')
+            forces.append(_spring_along(f"story{i + 1}_{axis}", f"story {i + 1} along {axis}: k_i, c_i on the drift "
+                                        "d_i - d_(i-1)", f"floor{i + 1}", below, e, b.stiffnesses[i], b.story_damping[i]))
             if b.slab_damping[i] > 0:
-                forces.append(f'''
-[[forces]]   # Rayleigh's mass-proportional part along {axis}: b_i on d_i - d_0
-name = "slab_damper{i + 1}_{axis}"
-law = "linear_spring_damper"
-body_a = "floor{i + 1}"
-body_b = "plate"
-direction = {e}
-parameters = {{ stiffness = 0.0, damping = {float(b.slab_damping[i])!r}, free_length = 0.0 }}
-''')
+                forces.append(_spring_along(f"slab_damper{i + 1}_{axis}", f"Rayleigh's mass-proportional part along "
+                                            f"{axis}: b_i on d_i - d_0", f"floor{i + 1}", "plate", e, 0.0,
+                                            b.slab_damping[i]))
             outputs.append(f'''
 [[outputs]]
 name = "floor{i + 1}_{axis}"
