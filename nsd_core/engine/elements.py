@@ -43,7 +43,10 @@ def element_kinematics(body_up, pts_up, body_lo, pts_lo, A, r, Z, P_up, P_lo, N,
         d0, d1, d2 = pu[0] - pl[0], pu[1] - pl[1], pu[2] - pl[2]
         length = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
         L[e] = length
-        N[e, 0], N[e, 1], N[e, 2] = d0 / length, d1 / length, d2 / length
+        if length > 0.0:
+            N[e, 0], N[e, 1], N[e, 2] = d0 / length, d1 / length, d2 / length
+        else:   # coinciding points (a stop at rest): no direction, so no force and no rate
+            N[e, 0], N[e, 1], N[e, 2] = 0.0, 0.0, 0.0
         Ld[e] = N[e, 0] * (vu[0] - vl[0]) + N[e, 1] * (vu[1] - vl[1]) + N[e, 2] * (vu[2] - vl[2])
         for a in range(3):
             P_up[e, a] = pu[a]

@@ -99,27 +99,12 @@ class Forces:
         direction e, (p_a - p_b) . e and its rate (its unit vector set to e). A line element whose
         points coincide gets a zero unit vector: its force has no direction there (a stop at rest)."""
         el = self.elements
-        try:
-            L, Ld = el.state(kin)
-        except ZeroDivisionError:   # two points coincide (the compiled kernel divides by the length)
-            L, Ld = self._lengths_at_contact(kin)
+        L, Ld = el.state(kin)   # coinciding points get a zero unit vector there (elements.element_kinematics)
         for j, a, b, e in self.directed:
             L[j] = (el.P_up[j] - el.P_lo[j]) @ e
             Ld[j] = (kin.point_velocity(a, el.P_up[j]) - kin.point_velocity(b, el.P_lo[j])) @ e
             el.N[j] = e
         return L, Ld
-
-    def _lengths_at_contact(self, kin):
-        """The elements' geometry one by one, a zero unit vector where the points coincide."""
-        el = self.elements
-        for e in range(len(el.body_up)):
-            a, b = int(el.body_up[e]), int(el.body_lo[e])
-            el.P_up[e], el.P_lo[e] = kin.point(a, el.pts_up[e]), kin.point(b, el.pts_lo[e])
-            d = el.P_up[e] - el.P_lo[e]
-            el.L[e] = float(np.linalg.norm(d))
-            el.N[e] = d / el.L[e] if el.L[e] > 0.0 else 0.0
-            el.Ld[e] = (kin.point_velocity(a, el.P_up[e]) - kin.point_velocity(b, el.P_lo[e])) @ el.N[e]
-        return el.L, el.Ld
 
     def _each(self, kin, z, zd, extra):
         """(element, x, x', state slot or -1) for every element."""
