@@ -22,6 +22,7 @@ import tomllib
 import numpy as np
 
 from comparisons.engines.base import EngineError
+from comparisons.engines.perturb import perturbed
 from nsd_core.device.describe import device_description
 from nsd_core.device.drive import Drive
 from nsd_core.device.geometry import device_geometry
@@ -56,11 +57,12 @@ def _outputs(n_wires: int) -> str:
     return "".join(blocks)
 
 
-def described_model(params: Params, drive: Drive):
-    """The device under ``drive`` as a parsed description with the columns' outputs."""
-    g = device_geometry(params)
+def described_model(params: Params, drive: Drive, perturb: dict | None = None):
+    """The device under ``drive`` as a parsed description with the columns' outputs; ``perturb``: a
+    modelling error injected into this engine's description only (comparisons.engines.perturb)."""
+    g = perturbed(device_geometry(params), perturb)
     text = device_description(params, drive.amplitude, drive.frequency, drive.direction_deg, drive.cycles,
-                              drive.samples_per_cycle, drive=drive, case="") + _outputs(g.n_wires)
+                              drive.samples_per_cycle, drive=drive, case="", geometry=g) + _outputs(g.n_wires)
     return parse_model(tomllib.loads(text)), g
 
 
@@ -73,7 +75,7 @@ class DescribedEngine:
 
     def run(self, params: Params, drive: Drive, settings: dict | None = None):
         try:
-            model, g = described_model(params, drive)
+            model, g = described_model(params, drive, (settings or {}).get("perturb"))
             t_out = drive.output_times()
             run = self.builder.simulate(model, drive.duration, float(t_out[1] - t_out[0]),
                                         builder_settings(self.name, settings, drive.frequency))

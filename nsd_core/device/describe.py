@@ -39,11 +39,14 @@ def _changed(params: Params) -> dict:
 
 
 def device_description(params: Params, amplitude: float, frequency: float, direction_deg: float = 0.0,
-                       cycles: int = 2, samples_per_cycle: int = 500, drive=None, case: str | None = None) -> str:
+                       cycles: int = 2, samples_per_cycle: int = 500, drive=None, case: str | None = None,
+                       geometry=None) -> str:
     """The drive-mode device under a line drive (u = A sin(2 pi f t) along the direction), as TOML.
     drive: a nsd_core.device.drive.Drive whose plate path (circle, figure8, ... with its ramp) the cap
-    follows instead (motion "device_path"); case: the [[case]] table's text instead of the default."""
-    g = device_geometry(params)
+    follows instead (motion "device_path"); case: the [[case]] table's text instead of the default;
+    geometry: the device's DeviceGeometry when it is not ``device_geometry(params)`` (the gate's
+    injected modelling errors, comparisons.engines.perturb, live in one engine's model only)."""
+    g = device_geometry(params) if geometry is None else geometry
     psi = math.radians(direction_deg)
     lines = [f'''# The negative-stiffness device (Dai et al. 2024) in drive mode, as a model description.
 # Written by `python -m nsd_core.device.describe` from the device's parameters (nsd params lists each
@@ -202,6 +205,7 @@ def device_forces(g) -> str:
     """The device's force elements as TOML: ropes (Eq. 16) base -> cap, SMA wires (Eq. 17) cap ->
     wall, the push spring (Eq. 18) wall -> base; the cap's points are in the cap's frame."""
     w, s = g.wire, g.spring
+    stiffness = np.broadcast_to(np.asarray(g.rope_stiffness, dtype=float), (g.n_ropes,))   # one per rope
     lines = []
     for k in range(g.n_ropes):
         lines.append(f'''
@@ -212,7 +216,7 @@ body_a = "cap"
 point_a = {_v(g.rope_cap_points[k])}
 body_b = "ground"
 point_b = {_v(g.rope_base_points[k])}
-parameters = {{ stiffness = {g.rope_stiffness!r}, free_length = {float(g.rope_natural_length[k])!r} }}
+parameters = {{ stiffness = {float(stiffness[k])!r}, free_length = {float(g.rope_natural_length[k])!r} }}
 ''')
     stress0 = g.initial_wire_stress()
     for k in range(g.n_wires):
