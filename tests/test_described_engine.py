@@ -58,3 +58,17 @@ def test_an_injected_modelling_error_reaches_the_described_model(perturb):
     shift = {m: np.max(np.abs(p["F"] - n["F"])) for m, (n, p) in runs.items()}
     assert shift["described"] > 5e-4 * np.max(np.abs(runs["adapter"][0]["F"]))
     assert abs(shift["described"] - shift["adapter"]) < 0.02 * shift["adapter"]
+
+
+@pytest.mark.parametrize("path", ["line", "circle", "figure8"])
+def test_the_step_loops_table_of_a_device_path_is_the_path_itself(path):
+    """MuJoCo's compiled loop reads the prescribed motion from a table made in one call of the drive's
+    compiled path (comparisons.builders.mujoco_compiled.motion_table): the same numbers, to the bit, as
+    the description's motion evaluated one time at a time."""
+    from comparisons.builders.mujoco_compiled import motion_table
+    from comparisons.engines.described import described_model
+    drive = Drive(amplitude=0.015, frequency=10.0, path=path, cycles=2, samples_per_cycle=100)
+    model, _ = described_model(Params(), drive)
+    t = np.linspace(0.0, drive.duration, 1001)
+    for p in model.prescribed:
+        assert np.array_equal(motion_table(p, t), np.array([p(x) for x in t]).T)
