@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from nsd_core.engine.compiled_model import split_state
 from nsd_core.engine.elements import AxialElements
 from nsd_core.engine.mechanism import Cut, Mechanism, mechanism, revolute_cut
 from nsd_core.engine.semirecursive import SemiRecursiveSystem
@@ -91,7 +92,14 @@ class Forces:
                          for j, f in enumerate(pts) if f.direction is not None]
         self.stateful = [f.name for f in model.forces if f.law.state is not None]
         self.slot = {name: k for k, name in enumerate(self.stateful)}
-        self.initial = np.array([f.initial_state for f in model.forces if f.law.state is not None])
+        # work outputs: quadratures of their power, extra ODE states after the laws' (so the integrator's
+        # own error control and dense output hold them); none declared: nothing computed
+        self.work = [o for o in model.outputs if o.kind == "work"]
+        order = {f.name: j for j, f in enumerate(pts + [f for f, _ in self.joints])}   # _each's order
+        self.work_element = [order.get(o.element, -1) for o in self.work]
+        self.work_at = {o.name: len(self.stateful) + k for k, o in enumerate(self.work)}
+        self.drive_work = [len(self.stateful) + k for k, o in enumerate(self.work) if o.source == "drive"]
+        self.initial = np.array([f.initial_state for f in model.forces if f.law.state is not None] + [0.0] * len(self.work))
         self.excitation, self.mech = model.excitation, tree.mech
 
     def _lengths(self, kin):
@@ -128,10 +136,21 @@ class Forces:
         wrench[:, :3] += f
         wrench[:, 3:] += np.cross(com, f)
 
+    def excitation_power(self, t, kin) -> float:
+        """The excitation's power on the mechanism: sum over the bodies of -m a_g(t) . v_com (relative)."""
+        m = self.mech
+        mc = m.mass[:, None] * (kin.r + np.einsum("nij,nj->ni", kin.A, m.com))   # m r_com
+        w = kin.Z[:, 3:]
+        # sum of m (v_o + w x r_com), the cross products written out (np.cross costs ~20 us a call)
+        p = m.mass @ kin.Z[:, :3] + np.array([w[:, 1] @ mc[:, 2] - w[:, 2] @ mc[:, 1], w[:, 2] @ mc[:, 0] - w[:, 0] @ mc[:, 2],
+                                              w[:, 0] @ mc[:, 1] - w[:, 1] @ mc[:, 0]])
+        return -float(self.excitation.acceleration(t) @ p)
+
     def __call__(self, t, kin, z, zd, extra):
         gen = np.zeros(self.n)
         T = np.zeros(len(self.points))
-        rates = np.zeros(len(self.stateful))
+        rates = np.zeros(len(self.initial))
+        power = np.zeros(len(self.points) + len(self.joints)) if self.work else None
         for j, (f, x, xd, k) in enumerate(self._each(kin, z, zd, extra)):
             value = f.force(x, xd, extra[k] if k >= 0 else 0.0)
             if k >= 0:
@@ -140,10 +159,31 @@ class Forces:
                 T[j] = value
             else:
                 gen[self.joints[j - len(self.points)][1]] += value
+            if power is not None:   # a points law pulls its ends together by T: power -T x'; a joint law Q q'
+                power[j] = (-value if j < len(self.points) else value) * xd
+        for k, (o, j) in enumerate(zip(self.work, self.work_element)):
+            if j >= 0:
+                rates[len(self.stateful) + k] = power[j]
+            elif o.source == "excitation":
+                rates[len(self.stateful) + k] = self.excitation_power(t, kin)
+            # "drive": the drive force is known after the dynamics are solved (DriveWorkSystem.rhs)
         wrench = self.elements.wrench(T) if self.points else np.zeros((self.n, 6))
         if self.excitation is not None:
             self.ground_load(t, kin, wrench)
         return wrench, gen, rates
+
+
+class DriveWorkSystem(SemiRecursiveSystem):
+    """The in-house system of a description with a work output of its drives: that output's rate, the
+    drives' power tau . q'(t), needs the drive forces tau, which the equations of motion give after
+    the applied forces; so it is set here, after the solve, in the ODE's right-hand side."""
+
+    def rhs(self, ws, t, y):
+        zf, zfd, extra = split_state(y, len(self.partition.free))
+        ev = self.rhs_parts(ws, t, zf, zfd, extra)
+        rate = ev.extra_rate
+        rate[self.forces.drive_work] = float(ev.drive_force @ ev.zd[self.prescribed])
+        return np.concatenate([zfd, ev.zdd[self.partition.free], rate])
 
 
 def system_of(model: Model, tree: Tree | None = None) -> tuple[SemiRecursiveSystem, Tree]:
@@ -156,8 +196,8 @@ def system_of(model: Model, tree: Tree | None = None) -> tuple[SemiRecursiveSyst
         return qs[:, 0].copy(), qs[:, 1].copy(), qs[:, 2].copy()
     prefer = [tree.coordinate[c] for c in model.free]
     forces = Forces(model, tree)
-    system = SemiRecursiveSystem(tree.mech, tree.prescribed, motion, forces, n_extra=len(forces.stateful),
-                                 prefer_free=prefer)
+    kind = DriveWorkSystem if forces.drive_work else SemiRecursiveSystem
+    system = kind(tree.mech, tree.prescribed, motion, forces, n_extra=len(forces.initial), prefer_free=prefer)
     return system, tree
 
 

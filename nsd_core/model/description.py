@@ -20,6 +20,10 @@ The conventions every builder follows (docs/models.md):
   body feels -m a_g(t) besides gravity, i.e. the uniform field g - a_g(t);
 - outputs are in the file's frame (relative to the ground when it moves), except
   ``point_acceleration``: the absolute (inertial) acceleration, the frame's relative one plus a_g(t);
+- ``work``: the work done on the mechanism since t = 0, integral of the power over the run: of a force
+  element (a points law: -T x', its tension against its x's rate; a joint law: Q q'), of the excitation
+  (sum over the bodies of -m a_g(t) . v_com, v relative to the moving frame) or of the drives (each
+  prescribed motion's drive force times q'(t)); kinetic + gravity energy less every work is constant;
 - SI units everywhere: m, kg, kg m^2, s, rad, N, N m.
 """
 from __future__ import annotations
@@ -36,7 +40,8 @@ GROUND = "ground"
 JOINT_DOFS = {"revolute": 1, "prismatic": 1, "universal": 2, "spherical": 3, "planar": 3, "planar_translation": 2,
               "translational": 3}
 OUTPUT_KINDS = ("coordinate", "point", "point_velocity", "point_acceleration", "force", "drive_force", "energy",
-                "state")
+                "state", "work")
+WORK_SOURCES = ("excitation", "drive")   # a work output's loads other than a force element's
 MOTION_KINDS = {"constant_speed": ("start", "speed"), "harmonic": ("centre", "amplitude", "frequency", "phase"),
                 "device_path": ("path", "amplitude", "minor", "frequency", "direction", "component")}
 COMPONENTS = {"x": 0, "y": 1, "z": 2}
@@ -165,7 +170,8 @@ class Output:
     point: tuple = (0.0, 0.0, 0.0)
     component: int = 0
     dof: int = 0
-    element: str = ""        # force, state: a force element; drive_force: a prescribed motion
+    element: str = ""        # force, state, work: a force element; drive_force: a prescribed motion
+    source: str = ""         # work: "excitation" or "drive" (every prescribed motion's) instead of an element
     term: str = ""           # energy: kinetic or gravity
     tolerance: float = 1e-3  # engineering tolerance, a fraction of the scale
     scale: float = 0.0       # the quantity's scale [its unit]; 0: the reference's peak |value|

@@ -12,8 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from nsd_core.model.description import (COMPONENTS, GROUND, JOINT_DOFS, MOTION_KINDS, OUTPUT_KINDS, Body,
-                                        ForceElement, Joint, Loop, Model, Output, Prescribed)
+from nsd_core.model.description import (COMPONENTS, GROUND, JOINT_DOFS, MOTION_KINDS, OUTPUT_KINDS, WORK_SOURCES,
+                                        Body, ForceElement, Joint, Loop, Model, Output, Prescribed)
 from nsd_core.model.errors import ModelError
 from nsd_core.model.excitation import parse_excitation
 from nsd_core.model.laws import JOINT, POINTS, get_law
@@ -297,7 +297,7 @@ def _device_path(where: str, t: dict) -> dict:
 def _output(i: int, t: dict, model: Model) -> Output:
     where = f"outputs[{i}]"
     _fields(where, t, {"name", "kind", "body", "point", "component", "joint", "dof", "element", "term",
-                       "tolerance", "scale"}, ("kind",))
+                       "source", "tolerance", "scale"}, ("kind",))
     name = _name(f"{where}.name", t.get("name", f"output{i}"))
     where = f"outputs.{name}"
     kind = t["kind"]
@@ -333,6 +333,8 @@ def _output(i: int, t: dict, model: Model) -> Output:
                              f"state: {', '.join(stateful) or '(none)'}")
         f = el[t["element"]]
         return Output(name, kind, element=f.name, unit=f.law.state.unit, **common)
+    if kind == "work":
+        return Output(name, kind, **_work(where, t, model), unit="J", **common)
     if kind == "drive_force":
         pr = {p.name: p for p in model.prescribed}
         if t.get("element") not in pr:
@@ -345,6 +347,22 @@ def _output(i: int, t: dict, model: Model) -> Output:
     if term not in ("kinetic", "gravity"):
         raise ModelError(f"{where}.term = {term!r}: allowed: kinetic, gravity")
     return Output(name, kind, term=term, unit="J", **common)
+
+
+def _work(where: str, t: dict, model: Model) -> dict:
+    """A work output's one load: ``element`` (a force element) or ``source`` (WORK_SOURCES)."""
+    if ("element" in t) == ("source" in t):
+        raise ModelError(f"{where}: give exactly one of element (a force element) or source "
+                         f"({', '.join(WORK_SOURCES)})")
+    elements = [f.name for f in model.forces]
+    if "element" in t and t["element"] not in elements:
+        raise ModelError(f"{where}.element = {t['element']!r}: must name a force element; allowed: "
+                         f"{', '.join(elements) or '(none)'}")
+    present = {"excitation": model.excitation is not None, "drive": bool(model.prescribed)}
+    if "source" in t and not (isinstance(t["source"], str) and present.get(t["source"])):
+        allowed = ", ".join(k for k in WORK_SOURCES if present[k]) or "(none: no [excitation], no [[prescribed]])"
+        raise ModelError(f"{where}.source = {t['source']!r}: allowed: {allowed}")
+    return {"element": t["element"]} if "element" in t else {"source": t["source"]}
 
 
 def _initial(t, bodies, prescribed) -> dict:
