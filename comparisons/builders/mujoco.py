@@ -68,7 +68,10 @@ point_velocity from the body's pose and mj_jac; point_acceleration = J qacc + J'
 mj_jacDot; qacc of the output time's own mj_forward) plus a_g(t); force = the law's value at that
 state; state = the law's activation after that evaluation (the value its force used); drive_force as
 above; kinetic energy = 1/2 v^T M v less the virtual drives' armature share; gravity potential =
--sum m g . r_com (both as nsd_core.engine.dynamics). stats: wall_time (steps and outputs only),
+-sum m g . r_com (both as nsd_core.engine.dynamics); work = the trapezoid of its power at the steps'
+first evaluations (a drive's: each step's average force times q's change): the energy balance's
+residual second order with RK4 (nsd_seismic 9.2e-5 of the peak work at 1e-4 s), first with Euler
+(1.5e-4 at 1e-5 s; fourbar_spring 3.1e-2 at 1e-4 s). stats: wall_time (steps and outputs only),
 steps, timestep, closure_max (largest distance between the two sites of any connect at the output
 times [m]; a revolute loop's second pair measures the axes' misalignment times the arm),
 tracking_error.
@@ -105,7 +108,7 @@ import mujoco
 import numpy as np
 
 from comparisons.builders import mujoco_codegen, mujoco_compiled
-from comparisons.builders.mujoco_passive import Passive
+from comparisons.builders.mujoco_passive import DRIVE, Passive, work_plan
 from comparisons.builders.mujoco_mjcf import build_mjcf, connects, joint_name, state_activations
 from comparisons.engines.base import EngineError, check_step_count
 from nsd_core.model.assemble import initial_state
@@ -179,25 +182,29 @@ def simulate(model: Model, duration: float, dt_out: float, settings: dict | None
     pairs = [(m.site(f"{c[0]}:a").id, m.site(f"{c[0]}:b").id) for c in connects(model, init.rotation)]
     weights = RK4_WEIGHTS if s["integrator"] == "RK4" else np.ones(1)
     uses = drive_force_uses(n_steps, n_sub, s["integrator"]) if drives else {}
+    plan = work_plan(model, m)
     if compiled:
-        data, drive_at, wall, closure, tracking = mujoco_compiled.run(
+        data, drive_at, wall, closure, tracking, work = mujoco_compiled.run(
             model, s, m, d, drives, pairs, t_out, n_sub, h, n_steps, weights, uses,
-            lambda forces: _sampler(model, m, d, forces))
+            lambda forces: _sampler(model, m, d, forces), plan)
     else:
-        data, drive_at, wall, closure, tracking = _run_python(model, s, m, d, drives, pairs, t_out, n_sub, h,
-                                                               n_steps, weights, uses)
+        data, drive_at, wall, closure, tracking, work = _run_python(model, s, m, d, drives, pairs, t_out, n_sub, h,
+                                                                     n_steps, weights, uses, plan)
     for k, o in enumerate(model.outputs):
         if o.kind == "drive_force":
             data[:, k] = drive_at[:, [p.name for p in model.prescribed].index(o.element)]
+    data[:, [k for k, o in enumerate(model.outputs) if o.kind == "work"]] = work
     return ModelRun(name, t_out, {o.name: data[:, k] for k, o in enumerate(model.outputs)},
                     {o.name: o.unit for o in model.outputs},
                     {"wall_time": wall, "steps": n_steps, "timestep": h, "closure_max": closure,
                      "tracking_error": tracking, "mujoco_version": mujoco.__version__, **s})
 
 
-def _run_python(model, s, m, d, drives, pairs, t_out, n_sub, h, n_steps, weights, uses):
+def _run_python(model, s, m, d, drives, pairs, t_out, n_sub, h, n_steps, weights, uses, plan):
     """The readable reference loop (``passive = "python"``): Passive as mjcb_passive, one Python
-    iteration per step. Returns as mujoco_compiled.run."""
+    iteration per step. Returns as mujoco_compiled.run. Work outputs (``plan``: mujoco_passive.work_plan):
+    the trapezoid of each one's power at the steps' first evaluations (second order; RK4's stages are
+    not weighed in), the drives' as each step's measured average force times the change of q(t)."""
     forces = Passive(model, m, drives, advance=s["integrator"] == "Euler")
     sample = _sampler(model, m, d, forces)
     advance = {"RK4": lambda: mujoco.mj_RungeKutta(m, d, 4), "Euler": lambda: mujoco.mj_Euler(m, d)}[s["integrator"]]
@@ -206,6 +213,9 @@ def _run_python(model, s, m, d, drives, pairs, t_out, n_sub, h, n_steps, weights
     rows, closure, tracking = [], 0.0, 0.0
     drive_at = np.zeros((len(t_out), len(drives)))   # the drive forces at the output times
     rk4 = s["integrator"] == "RK4"
+    work_of, sign, mass = plan
+    work, power, rec_work = np.zeros(len(work_of)), None, np.zeros((len(t_out), len(work_of)))
+    drive_work = work_of == DRIVE
 
     def measure(n, t):
         # the step's average drive force (its impulse / h; RK4: at the step's middle): the weighted
@@ -232,7 +242,12 @@ def _run_python(model, s, m, d, drives, pairs, t_out, n_sub, h, n_steps, weights
             d.time = t
             forces.feeds.clear()
             mujoco.mj_forward(m, d)
+            if len(work_of):
+                now = forces.powers(m, d, work_of, sign, mass)
+                work += 0.0 if power is None else 0.5 * h * (power + now)
+                power = now
             if n % n_sub == 0:
+                rec_work[n // n_sub] = work
                 gap = max((float(np.linalg.norm(d.site_xpos[a] - d.site_xpos[b])) for a, b in pairs), default=0.0)
                 closure = max(closure, gap)
                 if not (np.all(np.isfinite(d.qpos)) and gap < s["closure_limit"]):
@@ -246,6 +261,8 @@ def _run_python(model, s, m, d, drives, pairs, t_out, n_sub, h, n_steps, weights
             advance()
             if drives:
                 measure(n, t)
+                if drive_work.any():   # the step's drive work: its average force times q's change
+                    work[drive_work] += float(forces.tau @ np.array([p(t + h)[0] - p(t)[0] for p, *_ in drives]))
             for p, qa, da, _ in drives:   # the drive's coordinate, exactly on its path
                 q, qd, _ = p(t + h)
                 tracking = max(tracking, abs(d.qpos[qa] - q))
@@ -254,7 +271,7 @@ def _run_python(model, s, m, d, drives, pairs, t_out, n_sub, h, n_steps, weights
     finally:
         mujoco.set_mjcb_passive(previous[0])
         mujoco.set_mjcb_act_dyn(previous[1])
-    return np.array(rows, dtype=float), drive_at, wall, closure, tracking
+    return np.array(rows, dtype=float), drive_at, wall, closure, tracking, rec_work
 
 
 def drive_force_uses(n_steps: int, n_sub: int, integrator: str) -> dict[int, list[tuple[int, float]]]:
@@ -372,7 +389,7 @@ def _sampler(model: Model, m: mujoco.MjModel, d: mujoco.MjData, forces: Passive)
             return laws[o.element]
         if o.kind == "state":   # the activation the law's state lives in (after this evaluation's advance)
             return d.act[acts[o.element]]
-        if o.kind == "drive_force":
+        if o.kind in ("drive_force", "work"):   # filled by simulate from the steps
             return math.nan
         if o.term == "kinetic":
             return kinetic()

@@ -211,6 +211,8 @@ def source(model: Model, lay: Layout, nbody: int) -> tuple[str, dict]:
                       f"        ud[{lay.rates_at} + int(ud[{slot}])] = {names[id(f.law.rate)]}(x, xd, s, ud[{p0}:{p1}])",
                       f"    f = {law}(x, xd, s, ud[{p0}:{p1}])"]
         lines.append(f"    ud[{lay.values[e]}] = f")
+        if any(o.kind == "work" for o in model.outputs):   # x' beside the value: the step loop's power
+            lines.append(f"    ud[{lay.values[e] + 1}] = xd")
         lines.append(f"    apply_points(ud, {at}, f, {lay.nv})" if f.law.acts_on == POINTS
                      else f"    qfrc[int(ud[{at + 1}])] += f")
     if lay.na:

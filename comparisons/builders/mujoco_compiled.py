@@ -28,6 +28,7 @@ from comparisons.builders import mujoco_kernels as K
 from comparisons.builders.mujoco_cabi import data_offsets, function_address
 from comparisons.builders.mujoco_codegen import callbacks, layout, pack
 from comparisons.builders.mujoco_mjcf import joint_name, state_activations
+from comparisons.builders.mujoco_passive import EXCITATION
 from comparisons.engines.base import EngineError
 
 REPLAYED = ("point", "point_velocity", "point_acceleration", "energy")
@@ -75,9 +76,10 @@ class _Recorded:
 
 
 def run(model, s: dict, m, d, drives: list, pairs: list, t_out: np.ndarray, n_sub: int, h: float,
-        n_steps: int, weights: np.ndarray, uses: dict, sampler) -> tuple:
-    """The run: (outputs at t_out (drive forces NaN), drive forces at t_out, wall time [s], largest loop
-    gap, tracking error). ``sampler(forces)`` is mujoco._sampler on (m, d) with law values ``forces``."""
+        n_steps: int, weights: np.ndarray, uses: dict, sampler, plan) -> tuple:
+    """The run: (outputs at t_out (drive forces and work NaN), drive forces at t_out, wall time [s], largest
+    loop gap, tracking error, the work outputs at t_out). ``sampler(forces)`` is mujoco._sampler on (m, d)
+    with law values ``forces``; ``plan`` mujoco_passive.work_plan."""
     lay = layout(model)
     ud = d.userdata
     pack(ud, model, m, drives, lay)
@@ -97,6 +99,8 @@ def run(model, s: dict, m, d, drives: list, pairs: list, t_out: np.ndarray, n_su
     gaps, drive_at = np.zeros(n_out), np.zeros((n_out, nd))
     clock = np.ctypeslib.as_array((ctypes.c_double * 1).from_address(d._address + 8 * data_offsets()["time"]))
     rk4 = s["integrator"] == "RK4"
+    work_of, sign, mass = plan
+    rec_work = np.zeros((n_out, len(work_of)))
     fn_forward = function_address("mj_forward")
     fn_advance = function_address("mj_RungeKutta" if rk4 else "mj_Euler")
     previous = mujoco.get_mjcb_passive(), mujoco.get_mjcb_act_dyn()
@@ -116,7 +120,9 @@ def run(model, s: dict, m, d, drives: list, pairs: list, t_out: np.ndarray, n_su
         args = (fn_forward, fn_advance, rk4, m._address, d._address, clock, d.qpos, d.qvel, d.act, d.qacc,
                 d.site_xpos, ud, n_sub, n_steps, h, weights, acc_half, q_at, qd_at, drive_qa, uses_ptr, uses_k,
                 uses_w, site_pairs, float(s["closure_limit"]), lay.values, rec_qpos, rec_qvel, rec_act, rec_val,
-                rec_qacc, gaps, drive_at)
+                rec_qacc, gaps, drive_at, work_of, sign,
+                function_address("mj_subtreeVel") if np.any(work_of == EXCITATION) else 0, d.subtree_linvel, mass,
+                model.excitation.block if model.excitation is not None else np.zeros(1), rec_work)
         K.step_loop.compile(tuple(numba.typeof(a) for a in args))   # (or load) before the clock starts
         begin = time.perf_counter()
         tracking, failed = K.step_loop(*args)
@@ -149,4 +155,4 @@ def run(model, s: dict, m, d, drives: list, pairs: list, t_out: np.ndarray, n_su
     finally:
         mujoco.set_mjcb_passive(previous[0])
         mujoco.set_mjcb_act_dyn(previous[1])
-    return data, drive_at, wall, float(gaps.max()), float(tracking)
+    return data, drive_at, wall, float(gaps.max()), float(tracking), rec_work

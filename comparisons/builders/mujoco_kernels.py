@@ -41,6 +41,7 @@ import numpy as np
 from numba import njit
 
 from comparisons.builders.mujoco_cabi import call_jac, call_md, call_md_int
+from nsd_core.device.ground import ground_values
 
 # header (EXCITATION_SIZE: the length of the excitation's ground_values block, last in userdata;
 # ADVANCE: 1 where the passive callback advances the laws' states itself (Euler), 0 where MuJoCo
@@ -55,9 +56,10 @@ S_BODY, S_POINT, S_VEL, S_OMEGA, S_FORCE, S_MOMENT, S_MASS, S_COM, S_JAC = 0, 1,
 # a drive: dof address, armature, tau, tau', q'' at the step's start / middle / end, the stages' feeds
 D_DOF, D_ARM, D_TAU, D_SLOPE, D_ACC, D_FEED, DRIVE_SIZE = 0, 1, 2, 3, 4, 7, 7 + MAX_STAGES
 # a points element: slot of body a (-1: ground), point a (3), slot of body b, point b (3), its state's
-# index in act (-1: none), its x at the states' last advance (ADVANCE), last value, (unused), its
-# direction e (ground frame; zero for a line element), then the law's parameters; a joint element: qpos
-# and dof address, act index, x at the last advance, value, (unused), parameters
+# index in act (-1: none), its x at the states' last advance (ADVANCE), last value, its x' (kept by a
+# description with work outputs), its direction e (ground frame; zero for a line element), then the
+# law's parameters; a joint element: qpos and dof address, act index, x at the last advance, value, x'
+# (as a points element's), parameters
 P_SLOT, P_PREVIOUS, P_VALUE, P_DIRECTION, POINTS_HEAD = 8, 9, 10, 12, 15
 J_SLOT, J_PREVIOUS, J_VALUE, JOINT_HEAD = 2, 3, 4, 6
 
@@ -250,16 +252,39 @@ def _measure(ud, weights, qacc, uses_ptr, uses_k, uses_w, drive_at, n, h, t, rk4
 
 
 @njit(cache=True)
+def work_powers(ud, values, sign, work_of, power, fn_subtree, m_addr, d_addr, linvel, mass, t, ground):
+    """Each work output's power at this evaluation (mujoco_passive.Passive.powers, the same arithmetic):
+    an element's sign x value x x' (the generated callback keeps x' beside the value), the excitation's
+    -a_g(t) . (M v_com) (MuJoCo's mj_subtreeVel: v_com of the whole mechanism), a drive's 0 (the loop
+    adds each step's drive work)."""
+    for k in range(work_of.shape[0]):
+        e = work_of[k]
+        if e >= 0:
+            power[k] = sign[e] * ud[values[e]] * ud[values[e] + 1]
+        elif e == -1:
+            call_md(fn_subtree, m_addr, d_addr)
+            ag = ground_values(t, ground, 0)
+            power[k] = -mass * (ag[4] * linvel[0, 0] + ag[5] * linvel[0, 1])
+        else:
+            power[k] = 0.0
+
+
+@njit(cache=True)
 def step_loop(fn_forward, fn_advance, rk4, m_addr, d_addr, time, qpos, qvel, act, qacc, site_xpos, ud,
               n_sub, n_steps, h, weights, acc_half, q_at, qd_at, drive_qa, uses_ptr, uses_k, uses_w,
-              pairs, closure_limit, values, rec_qpos, rec_qvel, rec_act, rec_val, rec_qacc, gaps, drive_at):
+              pairs, closure_limit, values, rec_qpos, rec_qvel, rec_act, rec_val, rec_qacc, gaps, drive_at,
+              work_of, sign, fn_subtree, linvel, mass, ground, rec_work):
     """comparisons.builders.mujoco.simulate's step loop, natively, in the same order of operations.
 
-    Records, at every output time, qpos, qvel, act, qacc, each element's last law value and the loop gap.
+    Records, at every output time, qpos, qvel, act, qacc, each element's last law value, the loop gap
+    and the work outputs (``work_of``: mujoco_passive.work_plan; the trapezoid of their powers at the
+    steps' first evaluations, a drive's as each step's average force times q's change; none: no cost).
     Returns (largest tracking error, failing output index or -1, -2 for a stage count that is not the
     integrator's)."""
     nd = drive_qa.shape[0]
     tracking = 0.0
+    nw = work_of.shape[0]
+    work, power, now = np.zeros(nw), np.zeros(nw), np.zeros(nw)
     for n in range(n_steps + 1):
         t = n * h
         time[0] = t
@@ -267,8 +292,16 @@ def step_loop(fn_forward, fn_advance, rk4, m_addr, d_addr, time, qpos, qvel, act
         ud[T_STEP] = t
         set_stage_accelerations(ud, acc_half, n)
         call_md(fn_forward, m_addr, d_addr)
+        if nw:
+            work_powers(ud, values, sign, work_of, now, fn_subtree, m_addr, d_addr, linvel, mass, t, ground)
+            for i in range(nw):
+                if n:
+                    work[i] += 0.5 * h * (power[i] + now[i])
+                power[i] = now[i]
         if n % n_sub == 0:
             k = n // n_sub
+            for i in range(nw):
+                rec_work[k, i] = work[i]
             gap = 0.0
             for i in range(pairs.shape[0]):
                 a, b = pairs[i, 0], pairs[i, 1]
@@ -297,6 +330,10 @@ def step_loop(fn_forward, fn_advance, rk4, m_addr, d_addr, time, qpos, qvel, act
             call_md(fn_advance, m_addr, d_addr)
         if nd and not _measure(ud, weights, qacc, uses_ptr, uses_k, uses_w, drive_at, n, h, t, rk4):
             return tracking, -2
+        for j in range(nw):
+            if work_of[j] == -2:   # the step's drive work: each drive's average force times q's change
+                for i in range(nd):
+                    work[j] += ud[int(ud[DRIVES_AT]) + DRIVE_SIZE * i + D_TAU] * (q_at[i, n + 1] - q_at[i, n])
         for i in range(nd):   # the drive's coordinate, exactly on its path
             qa, da = drive_qa[i, 0], drive_qa[i, 1]
             tracking = max(tracking, abs(qpos[qa] - q_at[i, n + 1]))

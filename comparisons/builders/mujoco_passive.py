@@ -20,6 +20,8 @@ numbers in the same order; tests/test_mujoco_codegen.py holds them equal to roun
   Euler evaluates once per step, at its start, so the state always matches the configuration the
   force sees (comparisons.builders.mujoco says why). Otherwise (RK4) MuJoCo integrates it from the
   rate handed over by ``act_dyn``.
+- Work outputs (``work_plan``, ``Passive.powers``): each one's power at the step's first evaluation;
+  the step loops integrate it by the trapezoid over the steps (comparisons.builders.mujoco).
 """
 from __future__ import annotations
 
@@ -29,6 +31,21 @@ import numpy as np
 from comparisons.builders.mujoco_mjcf import joint_name, state_activations
 from nsd_core.model.description import GROUND, Model
 from nsd_core.model.laws import POINTS
+
+EXCITATION, DRIVE = -1, -2   # a work output's load when it is no element (work_plan)
+
+
+def work_plan(model: Model, m: mujoco.MjModel):
+    """The work outputs as the step loops integrate them: (each one's element index in the description,
+    or EXCITATION or DRIVE; each element's power sign: a points law's tension T pulls its ends together,
+    power -T x', a joint law's Q drives its coordinate, power Q q'; the total mass the excitation loads,
+    MuJoCo's own). Its power is then sign value x' (an element), -a_g(t) . (M v_com) of the whole
+    mechanism (the excitation: the sum of -m a_g . v_com over the bodies) or the drives' (DRIVE)."""
+    index = {f.name: e for e, f in enumerate(model.forces)}
+    work_of = np.array([index[o.element] if o.element else (EXCITATION if o.source == "excitation" else DRIVE)
+                        for o in model.outputs if o.kind == "work"], dtype=np.int64)
+    sign = np.array([-1.0 if f.law.acts_on == POINTS else 1.0 for f in model.forces])
+    return work_of, sign, float(m.body_subtreemass[0])
 
 
 class Passive:
@@ -55,6 +72,7 @@ class Passive:
             else:
                 j = m.joint(joint_name(f.joint, f.dof))
                 self.joints.append((f, int(j.qposadr[0]), int(j.dofadr[0]), slot))
+        self.forces = model.forces
         self.excitation = model.excitation
         # the bodies the excitation loads: every one with a mass (MuJoCo's own, as its gravity uses)
         self.loaded = [(b, float(m.body_mass[b])) for b in range(1, m.nbody) if m.body_mass[b] > 0.0]
@@ -123,6 +141,22 @@ class Passive:
         """Each element's force at d's state (tension [N], or generalized force)."""
         out = {f.name: self.law(d, f, *self.element_state(m, d, ends, u)[:2], slot) for f, ends, slot, u in self.points}
         out.update({f.name: self.law(d, f, d.qpos[qa], d.qvel[da], slot) for f, qa, da, slot in self.joints})
+        return out
+
+    def powers(self, m, d, work_of, sign, mass) -> np.ndarray:
+        """Each work output's power at d's evaluated state (the drives' is left 0: the loop adds each
+        step's drive work itself). The laws' states are read, not advanced."""
+        rates = {f.name: (*self.element_state(m, d, ends, u)[:2], slot) for f, ends, slot, u in self.points}
+        rates.update({f.name: (d.qpos[qa], d.qvel[da], slot) for f, qa, da, slot in self.joints})
+        out = np.zeros(len(work_of))
+        for k, e in enumerate(work_of):
+            if e == EXCITATION:
+                mujoco.mj_subtreeVel(m, d)
+                out[k] = -mass * float(self.excitation.acceleration(d.time) @ d.subtree_linvel[0])
+            elif e >= 0:
+                f = self.forces[e]
+                x, xd, slot = rates[f.name]
+                out[k] = sign[e] * self.law(d, f, x, xd, slot) * xd
         return out
 
     def act_dyn(self, m, d, actuator: int) -> float:
