@@ -53,7 +53,7 @@ output interval): joint coordinates (angles continuous across +-pi), points and 
 velocities, the laws' values (at the committed states), the drive's generalized force (the locked
 axis' reaction; the sign of the in-house ``Evaluation.drive_force``: positive drives the coordinate
 up), kinetic and gravity
-energy (-sum m g . r_com, as nsd_core.engine.dynamics).
+energy (-sum m g . r_com, as nsd_core.engine.dynamics), work (exudyn_work: powers by the trapezoid).
 
 Steps for a relative error ~1e-3 (largest |Exudyn - in-house at rtol 1e-11| over an output's peak,
 worst output named; generalized-alpha rho_inf 0.8; second order, the error falls 4x per halving; wall
@@ -100,6 +100,7 @@ from comparisons.builders.exudyn_frames import (AXIS_OF_DOF, constrained_axes, c
                                                 joint_frame, planar_normal)
 from comparisons.builders.exudyn_outputs import Sampler
 from comparisons.builders.exudyn_solver import redundant_constraints, solver_settings
+from comparisons.builders.exudyn_work import Work
 from comparisons.engines.base import EngineError
 from comparisons.engines.exudyn_quiet import quiet_allocation_warning
 from nsd_core.model.assemble import initial_state
@@ -334,6 +335,7 @@ def _run(model: Model, s: dict, duration: float, dt_out: float) -> ModelRun:
     n_steps = per_out * (len(t_out) - 1)
     build = Build(model, s, duration / n_steps)
     sample = Sampler(build)
+    work = sample.work = Work(build, sample) if any(o.kind == "work" for o in model.outputs) else None
     counter = [0]
     h, predicted = duration / n_steps, build.compiled is not None and build.compiled.predicted
 
@@ -345,6 +347,8 @@ def _run(model: Model, s: dict, duration: float, dt_out: float) -> ModelRun:
         build.drive(t)
         if sample.stateful:
             sample.commit()
+        if work is not None:   # the converged state at t - h (before predict, which moves no state)
+            work.step(t - h)
         if predicted:
             build.compiled.predict(mbs, h)
         if n % per_out == 0:
@@ -372,6 +376,8 @@ def _run(model: Model, s: dict, duration: float, dt_out: float) -> ModelRun:
                           f"(t = {counter[0] * duration / n_steps:.6g} s): {why}")
     if sample.stateful:
         sample.commit()
+    if work is not None:
+        work.step(duration)
     sample.record(t_out[-1])
     wall = time.perf_counter() - begin
     begin = time.perf_counter()

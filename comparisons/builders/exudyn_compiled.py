@@ -119,6 +119,19 @@ class CompiledForces:
         st, a, n = self.states, self.s_at, self.ns
         st.s[:], st.r[:], st.started = self.W[a:a + n].tolist(), self.W[a + n:a + 2 * n].tolist(), True
 
+    def rates(self, mbs) -> tuple[np.ndarray, np.ndarray]:
+        """Every element's (x, x') at Exudyn's current coordinates, in ``elements``' order (the compiled
+        kinematics of the force call; exudyn_work's powers at the converged steps)."""
+        if self.index is None:
+            self.index = np.concatenate([np.arange(i, i + 7) for i in map(mbs.GetNodeODE2Index, self.nodes)])
+        sd, nb, ne = mbs.systemData, len(self.bodies), len(self.elements)
+        x, xd = np.empty(ne), np.empty(ne)
+        self.gen._state(self.F, self.I, self.W, self.f, np.asarray(sd.GetODE2Coordinates())[self.index],
+                        np.asarray(sd.GetODE2Coordinates_t())[self.index], x, xd, np.empty(ne), np.empty((ne, 3)),
+                        np.empty((ne, 2, 3)), np.empty((nb, 3, 3)), np.empty((nb, 3, 4)), np.empty((nb, 3)),
+                        np.empty((nb, 3)), np.empty((nb, 3)))
+        return x, xd
+
     def user_functions(self):
         """Exudyn's force and Jacobian user functions: plain closures around the compiled calls (the
         force function runs ~5 times a step: no attribute look-ups, Exudyn's lists as arrays)."""

@@ -36,17 +36,19 @@ class Sampler:
         self.q = {}
         self.recorded = []
         self.t = 0.0
+        self.work = None   # exudyn_work.Work: the work outputs, integrated in the run (set by the builder)
 
     def record(self, t: float) -> None:
         """The converged state at output time t, for ``replay``."""
         sd = self.b.mbs.systemData
         self.recorded.append((t, sd.GetODE2Coordinates(), sd.GetODE2Coordinates_t(), sd.GetODE2Coordinates_tt(),
-                              sd.GetAECoordinates(), list(self.b.states.s)))
+                              sd.GetAECoordinates(), list(self.b.states.s),
+                              None if self.work is None else dict(zip(self.work.names, self.work.work))))
 
     def replay(self) -> None:
         """Every output at the recorded states, in time order (angles continuous across samples)."""
         sd, now = self.b.mbs.systemData, exu.ConfigurationType.Current
-        for t, q, q_t, q_tt, lam, s in self.recorded:
+        for t, q, q_t, q_tt, lam, s, self.works in self.recorded:
             sd.SetODE2Coordinates(q, now)
             sd.SetODE2Coordinates_t(q_t, now)
             sd.SetODE2Coordinates_tt(q_tt, now)
@@ -121,6 +123,8 @@ class Sampler:
                 row.append(float(self.b.states.s[self.slot[o.element]]))
             elif o.kind == "drive_force":
                 row.append(self.b.drive_force(self.drives[o.element]))
+            elif o.kind == "work":   # integrated in the run to this time (exudyn_work), recorded
+                row.append(float(self.works[o.name]))
             else:
                 row.append(self.energy(P, o.term))
         self.rows.append(row)

@@ -1,0 +1,76 @@
+"""The Exudyn builder's work outputs (kind ``work``, comparisons.builders.exudyn): each one's power at
+every converged step, integrated by the trapezoid over Exudyn's steps (second order, as
+generalized-alpha), in the pre-step function: the output step is too coarse for the quadrature.
+
+Powers, at the converged state and time of a step's end (every force path the same, read back as the
+outputs read a force: exudyn_outputs.Sampler.law_value, the laws' committed states):
+- a force element: a points law's tension T pulls its ends together, power -T x' (x' the rate of
+  its distance, or of its offset along its direction); a joint law's Q drives its coordinate, Q q';
+- the excitation: the sum over the bodies of -m a_g(t) . v_com (the nodes sit at the centres of mass;
+  their velocities are relative to the moving frame, as the load -m a_g(t) is applied: exudyn.Build);
+- the drives: each prescribed motion's drive force (Build.drive_force, the locked axis' reaction)
+  times q'(t).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from nsd_core.model.laws import POINTS
+from comparisons.builders.exudyn_forces import law_arguments
+
+
+class Work:
+    """The work outputs of one run: ``step(t)`` at every converged state; the sampler records ``work``
+    (by ``names``) with each output time's state."""
+
+    def __init__(self, build, sampler):
+        self.b, self.sample = build, sampler
+        m = build.model
+        self.outputs = [o for o in m.outputs if o.kind == "work"]
+        self.names = [o.name for o in self.outputs]
+        elements = {f.name: f for f in m.forces}
+        self.elements = [elements.get(o.element) for o in self.outputs]
+        # the joints whose coordinates (continuous angles) the joint laws read
+        self.joints = {f.joint for f in self.elements if f is not None and f.law.acts_on != POINTS}
+        self.mass = np.array([b.mass for b in m.bodies])
+        self.velocity_index = None   # the nodes' velocity entries in Exudyn's ODE2 rates, once assembled
+        self.work = np.zeros(len(self.outputs))
+        self.power, self.t = None, 0.0
+
+    def arguments(self):
+        """Each work element's (x, x', committed state): the compiled paths' kinematics in one call
+        (exudyn_compiled.CompiledForces.rates), the connectors' read from the poses as its outputs are."""
+        b, states = self.b, self.b.states
+        slot = {f.name: k for k, f in enumerate(states.elements)}
+        if b.compiled is not None:
+            x, xd = b.compiled.rates(b.mbs)
+            at = {f.name: j for j, f in enumerate(b.compiled.elements)}
+            return [None if f is None else (x[at[f.name]], xd[at[f.name]], states.s[slot[f.name]] if f.name in slot else 0.0)
+                    for f in self.elements]
+        P = self.sample.read(self.joints)
+        return [None if f is None else (*law_arguments(b, P, self.sample.q, f), states.s[slot[f.name]] if f.name in slot else 0.0)
+                for f in self.elements]
+
+    def powers(self, t: float) -> np.ndarray:
+        b, out = self.b, np.zeros(len(self.outputs))
+        args = self.arguments() if any(f is not None for f in self.elements) else None
+        for k, (o, f) in enumerate(zip(self.outputs, self.elements)):
+            if f is not None:
+                x, xd, s = args[k]
+                out[k] = (-1.0 if f.law.acts_on == POINTS else 1.0) * f.force(x, xd, s) * xd
+            elif o.source == "excitation":
+                if self.velocity_index is None:
+                    self.velocity_index = np.array([[b.mbs.GetNodeODE2Index(b.node[body.name]) + c for c in range(3)]
+                                                    for body in b.model.bodies])
+                v = np.asarray(b.mbs.systemData.GetODE2Coordinates_t())[self.velocity_index]
+                out[k] = -float(b.excitation.acceleration(t) @ (self.mass @ v))
+            else:
+                out[k] = sum(b.drive_force(p) * p(t)[1] for p in b.model.prescribed)
+        return out
+
+    def step(self, t: float) -> None:
+        """The converged state at t: the trapezoid from the last one."""
+        now = self.powers(t)
+        if self.power is not None:
+            self.work += 0.5 * (t - self.t) * (self.power + now)
+        self.power, self.t = now, t
