@@ -64,6 +64,17 @@ parameters = {{ gap = {r.gap!r}, stiffness = {r.stiffness!r}, exponent = {r.expo
     return out, forces
 
 
+def _inline(t: dict) -> str:
+    """A flat table of strings, numbers and number lists as a TOML inline table (floats by repr)."""
+    def value(v):
+        if isinstance(v, str):
+            return f'"{v}"'
+        if isinstance(v, (list, tuple)):
+            return "[" + ", ".join(value(x) for x in v) + "]"
+        return repr(v) if isinstance(v, int) and not isinstance(v, bool) else repr(float(v))
+    return "{ " + ", ".join(f"{k} = {value(v)}" for k, v in t.items()) + " }"
+
+
 def _spring_along(name: str, comment: str, a: str, b: str, e: str, k: float, c: float) -> str:
     """A linear spring-dashpot between the origins of bodies a and b acting along the direction e."""
     return f'''
@@ -108,11 +119,13 @@ dof = {0 if axis == "x" else 1}
     return "".join(bodies), "".join(forces), "".join(outputs)
 
 
-def seismic_description(params: Params, st: Structure, ground: str, duration: float, dt_out: float = 1e-3,
+def seismic_description(params: Params, st: Structure, ground: str | dict, duration: float, dt_out: float = 1e-3,
                         name: str = "nsd_seismic", command: str = "") -> str:
     """The seismic-mode device on the structure ``st`` (its building, its restrainer) under the closed
-    form ``ground`` (``nsd seismic --ground``'s syntax), as TOML with one case of ``duration`` s."""
+    form ``ground`` (``nsd seismic --ground``'s syntax) or a FEMA P695 record table ({set, id, scale,
+    time_factor, window, rotate}: [excitation].record), as TOML with one case of ``duration`` s."""
     g = device_geometry(params)
+    excitation = f"record = {_inline(ground)}" if isinstance(ground, dict) else f'ground = "{ground}"'
     plate, supports = _structure_lines(st)
     floors, stories, floor_outputs = _building_lines(st) if st.building is not None else ("", "", "")
     head = f'''# The negative-stiffness device (Dai et al. 2024) in seismic mode{" under a " + str(st.building.stories) + "-story building" if st.building else ""}, as a model description.
@@ -128,7 +141,7 @@ gravity = {_v(g.gravity_vector)}
 
 [excitation]   # every body feels -m a_g(t): a_g from the ground motion below
 type = "ground_acceleration"
-ground = "{ground}"
+{excitation}
 {plate}
 [[bodies]]   # the cap: rides on the plate (turns with it), its height free
 name = "cap"
