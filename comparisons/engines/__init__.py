@@ -100,10 +100,19 @@ def run_seismic_engine(name: str, params: Params, structure, ground, duration=No
     """One engine's seismic run by name (Exudyn's prints go to stderr, as in ``run_engine``)."""
     from nsd_core.device.warmup import TINY_DT_OUT, TINY_DURATION, tiny_ground
     from nsd_core.engine.workers import stdout_to_stderr
-    engine = get_engine(name)
-    with stdout_to_stderr():
-        warm = _warm_peer("seismic", name, True, settings, lambda choices: engine.run_seismic(
-            params, structure, tiny_ground(), duration=TINY_DURATION, dt_out=TINY_DT_OUT, settings=choices))
+    settings = dict(settings or {})
+    model = settings.pop("model", "adapter")   # "described": the builder on the device's seismic description
+    if model not in ("adapter", "described") or (model == "described" and name == REFERENCE):
+        raise ParameterError(f"{name}.model = {model!r}: allowed: adapter, described (the peers only)")
+    if model == "described":
+        from comparisons.engines.described_seismic import DescribedSeismic
+        engine = DescribedSeismic(name)
+    else:
+        engine = get_engine(name)
+    with stdout_to_stderr():   # the warm-up's key names the model: each path compiles its own code
+        warm = _warm_peer("seismic", name, True, {**settings, "model": model}, lambda choices: engine.run_seismic(
+            params, structure, tiny_ground(), duration=TINY_DURATION, dt_out=TINY_DT_OUT,
+            settings={k: v for k, v in (choices or {}).items() if k != "model"} or None))
         c0 = time.process_time()
         result = engine.run_seismic(params, structure, ground, duration=duration, dt_out=dt_out,
                                     settings=settings or None)

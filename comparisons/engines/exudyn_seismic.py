@@ -50,7 +50,9 @@ from nsd_core.device.seismic import output_times
 quiet_allocation_warning()
 
 DEFAULTS = {"step_size": 1e-5, "spectral_radius": 0.8, "newton_rel_tol": 1e-12, "newton_abs_tol": 1e-14,
-            "rod_axial_inertia": 1e-3, "perturb": None}  # perturb: an error in this model only (engines/perturb.py)
+            "rod_axial_inertia": 1e-3, "perturb": None,  # perturb: an error in this model only (engines/perturb.py)
+            "model": "adapter",   # "described": the builder on the device's description (engines/described_seismic.py)
+            "builder_forces": "compiled"}   # model = "described" only: the builder's force path (compiled | predicted)
 
 
 def _cross(a, b):

@@ -50,7 +50,8 @@ from comparisons.engines.perturb import perturbed, perturbed_structure
 
 DEFAULTS = {"timestep": 1e-5, "solref_factor": 2.0, "solimp": [0.9999, 0.9999, 0.001, 0.5, 2.0],
             "solver_tolerance": 1e-12, "solver_iterations": 20, "closure_limit": 1e-4, "hysteresis_substeps": 1,
-            "step_loop": "native", "perturb": None}  # perturb: a modelling error in this model only (engines/perturb.py)
+            "step_loop": "native", "perturb": None,  # perturb: a modelling error in this model only (engines/perturb.py)
+            "model": "adapter"}   # "described": the builder on the device's description (engines/described_seismic.py)
 
 
 def _f(x) -> str:
