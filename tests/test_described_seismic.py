@@ -1,0 +1,99 @@
+"""The peers' seismic mode built from the device's description (``model = "described"``:
+comparisons/engines/described_seismic.py) against the hand-written adapters and the in-house engine:
+real MuJoCo and Exudyn on short record windows."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from comparisons.engines import run_seismic_engine
+from comparisons.engines.base import EngineError
+from comparisons.engines.described_seismic import DescribedSeismic, ground_table
+from comparisons.seismic import gate_metrics
+from nsd_core.device.describe_seismic import structure_for
+from nsd_core.device.ground import fema_record, parse_ground_spec
+from nsd_core.device.params import ParameterError, Params
+from nsd_core.device.seismic import simulate_seismic
+
+STEPS = {"mujoco": {"timestep": 2e-5}, "exudyn": {"step_size": 1e-4}}   # the gate's seismic cases' steps
+
+
+@pytest.fixture(scope="module")
+def pulse():
+    """The gate's first seismic window, shortened: record seconds 4.8-5.1 (0.095 model s)."""
+    return fema_record("nearfield-pulse", 1, scale=0.4, window=(4.8, 5.1), rotate_deg=20)
+
+
+@pytest.mark.parametrize("engine", ["mujoco", "exudyn"])
+def test_columns_and_units_are_the_adapters(engine):
+    """A 2-story building with the restrainer: every column the adapter writes (floors, drifts, story
+    shears, restrainer) in its order and unit, but the energy balance (no work output yet)."""
+    p = Params()
+    st = structure_for(p, 2, True)
+    ground = fema_record("farfield", 1, window=(3.0, 3.05))
+    a = run_seismic_engine(engine, p, st, ground, None, 1e-3, STEPS[engine])
+    d = run_seismic_engine(engine, p, st, ground, None, 1e-3, {**STEPS[engine], "model": "described"})
+    assert list(d.columns) == [c for c in a.columns if not c.startswith("E_")]
+    assert {c: d.units[c] for c in d.columns} == {c: a.units[c] for c in d.columns}
+    assert d.stats["model"] == "described" and np.array_equal(d["t"], a["t"])
+    for c in ("x", "y", "floor2_x", "drift1_y", "story_shear1_x", "device_Fx", "base_shear_y", "restrainer_F"):
+        scale = max(float(np.max(np.abs(a[c]))), 1e-12)
+        assert np.max(np.abs(d[c] - a[c])) <= 2e-2 * scale, c
+
+
+@pytest.fixture(scope="module")
+def reference(pulse):
+    return simulate_seismic(Params(), structure_for(Params()), pulse, dt_out=1e-3, rtol=1e-10, atol=1e-13)
+
+
+@pytest.mark.parametrize("engine, bounds", [
+    # measured on this window (peak |u| 2.5 mm): MuJoCo Euler 2e-5 s du 2.9e-4, dF 1.1e-3, peak u 2.9e-4,
+    # peak a 1.1e-4 (its adapter's to 3 digits); Exudyn 1e-4 s 2.4e-6, 6.9e-6, 1.6e-7, 1.8e-7 (its adapter's
+    # 2.4e-6, 6.2e-6, 2.0e-7, 1.1e-6). Bounds: ~3x those (the cap's mass left out of Newton's law: dF 1e-3)
+    ("mujoco", {"max_du_rel": 1e-3, "max_dF_device_rel": 3.5e-3, "peak_u_rel": 1e-3, "peak_a_rel": 4e-4}),
+    ("exudyn", {"max_du_rel": 8e-6, "max_dF_device_rel": 2e-5, "peak_u_rel": 1e-6, "peak_a_rel": 1e-6}),
+])
+def test_described_agrees_with_the_in_house_engine(engine, bounds, pulse, reference):
+    """The gate's seismic metrics of the described run against the in-house engine at rtol 1e-10: the
+    device force from Newton's law on the plate and cap (the module's docstring) included."""
+    d = run_seismic_engine(engine, Params(), structure_for(Params()), pulse, None, 1e-3,
+                           {**STEPS[engine], "model": "described"})
+    m = gate_metrics(reference, d)
+    for k, bound in bounds.items():
+        assert m[k] <= bound, (k, m[k])
+    for c in ("cap_z", "wall_z"):   # the device's heights, m (measured: 6e-8 MuJoCo, 5e-11 Exudyn)
+        assert np.max(np.abs(d[c] - reference[c])) < 2e-7, c
+
+
+def test_device_force_is_the_in_house_sign(pulse, reference):
+    """device_F is the force the plate applies to the device: with the supports' its sum is the base
+    shear, and it points as the in-house engine's (not its negative)."""
+    p = Params()
+    d = DescribedSeismic("exudyn").run_seismic(p, structure_for(p), pulse, None, 1e-3, STEPS["exudyn"])
+    assert np.allclose(d["base_shear_x"], d["support_Fx"] + d["device_Fx"], rtol=0, atol=1e-9)
+    F, F_ref = d["device_Fx"], reference["device_Fx"]
+    assert float(np.dot(F, F_ref)) > 0.99 * float(np.dot(F_ref, F_ref))
+
+
+def test_ground_is_written_exactly(pulse):
+    """A record becomes [excitation].record, a closed form its text; each parses to the same block."""
+    assert ground_table(pulse) == {"set": "nearfield-pulse", "id": 1, "scale": 0.4,
+                                   "time_factor": pulse.meta["time_factor"], "window": [4.8, 5.1], "rotate": 20.0}
+    for text in ("harmonic:amplitude=0.3,frequency=2,azimuth=30,duration=0.01",
+                 "pulse:velocity=0.1,frequency=2,gamma=2.5,phase=10,azimuth=-40"):
+        assert parse_ground_spec(ground_table(parse_ground_spec(text))).block().tolist() == \
+            parse_ground_spec(text).block().tolist()
+
+
+@pytest.mark.parametrize("engine, value", [("mujoco", "describd"), ("exudyn", 3), ("semirecursive", "described")])
+def test_bad_model_is_one_line(engine, value, pulse):
+    with pytest.raises(ParameterError) as e:
+        run_seismic_engine(engine, Params(), structure_for(Params()), pulse, 0.01, 1e-3, {"model": value})
+    msg = str(e.value)
+    assert "\n" not in msg and f"{engine}.model = {value!r}" in msg and "allowed: adapter, described" in msg
+
+
+def test_ground_an_excitation_cannot_write_is_refused():
+    raw = fema_record("nearfield-pulse", 1, window=(4.8, 4.9), normalised=False)
+    with pytest.raises(EngineError, match="normalised"):
+        DescribedSeismic("mujoco").run_seismic(Params(), structure_for(Params()), raw, None, 1e-3, STEPS["mujoco"])
