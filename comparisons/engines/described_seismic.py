@@ -26,12 +26,13 @@ story_shear1 = -sum m_i a_i,abs the building's force on the slab (floor_columns)
 device_F = -(M + m_cap) a_abs - support_F - restrainer_F + story_shear1, and the base shear
 support_F + device_F + restrainer_F = -(M + m_cap) a_abs + story_shear1, as in the adapters.
 
-The energy balance (E_* columns) needs every element's and the excitation's work from the builders
-(``energy_columns``); until they give it the columns are left out and the gate has no energy metric
-for a described run. Settings: those the builders share with the adapters
-(comparisons.engines.described.builder_settings: MuJoCo's timestep, integrator (the adapter's
-Euler), solref_factor, passive; Exudyn's step_size and ``builder_forces``); Exudyn's per-cycle cap of
-the drive mode does not apply to a ground motion.
+The energy balance (E_* columns, ``energy_columns``) comes from the builders' own ``work`` outputs:
+every force element's work and the excitation's, with the kinetic and gravity energy, so the gate's
+energy metric checks each builder's state as it checks each adapter's.
+
+Settings: those the builders share with the adapters (comparisons.engines.described.builder_settings:
+MuJoCo's timestep, integrator (the adapter's Euler), solref_factor, passive; Exudyn's step_size and
+``builder_forces``); Exudyn's per-cycle cap of the drive mode does not apply to a ground motion.
 """
 from __future__ import annotations
 
@@ -45,7 +46,7 @@ from comparisons.engines.described import builder_settings
 from nsd_core.device.building import floor_columns
 from nsd_core.device.columns import units_of
 from nsd_core.device.describe_seismic import seismic_description
-from nsd_core.device.forces import restrainer_forces, spring_push
+from nsd_core.device.forces import restrainer_forces, restrainer_stored_scalar, spring_push
 from nsd_core.device.geometry import device_geometry
 from nsd_core.device.ground import Harmonic, Pulse, Record
 from nsd_core.device.params import ParameterError
@@ -92,23 +93,58 @@ def _outputs(n_wires: int, structure) -> str:
     return "".join(blocks)
 
 
+def _energy_outputs(forces) -> str:
+    """The energy balance's outputs: every force element's work, the excitation's, kinetic and gravity energy."""
+    blocks = [_output(f"work_{f}", "work", element=f'"{f}"') for f in forces]
+    blocks += [_output("work_excitation", "work", source='"excitation"'),
+               _output("energy_kinetic", "energy", term='"kinetic"'),
+               _output("energy_gravity", "energy", term='"gravity"')]
+    return "".join(blocks)
+
+
 def described_seismic_model(params, structure, ground, duration: float, dt_out: float):
     """The case as a parsed description with the columns' outputs, and the device's geometry."""
     g = device_geometry(params)
     text = seismic_description(params, structure, ground_table(ground), duration, dt_out) + _outputs(g.n_wires,
                                                                                                     structure)
-    model = parse_model(tomllib.loads(text))
+    forces = [f.name for f in parse_model(tomllib.loads(text)).forces]
+    model = parse_model(tomllib.loads(text + _energy_outputs(forces)))
     if not np.array_equal(model.excitation.block, np.ascontiguousarray(ground.block(), dtype=float)):
         raise EngineError(f"described seismic: the [excitation] written for {ground.describe()!r} is not the case's "
                           "ground motion (its a_g differs)")
     return model, g
 
 
-def energy_columns(run, structure) -> dict:
-    """The energy balance's E_* columns from the builder's work outputs. The builders have no work
-    output yet (no element's, excitation's or supports' work is recorded), so there are none: an empty
-    dict, and the gate has no energy metric for a described seismic run."""
-    return {}
+def energy_columns(o: dict, st, x, y, theta, floors: dict) -> dict:
+    """The energy balance's columns in the frame of the ground (the adapters' names and meaning) from the
+    builder's outputs ``o``: work_<element> (each force element's work on the mechanism since t = 0),
+    work_excitation (the -m a_g loads': E_input), energy_kinetic and energy_gravity. What an element
+    group absorbed is minus its work: the device's (ropes, wires, spring) is E_device; the supports'
+    and the building's less what they store are their dissipation; the restrainer's less its stored
+    energy its dissipation. E_residual: input less every term, as the adapters (the loop closure's
+    work, zero in the model, is what is left besides the builder's quadrature)."""
+    def absorbed(test) -> np.ndarray:
+        return -sum((v for k, v in o.items() if k.startswith("work_") and k != "work_excitation" and test(k[5:])),
+                    np.zeros_like(x))
+    group = {"support": lambda n: n.startswith("support_"), "restrainer": lambda n: n == "restrainer",
+             "building": lambda n: n.startswith(("story", "slab_damper"))}
+    device = absorbed(lambda n: not any(t(n) for t in group.values()))
+    stored = 0.5 * st.stiffness * (x * x + y * y + st.support_radius ** 2 * theta * theta)
+    kinetic, gravity = o["energy_kinetic"], o["energy_gravity"] - o["energy_gravity"][0]
+    cols = {"E_input": o["work_excitation"], "E_kinetic": kinetic, "E_gravity": gravity, "E_supports_stored": stored,
+            "E_supports_dissipated": absorbed(group["support"]) - stored, "E_device": device}
+    rest = absorbed(group["restrainer"])
+    building = absorbed(group["building"])
+    if st.building is not None:
+        cols["E_building_dissipated"] = building - floors["E_building_stored"]
+    cols["E_residual"] = cols["E_input"] - (kinetic + gravity + stored + cols["E_supports_dissipated"] + device + rest
+                                            + building)
+    if st.restrainer is not None:
+        r = st.restrainer
+        delta = np.maximum(np.hypot(x, y) - r.gap, 0.0)
+        cols["E_restrainer_stored"] = np.array([restrainer_stored_scalar(d, r.stiffness, r.exponent) for d in delta])
+        cols["E_restrainer_dissipated"] = rest - cols["E_restrainer_stored"]
+    return cols
 
 
 class DescribedSeismic:
@@ -130,14 +166,13 @@ class DescribedSeismic:
         if len(run.t) != len(t_out) or np.max(np.abs(run.t - t_out)) > 1e-12:
             raise EngineError(f"{self.name} (described): output times differ from the in-house run's")
         cols = seismic_columns(run, g, structure, t_out)
-        cols.update(energy_columns(run, structure))
         stats = {**run.stats, "engine": self.name, "mode": "seismic", "model": "described", "settings": s}
         return RunResult(self.name, cols, units_of(cols), stats)
 
 
 def seismic_columns(run, g, st, t) -> dict:
-    """The adapters' seismic columns (MujocoSeismic.run's names and order, less E_*; Exudyn's adapter also
-    writes omega, the plate's turn rate) from a builder's run."""
+    """The adapters' seismic columns (MujocoSeismic.run's names and order; Exudyn's adapter also writes
+    omega, the plate's turn rate) from a builder's run."""
     o = run.outputs
     x, y, vx, vy, ax, ay = o["u_x"], o["u_y"], o["plate0_vx"], o["plate0_vy"], o["a_x"], o["a_y"]
     n = len(t)
@@ -162,6 +197,7 @@ def seismic_columns(run, g, st, t) -> dict:
         th = o["theta"]
         cols["omega"] = -(o["plate1_vx"] - vx) * np.sin(th) + (o["plate1_vy"] - vy) * np.cos(th)
     cols.update({f"wire{j}_stress": o[f"wire{j}_stress"] for j in range(g.n_wires)})
+    cols.update(energy_columns(o, st, x, y, o["theta"], floors))
     cols["u"] = np.hypot(x, y)
     cols.update(floors)
     cols.update(rest)
@@ -176,6 +212,4 @@ def _floors(o, st, x, y, vx, vy) -> dict:
     v = np.array([[o[f"floor{i}_vx_out"], o[f"floor{i}_vy_out"]] for i in rng])
     a = np.array([[o[f"floor{i}_ax_out"], o[f"floor{i}_ay_out"]] for i in rng])
     below = np.concatenate([np.array([x, y])[None], d[:-1]])
-    cols = floor_columns(b, d, a, d - below, v, np.array([vx, vy]))
-    cols.pop("E_building_stored")   # the energy balance's: with the others (energy_columns) or none
-    return cols
+    return floor_columns(b, d, a, d - below, v, np.array([vx, vy]))
