@@ -99,7 +99,9 @@ from comparisons.builders.exudyn_forces import LawStates, add_force
 from comparisons.builders.exudyn_frames import (AXIS_OF_DOF, constrained_axes, cross, frame_with_z, joint_coordinates,
                                                 joint_frame, planar_normal)
 from comparisons.builders.exudyn_outputs import Sampler
-from comparisons.builders.exudyn_solver import redundant_constraints, solver_settings
+from comparisons.builders.exudyn_replay import SeriesReader
+from comparisons.builders.exudyn_solver import (CHOICES, RELAXED_REL_TOL, check_settings, default_settings,  # noqa: F401
+                                                redundant_constraints, solver_settings)
 from comparisons.builders.exudyn_work import Work
 from comparisons.engines.base import EngineError
 from comparisons.engines.exudyn_quiet import quiet_allocation_warning
@@ -111,55 +113,6 @@ from nsd_core.model.run import ModelRun, output_times
 quiet_allocation_warning()
 
 name = "exudyn"
-default_settings = {
-    "step_size": 1e-4,             # largest step [s]; the step used is dt_out / n, the largest <= this
-    "solver": "generalized_alpha",  # index 3; or "trapezoidal_index2" (no prescribed motions: Exudyn's
-                                    # GenericJoint has no velocity-level offset)
-    "spectral_radius": 0.8,        # generalized-alpha rho_inf: damps the multipliers' step-to-step ringing
-    "newton_rel_tol": 1e-10,       # Newton's residual tolerances (relative, absolute); the index-3
-    "newton_abs_tol": 1e-12,       # multipliers amplify position residuals by M / (beta h^2)
-    "redundant_constraints": "auto",  # "auto": Exudyn's rank test at t = 0 picks the full-pivot LU when
-                                      # it finds any; "ignore": always; "fail": never (singular -> error)
-    "on_newton_failure": "relax",  # with closures: "relax" reruns once at RELAXED_REL_TOL; "fail"
-    "forces": "compiled",          # the force elements: one object for all, its forces from compiled
-                                   # kernels (exudyn_compiled; 2-4x faster), or "connectors": one connector
-                                   # each with a Python user function (exudyn_forces, the readable
-                                   # reference; the same equations, agreeing to Newton's tolerance);
-                                   # "predicted": the compiled forces once a step at the Taylor-predicted
-                                   # end of the step, constant in it (the hand-written adapter's scheme:
-                                   # no Python in Newton's iterations; explicit in the forces)
-}
-CHOICES = {"solver": ("generalized_alpha", "trapezoidal_index2"), "redundant_constraints": ("auto", "ignore", "fail"),
-           "on_newton_failure": ("relax", "fail"), "forces": ("connectors", "compiled", "predicted")}
-# near a singular position Newton's relative residual stalls above 1e-10 (A02: h = 1e-3 s passes at
-# 1e-9 and 1e-8, fails at 1e-10); 1e-8 still leaves A02's error second order in h (module docstring)
-RELAXED_REL_TOL = 1e-8
-PREDICTED_TOLERANCES = {"newton_rel_tol": 1e-12, "newton_abs_tol": 1e-14}   # forces = "predicted" (check_settings)
-POSITIVE = ("step_size", "spectral_radius", "newton_rel_tol", "newton_abs_tol")
-
-
-def check_settings(settings: dict | None, model: Model) -> dict:
-    """Defaults updated by ``settings``; a bad key or value raises ModelError (one line)."""
-    settings = settings or {}
-    for k in settings:
-        if k not in default_settings:
-            raise ModelError(f"exudyn.{k}: unknown setting; allowed: {', '.join(default_settings)}")
-    s = {**default_settings, **settings}
-    if s["forces"] == "predicted":   # the adapter's tolerances, for its reason: at 1e-10 constant loads leave
-        # isolated multiplier spikes (the 10 Hz gate case at h = 1.25e-5 s: 1.7e-4 of the peak force; 2.5e-7 here)
-        s = {**s, **{k: v for k, v in PREDICTED_TOLERANCES.items() if k not in settings}}
-    for k, allowed in CHOICES.items():
-        if s[k] not in allowed:
-            raise ModelError(f"exudyn.{k} = {s[k]!r}: allowed: {', '.join(allowed)}")
-    for k in POSITIVE:
-        if isinstance(s[k], bool) or not isinstance(s[k], (int, float)) or not s[k] > 0:
-            raise ModelError(f"exudyn.{k} = {s[k]!r}: must be a number > 0")
-    if s["solver"] == "generalized_alpha" and s["spectral_radius"] >= 1:
-        raise ModelError(f"exudyn.spectral_radius = {s['spectral_radius']!r}: must be < 1 (index 3)")
-    if s["solver"] == "trapezoidal_index2" and model.prescribed:
-        raise ModelError(f"exudyn.solver = 'trapezoidal_index2': {model.name} has prescribed motions, whose "
-                         "velocity-level offset Exudyn's GenericJoint lacks; allowed: generalized_alpha")
-    return s
 
 
 def _local_frame(R_body_world, axis_world) -> np.ndarray:
@@ -245,7 +198,7 @@ class Build:
                                  f"the Exudyn builder drives a slide of {b.name}'s {b.joint.type} joint on the ground "
                                  f"or beside a free slide only (its parent {b.parent} moves, and Exudyn's joint then "
                                  "takes the offset in global coordinates)")
-            J_offsets = J if global_offsets else np.eye(3)
+            J_offsets = J if global_offsets else None
             # the offset is its parameters, set to q(t_end) before each step (``drive``): generalized-
             # alpha (index 3) evaluates the constraint at the step's end only, so this is exact, and
             # the symbolic function runs in C++ (a Python offset function cost ~2 calls an iteration)
@@ -319,13 +272,14 @@ def _offset(mbs, t, itemNumber, offsetUserFunctionParameters):
     return offsetUserFunctionParameters
 
 
-def _offsets(slots: dict, t: float, J: np.ndarray) -> list[float]:
+def _offsets(slots: dict, t: float, J: np.ndarray | None) -> list[float]:
     """The six offsets at t: the prescribed coordinates in the joint frame, translations turned by J
-    (the joint frame, when Exudyn reads them in global coordinates; the identity otherwise)."""
+    (the joint frame, when Exudyn reads them in global coordinates; None: as they are)."""
     out = [0.0] * 6
     for k, p in slots.items():
         out[k] = p(t)[0]
-    out[:3] = [float(v) for v in J @ np.asarray(out[:3])]
+    if J is not None:
+        out[:3] = [float(v) for v in J @ np.asarray(out[:3])]
     return out
 
 
@@ -337,7 +291,9 @@ def _run(model: Model, s: dict, duration: float, dt_out: float) -> ModelRun:
     sample = Sampler(build)
     work = sample.work = Work(build, sample) if any(o.kind == "work" for o in model.outputs) else None
     counter = [0]
-    h, predicted = duration / n_steps, build.compiled is not None and build.compiled.predicted
+    h, compiled = duration / n_steps, build.compiled
+    predicted = compiled is not None and compiled.predicted
+    advance = compiled is not None and (predicted or bool(sample.stateful))
 
     def pre_step(mbs, t):
         """t is the END of the step (Exudyn's convention); the state is the converged one at t - h."""
@@ -345,12 +301,12 @@ def _run(model: Model, s: dict, duration: float, dt_out: float) -> ModelRun:
         counter[0] += 1
         build.excite(t)
         build.drive(t)
-        if sample.stateful:
+        if advance:   # the laws' commit, and the predicted forces: one compiled call
+            compiled.advance(mbs, h, predicted)
+        elif sample.stateful:
             sample.commit()
-        if work is not None:   # the converged state at t - h (before predict, which moves no state)
+        if work is not None:   # the converged state at t - h, the states committed (no state moves after)
             work.step(t - h)
-        if predicted:
-            build.compiled.predict(mbs, h)
         if n % per_out == 0:
             sample.record(t_out[n // per_out])
         return True
@@ -381,10 +337,10 @@ def _run(model: Model, s: dict, duration: float, dt_out: float) -> ModelRun:
     sample.record(t_out[-1])
     wall = time.perf_counter() - begin
     begin = time.perf_counter()
-    sample.replay()   # the outputs from the recorded states (exudyn_outputs' docstring)
+    series = s["outputs_from"] == "coordinates" and s["forces"] != "connectors"
+    columns = sample.replay(SeriesReader(build, sample) if series else None)   # exudyn_outputs' docstring
     reading = time.perf_counter() - begin
-    data = np.array(sample.rows).reshape(len(t_out), len(model.outputs))
-    return ModelRun(name, t_out, {o.name: data[:, k] for k, o in enumerate(model.outputs)},
+    return ModelRun(name, t_out, columns,
                     {o.name: o.unit for o in model.outputs},
                     {"wall_time": wall, "output_time": reading, "steps": n_steps, "step_size": duration / n_steps,
                      "closure_max": sample.closure, "tracking_error": sample.tracking,

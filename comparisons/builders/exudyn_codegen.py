@@ -13,7 +13,12 @@ order, are
   J = -(fq df/dq + fv df/dq') by forward differences of ``evaluate`` inside the compiled call
   (Exudyn's own numerical Jacobian calls the Python function twice per coordinate); only the
   columns of bodies some element touches (the ``active`` list in I);
-- ``commit(q, q_t, F, I, W)``: the step converged: every state and its rate move on (LawStates.commit).
+- ``commit(q, q_t, F, I, W)``: the step converged: every state and its rate move on (LawStates.commit);
+- ``series(Q, Q_t, F, I, W, X, XD)``: every element's (x, x') at each of a series of samples (the rows
+  of Q, Q_t) into the rows of X, XD: the outputs' law arguments (exudyn_replay), by this kinematics;
+- ``advance(q_all, q_t_all, q_tt_all, index, h, predict, F, I, W, f)``: the pre-step's work on Exudyn's
+  whole coordinate vectors in one call: ``commit``, then (``predict``) the forces at the Taylor-
+  predicted end of the step into f (CompiledForces.advance).
 Numbers live in three arrays (F: constants, I: integers, W: the states, the turns' last angles,
 the started flag), so the source depends on the description's shape only (element kinds, laws,
 states, counts); a parameter change reuses the compiled code. Cached as mujoco_codegen does: the
@@ -141,7 +146,24 @@ def source(elements, nb: int, npts: int, nj: int, params: list[tuple[int, int]],
                  f"        W[{s_at}] = s + 0.5 * h * (r + {rate}(x[{j}], xd[{j}], s + h * r, F[{p0}:{p1}]))",
                  f"    W[{r_at}] = {rate}(x[{j}], xd[{j}], W[{s_at}], F[{p0}:{p1}])"]
         k += 1
-    body += [f"    W[{o['started']}] = 1.0", "    return 0", ""]
+    body += [f"    W[{o['started']}] = 1.0", "    return 0", "", "",
+             "@njit(cache=True)",
+             "def series(Q, Q_t, F, I, W, X, XD):",
+             scratch,
+             f"    f = np.empty({7 * nb})",
+             "    for k in range(Q.shape[0]):",
+             "        _state(F, I, W, f, Q[k], Q_t[k], x, xd, T, N, S, R, G, r, v, w)",
+             "        X[k, :] = x",
+             "        XD[k, :] = xd",
+             "    return 0", "", "",
+             "@njit(cache=True)",
+             "def advance(q_all, q_t_all, q_tt_all, index, h, predict, F, I, W, f):",
+             "    q, q_t = q_all[index], q_t_all[index]",
+             "    commit(q, q_t, F, I, W)",
+             "    if predict:   # CompiledForces.predict's Taylor step, operation for operation",
+             "        a = q_tt_all[index]",
+             "        evaluate(q + h * q_t + (0.5 * h * h) * a, q_t + h * a, F, I, W, f)",
+             "    return f", ""]
     return "\n".join(head + body), {names[id(fn)]: fn for fn in fns}
 
 

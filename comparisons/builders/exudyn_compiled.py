@@ -79,11 +79,14 @@ class CompiledForces:
         self.F, self.I, self.W, sizes, params = pack(self)
         self.gen = module_for(*source(self.elements, nb, len(pts), len(jts), params, len(states.elements), sizes))
         self.s_at, self.ns = sizes["s"], len(states.elements)
+        # the committed states and rates are W's (views): the outputs and the work read them as committed
+        states.s, states.r = self.W[self.s_at:self.s_at + self.ns], self.W[self.s_at + self.ns:self.s_at + 2 * self.ns]
         self.J = np.zeros((7 * nb, 7 * nb))
         # load (or compile) the machine code now, not in the timed run's first call; on copies of the states
         z = np.zeros(7 * nb)
         self.gen.jacobian(z, z, self.F, self.I, self.W.copy(), 1.0, 1.0, self.J.copy())
         self.gen.commit(z, z, self.F, self.I, self.W.copy())
+        self.gen.advance(z, z, z, np.arange(7 * nb), 0.0, True, self.F, self.I, self.W.copy(), self.f.copy())
         self.predicted = predicted
         if predicted:   # a constant force vector, set before each step (``predict``)
             kw = {"forceVector": np.zeros(7 * nb)}
@@ -93,15 +96,19 @@ class CompiledForces:
         self.object = mbs.AddObject(ObjectGenericODE2(nodeNumbers=self.nodes, massMatrix=np.zeros((7 * nb, 7 * nb)),
                                                       **kw))
 
+    def node_index(self, mbs) -> np.ndarray:
+        """The nodes' entries in Exudyn's ODE2 vectors (7 each), known once the system is assembled."""
+        if self.index is None:
+            self.index = np.concatenate([np.arange(i, i + 7) for i in map(mbs.GetNodeODE2Index, self.nodes)])
+        return self.index
+
     def predict(self, mbs, h: float) -> None:
         """forces = "predicted": the forces for the step of size h starting at the converged state, at
         its Taylor-predicted end (q + h q' + h^2/2 q'', q' + h q''; the states by Heun from the
         committed ones, as ``evaluate``), held through the step. The prediction's error is O(h^3) in
         the positions and O(h^2) in the rates, so the forces' error adds O(h^2) to the motion: second
         order, as generalized-alpha (the adapter's per_step scheme, generic here)."""
-        if self.index is None:
-            self.index = np.concatenate([np.arange(i, i + 7) for i in map(mbs.GetNodeODE2Index, self.nodes)])
-        sd, ix = mbs.systemData, self.index
+        sd, ix = mbs.systemData, self.node_index(mbs)
         q, v = np.asarray(sd.GetODE2Coordinates())[ix], np.asarray(sd.GetODE2Coordinates_t())[ix]
         if h > 0.0:
             a = np.asarray(sd.GetODE2Coordinates_tt())[ix]
@@ -110,24 +117,27 @@ class CompiledForces:
 
     def commit(self, mbs) -> None:
         """The step converged: the laws' states move on at Exudyn's current coordinates (in the compiled
-        call); LawStates keeps a copy for the outputs' law values."""
-        if self.index is None:   # the nodes' first ODE2 indices, known once the system is assembled
-            self.index = np.concatenate([np.arange(i, i + 7) for i in map(mbs.GetNodeODE2Index, self.nodes)])
+        call; LawStates' s and r are views of them)."""
+        self.advance(mbs, 0.0, False)
+
+    def advance(self, mbs, h: float, predict: bool) -> None:
+        """The pre-step's work in one compiled call on Exudyn's coordinate vectors: ``commit``, then
+        (``predict``) ``predict``'s forces for the step of size h, set as the object's force vector."""
         sd = mbs.systemData
-        self.gen.commit(np.asarray(sd.GetODE2Coordinates())[self.index], np.asarray(sd.GetODE2Coordinates_t())[self.index],
-                        self.F, self.I, self.W)
-        st, a, n = self.states, self.s_at, self.ns
-        st.s[:], st.r[:], st.started = self.W[a:a + n].tolist(), self.W[a + n:a + 2 * n].tolist(), True
+        f = self.gen.advance(np.asarray(sd.GetODE2Coordinates()), np.asarray(sd.GetODE2Coordinates_t()),
+                             np.asarray(sd.GetODE2Coordinates_tt()) if predict else self.f, self.node_index(mbs), h, predict,
+                             self.F, self.I, self.W, self.f)
+        self.states.started = True
+        if predict:
+            mbs.SetObjectParameter(self.object, "forceVector", f)
 
     def rates(self, mbs) -> tuple[np.ndarray, np.ndarray]:
         """Every element's (x, x') at Exudyn's current coordinates, in ``elements``' order (the compiled
         kinematics of the force call; exudyn_work's powers at the converged steps)."""
-        if self.index is None:
-            self.index = np.concatenate([np.arange(i, i + 7) for i in map(mbs.GetNodeODE2Index, self.nodes)])
-        sd, nb, ne = mbs.systemData, len(self.bodies), len(self.elements)
+        sd, nb, ne, ix = mbs.systemData, len(self.bodies), len(self.elements), self.node_index(mbs)
         x, xd = np.empty(ne), np.empty(ne)
-        self.gen._state(self.F, self.I, self.W, self.f, np.asarray(sd.GetODE2Coordinates())[self.index],
-                        np.asarray(sd.GetODE2Coordinates_t())[self.index], x, xd, np.empty(ne), np.empty((ne, 3)),
+        self.gen._state(self.F, self.I, self.W, self.f, np.asarray(sd.GetODE2Coordinates())[ix],
+                        np.asarray(sd.GetODE2Coordinates_t())[ix], x, xd, np.empty(ne), np.empty((ne, 3)),
                         np.empty((ne, 2, 3)), np.empty((nb, 3, 3)), np.empty((nb, 3, 4)), np.empty((nb, 3)),
                         np.empty((nb, 3)), np.empty((nb, 3)))
         return x, xd

@@ -24,9 +24,21 @@ AXIS_OF_DOF = {"revolute": (5,), "prismatic": (2,), "universal": (3, 4), "spheri
 
 
 def cross(a, b) -> np.ndarray:
-    """a x b of two 3-vectors: numpy.cross's arithmetic without its axis handling (which cost most of
-    the outputs' time, read at every step)."""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+    """a x b of two 3-vectors, or of stacks of them (the last axis): numpy.cross's arithmetic without
+    its axis handling (which cost most of the outputs' time, read at every step)."""
+    c = (a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1], a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
+         a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0])
+    return np.array(c) if np.ndim(c[0]) == 0 else np.stack(c, axis=-1)
+
+
+def transposed(R) -> np.ndarray:
+    """R^T of a matrix, or of each of a stack of them."""
+    return np.swapaxes(R, -1, -2)
+
+
+def applied(A, x) -> np.ndarray:
+    """A x of a matrix and a vector, or of stacks of them (the sample axis first)."""
+    return A @ x if np.ndim(x) == 1 and np.ndim(A) == 2 else (A @ x[..., None])[..., 0]
 
 
 def perpendicular(a: np.ndarray) -> np.ndarray:
@@ -69,26 +81,27 @@ def wrap(x: float) -> float:
     return (x + math.pi) % (2.0 * math.pi) - math.pi
 
 
-def joint_coordinates(body: Body, J, Rp, rp, Rc, rc) -> list[float]:
+def joint_coordinates(body: Body, J, Rp, rp, Rc, rc) -> list:
     """The joint's coordinates from the world poses (R, origin) of the parent and the child; angles
-    in (-pi, pi] (``Continuous`` keeps them continuous in time)."""
-    M = J.T @ Rp.T @ Rc @ J
-    d = J.T @ (Rp.T @ (rc - rp) - np.asarray(body.joint.position))
+    in (-pi, pi] (``Continuous`` keeps them continuous in time). Each of Rp, rp, Rc, rc may be a stack
+    over samples (the first axis): then each coordinate is an array over them."""
+    M = J.T @ transposed(Rp) @ Rc @ J
+    d = applied(J.T, applied(transposed(Rp), rc - rp) - np.asarray(body.joint.position))
     t = body.joint.type
     if t == "revolute":
-        return [math.atan2(M[1, 0], M[0, 0])]
+        return [np.arctan2(M[..., 1, 0], M[..., 0, 0])]
     if t == "prismatic":
-        return [float(d[2])]
+        return [d[..., 2]]
     if t == "translational":
-        return [float(d[0]), float(d[1]), float(d[2])]
+        return [d[..., 0], d[..., 1], d[..., 2]]
     if t == "universal":          # M = Rx(q1) Ry(q2)
-        return [math.atan2(M[2, 1], M[1, 1]), math.atan2(M[0, 2], M[0, 0])]
+        return [np.arctan2(M[..., 2, 1], M[..., 1, 1]), np.arctan2(M[..., 0, 2], M[..., 0, 0])]
     if t == "spherical":          # M = Rx(q1) Ry(q2) Rz(q3)
-        return [math.atan2(-M[1, 2], M[2, 2]), math.atan2(M[0, 2], math.hypot(M[0, 0], M[0, 1])),
-                math.atan2(-M[0, 1], M[0, 0])]
+        return [np.arctan2(-M[..., 1, 2], M[..., 2, 2]), np.arctan2(M[..., 0, 2], np.hypot(M[..., 0, 0], M[..., 0, 1])),
+                np.arctan2(-M[..., 0, 1], M[..., 0, 0])]
     if t == "planar_translation":
-        return [float(d[0]), float(d[1])]
-    return [float(d[0]), float(d[1]), math.atan2(M[1, 0], M[0, 0])]   # planar
+        return [d[..., 0], d[..., 1]]
+    return [d[..., 0], d[..., 1], np.arctan2(M[..., 1, 0], M[..., 0, 0])]   # planar
 
 
 def joint_rate(body: Body, dof: int, J, Rp, rp, vp, wp, rc, vc, wc) -> float:
@@ -111,13 +124,22 @@ def law_axis(body: Body, dof: int) -> int | None:
 
 
 class Continuous:
-    """Keeps each rotation coordinate continuous across +-pi: the turn nearest the last value."""
+    """Keeps each rotation coordinate continuous across +-pi: the turn nearest the last value (of a
+    series of samples, each the turn nearest the sample before)."""
 
     def __init__(self, start: dict, rotational: set):
         self.last = dict(start)
         self.rotational = rotational
 
-    def __call__(self, key, raw: float) -> float:
+    def __call__(self, key, raw):
+        if np.ndim(raw) > 0:
+            out = np.array(raw, dtype=float)
+            if key in self.rotational:
+                last = self.last[key]
+                for i, x in enumerate(out.tolist()):
+                    last = out[i] = last + wrap(x - last)
+            self.last[key] = out[-1]
+            return out
         if key in self.rotational:
             raw = self.last[key] + wrap(raw - self.last[key])
         self.last[key] = raw

@@ -168,3 +168,10 @@ def forces(T, ia, ib, jc, jp, turn, R, G, r, N, S, f):
                 for k in range(3):
                     S[j, 0, k] -= r[p, k]
                 _load(f, G, p, -T[j], N, j, S, j, 0)
+
+
+@njit(cache=True)
+def pose_series(Q, Q_t, ref, R, G, r, v, w):
+    """``_poses`` at each of a series of samples (the first axis of every array)."""
+    for k in range(Q.shape[0]):
+        _poses(Q[k], Q_t[k], ref, R[k], G[k], r[k], v[k], w[k])

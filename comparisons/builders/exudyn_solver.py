@@ -1,9 +1,67 @@
-"""Exudyn's solver settings for comparisons.builders.exudyn (the builder's settings dict ``s``), and its
-rank test for redundant constraints."""
+"""The Exudyn builder's settings (comparisons.builders.exudyn: ``default_settings``, checked by
+``check_settings``), Exudyn's solver settings from them, and its rank test for redundant constraints."""
 from __future__ import annotations
 
 import exudyn as exu
 import exudyn.solver
+
+from nsd_core.model.description import Model
+from nsd_core.model.errors import ModelError
+
+default_settings = {
+    "step_size": 1e-4,             # largest step [s]; the step used is dt_out / n, the largest <= this
+    "solver": "generalized_alpha",  # index 3; or "trapezoidal_index2" (no prescribed motions: Exudyn's
+                                    # GenericJoint has no velocity-level offset)
+    "spectral_radius": 0.8,        # generalized-alpha rho_inf: damps the multipliers' step-to-step ringing
+    "newton_rel_tol": 1e-10,       # Newton's residual tolerances (relative, absolute); the index-3
+    "newton_abs_tol": 1e-12,       # multipliers amplify position residuals by M / (beta h^2)
+    "redundant_constraints": "auto",  # "auto": Exudyn's rank test at t = 0 picks the full-pivot LU when
+                                      # it finds any; "ignore": always; "fail": never (singular -> error)
+    "on_newton_failure": "relax",  # with closures: "relax" reruns once at RELAXED_REL_TOL; "fail"
+    "forces": "compiled",          # the force elements: one object for all, its forces from compiled
+                                   # kernels (exudyn_compiled; 2-4x faster), or "connectors": one connector
+                                   # each with a Python user function (exudyn_forces, the readable
+                                   # reference; the same equations, agreeing to Newton's tolerance);
+                                   # "predicted": the compiled forces once a step at the Taylor-predicted
+                                   # end of the step, constant in it (the hand-written adapter's scheme:
+                                   # no Python in Newton's iterations; explicit in the forces)
+    "outputs_from": "coordinates",  # the compiled paths' outputs from the recorded coordinates, all samples
+                                    # at once (exudyn_replay), or "exudyn": each state set back into Exudyn
+                                    # and read through it (the reference; the connectors always read so)
+}
+CHOICES = {"solver": ("generalized_alpha", "trapezoidal_index2"), "redundant_constraints": ("auto", "ignore", "fail"),
+           "on_newton_failure": ("relax", "fail"), "forces": ("connectors", "compiled", "predicted"),
+           "outputs_from": ("coordinates", "exudyn")}
+# near a singular position Newton's relative residual stalls above 1e-10 (A02: h = 1e-3 s passes at
+# 1e-9 and 1e-8, fails at 1e-10); 1e-8 still leaves A02's error second order in h (module docstring)
+RELAXED_REL_TOL = 1e-8
+PREDICTED_TOLERANCES = {"newton_rel_tol": 1e-12, "newton_abs_tol": 1e-14}   # forces = "predicted" (check_settings)
+POSITIVE = ("step_size", "spectral_radius", "newton_rel_tol", "newton_abs_tol")
+
+
+def check_settings(settings: dict | None, model: Model) -> dict:
+    """Defaults updated by ``settings``; a bad key or value raises ModelError (one line)."""
+    settings = settings or {}
+    for k in settings:
+        if k not in default_settings:
+            raise ModelError(f"exudyn.{k}: unknown setting; allowed: {', '.join(default_settings)}")
+    s = {**default_settings, **settings}
+    if s["forces"] == "predicted":   # the adapter's tolerances, for its reason: at 1e-10 constant loads leave
+        # isolated multiplier spikes (the 10 Hz gate case at h = 1.25e-5 s: 1.7e-4 of the peak force; 2.5e-7 here)
+        s = {**s, **{k: v for k, v in PREDICTED_TOLERANCES.items() if k not in settings}}
+    for k, allowed in CHOICES.items():
+        if s[k] not in allowed:
+            raise ModelError(f"exudyn.{k} = {s[k]!r}: allowed: {', '.join(allowed)}")
+    for k in POSITIVE:
+        if isinstance(s[k], bool) or not isinstance(s[k], (int, float)) or not s[k] > 0:
+            raise ModelError(f"exudyn.{k} = {s[k]!r}: must be a number > 0")
+    if s["solver"] == "generalized_alpha" and s["spectral_radius"] >= 1:
+        raise ModelError(f"exudyn.spectral_radius = {s['spectral_radius']!r}: must be < 1 (index 3)")
+    if s["solver"] == "trapezoidal_index2" and model.prescribed:
+        raise ModelError(f"exudyn.solver = 'trapezoidal_index2': {model.name} has prescribed motions, whose "
+                         "velocity-level offset Exudyn's GenericJoint lacks; allowed: generalized_alpha")
+    return s
+
 
 MAX_MODIFIED_NEWTON = 3   # modified Newton iterations before a new Jacobian (solver_settings)
 
