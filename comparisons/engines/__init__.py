@@ -34,14 +34,17 @@ def tiny_settings(name: str, mode: str, settings: dict | None) -> dict | None:
     return {**warm, **choices} or None
 
 
-def _warm_peer(mode: str, name: str, line: bool, settings: dict | None, tiny) -> float:
+def _warm_peer(mode: str, name: str, line: bool, settings: dict | None, tiny, shape: tuple = ()) -> float:
     """A peer engine's numba code (MuJoCo's callback and step loop, Exudyn's step) compiles on its first
     call: run ``tiny`` once per process and kind of run first, and return its seconds, so that the real
     run's wall_time is its integration (the in-house engine does this in nsd_core.device.warmup).
     ``tiny`` is given the settings' named choices alone (they decide what compiles; a case's own step,
-    e.g. Exudyn's 6.25e-6 s, would make the tiny run cost seconds), over the engine's ``warm_settings``."""
+    e.g. Exudyn's 6.25e-6 s, would make the tiny run cost seconds), over the engine's ``warm_settings``.
+    ``shape``: what else decides the compiled code (a described model's code is generated per number of
+    ropes, wires, stories and restrainer: a variant's first run warms up again instead of compiling
+    inside its timed run)."""
     choices = tuple(sorted((k, v) for k, v in (settings or {}).items() if isinstance(v, str)))
-    key = (mode, name, line, choices)
+    key = (mode, name, line, choices, shape)
     if name == REFERENCE or key in _WARM:
         return 0.0
     _WARM.add(key)
@@ -69,8 +72,10 @@ def run_engine(name: str, params: Params, drive, settings: dict | None = None):
     else:
         engine = get_engine(name)
     with stdout_to_stderr():
-        warm = _warm_peer("drive", name, drive.is_line, settings, lambda choices: engine.run(
-            Params(), tiny_drive("line" if drive.is_line else "circle"), choices))
+        shape = (params.n_ropes, params.n_wires) if model == "described" else ()
+        warm = _warm_peer("drive", name, drive.is_line, {**settings, "model": model}, lambda choices: engine.run(
+            params, tiny_drive("line" if drive.is_line else "circle"),
+            {k: v for k, v in (choices or {}).items() if k != "model"} or None), shape)
         c0 = time.process_time()
         result = engine.run(params, drive, settings or None)
     return _with_times(name, result, warm, time.process_time() - c0)
@@ -112,7 +117,9 @@ def run_seismic_engine(name: str, params: Params, structure, ground, duration=No
     with stdout_to_stderr():   # the warm-up's key names the model: each path compiles its own code
         warm = _warm_peer("seismic", name, True, {**settings, "model": model}, lambda choices: engine.run_seismic(
             params, structure, tiny_ground(), duration=TINY_DURATION, dt_out=TINY_DT_OUT,
-            settings={k: v for k, v in (choices or {}).items() if k != "model"} or None))
+            settings={k: v for k, v in (choices or {}).items() if k != "model"} or None),
+            (params.n_ropes, params.n_wires, structure.building.stories if structure.building is not None else 0,
+             structure.restrainer is not None) if model == "described" else ())
         c0 = time.process_time()
         result = engine.run_seismic(params, structure, ground, duration=duration, dt_out=dt_out,
                                     settings=settings or None)
