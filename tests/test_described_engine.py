@@ -25,7 +25,7 @@ def test_a_described_peer_gives_the_adapters_columns_and_the_in_house_force(engi
     params = Params().replace(n_wires=6, rope_stiffness=6e5)
     drive = Drive(amplitude=0.015, frequency=10.0, path="circle", cycles=3, samples_per_cycle=400)   # as the gate
     ref = simulate(params, drive, rtol=1e-10)
-    adapter = run_engine(engine, params, drive, {k: v for k, v in settings.items() if k != "builder_forces"})
+    adapter = run_engine(engine, params, drive, {k: v for k, v in settings.items() if k != "builder_forces"} | {"model": "adapter"})
     run = run_engine(engine, params, drive, {**settings, "model": "described"})
     assert set(adapter.columns) <= set(run.columns) and run.stats["model"] == "described"
     assert all(run.units[c] == adapter.units[c] for c in adapter.columns)
@@ -46,7 +46,7 @@ def test_a_bad_model_choice_is_one_line(engine, key, value):
 
 @pytest.mark.parametrize("perturb", [{"what": "cap_mass", "by": 0.01},
                                      {"what": "rope_stiffness", "index": 1, "by": 0.05},
-                                     {"what": "rest_ignores_weight"}])
+                                     {"what": "rest_ignores_weight"}, {"what": "rod_length", "by": 2e-4}])
 def test_an_injected_modelling_error_reaches_the_described_model(perturb):
     """The gate's detection power (comparisons/power.py) injects an error into one peer's model: the
     described model carries it as the adapter does. On the 10 Hz line, MuJoCo's force departs from

@@ -31,7 +31,7 @@ def test_columns_and_units_are_the_adapters(engine):
     p = Params()
     st = structure_for(p, 2, True)
     ground = fema_record("farfield", 1, window=(3.0, 3.05))
-    a = run_seismic_engine(engine, p, st, ground, None, 1e-3, STEPS[engine])
+    a = run_seismic_engine(engine, p, st, ground, None, 1e-3, {**STEPS[engine], "model": "adapter"})
     d = run_seismic_engine(engine, p, st, ground, None, 1e-3, {**STEPS[engine], "model": "described"})
     assert list(d.columns) == list(a.columns)
     assert d.units == a.units
@@ -103,3 +103,21 @@ def test_ground_an_excitation_cannot_write_is_refused():
     raw = fema_record("nearfield-pulse", 1, window=(4.8, 4.9), normalised=False)
     with pytest.raises(EngineError, match="normalised"):
         DescribedSeismic("mujoco").run_seismic(Params(), structure_for(Params()), raw, None, 1e-3, STEPS["mujoco"])
+
+
+@pytest.mark.parametrize("perturb", [{"what": "cap_mass", "by": 0.05}, {"what": "isolated_mass", "by": 0.02},
+                                     {"what": "rod_length", "by": 5e-4}])
+def test_an_injected_modelling_error_reaches_the_described_seismic_model(pulse, perturb):
+    """The gate's detection power injects an error into one peer's model: the described seismic model
+    carries it (the device's geometry, the isolated mass) as the adapter does. MuJoCo's plate motion and
+    device force depart from their unperturbed runs by what the adapter's depart, within 5 %."""
+    p, st = Params(), structure_for(Params())
+    runs = {m: [run_seismic_engine("mujoco", p, st, pulse, None, 1e-3, {**STEPS["mujoco"], "model": m, **extra})
+                for extra in ({}, {"perturb": perturb})] for m in ("adapter", "described")}
+    visible = []
+    for cols in (("x", "y"), ("device_Fx", "device_Fy")):
+        shift = {m: np.max(np.hypot(*(b[c] - a[c] for c in cols))) for m, (a, b) in runs.items()}
+        peak = np.max(np.hypot(*(runs["adapter"][0][c] for c in cols)))
+        visible.append(shift["adapter"] > 1e-4 * peak)
+        assert abs(shift["described"] - shift["adapter"]) < 0.05 * shift["adapter"] + 1e-9 * peak, (cols, shift)
+    assert any(visible)   # the error shows at all (a 5 % heavier cap barely moves the plate, but its force)

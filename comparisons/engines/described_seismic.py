@@ -43,6 +43,7 @@ import numpy as np
 
 from comparisons.engines.base import EngineError
 from comparisons.engines.described import builder_settings
+from comparisons.engines.perturb import perturbed, perturbed_structure
 from nsd_core.device.building import floor_columns
 from nsd_core.device.columns import units_of
 from nsd_core.device.describe_seismic import seismic_description
@@ -102,11 +103,12 @@ def _energy_outputs(forces) -> str:
     return "".join(blocks)
 
 
-def described_seismic_model(params, structure, ground, duration: float, dt_out: float):
-    """The case as a parsed description with the columns' outputs, and the device's geometry."""
-    g = device_geometry(params)
-    text = seismic_description(params, structure, ground_table(ground), duration, dt_out) + _outputs(g.n_wires,
-                                                                                                    structure)
+def described_seismic_model(params, structure, ground, duration: float, dt_out: float, perturb: dict | None = None):
+    """The case as a parsed description with the columns' outputs, and the device's geometry; ``perturb``:
+    a modelling error injected into this engine's description only (comparisons.engines.perturb)."""
+    g = perturbed(device_geometry(params), perturb, seismic=True)
+    text = seismic_description(params, structure, ground_table(ground), duration, dt_out,
+                               geometry=g) + _outputs(g.n_wires, structure)
     forces = [f.name for f in parse_model(tomllib.loads(text)).forces]
     model = parse_model(tomllib.loads(text + _energy_outputs(forces)))
     if not np.array_equal(model.excitation.block, np.ascontiguousarray(ground.block(), dtype=float)):
@@ -158,7 +160,9 @@ class DescribedSeismic:
         duration = ground.duration if duration is None else float(duration)
         t_out = output_times(duration, dt_out)   # the in-house run's output times (ceil): the builders round
         try:
-            model, g = described_seismic_model(params, structure, ground, duration, dt_out)
+            perturb = (settings or {}).get("perturb")
+            structure = perturbed_structure(structure, perturb)   # the columns read this model's own masses
+            model, g = described_seismic_model(params, structure, ground, duration, dt_out, perturb)
             s = builder_settings(self.name, {**(settings or {}), "min_steps_per_cycle": None}, 1.0)
             run = self.builder.simulate(model, duration, duration / (len(t_out) - 1), s)
         except (ModelError, ParameterError) as e:

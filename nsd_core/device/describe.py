@@ -67,7 +67,7 @@ com = {_v(g.cap.com)}
 inertia = {_inertia(g.cap.inertia)}
 
 {wall_and_rod(g)}
-{rod_loop(params)}
+{rod_loop(g.params)}
 {_prescribed(amplitude, frequency, psi, drive)}[initial]    # the precompressed rest state
 coordinates = {{ cap = [0.0, 0.0, {g.cap_rest_z!r}], wall = {g.wall_rest_z!r} }}
 free = ["cap"]

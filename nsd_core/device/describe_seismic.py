@@ -120,11 +120,13 @@ dof = {0 if axis == "x" else 1}
 
 
 def seismic_description(params: Params, st: Structure, ground: str | dict, duration: float, dt_out: float = 1e-3,
-                        name: str = "nsd_seismic", command: str = "") -> str:
+                        name: str = "nsd_seismic", command: str = "", geometry=None) -> str:
     """The seismic-mode device on the structure ``st`` (its building, its restrainer) under the closed
     form ``ground`` (``nsd seismic --ground``'s syntax) or a FEMA P695 record table ({set, id, scale,
-    time_factor, window, rotate}: [excitation].record), as TOML with one case of ``duration`` s."""
-    g = device_geometry(params)
+    time_factor, window, rotate}: [excitation].record), as TOML with one case of ``duration`` s.
+    geometry: the device's DeviceGeometry when it is not ``device_geometry(params)`` (an injected
+    modelling error, comparisons.engines.perturb)."""
+    g = device_geometry(params) if geometry is None else geometry
     excitation = f"record = {_inline(ground)}" if isinstance(ground, dict) else f'ground = "{ground}"'
     plate, supports = _structure_lines(st)
     floors, stories, floor_outputs = _building_lines(st) if st.building is not None else ("", "", "")
@@ -152,7 +154,7 @@ com = {_v(g.cap.com)}
 inertia = {_inertia(g.cap.inertia)}
 
 {wall_and_rod(g)}{floors}
-{rod_loop(params)}
+{rod_loop(g.params)}
 [initial]    # relative rest, the device precompressed
 coordinates = {{ cap = {g.cap_rest_z!r}, wall = {g.wall_rest_z!r} }}
 free = ["plate", "cap"]
