@@ -28,13 +28,17 @@ starts from; joints and loop closures are constraints with Lagrange multipliers 
   internal state (the SMA wire's stress, the Bouc-Wen zeta) is integrated with the motion by Heun's
   method at Exudyn's step, second order as generalized-alpha is: the force sees the state at the end
   of the step for the configuration Newton tries, the pre-step function commits it (exudyn_forces).
-  Cost on the device's gate drive cases (interleaved, median of 3, load ~1-2 on 2 cores), against the
-  hand-written adapter at the same step: "compiled" 1.66x (A15mm_f1Hz, h = 2.5e-4 s: 0.53 vs 0.32 s)
-  and 1.49x (A15mm_f10Hz, 2.5e-5 s: 0.52 vs 0.35 s); "predicted" 1.15x and 1.06x (0.37 s both, at
-  its Newton tolerances 1e-12/1e-14). What bounds "compiled": ~4.9 force calls a step (3.9 modified
-  Newton iterations at newton_rel_tol 1e-10, each a Python callback of ~5 us: Exudyn's lists to
-  arrays, numba's dispatch, ~1.5 us of compiled work) and Exudyn's solver (~39 us a step, profiled,
-  as much as the adapter's whole step).
+  Cost on the device's 8 gate drive cases (the whole run, the model's build included, as the gate
+  counts it: comparisons.engines.run_engine with model = "described" against the hand-written adapter
+  at the same step, interleaved in one process, median of 3, load ~3-4 on 2 cores): "predicted"
+  0.91-1.23x the adapter's CPU (A15mm_f1Hz 0.38 vs 0.34 s, A15mm_f10Hz 0.38 vs 0.36 s, A25.5mm_f1Hz
+  11.5 vs 12.7 s, circle_A22mm_f10Hz 2.93 vs 2.39 s), "compiled" 1.48-1.76x. Per step, beside
+  Exudyn's solver: one Python pre-step (the drive's offsets ~1.7 us, then the laws' commit and, for
+  "predicted", the forces at the predicted state in one compiled call, CompiledForces.advance), and
+  for "compiled" ~4.9 force calls (3.9 modified Newton iterations at newton_rel_tol 1e-10 and a
+  residual), each a Python callback of ~5 us CPU (Exudyn's lists to arrays ~1 us, numba's dispatch
+  ~0.6 us, ~2.7 us of compiled work): ~24 us a step the adapter's scheme does not spend, what keeps
+  "compiled" above the adapter. The outputs cost ~6 us a sample (exudyn_outputs' docstring).
 - Prescribed motions: the joint's offset is a symbolic user function returning its parameters (run in
   C++), set to q(t_end) before each step: generalized-alpha (index 3) evaluates the constraint at the
   step's end only, so this is exact.
@@ -48,7 +52,8 @@ starts from; joints and loop closures are constraints with Lagrange multipliers 
   -a_g(t_end) before each step (generalized-alpha's equations hold at the step's end): second order
   (tests/test_model_exudyn_seismic.py: a forced oscillator's error falls 4.0x per halving).
 Outputs are read from the bodies' world poses at the output times (recorded by the pre-step function,
-read after the run: ``wall_time`` is the stepping, ``output_time`` the reading; the step divides the
+read after the run, by default from the recorded coordinates, all samples at once: exudyn_outputs,
+exudyn_replay; ``wall_time`` is the stepping, ``output_time`` the reading; the step divides the
 output interval): joint coordinates (angles continuous across +-pi), points and their
 velocities, the laws' values (at the committed states), the drive's generalized force (the locked
 axis' reaction; the sign of the in-house ``Evaluation.drive_force``: positive drives the coordinate
