@@ -152,7 +152,12 @@ def derive(summary: dict, ref_errors: dict[str, dict], spread: dict[str, dict] |
 def derived_info(summary: dict) -> dict:
     from comparisons.reference import CHECK_SETTINGS, CONVERGED_SETTINGS
     v = summary.get("versions", {})
+    # the peers' model the run used (comparisons.engines.base.DEFAULT_MODEL unless a case chose): a profile's
+    # limits hold for that model only, so the gate runs the peers on it (nsd_cli.compare.pin_model)
+    models = {(r.get("stats") or {}).get("model", "adapter") for runs in summary.get("runs", {}).values()
+              for e, r in runs.items() if e in ("mujoco", "exudyn") and isinstance(r, dict) and r.get("status") == "ok"}
     return {"mujoco": v.get("mujoco", ""), "exudyn": v.get("exudyn", ""), "numpy": v.get("numpy", ""),
+            "model": models.pop() if len(models) == 1 else "adapter",
             "date": summary.get("date", dt.date.today().isoformat()), "git_revision": summary.get("git_revision", ""),
             "rule": f"{FACTOR:g} x max(engine error, reference error, {FRACTION:g} x engine max|dF| error) "
                     "against the converged reference (benchmarks/derive_limits.py); the in-house engine error: "

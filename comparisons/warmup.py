@@ -7,12 +7,14 @@ from __future__ import annotations
 
 from functools import partial
 
+from nsd_core.device.describe_seismic import structure_for
 from nsd_core.device.isolation import default_structure
 from nsd_core.device.params import Params
 from nsd_core.device.warmup import TINY_DT_OUT, TINY_DURATION, tiny_drive, tiny_ground
 from nsd_core.device.worker_warmup import kind, warm_worker
 
 from comparisons.engines import REFERENCE, run_job, run_seismic_job, tiny_settings
+from comparisons.engines.base import DEFAULT_MODEL
 
 
 def spec(engine: str, seismic: bool, drive=None, settings: dict | None = None) -> tuple:
@@ -64,4 +66,8 @@ def every_mode_calls() -> list:
     specs += [spec(e, True, None, {}) for e in peers]
     if "mujoco" in peers:
         specs.append(spec("mujoco", False, tiny_drive("line"), {"integrator": "RK4"}))
-    return peer_calls(specs)
+    # a described model's code is generated per shape: the default cases' restrainer and 3-story building too
+    shaped = [partial(run_seismic_job, e, Params(), structure_for(Params(), stories, restrainer), tiny_ground(),
+                      TINY_DURATION, TINY_DT_OUT, None)
+              for e in peers if DEFAULT_MODEL.get(e) == "described" for stories, restrainer in ((0, True), (3, False))]
+    return peer_calls(specs) + shaped

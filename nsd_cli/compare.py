@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 from pathlib import Path
 from xml.sax.saxutils import escape, quoteattr
 
@@ -210,6 +211,7 @@ def run(args) -> int:
     for flag in ("power_cases",):
         if getattr(args, flag) is not None:
             raise ParameterError(f"--{flag.replace('_', '-')}: applies to --power only")
+    cases = pin_model(cases, tolerances)
     order = load_order(args.cases, cases)
     check_settings(cases, engines, conv)
     out = check_out_dir("--out", args.out)
@@ -228,7 +230,8 @@ def run(args) -> int:
         atomic_write_text(args.junit, junit_xml(summary))
     d = summary.get("limits_derived_on") or {}
     if d:
-        print(f"limits derived on mujoco {d.get('mujoco', '?')}, exudyn {d.get('exudyn', '?')} ({d.get('date', '?')}); "
+        print(f"limits derived on mujoco {d.get('mujoco', '?')}, exudyn {d.get('exudyn', '?')}, the peers' "
+              f"{d.get('model', 'adapter')} models ({d.get('date', '?')}); "
               f"gated against the converged reference (in-house {summary['converged_reference']['settings']})")
     for line in summary["failures"]:
         print(f"FAILED {line}")
@@ -239,6 +242,16 @@ def run(args) -> int:
         paths = build_report(out, out / "report")
         print(f"report: {paths['pdf']}")
     return summary["exit_code"]
+
+
+def pin_model(cases, tolerances) -> list:
+    """Fixed limits hold for the peers' model they were derived on ([derived] model, e.g. the hand-written
+    adapters): each peer runs on it, unless a case chose its own ``model``."""
+    model = (getattr(tolerances, "derived", None) or {}).get("model")
+    if model is None:
+        return cases
+    return [dataclasses.replace(c, settings={**c.settings, **{e: {"model": model, **(c.settings.get(e) or {})}
+                                                           for e in ("mujoco", "exudyn")}}) for c in cases]
 
 
 def _power_cases(text: str, cases, profile: str) -> list:

@@ -119,7 +119,9 @@ def test_a_one_percent_cap_mass_in_mujocos_own_model_disagrees_beyond_numerical_
     res = json.loads((out / "results.json").read_text())
     v = res["verdicts"]["A15mm_f10Hz"]
     assert v["mujoco"]["consistent"] is False and v["mujoco"]["text"].startswith("disagrees beyond numerical error")
-    assert v["mujoco"]["worst_consistency"]["ratio"] > 3.0, v["mujoco"]   # not by a hair
+    # not by a hair: on the 8-wire variant rms_dF is 2.85x its bound with MuJoCo's described model (the
+    # default), 3.08x with its hand-written adapter (estimated errors 4.1e-5 and 3.8e-5 of the peak force)
+    assert v["mujoco"]["worst_consistency"]["ratio"] > 2.5, v["mujoco"]
     assert v["semirecursive"]["pass"], v["semirecursive"]
     bad = {m["metric"] for m in res["metrics"] if m["gated"] and not m["pass"] and m["engine"] == "mujoco"}
     assert "max_dF_rel" in bad, bad
@@ -157,3 +159,16 @@ def test_the_in_house_limit_follows_its_ensemble_and_a_peers_its_own_error():
     assert spread["semirecursive"]["case"]["c"]["max_dF_rel"] == pytest.approx(FACTOR * 4e-6)
     assert spread["mujoco"]["case"]["c"]["max_dF_rel"] == base["mujoco"]["case"]["c"]["max_dF_rel"] \
         == pytest.approx(FACTOR * 2e-5)
+
+
+def test_fixed_limits_run_the_peers_on_the_model_they_were_derived_on():
+    """The regression profiles' limits were derived on the peers' hand-written adapters ([derived] model):
+    the gate runs each peer on that model unless a case chose its own; the default rule pins nothing."""
+    from nsd_cli.compare import pin_model
+    cases = load_cases()
+    chose = [dataclasses.replace(cases[0], settings={**cases[0].settings, "mujoco": {"model": "described"}})]
+    pinned = pin_model(cases + chose, load_tolerances(REGRESSION))
+    assert load_tolerances(REGRESSION).derived["model"] == "adapter"
+    assert all(c.settings[e]["model"] == "adapter" for c in pinned[:-1] for e in ("mujoco", "exudyn"))
+    assert pinned[-1].settings["mujoco"]["model"] == "described" and pinned[-1].settings["exudyn"]["model"] == "adapter"
+    assert pin_model(cases, load_tolerances()) == cases

@@ -25,7 +25,8 @@ def _structures():
 def test_native_and_python_loops_agree_to_round_off(name):
     st = _structures()[name]
     ground = Harmonic(4.0, 3.0, duration=0.06)
-    runs = {loop: run_seismic_engine("mujoco", Params(), st, ground, 0.06, 1e-3, {"timestep": 2e-5, "step_loop": loop})
+    runs = {loop: run_seismic_engine("mujoco", Params(), st, ground, 0.06, 1e-3,
+                                 {"timestep": 2e-5, "step_loop": loop, "model": "adapter"})
             for loop in ("native", "python")}
     a, b = runs["native"].columns, runs["python"].columns
     assert set(a) == set(b)
@@ -43,4 +44,4 @@ def test_native_and_python_loops_agree_to_round_off(name):
 def test_an_unknown_step_loop_is_one_line_bad_input():
     with pytest.raises(ParameterError, match="step_loop"):
         run_seismic_engine("mujoco", Params(), default_structure(Params()), Harmonic(1.0, 2.0, duration=0.01), 0.01,
-                           1e-3, {"step_loop": "fortran"})
+                           1e-3, {"step_loop": "fortran", "model": "adapter"})

@@ -6,6 +6,7 @@ import importlib
 import time
 from typing import Any
 
+from comparisons.engines.base import DEFAULT_MODEL
 from nsd_core.device.params import ParameterError, Params
 
 ENGINES = {
@@ -63,7 +64,7 @@ def run_engine(name: str, params: Params, drive, settings: dict | None = None):
     from nsd_core.device.warmup import tiny_drive
     from nsd_core.engine.workers import stdout_to_stderr
     settings = dict(settings or {})
-    model = settings.pop("model", "adapter")   # "described": the builder on the device's description
+    model = settings.pop("model", DEFAULT_MODEL.get(name, "adapter"))   # base.DEFAULT_MODEL says which
     if model not in ("adapter", "described") or (model == "described" and name == REFERENCE):
         raise ParameterError(f"{name}.model = {model!r}: allowed: adapter, described (the peers only)")
     if model == "described":
@@ -106,7 +107,7 @@ def run_seismic_engine(name: str, params: Params, structure, ground, duration=No
     from nsd_core.device.warmup import TINY_DT_OUT, TINY_DURATION, tiny_ground
     from nsd_core.engine.workers import stdout_to_stderr
     settings = dict(settings or {})
-    model = settings.pop("model", "adapter")   # "described": the builder on the device's seismic description
+    model = settings.pop("model", DEFAULT_MODEL.get(name, "adapter"))   # base.DEFAULT_MODEL says which
     if model not in ("adapter", "described") or (model == "described" and name == REFERENCE):
         raise ParameterError(f"{name}.model = {model!r}: allowed: adapter, described (the peers only)")
     if model == "described":

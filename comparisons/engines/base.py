@@ -28,6 +28,16 @@ from nsd_core.device.params import Params
 from nsd_core.device.results import RunResult
 
 
+# Which model a peer runs (setting ``model``): "described", its builder on the device's description
+# (comparisons/engines/described.py, described_seismic.py), or "adapter", its hand-written model.
+# Described is the default where the gate gives the same verdicts on it (docs/models.md).
+DEFAULT_MODEL = {"mujoco": "described", "exudyn": "described"}
+# The settings a described model takes; an adapter's others (drive armature, Newton tolerances, its
+# step loop ...) describe the hand-written model and are refused with model = "described"
+DESCRIBED_SETTINGS = {"mujoco": ("model", "perturb", "timestep", "integrator", "solref_factor", "passive"),
+                      "exudyn": ("model", "perturb", "step_size", "min_steps_per_cycle", "builder_forces")}
+
+
 class EngineError(RuntimeError):
     """An engine failed on one case (exit code 3); the harness reports it and goes on."""
 
@@ -80,6 +90,12 @@ def check_settings(engine, settings: dict[str, Any] | None, where: str) -> dict[
     hook: a bad setting is bad input (exit 2) found before any work starts."""
     from nsd_core.device.params import ParameterError
     s = merged_settings(engine.default_settings, settings, where)
+    allowed = DESCRIBED_SETTINGS.get(engine.name, ())
+    if s.get("model") == "described" and any(k not in allowed for k in settings or {}):
+        k = next(k for k in settings if k not in allowed)
+        raise ParameterError(f"{where}.{k}: a setting of the hand-written adapter, not of the described model "
+                             f"(model = \"described\", the default); allowed: {', '.join(allowed)}; "
+                             f"or set model = \"adapter\"")
     for k, v in (settings or {}).items():
         d = engine.default_settings[k]
         name = f"{where}.{k} = {v!r}"

@@ -21,13 +21,13 @@ import tomllib
 
 import numpy as np
 
-from comparisons.engines.base import EngineError
+from comparisons.engines.base import DESCRIBED_SETTINGS, EngineError
 from comparisons.engines.perturb import perturbed
 from nsd_core.device.describe import device_description
 from nsd_core.device.drive import Drive
 from nsd_core.device.geometry import device_geometry
 from nsd_core.device.outputs import device_columns
-from nsd_core.device.params import Params
+from nsd_core.device.params import ParameterError, Params
 from nsd_core.model.errors import ModelError
 from nsd_core.model.load import parse_model
 
@@ -36,13 +36,25 @@ from nsd_core.model.load import parse_model
 SHARED = {"mujoco": ("timestep", "integrator", "solref_factor", "passive"), "exudyn": ("step_size",)}
 
 
-def builder_settings(engine: str, settings: dict | None, frequency: float) -> dict:
-    """The builder's settings for an adapter's ``settings`` (see the module's docstring)."""
+def builder_settings(engine: str, settings: dict | None, frequency: float, mode: str = "drive") -> dict:
+    """The builder's settings for an adapter's ``settings`` (see the module's docstring), over the
+    engine's defaults of ``mode`` (Exudyn's force path: "predicted" in drive mode, the adapter's own
+    scheme; "compiled", implicit, in the seismic mode)."""
     from comparisons.engines import get_engine
-    s = {**get_engine(engine).default_settings, **(settings or {})}
+    allowed = DESCRIBED_SETTINGS[engine]
+    for k in settings or {}:   # an adapter's setting would be silently void here: refused in one line
+        if k not in allowed:
+            raise ParameterError(f"{engine}.{k}: a setting of the hand-written adapter, not of the described model "
+                                 f"(model = \"described\", the default); allowed: {', '.join(allowed)}; "
+                                 f"or set model = \"adapter\"")
+    e = get_engine(engine)
+    defaults = e.default_settings
+    if mode != "drive":   # the seismic adapter's defaults over the drive's (MuJoCo's Euler), no cycle to cap a step
+        defaults = {**defaults, **e.seismic_default_settings, "min_steps_per_cycle": None}
+    s = {**defaults, **(settings or {})}
     out = {k: s[k] for k in SHARED[engine] if k in s and s[k] is not None}
     if engine == "exudyn":   # its force path (the adapter's own "forces" is its scheme's name)
-        out["forces"] = s.get("builder_forces", "compiled")
+        out["forces"] = s.get("builder_forces", "predicted")
     if engine == "exudyn" and s.get("min_steps_per_cycle"):   # the adapter's cap on its step, per cycle
         out["step_size"] = min(float(s["step_size"]), 1.0 / (float(s["min_steps_per_cycle"]) * frequency))
     return out

@@ -163,7 +163,7 @@ class DescribedSeismic:
             perturb = (settings or {}).get("perturb")
             structure = perturbed_structure(structure, perturb)   # the columns read this model's own masses
             model, g = described_seismic_model(params, structure, ground, duration, dt_out, perturb)
-            s = builder_settings(self.name, {**(settings or {}), "min_steps_per_cycle": None}, 1.0)
+            s = builder_settings(self.name, settings, 1.0, "seismic")
             run = self.builder.simulate(model, duration, duration / (len(t_out) - 1), s)
         except (ModelError, ParameterError) as e:
             raise EngineError(f"{self.name} (described): {e}") from None

@@ -80,7 +80,7 @@ from exudyn.rigidBodyUtilities import RigidBodyInertia
 
 from comparisons.engines import exudyn_native
 from comparisons.engines.exudyn_quiet import quiet_allocation_warning
-from comparisons.engines.base import check_step_count, EngineError, merged_settings
+from comparisons.engines.base import DEFAULT_MODEL, EngineError, check_step_count, merged_settings
 from nsd_core.device.drive import Drive
 from nsd_core.device.forces import advance_spring_zeta, advance_wire_stress, rope_tension, spring_push, wire_tension
 from nsd_core.device.geometry import device_geometry
@@ -233,8 +233,9 @@ class ExudynEngine:
         "perturb": None,              # a modelling error injected into this model only (engines/perturb.py)
         "force_code": "compiled",     # per_step loads: "compiled" (exudyn_native.step) or "python" (numpy)
         "linear_solver": "eigen_dense",  # Exudyn's linear solver: exudyn_dense | eigen_dense | eigen_sparse
-        "model": "adapter",            # "described": the builder on the device's description (engines/described.py)
-        "builder_forces": "compiled",  # model = "described" only: the builder's force path (compiled | predicted)
+        "model": DEFAULT_MODEL["exudyn"],            # "described": the builder on the device's description (engines/described.py)
+        "builder_forces": "predicted",  # model = "described" only: the builder's force path (predicted: the
+                                        # adapter's own scheme, within 1.25x its time; compiled: implicit)
     }
 
     # a warm-up's tiny run (comparisons.engines._warm_peer) compiles what a run does without the

@@ -32,7 +32,7 @@ import exudyn as exu
 from exudyn.itemInterface import LoadForceVector, LoadTorqueVector, MarkerNodePosition, MarkerNodeRigid
 from exudyn.rigidBodyUtilities import RigidBodyInertia
 
-from comparisons.engines.base import EngineError, check_step_count, merged_settings
+from comparisons.engines.base import DEFAULT_MODEL, EngineError, check_step_count, merged_settings
 from comparisons.engines.exudyn_building import ExudynFloors
 from comparisons.engines.exudyn_quiet import quiet_allocation_warning
 from comparisons.engines.perturb import perturbed, perturbed_structure
@@ -51,7 +51,7 @@ quiet_allocation_warning()
 
 DEFAULTS = {"step_size": 1e-5, "spectral_radius": 0.8, "newton_rel_tol": 1e-12, "newton_abs_tol": 1e-14,
             "rod_axial_inertia": 1e-3, "perturb": None,  # perturb: an error in this model only (engines/perturb.py)
-            "model": "adapter",   # "described": the builder on the device's description (engines/described_seismic.py)
+            "model": DEFAULT_MODEL["exudyn"],   # "described": the builder on the device's description (engines/described_seismic.py)
             "builder_forces": "compiled"}   # model = "described" only: the builder's force path (compiled | predicted)
 
 

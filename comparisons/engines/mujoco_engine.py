@@ -80,7 +80,7 @@ from nsd_core.device.params import ParameterError, Params
 from nsd_core.device.results import RunResult
 
 from comparisons.engines import mujoco_native
-from comparisons.engines.base import check_step_count, EngineError, merged_settings
+from comparisons.engines.base import DEFAULT_MODEL, EngineError, check_step_count, merged_settings
 from comparisons.engines.mujoco_mjcf import wall_rod_loop_mjcf
 from comparisons.engines.perturb import perturbed
 
@@ -232,7 +232,7 @@ class MujocoEngine:
         "perturb": None,             # a modelling error injected into this model only (engines/perturb.py)
         "passive": "compiled",       # "compiled": C callback (mujoco_native); "python": _Device.passive
         "step_loop": "native",       # "native": compiled loop calling mj_step; "python": one call a step
-        "model": "adapter",          # "described": the builder on the device's description (engines/described.py)
+        "model": DEFAULT_MODEL["mujoco"],          # "described": the builder on the device's description (engines/described.py)
     }
 
     @property

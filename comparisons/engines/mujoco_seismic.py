@@ -43,7 +43,7 @@ from nsd_core.device.columns import units_of
 from nsd_core.device.seismic import output_times
 
 from comparisons.engines import mujoco_native, mujoco_seismic_native as native_loop
-from comparisons.engines.base import EngineError, check_step_count, merged_settings
+from comparisons.engines.base import DEFAULT_MODEL, EngineError, check_step_count, merged_settings
 from comparisons.engines.mujoco_building import Floors, floors_mjcf, tendons_mjcf
 from comparisons.engines.mujoco_mjcf import wall_rod_loop_mjcf
 from comparisons.engines.perturb import perturbed, perturbed_structure
@@ -51,7 +51,7 @@ from comparisons.engines.perturb import perturbed, perturbed_structure
 DEFAULTS = {"timestep": 1e-5, "solref_factor": 2.0, "solimp": [0.9999, 0.9999, 0.001, 0.5, 2.0],
             "solver_tolerance": 1e-12, "solver_iterations": 20, "closure_limit": 1e-4, "hysteresis_substeps": 1,
             "step_loop": "native", "perturb": None,  # perturb: a modelling error in this model only (engines/perturb.py)
-            "model": "adapter"}   # "described": the builder on the device's description (engines/described_seismic.py)
+            "model": DEFAULT_MODEL["mujoco"]}   # "described": the builder on the device's description (engines/described_seismic.py)
 
 
 def _f(x) -> str:
