@@ -40,15 +40,18 @@ def cases_file(folder: Path, described: bool, exudyn_forces: str, modes=("drive"
                seismic_forces: str = "compiled") -> Path:
     raw = tomllib.loads((ROOT / "comparisons" / "cases.toml").read_text())
     raw = {"defaults": raw.get("defaults", {}), "case": [c for c in raw["case"] if c.get("mode", "drive") in modes]}
-    if described:
-        settings = raw["defaults"].setdefault("settings", {})
-        settings["mujoco"] = {**settings.get("mujoco", {}), "model": "described"}
-        settings["exudyn"] = {**settings.get("exudyn", {}), "model": "described", "builder_forces": exudyn_forces}
-        for c in raw["case"]:   # a seismic case takes no [defaults] settings: its own
-            if c.get("mode") == "seismic":
-                own = c.setdefault("settings", {})
-                own["mujoco"] = {**own.get("mujoco", {}), "model": "described"}
-                own["exudyn"] = {**own.get("exudyn", {}), "model": "described", "builder_forces": seismic_forces}
+    # each model named (the peers' default is "described": comparisons.engines.base.DEFAULT_MODEL)
+    model = "described" if described else "adapter"
+    forces = {"drive": {"builder_forces": exudyn_forces} if described else {},
+              "seismic": {"builder_forces": seismic_forces} if described else {}}
+    settings = raw["defaults"].setdefault("settings", {})
+    settings["mujoco"] = {**settings.get("mujoco", {}), "model": model}
+    settings["exudyn"] = {**settings.get("exudyn", {}), "model": model, **forces["drive"]}
+    for c in raw["case"]:   # a seismic case takes no [defaults] settings: its own
+        if c.get("mode") == "seismic":
+            own = c.setdefault("settings", {})
+            own["mujoco"] = {**own.get("mujoco", {}), "model": model}
+            own["exudyn"] = {**own.get("exudyn", {}), "model": model, **forces["seismic"]}
     path = folder / ("cases_described.toml" if described else "cases_adapters.toml")
     path.write_text(tomli_w.dumps(raw))
     return path
@@ -80,7 +83,7 @@ def seismic_timing(repeats: int) -> dict:
         st, row = case.isolated_structure(), {}
         for e in PEERS:
             given = case.settings.get(e, {})
-            paths = {"adapter": given, "described": {**given, "model": "described"}}
+            paths = {"adapter": {**given, "model": "adapter"}, "described": {**given, "model": "described"}}
             for settings in paths.values():   # compile this structure's code once, untimed
                 run_seismic_engine(e, case.params_for(e), st, tiny_ground(), TINY_DURATION, TINY_DT_OUT, settings)
             runs = {p: [] for p in paths}

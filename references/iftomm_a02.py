@@ -38,9 +38,8 @@ reference = { file = "iftomm_a02_reference.csv", source = "exact one-angle reduc
 # exudyn: 8.7e-4 (B0_vy), estimate 8.8e-4; both runs relaxed (Newton 1e-8) after a failure at 12.515 s
 #   (h) and 1.244 s (h/2); 6.25e-4 s gives 2.1e-4. Relaxed, 5e-4 s fails at 8.584 s, 4e-4 s at 6.618 s,
 #   2.5e-4 s at 5.175 s (a step ends within 3e-5 s of a singular instant): 1e-3 s and 8e-4 s pass but
-#   have no h/2. 34 s (h/2 37 s) with Exudyn's sparse LU; the builder's dense LU (EigenDense, on more
-#   than 1000 unknowns) takes ~120 ms a step against 1.8 ms, the same outputs to 2e-11: 1-2 h for the
-#   60000 steps of both runs.
+#   have no h/2. 34 s (h/2 37 s): the builder solves systems of over 1000 unknowns with Eigen's sparse
+#   LU (a dense one took ~120 ms a step against 1.8 ms, the same outputs to 2e-11).
 [[case]]
 name = "a02_20s"
 duration = 20.0    # s: the library's run

@@ -72,6 +72,17 @@ def redundant_constraints(mbs, ss) -> int:
     return int(info["redundantConstraints"])
 
 
+# above this many unknowns (coordinates and multipliers) a system without redundant constraints is solved
+# with Eigen's sparse LU (Exudyn advises it above 1000); the full-pivot LU that redundant ones need is dense
+SPARSE_ABOVE = 1000
+
+
+def unknowns(mbs) -> int:
+    """The assembled system's unknowns: ODE2 coordinates and algebraic ones (the multipliers)."""
+    sd = mbs.systemData
+    return len(sd.GetODE2Coordinates()) + len(sd.GetAECoordinates())
+
+
 def solver_settings(s: dict, n_steps: int, duration: float):
     ss = exu.SimulationSettings()
     ti = ss.timeIntegration

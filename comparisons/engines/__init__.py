@@ -57,6 +57,21 @@ def _warm_peer(mode: str, name: str, line: bool, settings: dict | None, tiny, sh
     return time.perf_counter() - start
 
 
+def _chosen(name: str, settings: dict, mode: str) -> tuple:
+    """(model, engine) for a run: ``settings``' own ``model`` (popped) or base.DEFAULT_MODEL's, and the
+    engine that runs it: the adapter, or the builder on the device's description of ``mode``."""
+    model = settings.pop("model", DEFAULT_MODEL.get(name, "adapter"))
+    if model not in ("adapter", "described") or (model == "described" and name == REFERENCE):
+        raise ParameterError(f"{name}.model = {model!r}: allowed: adapter, described (the peers only)")
+    if model == "adapter":
+        return model, get_engine(name)
+    if mode == "drive":
+        from comparisons.engines.described import DescribedEngine
+        return model, DescribedEngine(name)
+    from comparisons.engines.described_seismic import DescribedSeismic
+    return model, DescribedSeismic(name)
+
+
 def run_engine(name: str, params: Params, drive, settings: dict | None = None):
     """Run one engine by name: the runner the study layer is given to sweep any engine. Whatever the
     engine prints (Exudyn's memory-allocation warnings) goes to stderr, never into stdout's table.
@@ -64,14 +79,7 @@ def run_engine(name: str, params: Params, drive, settings: dict | None = None):
     from nsd_core.device.warmup import tiny_drive
     from nsd_core.engine.workers import stdout_to_stderr
     settings = dict(settings or {})
-    model = settings.pop("model", DEFAULT_MODEL.get(name, "adapter"))   # base.DEFAULT_MODEL says which
-    if model not in ("adapter", "described") or (model == "described" and name == REFERENCE):
-        raise ParameterError(f"{name}.model = {model!r}: allowed: adapter, described (the peers only)")
-    if model == "described":
-        from comparisons.engines.described import DescribedEngine
-        engine = DescribedEngine(name)
-    else:
-        engine = get_engine(name)
+    model, engine = _chosen(name, settings, "drive")
     with stdout_to_stderr():
         shape = (params.n_ropes, params.n_wires) if model == "described" else ()
         warm = _warm_peer("drive", name, drive.is_line, {**settings, "model": model}, lambda choices: engine.run(
@@ -107,14 +115,7 @@ def run_seismic_engine(name: str, params: Params, structure, ground, duration=No
     from nsd_core.device.warmup import TINY_DT_OUT, TINY_DURATION, tiny_ground
     from nsd_core.engine.workers import stdout_to_stderr
     settings = dict(settings or {})
-    model = settings.pop("model", DEFAULT_MODEL.get(name, "adapter"))   # base.DEFAULT_MODEL says which
-    if model not in ("adapter", "described") or (model == "described" and name == REFERENCE):
-        raise ParameterError(f"{name}.model = {model!r}: allowed: adapter, described (the peers only)")
-    if model == "described":
-        from comparisons.engines.described_seismic import DescribedSeismic
-        engine = DescribedSeismic(name)
-    else:
-        engine = get_engine(name)
+    model, engine = _chosen(name, settings, "seismic")
     with stdout_to_stderr():   # the warm-up's key names the model: each path compiles its own code
         warm = _warm_peer("seismic", name, True, {**settings, "model": model}, lambda choices: engine.run_seismic(
             params, structure, tiny_ground(), duration=TINY_DURATION, dt_out=TINY_DT_OUT,
