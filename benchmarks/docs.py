@@ -342,11 +342,30 @@ def gate_described() -> str:
             o = b["cases"][case][e]
             rows.append([case, e, "PASS" if r["pass"] else "FAIL", "PASS" if o["pass"] else "FAIL",
                          plain(r["cpu_s"]), plain(o["cpu_s"]), g(d["cpu_ratio_described_over_adapter"][case][e])])
-    return (provenance(rec) + "\n"
-            + f"`nsd compare --cases` on the gate's drive cases, every metric and the gate's rule, twice: the peers' "
+    text = (provenance(rec) + "\n"
+            + f"`nsd compare --cases` on the gate's cases, every metric and the gate's rule, twice: the peers' "
               f"adapters (verdict {a['verdict']}), then `model = \"described\"` with Exudyn's builder at `builder_forces = "
-              f"\"{d['exudyn_forces']}\"` (verdict {b['verdict']}); CPU seconds of each peer's h run in its warm worker.\n\n"
+              f"\"{d['exudyn_forces']}\"` (drive) and \"{d.get('exudyn_seismic_forces', 'compiled')}\" (seismic) "
+              f"(verdict {b['verdict']}); CPU seconds of each peer's h run in its warm worker.\n\n"
             + table(["case", "peer", "adapter", "builder", "adapter CPU s", "builder CPU s", "builder / adapter"], rows))
+    timing = d.get("seismic_timing_interleaved") or {}
+    if timing:
+        trows = []
+        for case, per in timing.items():
+            for e in ("mujoco", "exudyn"):
+                if e not in per:
+                    continue
+                best = {m: min(per[e]["runs"][m], key=lambda x: x["cpu_s"]) for m in ("adapter", "described")}
+                trows.append([case, e, plain(per["model_duration_s"]), plain(best["adapter"]["cpu_s"]),
+                              plain(best["described"]["cpu_s"]), g(per[e]["cpu_ratio_described_over_adapter"]),
+                              plain(best["adapter"]["wall_s_per_model_s"]), plain(best["described"]["wall_s_per_model_s"]),
+                              plain(max(x["load_before"] for v in per[e]["runs"].values() for x in v), 2)])
+        text += ("\n\nThe seismic cases again, each peer's whole run (the model's build included) adapter and builder "
+                 "interleaved in one process after an untimed warm-up, the fastest of the rounds; wall seconds per "
+                 "model second (the aim: at most 1) and the 1-minute load before the runs:\n\n"
+                 + table(["case", "peer", "model s", "adapter CPU s", "builder CPU s", "builder / adapter",
+                          "adapter wall s / model s", "builder wall s / model s", "load (max)"], trows))
+    return text
 
 
 def direction_study() -> str:
