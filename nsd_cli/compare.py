@@ -250,6 +250,8 @@ def pin_model(cases, tolerances) -> list:
     model = (getattr(tolerances, "derived", None) or {}).get("model")
     if model is None:
         return cases
+    if model not in ("adapter", "described"):
+        raise ParameterError(f"--tolerances: [derived] model = {model!r}: allowed: adapter, described")
     return [dataclasses.replace(c, settings={**c.settings, **{e: {"model": model, **(c.settings.get(e) or {})}
                                                            for e in ("mujoco", "exudyn")}}) for c in cases]
 

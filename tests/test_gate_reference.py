@@ -8,6 +8,7 @@ import json
 import math
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -172,3 +173,12 @@ def test_fixed_limits_run_the_peers_on_the_model_they_were_derived_on():
     assert all(c.settings[e]["model"] == "adapter" for c in pinned[:-1] for e in ("mujoco", "exudyn"))
     assert pinned[-1].settings["mujoco"]["model"] == "described" and pinned[-1].settings["exudyn"]["model"] == "adapter"
     assert pin_model(cases, load_tolerances()) == cases
+
+
+def test_a_bad_derived_model_is_one_line(tmp_path):
+    bad = tmp_path / "tol.toml"
+    bad.write_text(Path(REGRESSION).read_text().replace('model = "adapter"', 'model = "bogus"'))
+    p = subprocess.run([sys.executable, "-m", "nsd_cli.main", "compare", "--tolerances", str(bad), "--out",
+                        str(tmp_path / "out")], capture_output=True, text=True, timeout=120)
+    assert p.returncode == 2 and p.stderr.strip().endswith("[derived] model = 'bogus': allowed: adapter, described")
+    assert len(p.stderr.strip().splitlines()) == 1 and not (tmp_path / "out").exists()

@@ -85,17 +85,25 @@ STEP_SETTINGS = ("step_size", "timestep", "max_step")
 MAX_FIXED_STEPS = 20_000_000
 
 
+def described_only(engine: str, settings: dict[str, Any] | None, where: str) -> None:
+    """A setting of the hand-written adapter given to a described model (it would be silently void there):
+    a one-line ParameterError naming it and what the described model takes."""
+    from nsd_core.device.params import ParameterError
+    allowed = DESCRIBED_SETTINGS.get(engine, ())
+    for k in settings or {}:
+        if k not in allowed:
+            raise ParameterError(f"{where}.{k}: a setting of the hand-written adapter, not of the described model "
+                                 f"(model = \"described\", the default); allowed: {', '.join(allowed)}; "
+                                 f"or set model = \"adapter\"")
+
+
 def check_settings(engine, settings: dict[str, Any] | None, where: str) -> dict[str, Any]:
     """Every setting typed like its default and in range, then the engine's own ``validate_settings``
     hook: a bad setting is bad input (exit 2) found before any work starts."""
     from nsd_core.device.params import ParameterError
     s = merged_settings(engine.default_settings, settings, where)
-    allowed = DESCRIBED_SETTINGS.get(engine.name, ())
-    if s.get("model") == "described" and any(k not in allowed for k in settings or {}):
-        k = next(k for k in settings if k not in allowed)
-        raise ParameterError(f"{where}.{k}: a setting of the hand-written adapter, not of the described model "
-                             f"(model = \"described\", the default); allowed: {', '.join(allowed)}; "
-                             f"or set model = \"adapter\"")
+    if s.get("model") == "described":
+        described_only(engine.name, settings, where)
     for k, v in (settings or {}).items():
         d = engine.default_settings[k]
         name = f"{where}.{k} = {v!r}"

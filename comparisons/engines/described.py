@@ -21,13 +21,13 @@ import tomllib
 
 import numpy as np
 
-from comparisons.engines.base import DESCRIBED_SETTINGS, EngineError
+from comparisons.engines.base import EngineError, described_only
 from comparisons.engines.perturb import perturbed
 from nsd_core.device.describe import device_description
 from nsd_core.device.drive import Drive
 from nsd_core.device.geometry import device_geometry
 from nsd_core.device.outputs import device_columns
-from nsd_core.device.params import ParameterError, Params
+from nsd_core.device.params import Params
 from nsd_core.model.errors import ModelError
 from nsd_core.model.load import parse_model
 
@@ -41,12 +41,7 @@ def builder_settings(engine: str, settings: dict | None, frequency: float, mode:
     engine's defaults of ``mode`` (Exudyn's force path: "predicted" in drive mode, the adapter's own
     scheme; "compiled", implicit, in the seismic mode)."""
     from comparisons.engines import get_engine
-    allowed = DESCRIBED_SETTINGS[engine]
-    for k in settings or {}:   # an adapter's setting would be silently void here: refused in one line
-        if k not in allowed:
-            raise ParameterError(f"{engine}.{k}: a setting of the hand-written adapter, not of the described model "
-                                 f"(model = \"described\", the default); allowed: {', '.join(allowed)}; "
-                                 f"or set model = \"adapter\"")
+    described_only(engine, settings, engine)
     e = get_engine(engine)
     defaults = e.default_settings
     if mode != "drive":   # the seismic adapter's defaults over the drive's (MuJoCo's Euler), no cycle to cap a step
