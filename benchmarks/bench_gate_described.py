@@ -11,7 +11,10 @@ Writes two cases files from comparisons/cases.toml (its cases, unchanged; the se
 its text, every gated metric with its bound, and the h run's CPU seconds (a warm worker's, so load
 affects it less than wall time).
 
-Then the seismic cases' cost, interleaved in this one process so that load affects both paths alike:
+Then each drive case's cost, interleaved in this one process, adapter then described, each peer's whole
+run timed from outside (CPU seconds of ``run_engine``, the model's build included for both paths: a
+drive adapter's own ``cpu_time`` stat covers its stepping only, so the first table's ratios lean
+against the builders), the fastest of ``--repeats`` rounds. Then the seismic cases' cost, interleaved in this one process so that load affects both paths alike:
 per case and peer, after one untimed warm-up of each path (its compilation), ``--repeats`` rounds of
 the adapter's run then the described run (comparisons.engines.run_seismic_engine: the model's build
 included), each run's CPU seconds and its wall seconds per model second, with the load average.
@@ -103,13 +106,45 @@ def seismic_timing(repeats: int) -> dict:
     return out
 
 
+def drive_timing(repeats: int) -> dict:
+    """Each drive case's runs, adapter then described, interleaved in this one process, each timed from
+    outside (CPU seconds of the whole ``run_engine`` call, the model's build included, for both paths:
+    the adapters' own ``cpu_time`` covers their stepping only). An untimed run of the warm-up's tiny
+    drive first compiles each path's code (run_engine's warm-up is then cached)."""
+    from comparisons.config import Case, load_cases
+    from comparisons.engines import run_engine
+    from nsd_core.device.warmup import tiny_drive
+    out = {}
+    for case in (c for c in load_cases() if isinstance(c, Case)):
+        row = {}
+        for e in PEERS:
+            given = case.settings.get(e, {})
+            paths = {"adapter": {**given, "model": "adapter"}, "described": {**given, "model": "described"}}
+            for settings in paths.values():
+                run_engine(e, case.params_for(e), tiny_drive("line" if case.drive.is_line else "circle"), settings)
+            runs = {p: [] for p in paths}
+            for _ in range(repeats):
+                for path, settings in paths.items():
+                    load = os.getloadavg()[0]
+                    t0, c0 = time.perf_counter(), time.process_time()
+                    run_engine(e, case.params_for(e), case.drive, settings)
+                    cpu, wall = time.process_time() - c0, time.perf_counter() - t0
+                    runs[path].append({"cpu_s": cpu, "wall_s": wall, "load_before": load})
+                    print(f"{case.name:24s} {e:7s} {path:10s} cpu {cpu:7.3f} s  wall {wall:7.3f} s  (load {load:.1f})",
+                          flush=True)
+            best = {p: min(x["cpu_s"] for x in v) for p, v in runs.items()}
+            row[e] = {"runs": runs, "cpu_ratio_described_over_adapter": best["described"] / best["adapter"]}
+        out[case.name] = row
+    return out
+
+
 def main(argv=None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", required=True, help="JSON file (or folder) to write")
     ap.add_argument("--exudyn-forces", default="predicted", choices=("compiled", "predicted"))
     ap.add_argument("--exudyn-seismic-forces", default="compiled", choices=("compiled", "predicted"))
     ap.add_argument("--modes", default="drive,seismic", help="the cases' modes to run: drive, seismic or both")
-    ap.add_argument("--repeats", type=int, default=2, help="interleaved rounds of the seismic timing (0: none)")
+    ap.add_argument("--repeats", type=int, default=2, help="interleaved rounds of the drive and seismic timing (0: none)")
     args = ap.parse_args(argv)
     modes = tuple(m.strip() for m in args.modes.split(","))
     rows, loads = {}, {}
@@ -134,9 +169,11 @@ def main(argv=None) -> dict:
                         if cpu("described", case, e) and cpu("adapters", case, e) else None)
                     for e in PEERS} for case in rows["adapters"]["cases"]}
     timing = seismic_timing(args.repeats) if "seismic" in modes and args.repeats > 0 else {}
+    drive = drive_timing(args.repeats) if "drive" in modes and args.repeats > 0 else {}
     out = {"exudyn_forces": args.exudyn_forces,
            "exudyn_seismic_forces": args.exudyn_seismic_forces, "load_average_before_after": loads, "runs": rows,
            "cpu_ratio_described_over_adapter": ratio, "seismic_timing_interleaved": timing,
+           "drive_timing_interleaved": drive,
            "machine": {"cpus": os.cpu_count(), "when": time.strftime("%Y-%m-%d %H:%M:%S")}}
     target = Path(args.out)
     if target.suffix != ".json":

@@ -353,23 +353,31 @@ def _sampler(model: Model, m: mujoco.MjModel, d: mujoco.MjData, forces: Passive)
     gravity = np.asarray(model.gravity, float)
     mass = m.body_mass.copy()
 
+    body_id = {b.name: m.body(b.name).id for b in model.bodies}
+    done: dict = {}   # this sample's points and accelerations, once per (kind, body, point): not per component
+
     def point(o):
         if o.body == GROUND:
             return np.asarray(o.point, float), np.zeros(3)
-        b = m.body(o.body).id
-        x = d.xpos[b] + d.xmat[b].reshape(3, 3) @ np.asarray(o.point, float)
-        mujoco.mj_jac(m, d, jac, None, x, b)
-        return x, jac @ d.qvel
+        key = ("point", o.body, tuple(o.point))
+        if key not in done:
+            b = body_id[o.body]
+            x = d.xpos[b] + d.xmat[b].reshape(3, 3) @ np.asarray(o.point, float)
+            mujoco.mj_jac(m, d, jac, None, x, b)
+            done[key] = x, jac @ d.qvel, jac.copy()
+        return done[key][:2]
 
     def acceleration(o):
         """J qacc + J' qvel at the body point (qacc: this evaluation's, the soft loop constraints'
         forces included), plus the frame's a_g(t) with an excitation: the absolute acceleration."""
         a = np.zeros(3)
         if o.body != GROUND:
-            x = point(o)[0]
-            b = m.body(o.body).id
-            mujoco.mj_jacDot(m, d, jacdot, None, x, b)
-            a = jac @ d.qacc + jacdot @ d.qvel
+            key = ("acceleration", o.body, tuple(o.point))
+            if key not in done:
+                x = point(o)[0]
+                mujoco.mj_jacDot(m, d, jacdot, None, x, body_id[o.body])
+                done[key] = done[("point", o.body, tuple(o.point))][2] @ d.qacc + jacdot @ d.qvel
+            a = done[key]
         return a + model.excitation.acceleration(d.time) if model.excitation is not None else a
 
     def kinetic():
@@ -397,5 +405,6 @@ def _sampler(model: Model, m: mujoco.MjModel, d: mujoco.MjData, forces: Passive)
 
     def sample():
         laws = forces.law_values(m, d) if model.forces else {}
+        done.clear()
         return [float(one(o, laws)) for o in model.outputs]
     return sample

@@ -61,7 +61,7 @@ def _uses_arrays(uses: dict, n_steps: int):
     for n, pairs in uses.items():
         counts[n + 1] = len(pairs)
     ptr = np.cumsum(counts)
-    flat = [pair for n in range(n_steps + 1) for pair in uses.get(n, ())]
+    flat = [pair for n in sorted(uses) for pair in uses[n]]   # the steps that have pairs only (a few of n_steps)
     return ptr, np.array([k for k, _ in flat], dtype=np.int64), np.array([w for _, w in flat], dtype=float)
 
 
