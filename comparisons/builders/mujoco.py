@@ -320,7 +320,8 @@ def _compile(model: Model, s: dict, h: float, init, nuserdata: int = 0):
             d.qvel[j.dofadr[0]] = init.qd[(body, k)]
         for f in model.forces:
             if f.law.state is not None:
-                d.act[state_activations(model, m)[f.name]] = f.initial_state
+                k = state_activations(model, m)[f.name]
+                d.act[k:k + f.law.state_size] = f.initial_states
         return m, d
 
     armature = {}
@@ -393,10 +394,11 @@ def _sampler(model: Model, m: mujoco.MjModel, d: mujoco.MjData, forces: Passive)
             return point(o)[1][o.component]
         if o.kind == "point_acceleration":
             return acceleration(o)[o.component]
-        if o.kind == "force":
-            return laws[o.element]
+        if o.kind == "force":   # a plane law's value is its pair (Q_x, Q_y)
+            v = laws[o.element]
+            return v[o.component] if isinstance(v, tuple) else v
         if o.kind == "state":   # the activation the law's state lives in (after this evaluation's advance)
-            return d.act[acts[o.element]]
+            return d.act[acts[o.element] + o.component]
         if o.kind in ("drive_force", "work"):   # filled by simulate from the steps
             return math.nan
         if o.term == "kinetic":

@@ -26,6 +26,11 @@ A law with a state gets, besides its rate's call (RK4: handed to MuJoCo), a gene
 function: its source is in the generated text, so the hash covers it): with Euler (userdata's ADVANCE)
 the callback advances the state itself at each later evaluation, as mujoco_passive.Passive does.
 
+A plane law's element (two slide coordinates, a two-component state: nsd_core.model.laws) has its own
+block (PLANE_*, below): both coordinates' addresses, both values (Q_x, Q_y) and, for the work
+outputs, its power Q_x x' + Q_y y' as a third value column (``Layout.columns``, ``Layout.power``),
+with a generated ``advance2_<rate>`` (the same RK4 step, both components at once).
+
 The description's shape includes which points elements have a ``direction`` (points_state_along) and
 whether it has an excitation (ground_values at the stage's time, then ground_load on the body slots,
 which then include every body with a mass); the ground motion's block is data (userdata's tail).
@@ -45,10 +50,13 @@ from comparisons.builders.mujoco_cabi import data_offsets, function_address
 from nsd_core.device import ground as ground_motion
 from comparisons.builders.mujoco_mjcf import joint_name, state_activations
 from nsd_core.model.description import GROUND, Model
-from nsd_core.model.laws import POINTS
+from nsd_core.model.laws import PLANE, POINTS
 
 
 HELPERS = (K, mujoco_cabi, ground_motion)   # the modules the generated source calls into
+# a plane element's block: x's qposadr, dofadr, the state's first activation, x at the last advance,
+# Q_x and x', then y's qposadr, dofadr, y at the last advance, Q_y and y', its power and the constant 1
+PL_SLOT, PL_PREVIOUS, PL_VALUE, PL_Y, PL_POWER, PLANE_HEAD = 2, 3, 4, 6, 11, 13
 
 
 @dataclass(frozen=True)
@@ -64,8 +72,11 @@ class Layout:
     blocks: tuple[int, ...]          # each force element's block
     params: tuple[tuple[int, int], ...]   # each element's parameters [start, end)
     rates_at: int                    # the states' rates, by actuator id
-    values: np.ndarray               # each element's last law value
+    values: np.ndarray               # each value column's index: an element's last law value (a plane law's
+                                     # Q_x, Q_y and its power), x' beside it
     excitation_at: int               # the excitation's ground_values block, last (0: none)
+    columns: tuple[tuple[int, ...], ...] = ()   # each element's value columns (a plane law's: Q_x, Q_y)
+    power: tuple[int, ...] = ()      # each element's column whose value times the next is its power
 
     @property
     def core(self) -> int:
@@ -78,7 +89,7 @@ def layout(model: Model) -> Layout:
     declare ``nuserdata`` before MuJoCo compiles it)."""
     nq = sum(len(b.joint.dofs()) for b in model.bodies)
     nv = nq   # hinges and slides only (mujoco_mjcf): one qpos per dof
-    na = sum(f.law.state is not None for f in model.forces)
+    na = sum(f.law.state_size for f in model.forces)
     slots = tuple(dict.fromkeys(b for f in model.forces if f.law.acts_on == POINTS
                                 for b in (f.body_a, f.body_b) if b != GROUND))
     if model.excitation is not None:   # every body with a mass feels -m a_g: a slot holds its Jacobians
@@ -86,16 +97,24 @@ def layout(model: Model) -> Layout:
     slots_at = K.HEADER + K.SCRATCH
     drives_at = at = slots_at + K.slot_size(nv) * len(slots)
     at += K.DRIVE_SIZE * len(model.prescribed)
-    blocks, params, values = [], [], []
+    blocks, params, values, columns, power = [], [], [], [], []
     for f in model.forces:
         head, value = (K.POINTS_HEAD, K.P_VALUE) if f.law.acts_on == POINTS else (K.JOINT_HEAD, K.J_VALUE)
+        if f.law.acts_on == PLANE:
+            head = PLANE_HEAD
+            columns.append((len(values), len(values) + 1))
+            power.append(len(values) + 2)
+            values += [at + PL_VALUE, at + PL_Y + 3, at + PL_POWER]
+        else:
+            columns.append((len(values),))
+            power.append(len(values))
+            values.append(at + value)
         blocks.append(at)
-        values.append(at + value)
         params.append((at + head, at + head + len(f.parameters)))
         at += head + len(f.parameters)
     exc = 0 if model.excitation is None else len(model.excitation.block)
     return Layout(at + na + exc, nq, nv, na, drives_at, slots, slots_at, tuple(blocks), tuple(params), at,
-                  np.array(values, dtype=np.int64), at + na if exc else 0)
+                  np.array(values, dtype=np.int64), at + na if exc else 0, tuple(columns), tuple(power))
 
 
 def pack(ud: np.ndarray, model: Model, m: mujoco.MjModel, drives: list, lay: Layout) -> None:
@@ -132,6 +151,11 @@ def pack(ud: np.ndarray, model: Model, m: mujoco.MjModel, drives: list, lay: Lay
             ud[at + K.P_SLOT] = slot
             if f.direction is not None:
                 ud[at + K.P_DIRECTION:at + K.P_DIRECTION + 3] = np.asarray(f.direction, float)
+        elif f.law.acts_on == PLANE:
+            for k, base in zip(f.dofs, (at, at + PL_Y)):
+                j = m.joint(joint_name(f.joint, k))
+                ud[base], ud[base + 1] = j.qposadr[0], j.dofadr[0]
+            ud[at + PL_SLOT], ud[at + PL_POWER + 1] = slot, 1.0
         else:
             j = m.joint(joint_name(f.joint, f.dof))
             ud[at], ud[at + 1] = j.qposadr[0], j.dofadr[0]
@@ -168,7 +192,10 @@ def source(model: Model, lay: Layout, nbody: int) -> tuple[str, dict]:
         "points_state, points_state_along, prepare_bodies",
         "from nsd_core.device.ground import ground_values",
         "", "",
-        *[line for fn in fns if any(fn is f.law.rate for f in model.forces) for line in _advance_source(names[id(fn)])],
+        *[line for fn in fns if any(fn is f.law.rate and f.law.acts_on != PLANE for f in model.forces)
+          for line in _advance_source(names[id(fn)])],
+        *[line for fn in fns if any(fn is f.law.rate and f.law.acts_on == PLANE for f in model.forces)
+          for line in _advance_plane_source(names[id(fn)])],
         "@cfunc(types.void(types.voidptr, types.voidptr), cache=True)",
         "def passive(m, d):",
         f"    w = carray(d, ({words},), dtype=np.uint64)",
@@ -191,6 +218,10 @@ def source(model: Model, lay: Layout, nbody: int) -> tuple[str, dict]:
     for e, (f, at, (p0, p1)) in enumerate(zip(model.forces, lay.blocks, lay.params)):
         law = names[id(f.law.force)]
         lines.append(f"    # {f.name}: {f.law.name}")
+        if f.law.acts_on == PLANE:
+            lines += _plane_lines(f, at, p0, p1, law, names[id(f.law.rate)] if f.law.rate else "", lay,
+                                  any(o.kind == "work" for o in model.outputs))
+            continue
         if f.law.acts_on == POINTS:
             state = "points_state" if f.direction is None else "points_state_along"
             lines.append(f"    x, xd = {state}(ud, {at}, xpos, xmat, {lay.nv})")
@@ -253,6 +284,48 @@ def _advance_source(rate: str) -> list[str]:
         f"    k3 = {rate}(xm, xd, s + 0.5 * dt * k2, p)",
         f"    k4 = {rate}(x1, xd, s + dt * k3, p)",
         "    return s + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)",
+        "", ""]
+
+
+def _plane_lines(f, at: int, p0: int, p1: int, law: str, rate: str, lay: Layout, work: bool) -> list[str]:
+    """A plane element's lines (Passive.plane_law, the same arithmetic): both coordinates, the state
+    advanced (Euler) or its rates handed to MuJoCo (RK4), (Q_x, Q_y) applied and kept."""
+    p, y = f"ud[{p0}:{p1}]", at + PL_Y
+    lines = [f"    x, xd = qpos[int(ud[{at}])], qvel[int(ud[{at + 1}])]",
+             f"    y, yd = qpos[int(ud[{y}])], qvel[int(ud[{y + 1}])]"]
+    if f.law.state is None:
+        lines.append(f"    fx, fy = {law}(x, y, xd, yd, 0.0, 0.0, {p})")
+    else:
+        lines += [f"    k = int(ud[{at + PL_SLOT}])",
+                  "    sx, sy = act[k], act[k + 1]",
+                  "    if moved:",
+                  "        if dt > 0.0:",
+                  f"            sx, sy = advance2_{rate}(ud[{at + PL_PREVIOUS}], ud[{y + 2}], x, y, sx, sy, dt, {p})",
+                  "            act[k], act[k + 1] = sx, sy",
+                  f"        ud[{at + PL_PREVIOUS}], ud[{y + 2}] = x, y",
+                  "    elif not advance:",
+                  f"        rx, ry = {rate}(x, y, xd, yd, sx, sy, {p})",
+                  f"        ud[{lay.rates_at} + k], ud[{lay.rates_at} + k + 1] = rx, ry",
+                  f"    fx, fy = {law}(x, y, xd, yd, sx, sy, {p})"]
+    lines += [f"    ud[{at + PL_VALUE}], ud[{y + 3}] = fx, fy"]
+    if work:   # x', y' beside the values, and the power as a third value column
+        lines += [f"    ud[{at + PL_VALUE + 1}], ud[{y + 4}] = xd, yd",
+                  f"    ud[{at + PL_POWER}] = fx * xd + fy * yd"]
+    return lines + [f"    qfrc[int(ud[{at + 1}])] += fx", f"    qfrc[int(ud[{y + 1}])] += fy"]
+
+
+def _advance_plane_source(rate: str) -> list[str]:
+    """``_advance_source`` for a plane law's rate (Passive.plane_step, the same arithmetic in the same order)."""
+    return [
+        "@njit(cache=True, inline=\"always\")",
+        f"def advance2_{rate}(x0, y0, x1, y1, sx, sy, dt, p):",
+        "    xd, yd = (x1 - x0) / dt, (y1 - y0) / dt",
+        "    xm, ym = 0.5 * (x0 + x1), 0.5 * (y0 + y1)",
+        f"    a1, b1 = {rate}(x0, y0, xd, yd, sx, sy, p)",
+        f"    a2, b2 = {rate}(xm, ym, xd, yd, sx + 0.5 * dt * a1, sy + 0.5 * dt * b1, p)",
+        f"    a3, b3 = {rate}(xm, ym, xd, yd, sx + 0.5 * dt * a2, sy + 0.5 * dt * b2, p)",
+        f"    a4, b4 = {rate}(x1, y1, xd, yd, sx + dt * a3, sy + dt * b3, p)",
+        "    return (sx + dt / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4), sy + dt / 6.0 * (b1 + 2.0 * b2 + 2.0 * b3 + b4))",
         "", ""]
 
 

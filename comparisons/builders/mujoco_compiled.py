@@ -68,11 +68,13 @@ def _uses_arrays(uses: dict, n_steps: int):
 class _Recorded:
     """The sampler's law values at output k: those the loop recorded (no law is evaluated again)."""
 
-    def __init__(self, model, values):
-        self.names, self.values, self.k = [f.name for f in model.forces], values, 0
+    def __init__(self, model, values, columns):
+        self.names, self.values, self.columns, self.k = [f.name for f in model.forces], values, columns, 0
 
-    def law_values(self, m, d) -> dict:
-        return dict(zip(self.names, self.values[self.k]))
+    def law_values(self, m, d) -> dict:   # a plane law's value: its pair (Q_x, Q_y)
+        row = self.values[self.k]
+        return {n: float(row[c[0]]) if len(c) == 1 else (float(row[c[0]]), float(row[c[1]]))
+                for n, c in zip(self.names, self.columns)}
 
 
 def run(model, s: dict, m, d, drives: list, pairs: list, t_out: np.ndarray, n_sub: int, h: float,
@@ -94,12 +96,18 @@ def run(model, s: dict, m, d, drives: list, pairs: list, t_out: np.ndarray, n_su
     uses_ptr, uses_k, uses_w = _uses_arrays(uses, n_steps)
     site_pairs = np.array(pairs, dtype=np.int64).reshape(-1, 2)
     rec_qpos, rec_qvel = np.zeros((n_out, m.nq)), np.zeros((n_out, m.nv))
-    rec_act, rec_val = np.zeros((n_out, m.na)), np.zeros((n_out, len(model.forces)))
+    rec_act, rec_val = np.zeros((n_out, m.na)), np.zeros((n_out, len(lay.values)))
     rec_qacc = np.zeros((n_out, m.nv))
     gaps, drive_at = np.zeros(n_out), np.zeros((n_out, nd))
     clock = np.ctypeslib.as_array((ctypes.c_double * 1).from_address(d._address + 8 * data_offsets()["time"]))
     rk4 = s["integrator"] == "RK4"
     work_of, sign, mass = plan
+    # the work outputs on value columns: an element's power column (a plane law's: its power, sign +1)
+    sign_of = np.ones(len(lay.values))
+    for e, c in enumerate(lay.columns):
+        sign_of[lay.power[e]] = sign[e] if len(c) == 1 else 1.0
+    sign = sign_of
+    work_of = np.array([lay.power[e] if e >= 0 else e for e in work_of], dtype=np.int64)
     rec_work = np.zeros((n_out, len(work_of)))
     fn_forward = function_address("mj_forward")
     fn_advance = function_address("mj_RungeKutta" if rk4 else "mj_Euler")
@@ -137,13 +145,13 @@ def run(model, s: dict, m, d, drives: list, pairs: list, t_out: np.ndarray, n_su
             if o.kind == "coordinate":
                 data[:, c] = rec_qpos[:, m.joint(joint_name(o.body, o.dof)).qposadr[0]]
             elif o.kind == "force":
-                data[:, c] = rec_val[:, names.index(o.element)]
+                data[:, c] = rec_val[:, lay.columns[names.index(o.element)][o.component]]
             elif o.kind == "state":
-                data[:, c] = rec_act[:, acts[o.element]]
+                data[:, c] = rec_act[:, acts[o.element] + o.component]
         replayed = [c for c, o in enumerate(model.outputs) if o.kind in REPLAYED]
         ud[K.ADVANCE] = 0.0   # the replay below reads the recorded states: nothing is advanced
         if replayed:
-            recorded = _Recorded(model, rec_val)
+            recorded = _Recorded(model, rec_val, lay.columns)
             sample = sampler(recorded)
             for k in range(n_out):   # the recorded state again: its kinematics, mass matrix, energies
                 d.qpos[:], d.qvel[:], d.act[:], d.time = rec_qpos[k], rec_qvel[k], rec_act[k], t_out[k]

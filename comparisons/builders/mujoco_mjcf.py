@@ -90,8 +90,18 @@ STATES = "states"   # the actuator whose activations are the laws' states
 
 
 def state_slots(model: Model) -> dict[str, int]:
-    """Each force element with a state -> its index among the states actuator's activations."""
-    return {f.name: k for k, f in enumerate(f for f in model.forces if f.law.state is not None)}
+    """Each force element with a state -> its (first) index among the states actuator's activations (a
+    plane law's state takes two, x first: Law.state_size)."""
+    out, k = {}, 0
+    for f in model.forces:
+        if f.law.state is not None:
+            out[f.name], k = k, k + f.law.state_size
+    return out
+
+
+def n_states(model: Model) -> int:
+    """How many activations the states actuator has."""
+    return sum(f.law.state_size for f in model.forces)
 
 
 def state_activations(model: Model, m) -> dict[str, int]:
@@ -140,9 +150,9 @@ def build_mjcf(model: Model, s: dict, h: float, rotation: dict, armature: dict, 
     # mjcb_act_dyn), so that MuJoCo's own integrator advances them with the motion; the actuator's force
     # is zero. All of them in one actuator (actdim = their count): five one-state actuators cost the
     # device's mj_forward ~0.5 us of ~4 us; one costs nothing measurable
-    n_states = len(state_slots(model))
+    na = n_states(model)
     acts = [f'    <general name="{STATES}" joint="{joint_name(model.bodies[0].name, 0)}" dyntype="user" '
-            f'actdim="{n_states}" gaintype="fixed" gainprm="0" biastype="none" actlimited="false"/>'] if n_states else []
+            f'actdim="{na}" gaintype="fixed" gainprm="0" biastype="none" actlimited="false"/>'] if na else []
     eq = [f'    <connect name="{name}" site1="{name}:a" site2="{name}:b" solref="{solref}" solimp="{_f(s["solimp"])}"/>'
           for name, *_ in pairs]
     return "\n".join([

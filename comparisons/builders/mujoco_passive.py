@@ -8,7 +8,9 @@ numbers in the same order; tests/test_mujoco_codegen.py holds them equal to roun
   Coincident points (L = 0, a stop at rest) have no direction: u = 0, L' = 0, no force applied.
   With a ``direction`` e (ground frame): x = (p_a - p_b) . e, x' its rate, and the law's tension acts
   as -T e on a, +T e on b, i.e. the same arithmetic with u = -e and L = (p_b - p_a) . u.
-- A joint element adds ``element.force(q, q')`` to its coordinate.
+- A joint element adds ``element.force(q, q')`` to its coordinate; a plane element (two slide
+  coordinates of one joint, x and y) adds ``element.plane_force(x, y, x', y', s_x, s_y)``'s (Q_x, Q_y)
+  to them, its state in two consecutive activations (advanced as a scalar state is, the pair at once).
 - An excitation (the frame translates with the ground) adds -m a_g(t) at every body's centre of
   mass, J_com^T (-m a_g(t)), with t = mjData.time: the passive callback runs at every integrator
   stage with the stage's time (mj_RungeKutta sets it), so the forcing is as accurate as the
@@ -30,7 +32,7 @@ import numpy as np
 
 from comparisons.builders.mujoco_mjcf import joint_name, state_activations
 from nsd_core.model.description import GROUND, Model
-from nsd_core.model.laws import POINTS
+from nsd_core.model.laws import PLANE, POINTS
 
 EXCITATION, DRIVE = -1, -2   # a work output's load when it is no element (work_plan)
 
@@ -55,7 +57,7 @@ class Passive:
     def __init__(self, model: Model, m: mujoco.MjModel, drives: list, advance: bool = False):
         self.nv = m.nv
         self.jac = np.zeros((2, 3, m.nv))
-        self.points, self.joints = [], []
+        self.points, self.joints, self.planes = [], [], []
         # a law with a state keeps it in an activation of the states actuator (mujoco_mjcf); -1: none
         self.act = state_activations(model, m)
         self.rates = np.zeros(m.na)   # each state's rate at the last evaluation, for mjcb_act_dyn
@@ -69,6 +71,10 @@ class Passive:
                              for b, p in ((f.body_a, f.point_a), (f.body_b, f.point_b)))
                 u = None if f.direction is None else -np.asarray(f.direction, float)
                 self.points.append((f, ends, slot, u))
+            elif f.law.acts_on == PLANE:   # (element, qposadr x, y, dofadr x, y, first activation)
+                ja, jb = (m.joint(joint_name(f.joint, k)) for k in f.dofs)
+                self.planes.append((f, int(ja.qposadr[0]), int(jb.qposadr[0]), int(ja.dofadr[0]), int(jb.dofadr[0]),
+                                    slot))
             else:
                 j = m.joint(joint_name(f.joint, f.dof))
                 self.joints.append((f, int(j.qposadr[0]), int(j.dofadr[0]), slot))
@@ -137,10 +143,41 @@ class Passive:
         k4 = f.rate(x1, xd, s + dt * k3)
         return s + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
 
+    def plane_law(self, d, f, qa, qb, da, db, slot: int, dt: float | None = None) -> tuple[float, float]:
+        """A plane element's (Q_x, Q_y) at d's coordinates and its state, the state handled as ``law``
+        handles a scalar one (its two components at once)."""
+        x, y, xd, yd = d.qpos[qa], d.qpos[qb], d.qvel[da], d.qvel[db]
+        if slot < 0:
+            return f.plane_force(x, y, xd, yd)
+        s = (float(d.act[slot]), float(d.act[slot + 1]))
+        if dt is None:
+            pass
+        elif self.advance:
+            if not dt <= 0.0:
+                if dt > 0.0:
+                    s = self.plane_step(f, self.previous[slot], self.previous[slot + 1], x, y, s, dt)
+                    d.act[slot], d.act[slot + 1] = s
+                self.previous[slot], self.previous[slot + 1] = x, y
+        else:
+            self.rates[slot], self.rates[slot + 1] = f.plane_rate(x, y, xd, yd, *s)
+        return f.plane_force(x, y, xd, yd, *s)
+
+    @staticmethod
+    def plane_step(f, x0, y0, x1, y1, s, dt):
+        """``step`` for a plane law: one RK4 step in time along (x, y) linear from (x0, y0) to (x1, y1)."""
+        xd, yd = (x1 - x0) / dt, (y1 - y0) / dt
+        xm, ym = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
+        k1 = f.plane_rate(x0, y0, xd, yd, *s)
+        k2 = f.plane_rate(xm, ym, xd, yd, s[0] + 0.5 * dt * k1[0], s[1] + 0.5 * dt * k1[1])
+        k3 = f.plane_rate(xm, ym, xd, yd, s[0] + 0.5 * dt * k2[0], s[1] + 0.5 * dt * k2[1])
+        k4 = f.plane_rate(x1, y1, xd, yd, s[0] + dt * k3[0], s[1] + dt * k3[1])
+        return tuple(s[i] + dt / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]) for i in (0, 1))
+
     def law_values(self, m, d) -> dict:
-        """Each element's force at d's state (tension [N], or generalized force)."""
+        """Each element's force at d's state (tension [N], or generalized force; a plane law's pair)."""
         out = {f.name: self.law(d, f, *self.element_state(m, d, ends, u)[:2], slot) for f, ends, slot, u in self.points}
         out.update({f.name: self.law(d, f, d.qpos[qa], d.qvel[da], slot) for f, qa, da, slot in self.joints})
+        out.update({f.name: self.plane_law(d, f, *rest) for f, *rest in self.planes})
         return out
 
     def powers(self, m, d, work_of, sign, mass) -> np.ndarray:
@@ -149,10 +186,15 @@ class Passive:
         rates = {f.name: (*self.element_state(m, d, ends, u)[:2], slot) for f, ends, slot, u in self.points}
         rates.update({f.name: (d.qpos[qa], d.qvel[da], slot) for f, qa, da, slot in self.joints})
         out = np.zeros(len(work_of))
+        planes = {f.name: (f, rest) for f, *rest in self.planes}
         for k, e in enumerate(work_of):
             if e == EXCITATION:
                 mujoco.mj_subtreeVel(m, d)
                 out[k] = -mass * float(self.excitation.acceleration(d.time) @ d.subtree_linvel[0])
+            elif e >= 0 and self.forces[e].name in planes:   # Q_x x' + Q_y y'
+                f, (qa, qb, da, db, slot) = planes[self.forces[e].name]
+                qx, qy = self.plane_law(d, f, qa, qb, da, db, slot)
+                out[k] = qx * d.qvel[da] + qy * d.qvel[db]
             elif e >= 0:
                 f = self.forces[e]
                 x, xd, slot = rates[f.name]
@@ -181,6 +223,10 @@ class Passive:
             qfrc += (self.law(d, f, L, Ld, slot, dt) * u) @ (self.jac[0] - self.jac[1])
         for f, qa, da, slot in self.joints:
             qfrc[da] += self.law(d, f, d.qpos[qa], d.qvel[da], slot, dt)
+        for f, qa, qb, da, db, slot in self.planes:
+            qx, qy = self.plane_law(d, f, qa, qb, da, db, slot, dt)
+            qfrc[da] += qx
+            qfrc[db] += qy
         if self.advance and not dt <= 0.0:
             self.t_commit = d.time
         if self.excitation is not None:

@@ -25,7 +25,7 @@ from nsd_core.engine.mechanism import Cut, Mechanism, mechanism, revolute_cut
 from nsd_core.engine.semirecursive import SemiRecursiveSystem
 from nsd_core.model.description import GROUND, JOINT_DOFS, Model
 from nsd_core.model.errors import ModelError
-from nsd_core.model.laws import JOINT, POINTS
+from nsd_core.model.laws import JOINT, PLANE, POINTS
 
 ASSEMBLY_TOL = 1e-9   # m or rad: a closure residual above this after Newton means the loops cannot close
 
@@ -87,24 +87,30 @@ class Forces:
         pts = [f for f in model.forces if f.law.acts_on == POINTS]
         self.points, self.n = pts, tree.mech.n
         self.joints = [(f, tree.coordinate[(f.joint, f.dof)]) for f in model.forces if f.law.acts_on == JOINT]
+        # plane laws: (element, engine index of its x coordinate, of its y coordinate)
+        self.planes = [(f, tree.coordinate[(f.joint, f.dofs[0])], tree.coordinate[(f.joint, f.dofs[1])])
+                       for f in model.forces if f.law.acts_on == PLANE]
         self.elements = AxialElements([tree.body[f.body_a] for f in pts], [f.point_a for f in pts],
                                       [tree.body[f.body_b] for f in pts], [f.point_b for f in pts], tree.mech.n)
         self.directed = [(j, tree.body[f.body_a], tree.body[f.body_b], np.asarray(f.direction))
                          for j, f in enumerate(pts) if f.direction is not None]
-        self.stateful = [f.name for f in model.forces if f.law.state is not None]
-        self.slot = {name: k for k, name in enumerate(self.stateful)}
+        stateful = [f for f in model.forces if f.law.state is not None]
+        self.stateful = [f.name for f in stateful]
+        first = np.cumsum([0] + [f.law.state_size for f in stateful])   # a plane law's state takes two slots
+        self.slot = {f.name: int(k) for f, k in zip(stateful, first)}
+        n_states = int(first[-1])
         # work outputs: quadratures of their power, extra ODE states after the laws' (so the integrator's
         # own error control and dense output hold them); none declared: nothing computed
         self.work = [o for o in model.outputs if o.kind == "work"]
-        order = {f.name: j for j, f in enumerate(pts + [f for f, _ in self.joints])}   # _each's order
-        elements = [(len(self.stateful) + k, order[o.element]) for k, o in enumerate(self.work) if o.element]
+        order = {f.name: j for j, f in enumerate(pts + [f for f, _ in self.joints] + [f for f, _, _ in self.planes])}
+        elements = [(n_states + k, order[o.element]) for k, o in enumerate(self.work) if o.element]
         self.work_slots = np.array([k for k, _ in elements], dtype=int)   # the rates an element's power feeds
         self.work_from = np.array([j for _, j in elements], dtype=int)
         self.work_sign = np.array([-1.0 if j < len(pts) else 1.0 for _, j in elements])
-        self.excitation_slots = [len(self.stateful) + k for k, o in enumerate(self.work) if o.source == "excitation"]
-        self.work_at = {o.name: len(self.stateful) + k for k, o in enumerate(self.work)}
-        self.drive_work = [len(self.stateful) + k for k, o in enumerate(self.work) if o.source == "drive"]
-        self.initial = np.array([f.initial_state for f in model.forces if f.law.state is not None] + [0.0] * len(self.work))
+        self.excitation_slots = [n_states + k for k, o in enumerate(self.work) if o.source == "excitation"]
+        self.work_at = {o.name: n_states + k for k, o in enumerate(self.work)}
+        self.drive_work = [n_states + k for k, o in enumerate(self.work) if o.source == "drive"]
+        self.initial = np.array([s for f in stateful for s in f.initial_states] + [0.0] * len(self.work))
         self.excitation, self.mech = model.excitation, tree.mech
 
     def _lengths(self, kin):
@@ -128,9 +134,19 @@ class Forces:
         for f, i in self.joints:
             yield f, z[i], zd[i], self.slot.get(f.name, -1)
 
+    def _plane(self, f, i, j, z, zd, extra):
+        """A plane law's (Q_x, Q_y) and its state's rates (or None) at the coordinates (z_i, z_j)."""
+        k = self.slot.get(f.name, -1)
+        s = (extra[k], extra[k + 1]) if k >= 0 else (0.0, 0.0)
+        q = f.plane_force(z[i], z[j], zd[i], zd[j], *s)
+        return q, (f.plane_rate(z[i], z[j], zd[i], zd[j], *s) if k >= 0 else None), k
+
     def values(self, kin, z, zd, extra=()) -> dict:
-        """Each element's force: tension [N] of a points law, generalized force of a joint law."""
-        return {f.name: f.force(x, xd, extra[k] if k >= 0 else 0.0) for f, x, xd, k in self._each(kin, z, zd, extra)}
+        """Each element's force: tension [N] of a points law, generalized force of a joint law, the pair
+        (Q_x, Q_y) of a plane law."""
+        out = {f.name: f.force(x, xd, extra[k] if k >= 0 else 0.0) for f, x, xd, k in self._each(kin, z, zd, extra)}
+        out.update({f.name: self._plane(f, i, j, z, zd, extra)[0] for f, i, j in self.planes})
+        return out
 
     def ground_load(self, t, kin, wrench):
         """-m a_g(t) at every body's centre of mass, as wrenches about the origin (the excitation);
@@ -151,7 +167,7 @@ class Forces:
         gen = np.zeros(self.n)
         T = np.zeros(len(self.points))
         rates = np.zeros(len(self.initial))
-        power = np.zeros(len(self.points) + len(self.joints)) if self.work else None
+        power = np.zeros(len(self.points) + len(self.joints) + len(self.planes)) if self.work else None
         for j, (f, x, xd, k) in enumerate(self._each(kin, z, zd, extra)):
             value = f.force(x, xd, extra[k] if k >= 0 else 0.0)
             if k >= 0:
@@ -162,6 +178,14 @@ class Forces:
                 gen[self.joints[j - len(self.points)][1]] += value
             if power is not None:
                 power[j] = value * xd
+        for j, (f, i, i2) in enumerate(self.planes):
+            (qx, qy), r, k = self._plane(f, i, i2, z, zd, extra)
+            gen[i] += qx
+            gen[i2] += qy
+            if k >= 0:
+                rates[k], rates[k + 1] = r
+            if power is not None:
+                power[len(self.points) + len(self.joints) + j] = qx * zd[i] + qy * zd[i2]
         wrench = self.elements.wrench(T) if self.points else np.zeros((self.n, 6))
         if self.excitation is not None:
             a, com = self.ground_load(t, kin, wrench)

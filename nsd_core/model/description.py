@@ -16,6 +16,9 @@ The conventions every builder follows (docs/models.md):
 - a points force element acts along the line between its points, or, with a ``direction`` e (in the
   ground's frame), along e: x = (p_a - p_b) . e, its rate likewise, and the tension T pulls a by -T e
   and b by +T e (a per-direction spring: a shear building's story);
+- a plane force element (a law acting on a planar displacement) acts on two slide coordinates of one
+  joint, ``dofs = [i, j]``: x = q_i, y = q_j, and returns the generalized forces on both; its state
+  (when it has one) has two components, x first;
 - an excitation (``[excitation]``, nsd_core.model.excitation) moves the frame with the ground: every
   body feels -m a_g(t) besides gravity, i.e. the uniform field g - a_g(t);
 - outputs are in the file's frame (relative to the ground when it moves), except
@@ -125,6 +128,7 @@ class ForceElement:
     joint: str = ""          # joint laws: the body whose joint, and which of its coordinates
     dof: int = 0
     direction: tuple | None = None   # points laws: act along this unit vector (ground frame), not the line
+    dofs: tuple = ()         # plane laws: the joint's two slide coordinates (x, y), dof = dofs[0]
 
     def force(self, x: float, xd: float, s: float = 0.0) -> float:
         """The law's force at (x, x') (and its state s, for a law with one)."""
@@ -139,6 +143,21 @@ class ForceElement:
     @property
     def initial_state(self) -> float:
         return self.law.initial_state(self.parameters)
+
+    @property
+    def initial_states(self) -> tuple:
+        """The state's components at t = 0 (a plane law's two, x first)."""
+        return self.law.initial_states(self.parameters)
+
+    def plane_force(self, x, y, xd, yd, sx=0.0, sy=0.0) -> tuple[float, float]:
+        """A plane law's generalized forces (Q_x, Q_y) at the displacement (x, y), its rate and its state."""
+        qx, qy = self.law.force(float(x), float(y), float(xd), float(yd), float(sx), float(sy), self.parameters)
+        return float(qx), float(qy)
+
+    def plane_rate(self, x, y, xd, yd, sx, sy) -> tuple[float, float]:
+        """d(s_x, s_y)/dt of a plane law's state."""
+        rx, ry = self.law.rate(float(x), float(y), float(xd), float(yd), float(sx), float(sy), self.parameters)
+        return float(rx), float(ry)
 
 
 @dataclass(frozen=True)

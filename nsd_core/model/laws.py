@@ -17,6 +17,14 @@ A law may carry one internal state s (the SMA wire's stress, the Bouc-Wen spring
 ``state`` names it (its unit and the parameter holding its value at t = 0), ``force(x, xd, s, p)``
 takes it, and ``rate(x, xd, s, p)`` gives ds/dt. Each engine integrates the state along with its own
 motion (the in-house engine as extra states of its ODE).
+
+A *plane* law (``PLANE``) acts on two slide coordinates of one joint at once, a planar displacement
+(x, y) = (q_i, q_j) [m] with rates (x', y') [m/s], and may carry a two-component state (s_x, s_y): it
+is compiled as ``force(x, y, xd, yd, sx, sy, p) -> (Q_x, Q_y)`` [N], the generalized forces on the
+two coordinates, and ``rate(x, y, xd, yd, sx, sy, p) -> (s_x', s_y')``. The state of such a law takes
+two slots of an engine's state array, consecutive, x first (``Law.state_size``). It exists for laws
+whose two directions are coupled (a bidirectional hysteresis: the baseline isolators), which two
+scalar joint laws cannot express.
 """
 from __future__ import annotations
 
@@ -28,8 +36,9 @@ from numba import njit
 
 from nsd_core.device.forces import (bouc_wen_slope_scalar, restrainer_force_scalar, rope_tension_scalar,
                                     sma_slope_scalar, spring_push_scalar, wire_tension_scalar)
+from nsd_core.device.isolator_laws import hysteretic_force_scalar
 
-POINTS, JOINT = "points", "joint"
+POINTS, JOINT, PLANE = "points", "joint", "plane"
 
 
 @dataclass(frozen=True)
@@ -44,7 +53,8 @@ class LawParameter:
 
 @dataclass(frozen=True)
 class StateSpec:
-    """A law's internal state: its name, unit, and the parameter that gives its value at t = 0."""
+    """A law's internal state: its name, unit, and the parameter that gives its value at t = 0 (a plane
+    law's: two parameters, comma-separated, x first)."""
     name: str
     unit: str
     initial: str
@@ -60,9 +70,19 @@ class Law:
     state: StateSpec | None = None
     rate: Callable | None = None   # with a state: compiled rate(x, xd, s, p) -> ds/dt
 
+    @property
+    def state_size(self) -> int:
+        """How many slots the law's state takes in an engine's state array: 0, 1, or 2 (a plane law's)."""
+        return 0 if self.state is None else (2 if self.acts_on == PLANE else 1)
+
     def initial_state(self, packed: np.ndarray) -> float:
         names = [p.name for p in self.parameters]
         return float(packed[names.index(self.state.initial)]) if self.state else 0.0
+
+    def initial_states(self, packed: np.ndarray) -> tuple:
+        """The state's components at t = 0, one per slot (``state_size`` of them)."""
+        names = [p.name for p in self.parameters]
+        return tuple(float(packed[names.index(k)]) for k in self.state.initial.split(",")) if self.state else ()
 
     def pack(self, given: dict, where: str) -> np.ndarray:
         """The parameters of one element as the array ``force`` takes; bad input raises ModelError."""
@@ -91,12 +111,14 @@ def register(law: Law) -> Law:
     """Add a law to the registry (a name is registered once)."""
     if law.name in LAWS:
         raise ValueError(f"law {law.name!r} is already registered")
-    if law.acts_on not in (POINTS, JOINT):
-        raise ValueError(f"law {law.name!r}: acts_on must be {POINTS!r} or {JOINT!r}")
+    if law.acts_on not in (POINTS, JOINT, PLANE):
+        raise ValueError(f"law {law.name!r}: acts_on must be {POINTS!r}, {JOINT!r} or {PLANE!r}")
     if (law.state is None) != (law.rate is None):
         raise ValueError(f"law {law.name!r}: a state needs a rate, and a rate a state")
-    if law.state is not None and law.state.initial not in {p.name for p in law.parameters}:
-        raise ValueError(f"law {law.name!r}: the state's initial value {law.state.initial!r} is not a parameter")
+    if law.state is not None and (not set(law.state.initial.split(",")) <= {p.name for p in law.parameters}
+                                  or len(law.state.initial.split(",")) != law.state_size):
+        raise ValueError(f"law {law.name!r}: the state's initial value {law.state.initial!r} is not "
+                         f"{law.state_size} parameter(s)")
     LAWS[law.name] = law
     return law
 
@@ -210,3 +232,35 @@ register(Law("push_spring", POINTS, (
     LawParameter("initial_zeta", "N", -INF, default=0.0)),
     push_spring_tension, "Push-only Bouc-Wen spring, Eq. 18 of the paper",
     StateSpec("zeta", "N", "initial_zeta"), push_spring_rate))
+
+
+# ---- a plane law: the baseline isolators' bidirectional hysteresis (nsd_core.device.isolator_laws) -----
+# p: strength, strength_at_rest, rate, yield_displacement, exponent, initial_zx, initial_zy
+
+@njit(cache=True, _nrt=False)
+def bidirectional_hysteresis_force(x, y, xd, yd, sx, sy, p):
+    """(Q_x, Q_y) = -Q(|u'|) z [N]: the hysteretic part of a lead-rubber bearing or a friction pendulum
+    on the displacement u = (x, y), z = (s_x, s_y) its state (isolator_laws.hysteretic_force_scalar)."""
+    fx, fy, _, _, _ = hysteretic_force_scalar(xd, yd, sx, sy, p[0], p[1], p[2], p[3], p[4])
+    return -fx, -fy
+
+
+@njit(cache=True, _nrt=False)
+def bidirectional_hysteresis_rate(x, y, xd, yd, sx, sy, p):
+    """z' = (u' - H(z . u') |z|^(n - 2) (z . u') z) / D_y [1/s] (Park, Wen and Ang 1986)."""
+    _, _, dzx, dzy, _ = hysteretic_force_scalar(xd, yd, sx, sy, p[0], p[1], p[2], p[3], p[4])
+    return dzx, dzy
+
+
+register(Law("bidirectional_hysteresis", PLANE, (
+    LawParameter("strength", "N", 0.0, doc="Q at high velocity (Q_d; mu_fast W)"),
+    LawParameter("strength_at_rest", "N", 0.0, doc="Q at rest (= strength for a bilinear bearing; mu_slow W)"),
+    LawParameter("rate", "s/m", 0.0, default=0.0, doc="a of mu(v) = mu_fast - (mu_fast - mu_slow) exp(-a |v|)"),
+    LawParameter("yield_displacement", "m", 1e-12, doc="D_y"),
+    LawParameter("exponent", "-", 2.0, 50.0, doc="n"),
+    LawParameter("initial_zx", "-", -1.0, 1.0, default=0.0), LawParameter("initial_zy", "-", -1.0, 1.0, default=0.0)),
+    bidirectional_hysteresis_force,
+    "The baseline isolators' hysteretic part (nsd_core.device.isolator_laws; Park, Wen and Ang 1986): on a "
+    "planar displacement u = (x, y) [m], Q = -Q(|u'|) z [N], D_y z' = u' - H(z . u') |z|^(n-2) (z . u') z, "
+    "Q(v) = Q_fast - (Q_fast - Q_rest) exp(-a v); with the rate a = 0, Q = Q_rest",
+    StateSpec("z", "-", "initial_zx,initial_zy"), bidirectional_hysteresis_rate))

@@ -16,7 +16,7 @@ from nsd_core.model.description import (COMPONENTS, GROUND, JOINT_DOFS, MOTION_K
                                         Body, ForceElement, Joint, Loop, Model, Output, Prescribed)
 from nsd_core.model.errors import ModelError
 from nsd_core.model.excitation import parse_excitation
-from nsd_core.model.laws import JOINT, POINTS, get_law
+from nsd_core.model.laws import JOINT, PLANE, POINTS, get_law
 
 POINT_UNITS = {"point": "m", "point_velocity": "m/s", "point_acceleration": "m/s^2"}
 TOP = {"model", "bodies", "loops", "forces", "prescribed", "outputs", "initial", "case", "excitation"}
@@ -214,7 +214,7 @@ def _dof(where: str, t: dict, bodies, key="joint") -> tuple[str, int]:
 
 def _force(i: int, t: dict, bodies) -> ForceElement:
     where = f"forces[{i}]"
-    _fields(where, t, {"name", "law", "body_a", "point_a", "body_b", "point_b", "joint", "dof", "parameters",
+    _fields(where, t, {"name", "law", "body_a", "point_a", "body_b", "point_b", "joint", "dof", "dofs", "parameters",
                        "direction"}, ("law",))
     name = _name(f"{where}.name", t.get("name", f"force{i}"))
     where = f"forces.{name}"
@@ -238,11 +238,27 @@ def _force(i: int, t: dict, bodies) -> ForceElement:
             direction = tuple(e / np.linalg.norm(e))
         return ForceElement(name, law, packed, dict(params), a, _vec(f"{where}.point_a", t.get("point_a", [0, 0, 0])),
                             b, _vec(f"{where}.point_b", t.get("point_b", [0, 0, 0])), direction=direction)
-    for k in ("body_a", "point_a", "body_b", "point_b", "direction"):
+    what = "two slide coordinates of a joint (joint, dofs)" if law.acts_on == PLANE else "a joint coordinate (joint, dof)"
+    for k in ("body_a", "point_a", "body_b", "point_b", "direction", "dofs" if law.acts_on == JOINT else "dof"):
         if k in t:
-            raise ModelError(f"{where}.{k}: law {law.name!r} acts on a joint coordinate (joint, dof)")
+            raise ModelError(f"{where}.{k}: law {law.name!r} acts on {what}")
+    if law.acts_on == PLANE:
+        return _plane_force(where, t, bodies, name, law, packed, params)
     body, dof = _dof(where, t, bodies)
     return ForceElement(name, law, packed, dict(params), joint=body, dof=dof)
+
+
+def _plane_force(where: str, t: dict, bodies, name, law, packed, params) -> ForceElement:
+    """A plane law's element: ``dofs`` = two different slide coordinates of the joint (x, y)."""
+    body, _ = _dof(where, {k: v for k, v in t.items() if k != "dofs"}, bodies)
+    joint = next(b for b in bodies if b.name == body).joint
+    slides = [k for k, (kind, _) in enumerate(joint.dofs()) if kind == "P"]
+    dofs = t.get("dofs")
+    if (not isinstance(dofs, list) or len(dofs) != 2 or any(type(k) is not int or k not in slides for k in dofs)
+            or dofs[0] == dofs[1]):
+        raise ModelError(f"{where}.dofs = {dofs!r}: must be two different slide coordinates of {body}'s "
+                         f"{joint.type} joint (x, y); its slides: {slides or 'none'}")
+    return ForceElement(name, law, packed, dict(params), joint=body, dof=dofs[0], dofs=(dofs[0], dofs[1]))
 
 
 def _prescribed(i: int, t: dict, bodies) -> Prescribed:
@@ -323,7 +339,7 @@ def _output(i: int, t: dict, model: Model) -> Output:
                              f"allowed: {', '.join(el) or '(none)'}")
         f = el[t["element"]]
         u = "N" if f.law.acts_on == POINTS else ("N m" if model.coordinate_unit(f.joint, f.dof) == "rad" else "N")
-        return Output(name, kind, element=f.name, unit=u, **common)
+        return Output(name, kind, element=f.name, unit=u, component=_plane_component(where, t, f), **common)
     if kind == "state":
         el = {f.name: f for f in model.forces}
         stateful = [f.name for f in model.forces if f.law.state is not None]
@@ -332,7 +348,8 @@ def _output(i: int, t: dict, model: Model) -> Output:
             raise ModelError(f"{where}.element = {t.get('element')!r}: {what}; allowed: the elements whose law has a "
                              f"state: {', '.join(stateful) or '(none)'}")
         f = el[t["element"]]
-        return Output(name, kind, element=f.name, unit=f.law.state.unit, **common)
+        return Output(name, kind, element=f.name, unit=f.law.state.unit, component=_plane_component(where, t, f),
+                      **common)
     if kind == "work":
         return Output(name, kind, **_work(where, t, model), unit="J", **common)
     if kind == "drive_force":
@@ -347,6 +364,20 @@ def _output(i: int, t: dict, model: Model) -> Output:
     if term not in ("kinetic", "gravity"):
         raise ModelError(f"{where}.term = {term!r}: allowed: kinetic, gravity")
     return Output(name, kind, term=term, unit="J", **common)
+
+
+def _plane_component(where: str, t: dict, f) -> int:
+    """A force or state output's component: of a plane law's element, x (its first coordinate) or y;
+    no other element has components."""
+    if f.law.acts_on != PLANE:
+        if "component" in t:
+            raise ModelError(f"{where}.component = {t['component']!r}: element {f.name!r} has one value (no components)")
+        return 0
+    comp = t.get("component")
+    if comp not in ("x", "y"):
+        raise ModelError(f"{where}.component = {comp!r}: allowed: x, y (element {f.name!r} acts on the plane "
+                         f"of {f.joint}'s coordinates {list(f.dofs)})")
+    return COMPONENTS[comp]
 
 
 def _work(where: str, t: dict, model: Model) -> dict:

@@ -58,10 +58,11 @@ def sampler(model: Model, system, tree):
             return kin.point_velocity(i, kin.point(i, out.point))[out.component]
         if out.kind == "point_acceleration":
             return acceleration(ev, out)[out.component]
-        if out.kind == "force":
-            return law_values[out.element]
-        if out.kind == "state":
-            return extra[forces.slot[out.element]]
+        if out.kind == "force":   # a plane law's value is its pair (Q_x, Q_y)
+            v = law_values[out.element]
+            return v[out.component] if isinstance(v, tuple) else v
+        if out.kind == "state":   # a plane law's state takes two slots, x first
+            return extra[forces.slot[out.element] + out.component]
         if out.kind == "drive_force":
             return ev.drive_force[drive_pos[out.element]]
         if out.kind == "work":   # its quadrature state (nsd_core.model.assemble.Forces)
