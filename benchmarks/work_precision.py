@@ -83,11 +83,12 @@ def step_key(engine: str, drive, settings: dict):
     """The step actually used (rungs with the same one are the same run); None for adaptive engines."""
     dt_out = 1.0 / (drive.frequency * drive.samples_per_cycle)
     if engine == "mujoco":
-        n = max(1, math.ceil(dt_out / float(settings["timestep"]) - 1e-9))   # as MujocoEngine.run
+        n = max(1, math.ceil(dt_out / float(settings["timestep"]) - 1e-9))   # as comparisons.builders.mujoco
         return settings["integrator"], dt_out / n
-    if engine == "exudyn":
-        from comparisons.engines.exudyn_engine import ExudynEngine
-        return ExudynEngine.step_used(drive, settings)
+    if engine == "exudyn":   # the builder's step: the setting capped per cycle, dividing the output interval
+        from comparisons.engines.described import builder_settings
+        n = max(1, math.ceil(dt_out / builder_settings("exudyn", settings, drive.frequency)["step_size"] - 1e-9))
+        return dt_out / n
     return None
 
 

@@ -14,7 +14,6 @@ from nsd_core.device.warmup import TINY_DT_OUT, TINY_DURATION, tiny_drive, tiny_
 from nsd_core.device.worker_warmup import kind, warm_worker
 
 from comparisons.engines import REFERENCE, run_job, run_seismic_job, tiny_settings
-from comparisons.engines.base import DEFAULT_MODEL
 
 
 def spec(engine: str, seismic: bool, drive=None, settings: dict | None = None) -> tuple:
@@ -69,5 +68,5 @@ def every_mode_calls() -> list:
     # a described model's code is generated per shape: the default cases' restrainer and 3-story building too
     shaped = [partial(run_seismic_job, e, Params(), structure_for(Params(), stories, restrainer), tiny_ground(),
                       TINY_DURATION, TINY_DT_OUT, None)
-              for e in peers if DEFAULT_MODEL.get(e) == "described" for stories, restrainer in ((0, True), (3, False))]
+              for e in peers for stories, restrainer in ((0, True), (3, False))]
     return peer_calls(specs) + shaped

@@ -61,17 +61,19 @@ def test_masses_in_the_shared_geometry():
 
 
 def test_masses_and_loop_of_the_compiled_mujoco_model():
-    """What MuJoCo integrates: body masses read back from the compiled mjModel, the rod's length."""
+    """What MuJoCo integrates: body masses read back from the mjModel its builder compiles from the
+    device's description, the rod's length and the wall's height at the initial state."""
     import mujoco
 
-    from comparisons.engines.mujoco_engine import MujocoEngine, build_mjcf
-    s = dict(MujocoEngine.default_settings)
-    m = mujoco.MjModel.from_xml_string(build_mjcf(G, Drive(0.01, 1.0), s, 1e-5))
+    from comparisons.builders.mujoco import _compile, merged_settings
+    from comparisons.engines.described import described_model
+    from nsd_core.model.assemble import initial_state
+    model, _ = described_model(Params(), Drive(0.01, 1.0))
+    m, d, _ = _compile(model, merged_settings({}), 1e-5, initial_state(model))
     for body in ("cap", "wall", "rod"):
         assert m.body(body).mass[0] == pytest.approx(TABLE2[f"{body}_mass"], rel=1e-12)
-    d = mujoco.MjData(m)
     mujoco.mj_forward(m, d)
-    tip = d.site_xpos[m.site("rod_tip").id]
+    tip = d.site_xpos[m.site("cap_rod:b").id]
     assert tip[2] - d.xpos[m.body("wall").id][2] == pytest.approx(TABLE2["rod_length"], abs=1e-12)
     assert d.xpos[m.body("wall").id][2] == pytest.approx(TABLE2["spring_length_precompressed"], abs=1e-12)
     assert m.opt.gravity[2] < 0

@@ -156,10 +156,10 @@ def test_output_times_land_on_the_end():
 def test_mujoco_and_exudyn_with_the_restrainer_agree_with_the_in_house_engine():
     """Real MuJoCo and Exudyn, the restrainer engaged hard (gap 12 mm, two contacts, 2e5 N) while the
     device stays inside its working range: the same law through each engine's own force path.
-    Measured (du / dF_device / restrainer force / own energy residual): MuJoCo 2e-5 s 1.8e-4 / 1.9e-4 /
+    Measured with the hand-written models these replaced (du / dF_device / restrainer force / own energy
+    residual): MuJoCo 2e-5 s 1.8e-4 / 1.9e-4 /
     6.0e-4 / 2.6e-3; Exudyn 1e-4 s 1.8e-5 / 2.6e-5 / 1.1e-4 / 6.4e-5."""
-    from comparisons.engines.exudyn_seismic import ExudynSeismic
-    from comparisons.engines.mujoco_seismic import MujocoSeismic
+    from comparisons.engines.peers import ExudynEngine, MujocoEngine
     from comparisons.seismic import gate_metrics
     from nsd_core.device.ground import Pulse
     p = Params()
@@ -167,9 +167,9 @@ def test_mujoco_and_exudyn_with_the_restrainer_agree_with_the_in_house_engine():
     gm = Pulse(0.5, 2.0, 2.0, azimuth_deg=30.0)
     ref = simulate_seismic(p, st, gm, duration=0.45)
     assert np.max(ref["restrainer_F"]) > 1e5 and not seismic_summary(ref)["outside_working_range"]
-    for engine, settings, limit in ((MujocoSeismic(), {"timestep": 2e-5}, 2e-3),
-                                    (ExudynSeismic(), {"step_size": 1e-4}, 2e-4)):
-        other = engine.run(p, st, gm, duration=0.45, settings=settings)
+    for engine, settings, limit in ((MujocoEngine(), {"timestep": 2e-5}, 2e-3),
+                                    (ExudynEngine(), {"step_size": 1e-4}, 2e-4)):
+        other = engine.run_seismic(p, st, gm, duration=0.45, settings=settings)
         m = gate_metrics(ref, other)
         assert np.allclose(other["t"], ref["t"], atol=1e-12)
         assert m["max_du_rel"] < limit and m["max_dF_device_rel"] < 5 * limit, (engine.name, m)

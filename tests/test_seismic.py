@@ -204,10 +204,10 @@ def test_nsd_seismic_exit_4_with_the_time_when_the_rod_cannot_reach(tmp_path):
 def test_mujoco_seismic_agrees_with_the_in_house_engine():
     """Real MuJoCo, ground-frame loads, off a symmetry axis (so X, Y and the rotation all move).
     Measured: 3.7e-6 in displacement, 3.2e-5 in device force; the issue's aim is 1e-3."""
-    from comparisons.engines.mujoco_seismic import MujocoSeismic
+    from comparisons.engines.peers import MujocoEngine
     gm = Harmonic(0.8, 2.0, 30.0, duration=0.3)
     ref = simulate_seismic(Params(), STRUCTURE, gm, dt_out=2e-3)
-    mj = MujocoSeismic().run(Params(), STRUCTURE, gm, dt_out=2e-3)
+    mj = MujocoEngine().run_seismic(Params(), STRUCTURE, gm, dt_out=2e-3)
     du = np.max(np.hypot(mj["x"] - ref["x"], mj["y"] - ref["y"])) / np.max(ref["u"])
     F = np.hypot(ref["device_Fx"], ref["device_Fy"])
     dF = np.max(np.hypot(mj["device_Fx"] - ref["device_Fx"], mj["device_Fy"] - ref["device_Fy"])) / np.max(F)
@@ -221,10 +221,10 @@ def test_mujoco_seismic_agrees_with_the_in_house_engine():
 def test_exudyn_seismic_agrees_with_the_in_house_engine():
     """Real Exudyn (generalized-alpha, h = 1e-5 s). Measured over 0.3 s: 4.7e-6 in displacement,
     4.1e-5 in device force, 2.4e-5 in absolute acceleration; this test runs the first 0.2 s."""
-    from comparisons.engines.exudyn_seismic import ExudynSeismic
+    from comparisons.engines.peers import ExudynEngine
     gm = Harmonic(0.8, 2.0, 30.0, duration=0.3)
     ref = simulate_seismic(Params(), STRUCTURE, gm, dt_out=2e-3, duration=0.2)
-    ex = ExudynSeismic().run(Params(), STRUCTURE, gm, dt_out=2e-3, duration=0.2)
+    ex = ExudynEngine().run_seismic(Params(), STRUCTURE, gm, dt_out=2e-3, duration=0.2)
     du = np.max(np.hypot(ex["x"] - ref["x"], ex["y"] - ref["y"])) / np.max(ref["u"])
     F = np.hypot(ref["device_Fx"], ref["device_Fy"])
     dF = np.max(np.hypot(ex["device_Fx"] - ref["device_Fx"], ex["device_Fy"] - ref["device_Fy"])) / np.max(F)
@@ -254,11 +254,11 @@ def test_leaving_the_working_range_is_an_event_and_the_run_goes_on():
 def test_exudyn_seismic_on_a_record_window_that_starts_in_motion():
     """A window cut mid-record starts with a_g(0) != 0: every engine starts from relative rest with
     the ground already accelerating (Exudyn's initial accelerations need its loads set at t = 0)."""
-    from comparisons.engines.exudyn_seismic import ExudynSeismic
+    from comparisons.engines.peers import ExudynEngine
     from comparisons.seismic import seismic_metrics
     from nsd_core.device.ground import fema_record
     gm = fema_record("nearfield-pulse", 1, window=(2.0, 2.15), rotate_deg=20, scale=0.4)
     assert np.linalg.norm(gm(0.0)[2]) > 0.03
     ref = simulate_seismic(Params(), STRUCTURE, gm, dt_out=2e-3)
-    m = seismic_metrics(ref, ExudynSeismic().run(Params(), STRUCTURE, gm, dt_out=2e-3))
+    m = seismic_metrics(ref, ExudynEngine().run_seismic(Params(), STRUCTURE, gm, dt_out=2e-3))
     assert m["du"] < 1e-4 and m["dF"] < 1e-4 and m["da"] < 1e-4, m

@@ -109,7 +109,7 @@ from comparisons.builders.exudyn_solver import (CHOICES, RELAXED_REL_TOL, check_
                                                 SPARSE_ABOVE, redundant_constraints, solver_settings, unknowns)
 from comparisons.builders.exudyn_work import Work
 from comparisons.engines.base import EngineError
-from comparisons.engines.exudyn_quiet import quiet_allocation_warning
+from comparisons.builders.exudyn_quiet import quiet_allocation_warning
 from nsd_core.model.assemble import initial_state
 from nsd_core.model.description import GROUND, Model
 from nsd_core.model.errors import ModelError

@@ -1,18 +1,19 @@
-"""Engine adapters, one module each, all behind comparisons.engines.base.Engine: the one registry of
-the drive mode and the seismic mode (``run_job`` / ``run_seismic_job``)."""
+"""The engines behind comparisons.engines.base.Engine, one class each: the in-house model
+(semirecursive_engine) and the peers, MuJoCo and Exudyn, on models their builders make from the
+device's description (peers.py); the one registry of the drive mode and the seismic mode
+(``run_job`` / ``run_seismic_job``)."""
 from __future__ import annotations
 
 import importlib
 import time
 from typing import Any
 
-from comparisons.engines.base import DEFAULT_MODEL
 from nsd_core.device.params import ParameterError, Params
 
 ENGINES = {
     "semirecursive": ("comparisons.engines.semirecursive_engine", "SemirecursiveEngine"),
-    "mujoco": ("comparisons.engines.mujoco_engine", "MujocoEngine"),
-    "exudyn": ("comparisons.engines.exudyn_engine", "ExudynEngine"),
+    "mujoco": ("comparisons.engines.peers", "MujocoEngine"),
+    "exudyn": ("comparisons.engines.peers", "ExudynEngine"),
 }
 REFERENCE = "semirecursive"
 
@@ -57,19 +58,16 @@ def _warm_peer(mode: str, name: str, line: bool, settings: dict | None, tiny, sh
     return time.perf_counter() - start
 
 
-def _chosen(name: str, settings: dict, mode: str) -> tuple:
-    """(model, engine) for a run: ``settings``' own ``model`` (popped) or base.DEFAULT_MODEL's, and the
-    engine that runs it: the adapter, or the builder on the device's description of ``mode``."""
-    model = settings.pop("model", DEFAULT_MODEL.get(name, "adapter"))
-    if model not in ("adapter", "described") or (model == "described" and name == REFERENCE):
-        raise ParameterError(f"{name}.model = {model!r}: allowed: adapter, described (the peers only)")
-    if model == "adapter":
-        return model, get_engine(name)
-    if mode == "drive":
-        from comparisons.engines.described import DescribedEngine
-        return model, DescribedEngine(name)
-    from comparisons.engines.described_seismic import DescribedSeismic
-    return model, DescribedSeismic(name)
+def _chosen(name: str, settings: dict) -> tuple:
+    """(model, engine) for a run: ``settings``' own ``model`` (popped; "described", the only model a peer
+    has: files written when the peers also had hand-written adapters name it) and the engine."""
+    model = settings.pop("model", None if name == REFERENCE else "described")
+    if name == REFERENCE and model is not None:
+        raise ParameterError(f"{name}.model = {model!r}: a peer's setting (mujoco, exudyn)")
+    if name != REFERENCE and model != "described":
+        raise ParameterError(f"{name}.model = {model!r}: allowed: described (the peers' models are built from the "
+                             "device's description; the hand-written adapters were removed)")
+    return model, get_engine(name)
 
 
 def run_engine(name: str, params: Params, drive, settings: dict | None = None):
@@ -79,12 +77,10 @@ def run_engine(name: str, params: Params, drive, settings: dict | None = None):
     from nsd_core.device.warmup import tiny_drive
     from nsd_core.engine.workers import stdout_to_stderr
     settings = dict(settings or {})
-    model, engine = _chosen(name, settings, "drive")
+    _, engine = _chosen(name, settings)
     with stdout_to_stderr():
-        shape = (params.n_ropes, params.n_wires) if model == "described" else ()
-        warm = _warm_peer("drive", name, drive.is_line, {**settings, "model": model}, lambda choices: engine.run(
-            params, tiny_drive("line" if drive.is_line else "circle"),
-            {k: v for k, v in (choices or {}).items() if k != "model"} or None), shape)
+        warm = _warm_peer("drive", name, drive.is_line, settings, lambda choices: engine.run(
+            params, tiny_drive("line" if drive.is_line else "circle"), choices), (params.n_ropes, params.n_wires))
         c0 = time.process_time()
         result = engine.run(params, drive, settings or None)
     return _with_times(name, result, warm, time.process_time() - c0)
@@ -115,13 +111,12 @@ def run_seismic_engine(name: str, params: Params, structure, ground, duration=No
     from nsd_core.device.warmup import TINY_DT_OUT, TINY_DURATION, tiny_ground
     from nsd_core.engine.workers import stdout_to_stderr
     settings = dict(settings or {})
-    model, engine = _chosen(name, settings, "seismic")
-    with stdout_to_stderr():   # the warm-up's key names the model: each path compiles its own code
-        warm = _warm_peer("seismic", name, True, {**settings, "model": model}, lambda choices: engine.run_seismic(
-            params, structure, tiny_ground(), duration=TINY_DURATION, dt_out=TINY_DT_OUT,
-            settings={k: v for k, v in (choices or {}).items() if k != "model"} or None),
+    _, engine = _chosen(name, settings)
+    with stdout_to_stderr():   # the warm-up's key names the model's shape: each shape compiles its own code
+        warm = _warm_peer("seismic", name, True, settings, lambda choices: engine.run_seismic(
+            params, structure, tiny_ground(), duration=TINY_DURATION, dt_out=TINY_DT_OUT, settings=choices),
             (params.n_ropes, params.n_wires, structure.building.stories if structure.building is not None else 0,
-             structure.restrainer is not None) if model == "described" else ())
+             structure.restrainer is not None))
         c0 = time.process_time()
         result = engine.run_seismic(params, structure, ground, duration=duration, dt_out=dt_out,
                                     settings=settings or None)

@@ -28,16 +28,6 @@ from nsd_core.device.params import Params
 from nsd_core.device.results import RunResult
 
 
-# Which model a peer runs (setting ``model``): "described", its builder on the device's description
-# (comparisons/engines/described.py, described_seismic.py), or "adapter", its hand-written model.
-# Described is the default where the gate gives the same verdicts on it (docs/models.md).
-DEFAULT_MODEL = {"mujoco": "described", "exudyn": "described"}
-# The settings a described model takes; an adapter's others (drive armature, Newton tolerances, its
-# step loop ...) describe the hand-written model and are refused with model = "described"
-DESCRIBED_SETTINGS = {"mujoco": ("model", "perturb", "timestep", "integrator", "solref_factor", "passive"),
-                      "exudyn": ("model", "perturb", "step_size", "min_steps_per_cycle", "builder_forces")}
-
-
 class EngineError(RuntimeError):
     """An engine failed on one case (exit code 3); the harness reports it and goes on."""
 
@@ -85,31 +75,19 @@ STEP_SETTINGS = ("step_size", "timestep", "max_step")
 MAX_FIXED_STEPS = 20_000_000
 
 
-def described_only(engine: str, settings: dict[str, Any] | None, where: str) -> None:
-    """A setting of the hand-written adapter given to a described model (it would be silently void there):
-    a one-line ParameterError naming it and what the described model takes."""
-    from nsd_core.device.params import ParameterError
-    allowed = DESCRIBED_SETTINGS.get(engine, ())
-    for k in settings or {}:
-        if k not in allowed:
-            raise ParameterError(f"{where}.{k}: a setting of the hand-written adapter, not of the described model "
-                                 f"(model = \"described\", the default); allowed: {', '.join(allowed)}; "
-                                 f"or set model = \"adapter\"")
-
-
 def check_settings(engine, settings: dict[str, Any] | None, where: str) -> dict[str, Any]:
     """Every setting typed like its default and in range, then the engine's own ``validate_settings``
     hook: a bad setting is bad input (exit 2) found before any work starts."""
     from nsd_core.device.params import ParameterError
     s = merged_settings(engine.default_settings, settings, where)
-    if s.get("model") == "described":
-        described_only(engine.name, settings, where)
     for k, v in (settings or {}).items():
         d = engine.default_settings[k]
         name = f"{where}.{k} = {v!r}"
-        choices = {"model": ("adapter", "described"), "builder_forces": ("compiled", "predicted", "connectors")}.get(k)
+        choices = {"model": ("described",), "builder_forces": ("compiled", "predicted", "connectors")}.get(k)
         if choices and v not in choices:
-            raise ParameterError(f"{name}: allowed: {', '.join(choices)}")
+            gone = " (the peers' models are built from the device's description; the hand-written adapters " \
+                "were removed)" if k == "model" else ""
+            raise ParameterError(f"{name}: allowed: {', '.join(choices)}{gone}")
         if k == "perturb":   # an injected modelling error (nsd compare --power): its own checks
             from comparisons.engines.perturb import check as check_perturbation
             try:

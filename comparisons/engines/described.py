@@ -1,18 +1,18 @@
 """A peer's drive-mode run built from the device's description (issue 32): the gate's engine interface
-(``run(params, drive, settings) -> RunResult``) over a builder (comparisons/builders), so the gate can
-judge the generated models by the same rule and metrics as the hand-written adapters, side by side,
-before those go.
+(``run(params, drive, settings) -> RunResult``) over a builder (comparisons/builders), which
+comparisons/engines/peers.py puts behind each peer's name.
 
 The device is written as a description by ``nsd_core.device.describe.device_description`` (the case's
 parameters and plate path), with every output the gate's columns need: the drive force, the cap's
 position, the wall's height, every wire's stress and the spring's zeta (the laws' states). The columns
-then come from the device's one column builder (``nsd_core.device.outputs.device_columns``), as every
-adapter's do. Selected per engine by the setting ``model = "described"`` (comparisons.engines.run_engine).
+then come from the device's one column builder (``nsd_core.device.outputs.device_columns``), as the
+in-house engine's do.
 
-The adapters' settings are carried over where the builders have them: MuJoCo's ``timestep``,
-``integrator`` (its adapter's default Euler) and ``solref_factor``; Exudyn's ``step_size`` capped by
-``min_steps_per_cycle`` per drive cycle, as its adapter caps it, and its force path from
-``builder_forces`` (the adapter's own ``forces`` names its scheme).
+The gate's settings (peers.py) map onto the builders' own: MuJoCo's ``timestep``, ``integrator`` and
+``solref_factor``, ``passive``; Exudyn's ``step_size`` capped by ``min_steps_per_cycle`` per drive
+cycle and its force path from ``builder_forces``. Before the hand-written adapters were removed the two
+were run side by side on every gate case (docs/validation.md): the same verdicts, within 1.25x their
+time.
 """
 from __future__ import annotations
 
@@ -21,7 +21,7 @@ import tomllib
 
 import numpy as np
 
-from comparisons.engines.base import EngineError, described_only
+from comparisons.engines.base import EngineError
 from comparisons.engines.perturb import perturbed
 from nsd_core.device.describe import device_description
 from nsd_core.device.drive import Drive
@@ -31,26 +31,24 @@ from nsd_core.device.params import Params
 from nsd_core.model.errors import ModelError
 from nsd_core.model.load import parse_model
 
-# the adapters' settings a builder has with the same meaning; the adapters' others describe their own
-# hand-written models (drive armature, commit cadence, Newton tolerances ...) and are left out
+# the gate's settings a builder has under the same name
 SHARED = {"mujoco": ("timestep", "integrator", "solref_factor", "passive"), "exudyn": ("step_size",)}
 
 
 def builder_settings(engine: str, settings: dict | None, frequency: float, mode: str = "drive") -> dict:
-    """The builder's settings for an adapter's ``settings`` (see the module's docstring), over the
-    engine's defaults of ``mode`` (Exudyn's force path: "predicted" in drive mode, the adapter's own
-    scheme; "compiled", implicit, in the seismic mode)."""
+    """The builder's settings for a case's ``settings`` (see the module's docstring), over the peer's
+    defaults of ``mode`` (Exudyn's force path: "predicted" in drive mode, the forces once a step;
+    "compiled", implicit, in the seismic mode)."""
     from comparisons.engines import get_engine
-    described_only(engine, settings, engine)
     e = get_engine(engine)
     defaults = e.default_settings
-    if mode != "drive":   # the seismic adapter's defaults over the drive's (MuJoCo's Euler), no cycle to cap a step
+    if mode != "drive":   # the seismic defaults over the drive's (MuJoCo's Euler), no cycle to cap a step
         defaults = {**defaults, **e.seismic_default_settings, "min_steps_per_cycle": None}
     s = {**defaults, **(settings or {})}
     out = {k: s[k] for k in SHARED[engine] if k in s and s[k] is not None}
-    if engine == "exudyn":   # its force path (the adapter's own "forces" is its scheme's name)
+    if engine == "exudyn":   # its force path
         out["forces"] = s.get("builder_forces", "predicted")
-    if engine == "exudyn" and s.get("min_steps_per_cycle"):   # the adapter's cap on its step, per cycle
+    if engine == "exudyn" and s.get("min_steps_per_cycle"):   # the cap on its step, per drive cycle
         out["step_size"] = min(float(s["step_size"]), 1.0 / (float(s["min_steps_per_cycle"]) * frequency))
     return out
 

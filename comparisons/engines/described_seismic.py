@@ -1,7 +1,6 @@
 """A peer's seismic-mode run built from the device's description: the gate's seismic engine interface
 (``run_seismic(params, structure, ground, duration, dt_out, settings) -> RunResult``) over a builder
-(comparisons/builders), so the gate judges the generated models by the same rule and metrics as the
-hand-written seismic adapters (mujoco_seismic, exudyn_seismic), side by side, before those go.
+(comparisons/builders), which comparisons/engines/peers.py puts behind each peer's name.
 
 The case is written as a description by ``nsd_core.device.describe_seismic.seismic_description``: the
 case's parameters, its structure (supports, restrainer, building) and its ground motion as the
@@ -10,7 +9,7 @@ parsed from the file must give the case's ground motion's block exactly, else th
 the outputs the columns need beyond the description's own (the plate's velocity, the wall's height,
 every wire's stress, the spring's zeta, the floors' velocities and absolute accelerations).
 
-The columns, names and units are the adapters' (MujocoSeismic.run): t, x, y, theta, vx, vy, ax_abs,
+The columns, names and units are the in-house seismic run's: t, x, y, theta, vx, vy, ax_abs,
 ay_abs, support_F, device_F, base_shear, cap_z, wall_z, spring_zeta, spring_push, closure (the run's
 largest loop gap at the output times, as the drive mode's described engine), wire stresses, u, the
 floors' columns (nsd_core.device.building.floor_columns) and the restrainer's (the shared law on the
@@ -24,15 +23,14 @@ plate and the cap together: the cap slides along the plate's Z axis with its cen
 
 story_shear1 = -sum m_i a_i,abs the building's force on the slab (floor_columns), hence
 device_F = -(M + m_cap) a_abs - support_F - restrainer_F + story_shear1, and the base shear
-support_F + device_F + restrainer_F = -(M + m_cap) a_abs + story_shear1, as in the adapters.
+support_F + device_F + restrainer_F = -(M + m_cap) a_abs + story_shear1.
 
 The energy balance (E_* columns, ``energy_columns``) comes from the builders' own ``work`` outputs:
 every force element's work and the excitation's, with the kinetic and gravity energy, so the gate's
-energy metric checks each builder's state as it checks each adapter's.
+energy metric checks each builder's own state.
 
-Settings: those the builders share with the adapters (comparisons.engines.described.builder_settings:
-MuJoCo's timestep, integrator (the adapter's Euler), solref_factor, passive; Exudyn's step_size and
-``builder_forces``); Exudyn's per-cycle cap of the drive mode does not apply to a ground motion.
+Settings: the gate's (comparisons.engines.described.builder_settings: MuJoCo's timestep, integrator
+(Euler by default), solref_factor, passive; Exudyn's step_size and ``builder_forces``); Exudyn's per-cycle cap of the drive mode does not apply to a ground motion.
 """
 from __future__ import annotations
 
@@ -118,12 +116,12 @@ def described_seismic_model(params, structure, ground, duration: float, dt_out: 
 
 
 def energy_columns(o: dict, st, x, y, theta, floors: dict) -> dict:
-    """The energy balance's columns in the frame of the ground (the adapters' names and meaning) from the
+    """The energy balance's columns in the frame of the ground (the in-house run's names and meaning) from the
     builder's outputs ``o``: work_<element> (each force element's work on the mechanism since t = 0),
     work_excitation (the -m a_g loads': E_input), energy_kinetic and energy_gravity. What an element
     group absorbed is minus its work: the device's (ropes, wires, spring) is E_device; the supports'
     and the building's less what they store are their dissipation; the restrainer's less its stored
-    energy its dissipation. E_residual: input less every term, as the adapters (the loop closure's
+    energy its dissipation. E_residual: input less every term, as the in-house run's (the loop closure's
     work, zero in the model, is what is left besides the builder's quadrature)."""
     def absorbed(test) -> np.ndarray:
         return -sum((v for k, v in o.items() if k.startswith("work_") and k != "work_excitation" and test(k[5:])),
@@ -175,8 +173,8 @@ class DescribedSeismic:
 
 
 def seismic_columns(run, g, st, t) -> dict:
-    """The adapters' seismic columns (MujocoSeismic.run's names and order; Exudyn's adapter also writes
-    omega, the plate's turn rate) from a builder's run."""
+    """The seismic columns (the in-house run's names; Exudyn's also carry omega, the plate's turn rate, as
+    its hand-written model's did) from a builder's run."""
     o = run.outputs
     x, y, vx, vy, ax, ay = o["u_x"], o["u_y"], o["plate0_vx"], o["plate0_vy"], o["a_x"], o["a_y"]
     n = len(t)
@@ -197,7 +195,7 @@ def seismic_columns(run, g, st, t) -> dict:
             "base_shear_x": sx + dfx + rx, "base_shear_y": sy + dfy + ry, "cap_z": o["cap_z"], "wall_z": wz,
             "spring_zeta": zeta, "spring_push": spring_push(wz, 0.0, zeta, g.spring)[0],
             "closure": np.full(n, float(run.stats.get("closure_max", 0.0)))}
-    if run.engine == "exudyn":   # its adapter also writes the plate's turn rate: (v_p - v_0) . (e_z x r_p) / |r_p|^2
+    if run.engine == "exudyn":   # the plate's turn rate: (v_p - v_0) . (e_z x r_p) / |r_p|^2
         th = o["theta"]
         cols["omega"] = -(o["plate1_vx"] - vx) * np.sin(th) + (o["plate1_vy"] - vy) * np.cos(th)
     cols.update({f"wire{j}_stress": o[f"wire{j}_stress"] for j in range(g.n_wires)})

@@ -16,6 +16,7 @@ writes it for the nominal parameters (``--set NAME=VALUE`` for a variant).
 from __future__ import annotations
 
 import argparse
+import json
 import math
 
 import numpy as np
@@ -173,13 +174,13 @@ amplitude = {amplitude * math.sin(psi)!r}
 frequency = {frequency!r}
 
 '''
-    minor = "" if drive.path in ("line", "circle") else f"\nminor = {drive.minor_axis!r}"
+    minor = f"\nminor = {drive.minor_axis!r}" if drive.path in ("ellipse", "figure8") else ""   # (a table: its own)
     return "".join(f'''[[prescribed]]
 name = "drive_{c}"
 joint = "cap"
 dof = {k}
 motion = "device_path"   # the plate's {drive.path} path (nsd cycle --path), its {c} coordinate
-path = "{drive.path}"
+path = {json.dumps(drive.path)}
 amplitude = {drive.amplitude!r}
 frequency = {drive.frequency!r}
 direction = {drive.direction_deg!r}

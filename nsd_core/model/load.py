@@ -292,8 +292,9 @@ def _device_path(where: str, t: dict) -> dict:
     from nsd_core.device.drive import Drive
     from nsd_core.device.params import ParameterError
     path, comp = t.get("path"), t.get("component")
-    if path not in ("line", "circle", "ellipse", "figure8"):
-        raise ModelError(f"{where}.path = {path!r}: allowed: line, circle, ellipse, figure8")
+    named = ("line", "circle", "ellipse", "figure8")
+    if path not in named and not (isinstance(path, str) and path.lower().endswith(".csv")):
+        raise ModelError(f"{where}.path = {path!r}: allowed: {', '.join(named)} or a CSV file of t,x,y")
     if comp not in ("x", "y"):
         raise ModelError(f"{where}.component = {comp!r}: allowed: x, y (the plate path's coordinate)")
     for k in ("amplitude", "frequency"):
