@@ -56,7 +56,8 @@ def _versions(data) -> list[str]:
     for e in data.engines:
         v = vers.get(e) or vers.get("nsd-harness" if e == "semirecursive" else e, "?")
         engine_v.append(f"{e} {v}" + (" (reference)" if e == data.reference else "")
-                        + (f" ({model_words(models[e])})" if e in models else ""))
+                        + ("" if e not in models else f" ({model_words(models[e])})" if len(models[e]) == 1
+                           else " (models by case: 'Peer models' above)"))
     other = ", ".join(f"{k} {v}" for k, v in vers.items() if k not in data.engines and k != "nsd-harness")
     return [f"Engines: {', '.join(engine_v)}", f"Software: {other or '-'}"]
 

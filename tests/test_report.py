@@ -422,7 +422,7 @@ def test_page_one_and_the_text_summary_name_the_peer_model(run_dir, tmp_path, mo
     described, adapter = "model built from the description", "hand-written adapter"
     if model == "mixed":
         both = f"{described} ({runs[0][0]}); {adapter} ({', '.join(c for c, _ in runs[1:])})"
-        assert f"Peer models: mujoco: {both}" in page and f"({both})" in page   # the header, the engines line
+        assert f"Peer models: mujoco: {both}" in page and "(models by case: 'Peer models' above)" in page
         assert f"peer models: mujoco: {both}" in text
     else:
         words, other = (described, adapter) if model == "described" else (adapter, described)
