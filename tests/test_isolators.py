@@ -132,6 +132,20 @@ def test_the_peers_agree_with_the_in_house_engine_on_a_short_record(kind, engine
     assert m["du"] < 1e-4 and m["dF"] < 1e-3 and m["da"] < 1e-3, m
 
 
+def test_nsd_seismic_cross_checks_a_baseline_in_mujoco_and_exudyn(tmp_path):
+    """The command's peers on the isolator's description: each one's CSV and metrics in summary.json."""
+    import json
+    out = tmp_path / "out"
+    code = main(["seismic", "--record", "nearfield-pulse:1", "--window", "2,5", "--scale", "0.6", "--isolator",
+                 "friction-pendulum", "--engines", "semirecursive,mujoco,exudyn", "--out", str(out)])
+    assert code == 0
+    engines = json.loads((out / "summary.json").read_text())["engines"]
+    assert set(engines) == {"mujoco", "exudyn"}
+    for name, m in engines.items():
+        assert (out / f"seismic_{name}.csv").exists()
+        assert m["du"] < 1e-4 and m["dF"] < 1e-3 and m["da"] < 1e-3, (name, m)
+
+
 @pytest.mark.parametrize("argv,fragment", [
     (["--record", "nearfield-pulse:1", "--isolator", "rubber"], "--isolator"),
     (["--ground", "harmonic:amplitude=1,frequency=2,duration=0.05", "--design-level"], "--design-level"),

@@ -186,3 +186,16 @@ def test_a_bad_plane_element_in_a_model_file_is_exit_2_nothing_written(tmp_path)
     lines = [ln for ln in p.stderr.splitlines() if ln.strip()]
     assert p.returncode == 2 and len(lines) == 1 and "forces.isolator.dofs = [1, 2]" in lines[0], p.stderr
     assert not out.exists()
+
+
+def test_nsd_compare_model_judges_the_isolator_description_in_three_engines(tmp_path):
+    """The gate's rule on a plane law: each peer within 3 x its own error estimate of the converged
+    in-house reference, that error within the tolerance (the real engines, nothing mocked)."""
+    import json
+    path = tmp_path / "iso.toml"
+    path.write_text(isolator_description(_structure("friction-pendulum"), GROUND, 0.4, 1e-3))
+    p = subprocess.run([sys.executable, "-m", "nsd_cli.main", "compare", "--model", str(path), "--out",
+                        str(tmp_path / "out")], capture_output=True, text=True, timeout=900)
+    assert p.returncode == 0, p.stdout + p.stderr
+    v = json.loads((tmp_path / "out" / "results.json").read_text())["cases"]["nsd_isolator_0.4s"]["verdicts"]
+    assert {e for e in v if v[e]["pass"]} >= {"semirecursive", "mujoco", "exudyn"}, v
