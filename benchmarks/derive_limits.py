@@ -33,7 +33,10 @@ pass; a modelling error must exceed FACTOR x the engine's numerical error to be 
 --power measures what that means). Metrics measured 0 on every case (region shifts on the sampled
 grid) and the observed order (its band is in the case file) keep their defaults. The tables carry
 [derived]: the MuJoCo and Exudyn versions they were measured on (the gate warns when the installed
-one differs), the date and the git revision of the run.
+one differs), the date and the git revision of the run, and the peers' model the run used ("described"
+or "adapter", read from its runs; one for every peer, else the derivation stops), which the gate then
+runs the peers on (nsd_cli.compare.pin_model). Derive from the rule's profiles (default, strict): a
+regression profile runs the peers on the model of the limits it would replace.
 """
 from __future__ import annotations
 
@@ -152,12 +155,16 @@ def derive(summary: dict, ref_errors: dict[str, dict], spread: dict[str, dict] |
 def derived_info(summary: dict) -> dict:
     from comparisons.reference import CHECK_SETTINGS, CONVERGED_SETTINGS
     v = summary.get("versions", {})
-    # the peers' model the run used (comparisons.engines.base.DEFAULT_MODEL unless a case chose): a profile's
-    # limits hold for that model only, so the gate runs the peers on it (nsd_cli.compare.pin_model)
-    models = {(r.get("stats") or {}).get("model", "adapter") for runs in summary.get("runs", {}).values()
+    # the peers' model the run used (comparisons.engines.base.DEFAULT_MODEL unless a case chose), read from
+    # each run's stats (a described run records "described"; an adapter run records none): a profile's limits
+    # hold for that model only, so the gate runs the peers on it (nsd_cli.compare.pin_model)
+    models = {(r.get("stats") or {}).get("model") or "adapter" for runs in summary.get("runs", {}).values()
               for e, r in runs.items() if e in ("mujoco", "exudyn") and isinstance(r, dict) and r.get("status") == "ok"}
+    if len(models) > 1:
+        raise SystemExit(f"the run's peers ran different models ({', '.join(sorted(models))}): fixed limits hold for "
+                         "one model; derive them from a run on one (each case's settings.ENGINE.model)")
     return {"mujoco": v.get("mujoco", ""), "exudyn": v.get("exudyn", ""), "numpy": v.get("numpy", ""),
-            "model": models.pop() if len(models) == 1 else "adapter",
+            **({"model": models.pop()} if models else {}),
             "date": summary.get("date", dt.date.today().isoformat()), "git_revision": summary.get("git_revision", ""),
             "rule": f"{FACTOR:g} x max(engine error, reference error, {FRACTION:g} x engine max|dF| error) "
                     "against the converged reference (benchmarks/derive_limits.py); the in-house engine error: "

@@ -6,6 +6,44 @@ def _g(x, fmt="11.3e") -> str:
     return f"{x:{fmt}}" if x is not None else f"{'-':>{fmt.split('.')[0]}}"
 
 
+# What each peer model is, in words (the run's stats["model"]; comparisons.engines.base.DEFAULT_MODEL)
+MODEL_WORDS = {"described": "model built from the description", "adapter": "hand-written adapter"}
+
+
+def peer_models(summary: dict) -> dict[str, dict[str, list[str]]]:
+    """{peer: {model: [cases]}} of the runs that succeeded, read from each run's stats: the described
+    builders record ``model = "described"``; a peer run that records no model ran its hand-written adapter
+    (the only model before the described ones). The reference engine has no model choice and is left out."""
+    reference = summary.get("reference") or "semirecursive"
+    out: dict[str, dict[str, list[str]]] = {}
+    for engine in summary.get("engines") or ():   # in the run's engine order
+        for case, per in (summary.get("runs") or {}).items():
+            run = (per or {}).get(engine)
+            if engine == reference or not isinstance(run, dict) or run.get("status") != "ok":
+                continue
+            model = (run.get("stats") or {}).get("model") or "adapter"
+            out.setdefault(engine, {}).setdefault(str(model), []).append(case)
+    return out
+
+
+def model_words(models: dict[str, list[str]]) -> str:
+    """One peer's model(s) in words; where its cases ran different models, each with its cases."""
+    if len(models) == 1:
+        return MODEL_WORDS.get(next(iter(models)), f"model {next(iter(models))!r}")
+    return "; ".join(f"{MODEL_WORDS.get(m, f'model {m!r}')} ({', '.join(cases)})" for m, cases in models.items())
+
+
+def peer_models_line(summary: dict) -> str:
+    """'peer models: mujoco, exudyn: model built from the description' (one phrase per engine where they
+    differ; '' with no peer run)."""
+    words = {e: model_words(m) for e, m in peer_models(summary).items()}
+    if not words:
+        return ""
+    if len(set(words.values())) == 1:
+        return f"peer models: {', '.join(words)}: {next(iter(words.values()))}"
+    return "peer models: " + "; ".join(f"{e}: {w}" for e, w in words.items())
+
+
 def format_estimated(summary: dict) -> str:
     """The table of ``nsd compare`` under the estimated rule: each gated metric's difference from the
     converged reference, the engine's estimated error, the bound k x (estimate + reference's), the
@@ -25,6 +63,8 @@ def format_estimated(summary: dict) -> str:
         lines.append(f"{m['case']:22s} {m['engine']:13s} {m['metric']:18s} {_g(m['value'])} {_g(m.get('estimate'))} "
                      f"{_g(m.get('bound'))} {_g(m.get('tolerance'))} {unit:>20s}  {verdict}")
     lines.append("")
+    if peer_models_line(summary):
+        lines.append(peer_models_line(summary))
     lines.append("verdict per case and engine:")
     for case, per in summary.get("verdicts", {}).items():
         for engine, v in per.items():

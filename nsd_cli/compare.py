@@ -245,8 +245,9 @@ def run(args) -> int:
 
 
 def pin_model(cases, tolerances) -> list:
-    """Fixed limits hold for the peers' model they were derived on ([derived] model, e.g. the hand-written
-    adapters): each peer runs on it, unless a case chose its own ``model``."""
+    """Fixed limits hold for the peers' model they were derived on ([derived] model: "described" for the
+    shipped regression profiles, "adapter" for a file derived on the hand-written models): each peer runs on
+    it, unless a case chose its own ``model``. A file that names none pins nothing (the peers' default)."""
     model = (getattr(tolerances, "derived", None) or {}).get("model")
     if model is None:
         return cases

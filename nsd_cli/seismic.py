@@ -202,14 +202,14 @@ def run(args) -> int:
     seismic_extras.warn(summary)
     others = {}
     for name in engines[1:]:
-        if baseline:  # the baseline isolator's peer (comparisons/isolator_mujoco.py)
-            from comparisons.isolator_mujoco import run_isolator
-            other = run_isolator(structure, motion, duration=args.duration, dt_out=args.dt_out)
+        if baseline:  # the baseline isolator's peers: its description built by each (comparisons/engines/described_isolator.py)
+            from comparisons.engines.described_isolator import run_isolator
+            other = run_isolator(name, structure, motion, duration=args.duration, dt_out=args.dt_out)
         else:
             other = run_seismic_engine(name, params, structure, motion, duration=args.duration, dt_out=args.dt_out)
         others[name] = other
         if baseline:
-            from comparisons.isolator_mujoco import isolator_metrics as metrics
+            from comparisons.engines.described_isolator import isolator_metrics as metrics
         else:
             metrics = seismic_metrics
         summary.setdefault("engines", {})[name] = {**metrics(result, other),
@@ -251,7 +251,8 @@ def run(args) -> int:
 def _baseline(args, engines) -> bool:
     """--isolator: a baseline runs without the device (a single run: as --no-device; --compare-supports and
     --compare-building: their run without the device). True for a bilinear or friction-pendulum single
-    run, whose cross-check is MuJoCo's (comparisons/isolator_mujoco.py) alone."""
+    run, whose cross-check builds the isolator's description in MuJoCo and Exudyn (comparisons/engines/
+    described_isolator.py)."""
     from nsd_core.device.isolators import KINDS
     kind = seismic_extras.isolator_choice(args)
     if kind == "device":
@@ -261,10 +262,10 @@ def _baseline(args, engines) -> bool:
     if not (args.compare_supports or args.compare_building):
         args.no_device = True
     if kind in KINDS and args.no_device:
-        if set(engines[1:]) - {"mujoco"}:
-            raise ParameterError(f"--engines {args.engines!r}: --isolator {kind} cross-checks in mujoco only")
+        if set(engines[1:]) - {"mujoco", "exudyn"}:
+            raise ParameterError(f"--engines {args.engines!r}: --isolator {kind} cross-checks in mujoco and exudyn only")
         if engines[1:] and (args.restrainer or getattr(args, "building", None)):
-            raise ParameterError(f"--engines {args.engines!r}: the mujoco isolator peer runs no restrainer and no "
+            raise ParameterError(f"--engines {args.engines!r}: the isolator's described model has no restrainer and no "
                                  "building")
         return True
     return False
@@ -327,7 +328,7 @@ def run_set(args) -> int:
     if seismic_extras.isolator_choice(args) not in ("device", "linear") and engines[1:]:
         raise ParameterError(f"--engines {args.engines!r}: a record set's cross-check runs the device and the supports; "
                              f"the {args.isolator} baseline's peer: nsd seismic --record SET:ID --isolator "
-                             f"{args.isolator} --engines semirecursive,mujoco")
+                             f"{args.isolator} --engines semirecursive,mujoco,exudyn")
     if args.design_level:   # each record at its own scale: Sa(T_D) = the design spectrum's (docs/design.md)
         runs = []
         for rec in records:

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 
+from comparisons.report_text import model_words, peer_models, peer_models_line
 from reports.metric_tables import (SOURCES, draw_matrix, estimated, in_units, metric_rows,  # noqa: F401
                                    metric_table_pages)
 from reports.rule_pages import rule_pages, tolerance_line
@@ -51,10 +52,12 @@ def summary_pages(data) -> list:
 def _versions(data) -> list[str]:
     s = data.summary
     vers = s.get("versions") or {}
-    engine_v = []
+    engine_v, models = [], peer_models(s)
     for e in data.engines:
         v = vers.get(e) or vers.get("nsd-harness" if e == "semirecursive" else e, "?")
-        engine_v.append(f"{e} {v}" + (" (reference)" if e == data.reference else ""))
+        engine_v.append(f"{e} {v}" + (" (reference)" if e == data.reference else "")
+                        + ("" if e not in models else f" ({model_words(models[e])})" if len(models[e]) == 1
+                           else " (models by case: 'Peer models' above)"))
     other = ", ".join(f"{k} {v}" for k, v in vers.items() if k not in data.engines and k != "nsd-harness")
     return [f"Engines: {', '.join(engine_v)}", f"Software: {other or '-'}"]
 
@@ -91,6 +94,8 @@ def page_one(data):
     y = _text(fig, 0.935, f"exit code {code}  |  {len(data.cases)} drive case(s) and {n_seis} seismic case(s) x "
               f"{len(data.engines)} engine(s), reference {data.reference}  |  date {s.get('date', '?')}  |  git revision "
               f"{s.get('git_revision', '?')}", size=8, color=GREY)
+    if peer_models_line(s):   # which model each peer ran: built from the description, or a hand-written adapter
+        y = _text(fig, y, peer_models_line(s).replace("peer models", "Peer models", 1), size=8, color=GREY)
     if s["failures"] or not good:
         y = _text(fig, y - 0.004, "WHAT FAILED", size=11, color=RED, weight="bold")
         lines = []
@@ -124,7 +129,7 @@ def page_one(data):
                   size=7.5, color=GREY)
     y = draw_matrix(fig, y - 0.004, data)
     seis = [_seismic_line(c) for c in s.get("seismic_cases", [])]
-    software = ("Software and cost", "\n".join(_versions(data) + [_cost_line(data)]))
+    software = ("Software, models and cost", "\n".join(_versions(data) + [_cost_line(data)]))
     tail = ([("Seismic input (details: what was run)", "\n".join(seis))] if seis else []) + [software]
     if seis and y - _height(tail) < FOOTER_TOP:   # a long failure list: the seismic input is on 'what was run'
         y = _text(fig, y - 0.008, "(the seismic input: on the page 'What was run')", size=7.5, color=GREY)

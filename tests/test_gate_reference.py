@@ -46,13 +46,22 @@ def test_limits_carry_their_versions_and_the_gate_warns_on_another():
     assert version_warnings(t.derived, {"mujoco": "3.2.0"}, ["semirecursive"]) == []   # MuJoCo not run
 
 
-def test_every_default_case_and_engine_has_derived_limits_and_the_strict_ones_are_tighter():
-    t, strict = load_tolerances(REGRESSION), load_tolerances(REGRESSION_STRICT)
+def test_every_default_case_and_engine_has_derived_limits():
+    t = load_tolerances(REGRESSION)
     for c in load_cases():
         for e in ("semirecursive", "mujoco", "exudyn"):
             assert c.name in t.engines[e]["case"], (e, c.name)
-    for e in ("mujoco", "exudyn"):
-        assert strict.limit(e, "A15mm_f10Hz", "max_dF_rel") < t.limit(e, "A15mm_f10Hz", "max_dF_rel") / 5
+
+
+@pytest.mark.parametrize("engine", ["mujoco", pytest.param("exudyn", marks=pytest.mark.xfail(strict=True, reason=(
+    "Exudyn's described model (the profiles' model since 2026-11-26): its max|dF| error against the converged "
+    "reference on A15mm_f10Hz falls only from 2.2e-5 at 2.5e-5 s to 1.3e-5 at 6.25e-6 s (the adapter: 2.7e-5 to "
+    "1.5e-6), observed order -1.3: a floor near 1e-5, so the strict limit (4.1e-5) is not 5x below the default "
+    "(6.7e-5)")))])
+def test_the_strict_limits_are_tighter(engine):
+    """The strict profile's finer steps give a peer limits well below the default profile's (the step's own error)."""
+    t, strict = load_tolerances(REGRESSION), load_tolerances(REGRESSION_STRICT)
+    assert strict.limit(engine, "A15mm_f10Hz", "max_dF_rel") < t.limit(engine, "A15mm_f10Hz", "max_dF_rel") / 5
 
 
 def test_order_table_is_validated(tmp_path):
@@ -162,22 +171,47 @@ def test_the_in_house_limit_follows_its_ensemble_and_a_peers_its_own_error():
         == pytest.approx(FACTOR * 2e-5)
 
 
-def test_fixed_limits_run_the_peers_on_the_model_they_were_derived_on():
-    """The regression profiles' limits were derived on the peers' hand-written adapters ([derived] model):
-    the gate runs each peer on that model unless a case chose its own; the default rule pins nothing."""
+def test_fixed_limits_run_the_peers_on_the_model_they_were_derived_on(tmp_path):
+    """Fixed limits hold for the peers' model they were derived on ([derived] model): the gate runs each peer
+    on that model unless a case chose its own. The shipped regression profiles were derived on the described
+    models, the peers' default; a file derived on the hand-written adapters still runs the adapters; the
+    default rule pins nothing."""
+    from comparisons.engines.base import DEFAULT_MODEL
     from nsd_cli.compare import pin_model
     cases = load_cases()
+    for f in (REGRESSION, REGRESSION_STRICT):
+        assert load_tolerances(f).derived["model"] == "described" == DEFAULT_MODEL["mujoco"] == DEFAULT_MODEL["exudyn"]
+        pinned = pin_model(cases, load_tolerances(f))
+        assert all(c.settings[e]["model"] == "described" for c in pinned for e in ("mujoco", "exudyn"))
+    adapters = tmp_path / "adapters.toml"
+    adapters.write_text(Path(REGRESSION).read_text().replace('model = "described"', 'model = "adapter"'))
     chose = [dataclasses.replace(cases[0], settings={**cases[0].settings, "mujoco": {"model": "described"}})]
-    pinned = pin_model(cases + chose, load_tolerances(REGRESSION))
-    assert load_tolerances(REGRESSION).derived["model"] == "adapter"
+    pinned = pin_model(cases + chose, load_tolerances(adapters))
+    assert load_tolerances(adapters).derived["model"] == "adapter"
     assert all(c.settings[e]["model"] == "adapter" for c in pinned[:-1] for e in ("mujoco", "exudyn"))
     assert pinned[-1].settings["mujoco"]["model"] == "described" and pinned[-1].settings["exudyn"]["model"] == "adapter"
     assert pin_model(cases, load_tolerances()) == cases
 
 
+def test_derived_limits_name_the_model_the_run_used():
+    """derive_limits writes [derived] model from the run's stats (a described run records "described", an adapter
+    run none), refuses a run whose peers ran different models, and names none where no peer ran."""
+    from benchmarks.derive_limits import derived_info
+
+    def summary(*models):
+        return {"runs": {f"c{i}": {"semirecursive": {"status": "ok", "stats": {}},
+                                   "mujoco": {"status": "ok", "stats": {"model": m} if m else {}}}
+                         for i, m in enumerate(models)}}
+    assert derived_info(summary("described", "described"))["model"] == "described"
+    assert derived_info(summary(None, "adapter"))["model"] == "adapter"
+    assert "model" not in derived_info({"runs": {"c": {"semirecursive": {"status": "ok", "stats": {}}}}})
+    with pytest.raises(SystemExit, match="different models"):
+        derived_info(summary("described", None))
+
+
 def test_a_bad_derived_model_is_one_line(tmp_path):
     bad = tmp_path / "tol.toml"
-    bad.write_text(Path(REGRESSION).read_text().replace('model = "adapter"', 'model = "bogus"'))
+    bad.write_text(Path(REGRESSION).read_text().replace('model = "described"', 'model = "bogus"'))
     p = subprocess.run([sys.executable, "-m", "nsd_cli.main", "compare", "--tolerances", str(bad), "--out",
                         str(tmp_path / "out")], capture_output=True, text=True, timeout=120)
     assert p.returncode == 2 and p.stderr.strip().endswith("[derived] model = 'bogus': allowed: adapter, described")

@@ -3,8 +3,9 @@
 Every expected number here is computed in the test from closed forms or by an independent method
 (quadrature and root finding, scipy's integrator), never by the code under test: the bilinear loop's
 energy per cycle, the friction pendulum's free-vibration decay of 4 mu R per cycle, the design
-displacement of ASCE 7 Eq. 17.5-1, the lead-rubber sizing's effective period and damping; MuJoCo
-against the in-house engine on a short record; bad input for the new options.
+displacement of ASCE 7 Eq. 17.5-1, the lead-rubber sizing's effective period and damping; the peers
+(the isolator's description built by MuJoCo and Exudyn) against the in-house engine on a short
+record; bad input for the new options.
 """
 import math
 
@@ -112,9 +113,11 @@ def test_a_device_variant_leaves_the_designed_structure_unchanged():
     assert a.mass == pytest.approx(3743.7968184920674)   # the nominal rule's value, 1e-3 of the full scale's
 
 
+@pytest.mark.parametrize("engine", ["mujoco", "exudyn"])
 @pytest.mark.parametrize("kind", ["bilinear", "friction-pendulum"])
-def test_mujoco_agrees_with_the_in_house_engine_on_a_short_record(kind):
-    from comparisons.isolator_mujoco import isolator_metrics, run_isolator
+def test_the_peers_agree_with_the_in_house_engine_on_a_short_record(kind, engine):
+    """Each peer builds the isolator's description (the registry's plane law, the real engines)."""
+    from comparisons.engines.described_isolator import isolator_metrics, run_isolator
     from nsd_core.device.isolation import designed_structure
     from nsd_core.device.ground import SIMILITUDE_TIME_FACTOR, fema_record
     from nsd_core.device.seismic import simulate_seismic
@@ -122,10 +125,25 @@ def test_mujoco_agrees_with_the_in_house_engine_on_a_short_record(kind):
     st = s.with_isolator(sized(kind, s.mass))
     g = fema_record("nearfield-pulse", "1", scale=0.6, time_factor=SIMILITUDE_TIME_FACTOR, window=[2, 5])
     ref = simulate_seismic(Params(), st, g, device=False)
-    other = run_isolator(st, g)
+    other = run_isolator(engine, st, g)
     m = isolator_metrics(ref, other)
     assert ref["u"].max() > 2 * st.isolator.yield_displacement   # the isolator yielded: the law was exercised
+    assert other.stats["model"] == "described" and other.stats["engine"] == engine
     assert m["du"] < 1e-4 and m["dF"] < 1e-3 and m["da"] < 1e-3, m
+
+
+def test_nsd_seismic_cross_checks_a_baseline_in_mujoco_and_exudyn(tmp_path):
+    """The command's peers on the isolator's description: each one's CSV and metrics in summary.json."""
+    import json
+    out = tmp_path / "out"
+    code = main(["seismic", "--record", "nearfield-pulse:1", "--window", "2,5", "--scale", "0.6", "--isolator",
+                 "friction-pendulum", "--engines", "semirecursive,mujoco,exudyn", "--out", str(out)])
+    assert code == 0
+    engines = json.loads((out / "summary.json").read_text())["engines"]
+    assert set(engines) == {"mujoco", "exudyn"}
+    for name, m in engines.items():
+        assert (out / f"seismic_{name}.csv").exists()
+        assert m["du"] < 1e-4 and m["dF"] < 1e-3 and m["da"] < 1e-3, (name, m)
 
 
 @pytest.mark.parametrize("argv,fragment", [
@@ -133,7 +151,8 @@ def test_mujoco_agrees_with_the_in_house_engine_on_a_short_record(kind):
     (["--ground", "harmonic:amplitude=1,frequency=2,duration=0.05", "--design-level"], "--design-level"),
     (["--record", "nearfield-pulse:1", "--design-level", "--scale", "2"], "--scale"),
     (["--record", "nearfield-pulse:1", "--isolator", "bilinear", "--no-device"], "--no-device"),
-    (["--record", "nearfield-pulse:1", "--isolator", "bilinear", "--engines", "semirecursive,exudyn"], "--engines"),
+    (["--record", "nearfield-pulse:1", "--isolator", "bilinear", "--restrainer", "--engines", "semirecursive,mujoco"],
+     "--engines"),
 ])
 def test_bad_isolator_and_design_options_are_one_line_exit_2_nothing_written(tmp_path, capsys, argv, fragment):
     out = tmp_path / "out"

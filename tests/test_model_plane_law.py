@@ -72,6 +72,46 @@ def test_mujoco_compiled_and_python_passive_paths_agree_on_a_plane_law(integrato
         assert np.max(np.abs(a[k] - b[k])) <= 1e-9 * max(np.max(np.abs(a[k])), 1e-12), k
 
 
+@pytest.mark.parametrize("forces", ["compiled", "connectors", "predicted"])
+def test_exudyn_runs_a_plane_law_on_each_force_path(forces):
+    """Each Exudyn force path against the in-house device model's run without the device, the work of
+    the hysteretic element against the in-house builder's (second order at 1e-4 s)."""
+    from comparisons.builders import exudyn
+    from nsd_core.model import semirecursive
+    ref = _in_house_reference("bilinear")
+    raw = _raw("bilinear", 0.6)
+    raw["outputs"].append({"name": "w", "kind": "work", "element": "isolator"})
+    m = parse_model(raw)
+    o = exudyn.simulate(m, 0.6, 1e-3, {"step_size": 1e-4, "forces": forces}).outputs
+    w = semirecursive.simulate(m, 0.6, 1e-3, {"rtol": 1e-11, "atol": 1e-14}).outputs["w"]
+    assert np.max(np.hypot(o["u_x"] - ref["x"], o["u_y"] - ref["y"])) < 1e-4 * np.max(ref["u"])
+    assert np.max(np.abs(o["z_x"] - ref["isolator_zx"])) < 1e-3 and np.max(np.abs(o["z_y"] - ref["isolator_zy"])) < 1e-3
+    assert w[-1] < 0.0 and np.max(np.abs(o["w"] - w)) < 1e-3 * np.max(np.abs(w))
+
+
+def test_exudyn_connectors_refuse_a_plane_law_on_a_joint_off_the_ground_the_compiled_path_runs_it():
+    """A carrier on a slide with the plate on it: the connectors path says it cannot (one line), the
+    compiled path runs it and agrees with the in-house builder."""
+    from comparisons.builders import exudyn
+    from nsd_core.model import semirecursive
+    raw = _raw("bilinear", 0.3)
+    plate = raw["bodies"][0]
+    plate["parent"] = "carrier"
+    raw["bodies"].insert(0, {"name": "carrier", "joint": {"type": "prismatic", "position": [0.0, 0.0, 0.0],
+                                                          "axis": [0.0, 0.0, 1.0]}, "mass": 100.0,
+                             "inertia": [1.0, 1.0, 1.0]})
+    raw["forces"].append({"name": "carrier_spring", "law": "joint_spring_damper", "joint": "carrier", "dof": 0,
+                          "parameters": {"stiffness": 1e5}})
+    m = parse_model(raw)
+    with pytest.raises(ModelError) as e:
+        exudyn.simulate(m, 0.3, 1e-3, {"step_size": 1e-4, "forces": "connectors"})
+    assert "forces.isolator.joint = 'plate': Exudyn's connectors apply a plane law on a joint to the ground only" in str(e.value)
+    o = exudyn.simulate(m, 0.3, 1e-3, {"step_size": 1e-4, "forces": "compiled"}).outputs
+    r = semirecursive.simulate(m, 0.3, 1e-3, {"rtol": 1e-11, "atol": 1e-14}).outputs
+    assert np.max(np.abs(r["z_x"])) > 0.5
+    assert np.max(np.hypot(o["u_x"] - r["u_x"], o["u_y"] - r["u_y"])) < 1e-4 * np.max(np.hypot(r["u_x"], r["u_y"]))
+
+
 def test_the_work_of_a_plane_law_is_its_power_integrated():
     """The in-house work output of the hysteretic element against the trapezoid of Q . u' from its own
     force and velocity outputs (a different quadrature: agreement to its error)."""
@@ -146,3 +186,16 @@ def test_a_bad_plane_element_in_a_model_file_is_exit_2_nothing_written(tmp_path)
     lines = [ln for ln in p.stderr.splitlines() if ln.strip()]
     assert p.returncode == 2 and len(lines) == 1 and "forces.isolator.dofs = [1, 2]" in lines[0], p.stderr
     assert not out.exists()
+
+
+def test_nsd_compare_model_judges_the_isolator_description_in_three_engines(tmp_path):
+    """The gate's rule on a plane law: each peer within 3 x its own error estimate of the converged
+    in-house reference, that error within the tolerance (the real engines, nothing mocked)."""
+    import json
+    path = tmp_path / "iso.toml"
+    path.write_text(isolator_description(_structure("friction-pendulum"), GROUND, 0.4, 1e-3))
+    p = subprocess.run([sys.executable, "-m", "nsd_cli.main", "compare", "--model", str(path), "--out",
+                        str(tmp_path / "out")], capture_output=True, text=True, timeout=900)
+    assert p.returncode == 0, p.stdout + p.stderr
+    v = json.loads((tmp_path / "out" / "results.json").read_text())["cases"]["nsd_isolator_0.4s"]["verdicts"]
+    assert {e for e in v if v[e]["pass"]} >= {"semirecursive", "mujoco", "exudyn"}, v

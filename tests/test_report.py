@@ -396,3 +396,36 @@ def test_study_folders_draw_their_own_figures_and_report_from_them(tmp_path):
         assert (out / f"01_{stem}.png").is_file() and (out / "validation.pdf").is_file()
         problems = _figure_problems(folder)
         assert not problems, problems
+
+
+@pytest.mark.parametrize("model", ["described", "adapter", "not recorded", "mixed"])
+def test_page_one_and_the_text_summary_name_the_peer_model(run_dir, tmp_path, model):
+    """Which model each peer ran (its runs' stats "model": "described" from the builders on the device's
+    description; "adapter", or none recorded, the hand-written adapter) is on page one, in the header line and
+    beside the engine, and in nsd compare's text summary. The run is the session's real one (MuJoCo on its
+    default, the described model); the other values are written into a copy of its results.json."""
+    from comparisons.report_text import format_estimated
+    from reports.build import build_report
+    dst = tmp_path / "run"
+    shutil.copytree(run_dir[0], dst)
+    s = json.loads((dst / "results.json").read_text())
+    runs = [(c, r) for c, per in s["runs"].items() for e, r in per.items() if e == "mujoco" and r["status"] == "ok"]
+    assert len(runs) == 3 and all(r["stats"]["model"] == "described" for _, r in runs)
+    for i, (_, r) in enumerate(runs):
+        if model == "adapter" or (model == "mixed" and i):
+            r["stats"]["model"] = "adapter"
+        elif model == "not recorded":
+            del r["stats"]["model"]
+    (dst / "results.json").write_text(json.dumps(s))
+    page = _page_text(build_report(dst, tmp_path / "r")["pdf"])
+    text = format_estimated(s)
+    described, adapter = "model built from the description", "hand-written adapter"
+    if model == "mixed":
+        both = f"{described} ({runs[0][0]}); {adapter} ({', '.join(c for c, _ in runs[1:])})"
+        assert f"Peer models: mujoco: {both}" in page and "(models by case: 'Peer models' above)" in page
+        assert f"peer models: mujoco: {both}" in text
+    else:
+        words, other = (described, adapter) if model == "described" else (adapter, described)
+        assert f"Peer models: mujoco: {words}" in page and f"({words})" in page
+        assert f"peer models: mujoco: {words}" in text and other not in page and other not in text
+    assert "semirecursive" not in text.split("peer models:")[1].split("\n")[0]   # the reference has no model

@@ -19,6 +19,9 @@ order, are
 - ``advance(q_all, q_t_all, q_tt_all, index, h, predict, F, I, W, f)``: the pre-step's work on Exudyn's
   whole coordinate vectors in one call: ``commit``, then (``predict``) the forces at the Taylor-
   predicted end of the step into f (CompiledForces.advance).
+A plane law's element comes as two consecutive joint entries (its x and y slides, exudyn_compiled):
+its law is called once at the first, giving both entries' values, its two-component state in two
+consecutive slots (Heun, LawStates.at_plane's arithmetic).
 Numbers live in three arrays (F: constants, I: integers, W: the states, the turns' last angles,
 the started flag), so the source depends on the description's shape only (element kinds, laws,
 states, counts); a parameter change reuses the compiled code. Cached as mujoco_codegen does: the
@@ -32,6 +35,7 @@ import numpy as np
 
 from comparisons.builders import generated
 from comparisons.builders import exudyn_kernels
+from nsd_core.model.laws import PLANE
 
 HELPERS = (exudyn_kernels,)
 EPS_REL, EPS_MIN = 1e-7, 1e-2   # forward-difference step: EPS_REL max(EPS_MIN, |q_i|) (Exudyn's defaults)
@@ -76,9 +80,15 @@ def source(elements, nb: int, npts: int, nj: int, params: list[tuple[int, int]],
         "def _laws(F, W, x, xd, T):",
         f"    h, started = F[{o['h']}], W[{o['started']}] != 0.0",
     ]
-    k = 0
+    k, planes = 0, set()
     for j, (f, (p0, p1)) in enumerate(zip(elements, params)):
         law = names[id(f.law.force)]
+        if f.law.acts_on == PLANE:   # entries j, j + 1: one call, both values
+            if f.name not in planes:
+                planes.add(f.name)
+                head += _plane_laws(j, f, law, names.get(id(f.law.rate)), o["s"] + k, o["r"] + k, p0, p1)
+                k += f.law.state_size
+            continue
         head.append(f"    # element {j}: {f.name} ({f.law.name})")
         if f.law.state is None:
             head.append(f"    T[{j}] = {law}(x[{j}], xd[{j}], F[{p0}:{p1}])")
@@ -136,11 +146,22 @@ def source(elements, nb: int, npts: int, nj: int, params: list[tuple[int, int]],
         "    _state(F, I, W, f, q, q_t, x, xd, T, N, S, R, G, r, v, w)",
         f"    h, started = F[{o['h']}], W[{o['started']}] != 0.0",
     ]
-    k = 0
+    k, planes = 0, set()
     for j, (f, (p0, p1)) in enumerate(zip(elements, params)):
         if f.law.state is None:
             continue
         s_at, r_at, rate = o["s"] + k, o["r"] + k, names[id(f.law.rate)]
+        if f.law.acts_on == PLANE:   # LawStates.commit's, both components
+            if f.name not in planes:
+                planes.add(f.name)
+                a = f"x[{j}], x[{j + 1}], xd[{j}], xd[{j + 1}]"
+                body += ["    if started:",
+                         f"        rx, ry = W[{r_at}], W[{r_at + 1}]",
+                         f"        ax, ay = {rate}({a}, W[{s_at}] + h * rx, W[{s_at + 1}] + h * ry, F[{p0}:{p1}])",
+                         f"        W[{s_at}], W[{s_at + 1}] = W[{s_at}] + 0.5 * h * (rx + ax), W[{s_at + 1}] + 0.5 * h * (ry + ay)",
+                         f"    W[{r_at}], W[{r_at + 1}] = {rate}({a}, W[{s_at}], W[{s_at + 1}], F[{p0}:{p1}])"]
+                k += 2
+            continue
         body += ["    if started:",
                  f"        s, r = W[{s_at}], W[{r_at}]",
                  f"        W[{s_at}] = s + 0.5 * h * (r + {rate}(x[{j}], xd[{j}], s + h * r, F[{p0}:{p1}]))",
@@ -165,6 +186,21 @@ def source(elements, nb: int, npts: int, nj: int, params: list[tuple[int, int]],
              "        evaluate(q + h * q_t + (0.5 * h * h) * a, q_t + h * a, F, I, W, f)",
              "    return f", ""]
     return "\n".join(head + body), {names[id(fn)]: fn for fn in fns}
+
+
+def _plane_laws(j: int, f, law: str, rate: str | None, s_at: int, r_at: int, p0: int, p1: int) -> list[str]:
+    """A plane law's lines in ``_laws``: T[j], T[j + 1] = (Q_x, Q_y) from entries j, j + 1 and its state
+    at the end of the step by Heun (LawStates.at_plane, operation for operation)."""
+    a, p = f"x[{j}], x[{j + 1}], xd[{j}], xd[{j + 1}]", f"F[{p0}:{p1}]"
+    lines = [f"    # elements {j}, {j + 1}: {f.name} ({f.law.name}, x and y)"]
+    if f.law.state is None:
+        return lines + [f"    T[{j}], T[{j + 1}] = {law}({a}, 0.0, 0.0, {p})"]
+    return lines + [f"    sx, sy = W[{s_at}], W[{s_at + 1}]",
+                    "    if started:",
+                    f"        rx, ry = W[{r_at}], W[{r_at + 1}]",
+                    f"        ax, ay = {rate}({a}, sx + h * rx, sy + h * ry, {p})",
+                    "        sx, sy = sx + 0.5 * h * (rx + ax), sy + 0.5 * h * (ry + ay)",
+                    f"    T[{j}], T[{j + 1}] = {law}({a}, sx, sy, {p})"]
 
 
 def fingerprint(text: str, bound: dict) -> str:
@@ -207,7 +243,7 @@ def pack(cf) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict, list]:
         parts.append(np.asarray(b, dtype=np.int64))
     sizes["nactive"] = len(active)
     I = np.concatenate(parts).astype(np.int64) if parts else np.zeros(0, np.int64)
-    ns = len(cf.states.elements)
+    ns = len(cf.states.s)
     sizes["s"], sizes["r"], sizes["started"] = nj, nj + ns, nj + 2 * ns
     W = np.concatenate([cf.last, np.asarray(cf.states.s, float), np.zeros(ns), [0.0]]).astype(float)
     assert npts + nj == len(cf.elements)

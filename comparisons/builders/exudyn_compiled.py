@@ -10,7 +10,9 @@ model (exudyn_codegen) takes Exudyn's coordinates to every element's (x, x') and
 connectors' scheme, exudyn_forces.LawStates) and maps the laws' values to generalized forces
 (``forces``); its Jacobian is a compiled forward difference of the same function (Exudyn's would
 call the Python function twice per coordinate). So the discrete equations are the connectors' and the two paths agree to Newton's tolerance,
-except one detail where this path follows the description's virtual work: a joint law on a slide
+except one detail where this path follows the description's virtual work (and a plane law, which
+the connectors take on a joint to the ground only, is here two joint entries, one per slide, on any
+joint: its law called once for both, exudyn_codegen): a joint law on a slide
 pushes the parent at the child's frame origin (the connector pushes it at the parent's joint point;
 the two differ by a moment when the child is off the slide's line, which no joint of the device or
 the tests has).
@@ -26,7 +28,7 @@ from exudyn.itemInterface import ObjectGenericODE2
 from comparisons.builders.exudyn_frames import law_axis
 from nsd_core.model.description import GROUND
 from nsd_core.model.errors import ModelError
-from nsd_core.model.laws import POINTS
+from nsd_core.model.laws import PLANE, POINTS
 
 
 class CompiledForces:
@@ -40,8 +42,10 @@ class CompiledForces:
         com = {b.name: np.asarray(b.com, dtype=float) for b in model.bodies}
         com[GROUND] = np.zeros(3)
         pts = [f for f in model.forces if f.law.acts_on == POINTS]
-        jts = [f for f in model.forces if f.law.acts_on != POINTS]
-        self.elements = pts + jts
+        # joint entries: one per joint law, two per plane law (its slides, x then y; its law called once)
+        jts = [(f, k) for f in model.forces if f.law.acts_on != POINTS
+               for k in (f.dofs if f.law.acts_on == PLANE else (f.dof,))]
+        self.elements = pts + [f for f, _ in jts]
         self.ia = np.array([index[f.body_a] for f in pts], dtype=np.int64)
         self.ib = np.array([index[f.body_b] for f in pts], dtype=np.int64)
         self.pa = np.array([np.asarray(f.point_a, float) - com[f.body_a] for f in pts]).reshape(-1, 3)
@@ -49,16 +53,16 @@ class CompiledForces:
         self.e = np.array([np.zeros(3) if f.direction is None else np.asarray(f.direction, float)
                            for f in pts]).reshape(-1, 3)
         cols = []
-        for f in jts:
+        for f, dof in jts:
             b = model.body(f.joint)
-            k = law_axis(b, f.dof)
+            k = law_axis(b, dof)
             if k is None:
                 raise ModelError(f"forces.{f.name}.joint = {f.joint!r}: the Exudyn builder applies joint laws on slides "
                                  f"and on revolute and planar turns only (this is a turn of a {b.joint.type} joint)")
             J = build.frames[b.name]
             cols.append((index[b.name], index[b.parent], J[:, k % 3], J[:, 0], J[:, 1],
                          np.asarray(b.joint.position, float) - com[b.parent], -com[b.name], k >= 3,
-                         build.state.q[(b.name, f.dof)]))
+                         build.state.q[(b.name, dof)]))
         self.jc = np.array([c[0] for c in cols], dtype=np.int64)
         self.jp = np.array([c[1] for c in cols], dtype=np.int64)
         self.jax, self.jx, self.jy, self.jpos, self.jorig = (np.array([c[i] for c in cols], float).reshape(-1, 3)
@@ -69,7 +73,7 @@ class CompiledForces:
         self.f = np.zeros(7 * nb)   # the generalized forces Exudyn gets back
         self.states = states
         for f in self.elements:
-            if f.law.state is not None:
+            if f.law.state is not None and f.name not in states.slot:
                 states.add(f)
         self.nodes, self.index = [build.node[name] for name in self.bodies], None
         self.ref = np.concatenate([np.asarray(mbs.GetNodeParameter(n, "referenceCoordinates"), float)
@@ -77,8 +81,8 @@ class CompiledForces:
         # one generated function per model shape: laws and states inside the compiled call (exudyn_codegen)
         from comparisons.builders.exudyn_codegen import module_for, pack, source   # it imports this module
         self.F, self.I, self.W, sizes, params = pack(self)
-        self.gen = module_for(*source(self.elements, nb, len(pts), len(jts), params, len(states.elements), sizes))
-        self.s_at, self.ns = sizes["s"], len(states.elements)
+        self.gen = module_for(*source(self.elements, nb, len(pts), len(jts), params, len(states.s), sizes))
+        self.s_at, self.ns = sizes["s"], len(states.s)
         # the committed states and rates are W's (views): the outputs and the work read them as committed
         states.s, states.r = self.W[self.s_at:self.s_at + self.ns], self.W[self.s_at + self.ns:self.s_at + 2 * self.ns]
         self.J = np.zeros((7 * nb, 7 * nb))

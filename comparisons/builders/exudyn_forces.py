@@ -26,6 +26,13 @@ coordinates (ObjectGenericODE1) see only their own coordinates in the right-hand
 coupling to the bodies would be outside Exudyn's Jacobian. The hand-written device adapter
 (comparisons/engines/exudyn_engine.py) integrates the same laws in strain from committed states
 (Heun as well); here the integration runs in time, since a law's rate is a function of (x, x', s).
+
+A plane law (two slide coordinates of one joint, a two-component state: nsd_core.model.laws) is one
+CartesianSpringDamper between the parent's joint point and the child's origin (markers: the parent's,
+then the child's): x = d . u, y = d . v along the joint's two slide axes, and the returned vector
+-(Q_x u + Q_y v) pushes the child by Q_x u + Q_y v. Its state takes two slots, advanced as one by
+Heun's method (``at_plane``). The connector reads no rotation of the parent: this path takes a plane
+law on a joint to the ground (the compiled paths, exudyn_compiled, take any joint).
 """
 from __future__ import annotations
 
@@ -38,7 +45,8 @@ from exudyn.itemInterface import (NodeGenericData, ObjectConnectorCartesianSprin
 
 from comparisons.builders.exudyn_frames import cross, joint_rate, law_axis
 from nsd_core.model.errors import ModelError
-from nsd_core.model.laws import POINTS
+from nsd_core.model.description import GROUND
+from nsd_core.model.laws import PLANE, POINTS
 
 
 class LawStates:
@@ -46,29 +54,49 @@ class LawStates:
 
     def __init__(self, h: float):
         self.h, self.elements, self.s, self.r = h, [], [], []
+        self.of, self.slot = [], {}   # each slot's element; each element's first slot (a plane law takes two)
         self.started = False   # before the first step (the initial accelerations): s = s_0 exactly
 
     def add(self, f) -> int:
+        """A law's state: its first slot."""
+        k = len(self.s)
         self.elements.append(f)
-        self.s.append(f.initial_state)
-        self.r.append(0.0)
-        return len(self.elements) - 1
+        self.slot[f.name] = k
+        self.of += [f] * f.law.state_size
+        self.s += list(f.initial_states)
+        self.r += [0.0] * f.law.state_size
+        return k
 
     def at(self, k: int, x: float, xd: float) -> float:
-        """Element k's state at the end of the step being solved, for the configuration (x, x')."""
+        """Slot k's state at the end of the step being solved, for the configuration (x, x')."""
         s = self.s[k]
         if not self.started:
             return s
-        f, h, r = self.elements[k], self.h, self.r[k]
+        f, h, r = self.of[k], self.h, self.r[k]
         return s + 0.5 * h * (r + f.law.rate(x, xd, s + h * r, f.parameters))
 
+    def at_plane(self, k: int, x: float, y: float, xd: float, yd: float) -> tuple[float, float]:
+        """``at`` for a plane law whose state is in slots k, k + 1."""
+        sx, sy = self.s[k], self.s[k + 1]
+        if not self.started:
+            return sx, sy
+        f, h, rx, ry = self.of[k], self.h, self.r[k], self.r[k + 1]
+        ax, ay = f.plane_rate(x, y, xd, yd, sx + h * rx, sy + h * ry)
+        return sx + 0.5 * h * (rx + ax), sy + 0.5 * h * (ry + ay)
+
     def commit(self, args) -> None:
-        """The step converged: (x, x') of each element there; its state and rate become the start's."""
-        for k, (x, xd) in enumerate(args):
-            f = self.elements[k]
+        """The step converged: each element's arguments there ((x, x'), a plane law's (x, y, x', y'));
+        its state and rate become the start's."""
+        for f, a in zip(self.elements, args):
+            k = self.slot[f.name]
+            if f.law.acts_on == PLANE:
+                if self.started:
+                    self.s[k], self.s[k + 1] = self.at_plane(k, *a)
+                self.r[k], self.r[k + 1] = f.plane_rate(*a, self.s[k], self.s[k + 1])
+                continue
             if self.started:
-                self.s[k] = self.at(k, x, xd)
-            self.r[k] = f.law.rate(x, xd, self.s[k], f.parameters)
+                self.s[k] = self.at(k, *a)
+            self.r[k] = f.law.rate(*a, self.s[k], f.parameters)
         self.started = True
 
 
@@ -85,6 +113,8 @@ def add_force(build, f, states: LawStates):
     """One force element of the description as a connector of ``build`` (a comparisons.builders.exudyn
     Build)."""
     mbs = build.mbs
+    if f.law.acts_on == PLANE:
+        return add_plane(build, f, states)
     if f.law.acts_on == POINTS:
         tension = law_function(f, states, 1.0)
         e = None if f.direction is None else np.asarray(f.direction, dtype=float)
@@ -117,6 +147,26 @@ def add_force(build, f, states: LawStates):
                                                               springTorqueUserFunction=user))
 
 
+def add_plane(build, f, states: LawStates):
+    """A plane law as one CartesianSpringDamper (the module's docstring)."""
+    b = build.model.body(f.joint)
+    if b.parent != GROUND:
+        raise ModelError(f"forces.{f.name}.joint = {f.joint!r}: Exudyn's connectors apply a plane law on a joint to "
+                         f"the ground only (its parent is {b.parent!r}); forces = \"compiled\" or \"predicted\" take any")
+    J = build.frames[b.name]
+    u, v = (np.asarray(J[:, law_axis(b, k)], dtype=float) for k in f.dofs)
+    k = states.add(f) if f.law.state is not None else -1
+
+    def vector(mbs_, t, item, d, d_t, stiffness, damping, offset):
+        d, d_t = np.asarray(d), np.asarray(d_t)
+        x, y, xd, yd = float(d @ u), float(d @ v), float(d_t @ u), float(d_t @ v)
+        qx, qy = f.plane_force(x, y, xd, yd, *(states.at_plane(k, x, y, xd, yd) if k >= 0 else (0.0, 0.0)))
+        return list(-(qx * u + qy * v))
+    return build.mbs.AddObject(ObjectConnectorCartesianSpringDamper(
+        markerNumbers=[build.marker(GROUND, b.joint.position), build.marker(b.name, (0.0, 0.0, 0.0))],
+        springForceUserFunction=vector))
+
+
 def axial(d, d_t, e):
     """(x, x', unit vector) of a points element from d = p_a - p_b and its rate: along the fixed
     direction e, or along the line (a zero vector where the points coincide: no direction there)."""
@@ -147,4 +197,8 @@ def law_arguments(build, P, q, f) -> tuple[float, float]:
     b = build.model.body(f.joint)
     Rp, rp, vp, wp = P[b.parent]
     _, rc, vc, wc = P[b.name]
+    if f.law.acts_on == PLANE:   # (x, y, x', y')
+        i, j = f.dofs
+        return (q[(b.name, i)], q[(b.name, j)], joint_rate(b, i, build.frames[b.name], Rp, rp, vp, wp, rc, vc, wc),
+                joint_rate(b, j, build.frames[b.name], Rp, rp, vp, wp, rc, vc, wc))
     return q[(b.name, f.dof)], joint_rate(b, f.dof, build.frames[b.name], Rp, rp, vp, wp, rc, vc, wc)

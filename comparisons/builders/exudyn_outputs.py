@@ -27,6 +27,7 @@ import numpy as np
 from comparisons.builders.exudyn_forces import law_arguments, point
 from comparisons.builders.exudyn_frames import Continuous, applied, cross, transposed
 from nsd_core.model.description import GROUND
+from nsd_core.model.laws import PLANE
 
 
 def _dot(a, b):
@@ -87,7 +88,7 @@ class Sampler:
         self.forces = {f.name: f for f in m.forces}
         self.drives = {p.name: p for p in m.prescribed}
         self.stateful = build.states.elements
-        self.slot = {f.name: k for k, f in enumerate(self.stateful)}
+        self.slot = build.states.slot   # each element's first slot (a plane law's state takes two)
         self.q = {}
         self.recorded = []
         self.work = None   # exudyn_work.Work: the work outputs, integrated in the run (set by the builder)
@@ -133,8 +134,11 @@ class Sampler:
         P = self.read({f.joint for f in self.stateful if f.joint})
         self.b.states.commit([law_arguments(self.b, P, self.q, f) for f in self.stateful])
 
-    def law_value(self, reader, P, f, s):
+    def law_value(self, reader, P, f, s, component=0):
         k = self.slot.get(f.name)
+        if f.law.acts_on == PLANE:   # (Q_x, Q_y): the output's component
+            z = (0.0, 0.0) if k is None else (s[..., k], s[..., k + 1])
+            return _each(lambda *a: f.plane_force(*a)[component], *reader.arguments(P, f), *z)
         return _each(f.force, *reader.arguments(P, f), 0.0 if k is None else s[..., k])
 
     def acceleration(self, reader, P, o, t):
@@ -180,9 +184,9 @@ class Sampler:
             elif o.kind == "point_acceleration":
                 row.append(self.acceleration(reader, P, o, t)[..., o.component])
             elif o.kind == "force":
-                row.append(self.law_value(reader, P, self.forces[o.element], s))
+                row.append(self.law_value(reader, P, self.forces[o.element], s, o.component))
             elif o.kind == "state":   # the committed state its force value uses
-                row.append(s[..., self.slot[o.element]])
+                row.append(s[..., self.slot[o.element] + o.component])
             elif o.kind == "drive_force":
                 row.append(reader.drive_force(self.drives[o.element]))
             elif o.kind == "work":   # integrated in the run to this time (exudyn_work), recorded

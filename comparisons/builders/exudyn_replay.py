@@ -24,6 +24,7 @@ import numpy as np
 from comparisons.builders.exudyn_frames import AXIS_OF_DOF, applied, cross
 from comparisons.builders.exudyn_kernels import pose_series
 from nsd_core.model.description import GROUND
+from nsd_core.model.laws import PLANE
 
 
 class SeriesReader:
@@ -76,8 +77,12 @@ class SeriesReader:
             W = cf.W.copy()
             W[:len(cf.last)] = cf.last   # the turns' angles at t = 0, each sample continuing from the last
             cf.gen.series(self.Q, self.Q_t, cf.F, cf.I, W, self.x, self.xd)
-            self.at = {e.name: j for j, e in enumerate(cf.elements)}
+            self.at = {}
+            for j, e in enumerate(cf.elements):   # a plane law's first entry (x; y is the next)
+                self.at.setdefault(e.name, j)
         j = self.at[f.name]
+        if f.law.acts_on == PLANE:
+            return self.x[:, j], self.x[:, j + 1], self.xd[:, j], self.xd[:, j + 1]
         return self.x[:, j], self.xd[:, j]
 
     def drive_force(self, p):

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from nsd_core.model.laws import POINTS
+from nsd_core.model.laws import PLANE, POINTS
 from comparisons.builders.exudyn_forces import law_arguments
 
 
@@ -41,21 +41,33 @@ class Work:
         """Each work element's (x, x', committed state): the compiled paths' kinematics in one call
         (exudyn_compiled.CompiledForces.rates), the connectors' read from the poses as its outputs are."""
         b, states = self.b, self.b.states
-        slot = {f.name: k for k, f in enumerate(states.elements)}
+        slot = states.slot
+
+        def state(f):   # its committed state (a plane law's: two slots; none: zeros)
+            k = slot.get(f.name)
+            return tuple(0.0 if k is None else states.s[k + i] for i in range(2 if f.law.acts_on == PLANE else 1))
         if b.compiled is not None:
             x, xd = b.compiled.rates(b.mbs)
-            at = {f.name: j for j, f in enumerate(b.compiled.elements)}
-            return [None if f is None else (x[at[f.name]], xd[at[f.name]], states.s[slot[f.name]] if f.name in slot else 0.0)
-                    for f in self.elements]
+            at = {}
+            for j, f in enumerate(b.compiled.elements):   # a plane law's first entry (x; y is the next)
+                at.setdefault(f.name, j)
+
+            def args(f):
+                j = at[f.name]
+                return (x[j], x[j + 1], xd[j], xd[j + 1]) if f.law.acts_on == PLANE else (x[j], xd[j])
+            return [None if f is None else (*args(f), *state(f)) for f in self.elements]
         P = self.sample.read(self.joints)
-        return [None if f is None else (*law_arguments(b, P, self.sample.q, f), states.s[slot[f.name]] if f.name in slot else 0.0)
-                for f in self.elements]
+        return [None if f is None else (*law_arguments(b, P, self.sample.q, f), *state(f)) for f in self.elements]
 
     def powers(self, t: float) -> np.ndarray:
         b, out = self.b, np.zeros(len(self.outputs))
         args = self.arguments() if any(f is not None for f in self.elements) else None
         for k, (o, f) in enumerate(zip(self.outputs, self.elements)):
-            if f is not None:
+            if f is not None and f.law.acts_on == PLANE:   # Q_x x' + Q_y y'
+                x, y, xd, yd, sx, sy = args[k]
+                qx, qy = f.plane_force(x, y, xd, yd, sx, sy)
+                out[k] = qx * xd + qy * yd
+            elif f is not None:
                 x, xd, s = args[k]
                 out[k] = (-1.0 if f.law.acts_on == POINTS else 1.0) * f.force(x, xd, s) * xd
             elif o.source == "excitation":

@@ -260,7 +260,10 @@ register(Law("bidirectional_hysteresis", PLANE, (
     LawParameter("exponent", "-", 2.0, 50.0, doc="n"),
     LawParameter("initial_zx", "-", -1.0, 1.0, default=0.0), LawParameter("initial_zy", "-", -1.0, 1.0, default=0.0)),
     bidirectional_hysteresis_force,
-    "The baseline isolators' hysteretic part (nsd_core.device.isolator_laws; Park, Wen and Ang 1986): on a "
-    "planar displacement u = (x, y) [m], Q = -Q(|u'|) z [N], D_y z' = u' - H(z . u') |z|^(n-2) (z . u') z, "
-    "Q(v) = Q_fast - (Q_fast - Q_rest) exp(-a v); with the rate a = 0, Q = Q_rest",
+    "The baseline isolators' hysteretic part (a lead-rubber bearing: Q = Q_d; a friction pendulum: Q = mu W; "
+    "Park, Wen and Ang 1986, evaluated by nsd_core.device.isolator_laws.hysteretic_force_scalar): on the "
+    "planar displacement u = (x, y) [m], (Q_x, Q_y) = -Q(|u'|) z [N], D_y z' = u' - H(z . u') |z|^(n-2) "
+    "(z . u') z [1/s], Q(v) = Q_fast - (Q_fast - Q_rest) exp(-a v) [N] (a [s/m]; a = 0: Q = Q_rest). A plane "
+    "law because z couples the two directions (z_x' depends on z_y and y'): two scalar joint laws cannot "
+    "express it",
     StateSpec("z", "-", "initial_zx,initial_zy"), bidirectional_hysteresis_rate))

@@ -17,6 +17,7 @@ from nsd_core.model.description import (COMPONENTS, GROUND, JOINT_DOFS, MOTION_K
 from nsd_core.model.errors import ModelError
 from nsd_core.model.excitation import parse_excitation
 from nsd_core.model.laws import JOINT, PLANE, POINTS, get_law
+from nsd_core.model.load_plane import plane_component, plane_dofs
 
 POINT_UNITS = {"point": "m", "point_velocity": "m/s", "point_acceleration": "m/s^2"}
 TOP = {"model", "bodies", "loops", "forces", "prescribed", "outputs", "initial", "case", "excitation"}
@@ -243,22 +244,11 @@ def _force(i: int, t: dict, bodies) -> ForceElement:
         if k in t:
             raise ModelError(f"{where}.{k}: law {law.name!r} acts on {what}")
     if law.acts_on == PLANE:
-        return _plane_force(where, t, bodies, name, law, packed, params)
+        body, _ = _dof(where, t, bodies)   # (no "dof": refused above)
+        dofs = plane_dofs(where, t.get("dofs"), next(b for b in bodies if b.name == body))
+        return ForceElement(name, law, packed, dict(params), joint=body, dof=dofs[0], dofs=dofs)
     body, dof = _dof(where, t, bodies)
     return ForceElement(name, law, packed, dict(params), joint=body, dof=dof)
-
-
-def _plane_force(where: str, t: dict, bodies, name, law, packed, params) -> ForceElement:
-    """A plane law's element: ``dofs`` = two different slide coordinates of the joint (x, y)."""
-    body, _ = _dof(where, {k: v for k, v in t.items() if k != "dofs"}, bodies)
-    joint = next(b for b in bodies if b.name == body).joint
-    slides = [k for k, (kind, _) in enumerate(joint.dofs()) if kind == "P"]
-    dofs = t.get("dofs")
-    if (not isinstance(dofs, list) or len(dofs) != 2 or any(type(k) is not int or k not in slides for k in dofs)
-            or dofs[0] == dofs[1]):
-        raise ModelError(f"{where}.dofs = {dofs!r}: must be two different slide coordinates of {body}'s "
-                         f"{joint.type} joint (x, y); its slides: {slides or 'none'}")
-    return ForceElement(name, law, packed, dict(params), joint=body, dof=dofs[0], dofs=(dofs[0], dofs[1]))
 
 
 def _prescribed(i: int, t: dict, bodies) -> Prescribed:
@@ -340,7 +330,7 @@ def _output(i: int, t: dict, model: Model) -> Output:
                              f"allowed: {', '.join(el) or '(none)'}")
         f = el[t["element"]]
         u = "N" if f.law.acts_on == POINTS else ("N m" if model.coordinate_unit(f.joint, f.dof) == "rad" else "N")
-        return Output(name, kind, element=f.name, unit=u, component=_plane_component(where, t, f), **common)
+        return Output(name, kind, element=f.name, unit=u, component=plane_component(where, t, f), **common)
     if kind == "state":
         el = {f.name: f for f in model.forces}
         stateful = [f.name for f in model.forces if f.law.state is not None]
@@ -349,7 +339,7 @@ def _output(i: int, t: dict, model: Model) -> Output:
             raise ModelError(f"{where}.element = {t.get('element')!r}: {what}; allowed: the elements whose law has a "
                              f"state: {', '.join(stateful) or '(none)'}")
         f = el[t["element"]]
-        return Output(name, kind, element=f.name, unit=f.law.state.unit, component=_plane_component(where, t, f),
+        return Output(name, kind, element=f.name, unit=f.law.state.unit, component=plane_component(where, t, f),
                       **common)
     if kind == "work":
         return Output(name, kind, **_work(where, t, model), unit="J", **common)
@@ -365,20 +355,6 @@ def _output(i: int, t: dict, model: Model) -> Output:
     if term not in ("kinetic", "gravity"):
         raise ModelError(f"{where}.term = {term!r}: allowed: kinetic, gravity")
     return Output(name, kind, term=term, unit="J", **common)
-
-
-def _plane_component(where: str, t: dict, f) -> int:
-    """A force or state output's component: of a plane law's element, x (its first coordinate) or y;
-    no other element has components."""
-    if f.law.acts_on != PLANE:
-        if "component" in t:
-            raise ModelError(f"{where}.component = {t['component']!r}: element {f.name!r} has one value (no components)")
-        return 0
-    comp = t.get("component")
-    if comp not in ("x", "y"):
-        raise ModelError(f"{where}.component = {comp!r}: allowed: x, y (element {f.name!r} acts on the plane "
-                         f"of {f.joint}'s coordinates {list(f.dofs)})")
-    return COMPONENTS[comp]
 
 
 def _work(where: str, t: dict, model: Model) -> dict:
