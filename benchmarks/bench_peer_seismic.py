@@ -1,6 +1,6 @@
 """The peers on the gate's seismic cases (issue 35, item 2): wall and CPU seconds per model second of
-each peer at the case's own settings, MuJoCo with its native step loop (the default) and with the
-Python one (the check), Exudyn, and the in-house engine beside them; the aim is <= 1 wall s per model
+each peer at the case's own settings, MuJoCo with its compiled passive forces and step loop (the default)
+and with its Python ones (the check), Exudyn, and the in-house engine beside them; the aim is <= 1 wall s per model
 second for each peer on a quiet machine.
 
     python benchmarks/bench_peer_seismic.py --repeats 3 --out DIR
@@ -32,7 +32,7 @@ from comparisons.config import SeismicCase, load_cases  # noqa: E402
 from comparisons.engines import REFERENCE, run_seismic_engine  # noqa: E402
 from nsd_core.device.results import atomic_write_json, versions  # noqa: E402
 
-VARIANTS = {"mujoco": ("mujoco", {"step_loop": "native"}), "mujoco (python loop)": ("mujoco", {"step_loop": "python"}),
+VARIANTS = {"mujoco": ("mujoco", {"passive": "compiled"}), "mujoco (python loop)": ("mujoco", {"passive": "python"}),
             "exudyn": ("exudyn", {}), REFERENCE: (REFERENCE, {})}
 
 

@@ -231,7 +231,7 @@ def run(args) -> int:
     d = summary.get("limits_derived_on") or {}
     if d:
         print(f"limits derived on mujoco {d.get('mujoco', '?')}, exudyn {d.get('exudyn', '?')}, the peers' "
-              f"{d.get('model', 'adapter')} models ({d.get('date', '?')}); "
+              f"{d.get('model', 'described')} models ({d.get('date', '?')}); "
               f"gated against the converged reference (in-house {summary['converged_reference']['settings']})")
     for line in summary["failures"]:
         print(f"FAILED {line}")
@@ -245,16 +245,18 @@ def run(args) -> int:
 
 
 def pin_model(cases, tolerances) -> list:
-    """Fixed limits hold for the peers' model they were derived on ([derived] model: "described" for the
-    shipped regression profiles, "adapter" for a file derived on the hand-written models): each peer runs on
-    it, unless a case chose its own ``model``. A file that names none pins nothing (the peers' default)."""
+    """Fixed limits hold for the peers' model they were derived on ([derived] model): "described", the peers'
+    only model since the hand-written adapters were removed, runs as it is; a file derived on the adapters
+    ("adapter") cannot be honoured and is refused in one line (re-derive it: benchmarks/derive_limits.py).
+    A file that names none pins nothing."""
     model = (getattr(tolerances, "derived", None) or {}).get("model")
-    if model is None:
+    if model in (None, "described"):
         return cases
-    if model not in ("adapter", "described"):
-        raise ParameterError(f"--tolerances: [derived] model = {model!r}: allowed: adapter, described")
-    return [dataclasses.replace(c, settings={**c.settings, **{e: {"model": model, **(c.settings.get(e) or {})}
-                                                           for e in ("mujoco", "exudyn")}}) for c in cases]
+    if model == "adapter":
+        raise ParameterError("--tolerances: [derived] model = 'adapter': these limits were derived on the peers' "
+                             "hand-written models, which were removed; re-derive them on the described models "
+                             "(nsd compare --out DIR, then python benchmarks/derive_limits.py DIR --write)")
+    raise ParameterError(f"--tolerances: [derived] model = {model!r}: allowed: described")
 
 
 def _power_cases(text: str, cases, profile: str) -> list:

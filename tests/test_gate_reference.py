@@ -172,24 +172,19 @@ def test_the_in_house_limit_follows_its_ensemble_and_a_peers_its_own_error():
 
 
 def test_fixed_limits_run_the_peers_on_the_model_they_were_derived_on(tmp_path):
-    """Fixed limits hold for the peers' model they were derived on ([derived] model): the gate runs each peer
-    on that model unless a case chose its own. The shipped regression profiles were derived on the described
-    models, the peers' default; a file derived on the hand-written adapters still runs the adapters; the
-    default rule pins nothing."""
-    from comparisons.engines.base import DEFAULT_MODEL
+    """Fixed limits hold for the peers' model they were derived on ([derived] model). The shipped regression
+    profiles were derived on the described models, the peers' only model: they run as they are; a file
+    derived on the removed hand-written adapters is refused in one line; the default rule pins nothing."""
     from nsd_cli.compare import pin_model
     cases = load_cases()
     for f in (REGRESSION, REGRESSION_STRICT):
-        assert load_tolerances(f).derived["model"] == "described" == DEFAULT_MODEL["mujoco"] == DEFAULT_MODEL["exudyn"]
-        pinned = pin_model(cases, load_tolerances(f))
-        assert all(c.settings[e]["model"] == "described" for c in pinned for e in ("mujoco", "exudyn"))
+        assert load_tolerances(f).derived["model"] == "described"
+        assert pin_model(cases, load_tolerances(f)) == cases
     adapters = tmp_path / "adapters.toml"
     adapters.write_text(Path(REGRESSION).read_text().replace('model = "described"', 'model = "adapter"'))
-    chose = [dataclasses.replace(cases[0], settings={**cases[0].settings, "mujoco": {"model": "described"}})]
-    pinned = pin_model(cases + chose, load_tolerances(adapters))
-    assert load_tolerances(adapters).derived["model"] == "adapter"
-    assert all(c.settings[e]["model"] == "adapter" for c in pinned[:-1] for e in ("mujoco", "exudyn"))
-    assert pinned[-1].settings["mujoco"]["model"] == "described" and pinned[-1].settings["exudyn"]["model"] == "adapter"
+    with pytest.raises(ParameterError, match="model = 'adapter'.*re-derive") as e:
+        pin_model(cases, load_tolerances(adapters))
+    assert "\n" not in str(e.value)
     assert pin_model(cases, load_tolerances()) == cases
 
 
@@ -214,5 +209,5 @@ def test_a_bad_derived_model_is_one_line(tmp_path):
     bad.write_text(Path(REGRESSION).read_text().replace('model = "described"', 'model = "bogus"'))
     p = subprocess.run([sys.executable, "-m", "nsd_cli.main", "compare", "--tolerances", str(bad), "--out",
                         str(tmp_path / "out")], capture_output=True, text=True, timeout=120)
-    assert p.returncode == 2 and p.stderr.strip().endswith("[derived] model = 'bogus': allowed: adapter, described")
+    assert p.returncode == 2 and p.stderr.strip().endswith("[derived] model = 'bogus': allowed: described")
     assert len(p.stderr.strip().splitlines()) == 1 and not (tmp_path / "out").exists()
