@@ -53,11 +53,7 @@ def test_every_default_case_and_engine_has_derived_limits():
             assert c.name in t.engines[e]["case"], (e, c.name)
 
 
-@pytest.mark.parametrize("engine", ["mujoco", pytest.param("exudyn", marks=pytest.mark.xfail(strict=True, reason=(
-    "Exudyn's described model (the profiles' model since 2026-11-26): its max|dF| error against the converged "
-    "reference on A15mm_f10Hz falls only from 2.2e-5 at 2.5e-5 s to 1.3e-5 at 6.25e-6 s (the adapter: 2.7e-5 to "
-    "1.5e-6), observed order -1.3: a floor near 1e-5, so the strict limit (4.1e-5) is not 5x below the default "
-    "(6.7e-5)")))])
+@pytest.mark.parametrize("engine", ["mujoco", "exudyn"])
 def test_the_strict_limits_are_tighter(engine):
     """The strict profile's finer steps give a peer limits well below the default profile's (the step's own error)."""
     t, strict = load_tolerances(REGRESSION), load_tolerances(REGRESSION_STRICT)
