@@ -348,6 +348,22 @@ def gate_described() -> str:
               f"\"{d['exudyn_forces']}\"` (drive) and \"{d.get('exudyn_seismic_forces', 'compiled')}\" (seismic) "
               f"(verdict {b['verdict']}); CPU seconds of each peer's h run in its warm worker.\n\n"
             + table(["case", "peer", "adapter", "builder", "adapter CPU s", "builder CPU s", "builder / adapter"], rows))
+    drive = d.get("drive_timing_interleaved") or {}
+    if drive:
+        drows = []
+        for case, per in drive.items():
+            for e in ("mujoco", "exudyn"):
+                if e not in per:
+                    continue
+                best = {m: min(x["cpu_s"] for x in per[e]["runs"][m]) for m in ("adapter", "described")}
+                drows.append([case, e, plain(best["adapter"]), plain(best["described"]),
+                              g(per[e]["cpu_ratio_described_over_adapter"]),
+                              plain(max(x["load_before"] for v in per[e]["runs"].values() for x in v), 2)])
+        text += ("\n\nThe drive cases again, each peer's whole run timed from outside for both models (CPU seconds "
+                 "of `run_engine`, the model's build included: the table above takes an adapter's own `cpu_time`, "
+                 "its stepping only), adapter and builder interleaved in one process after an untimed warm-up, "
+                 "the fastest of the rounds, and the 1-minute load before the runs:\n\n"
+                 + table(["case", "peer", "adapter CPU s", "builder CPU s", "builder / adapter", "load (max)"], drows))
     timing = d.get("seismic_timing_interleaved") or {}
     if timing:
         trows = []
