@@ -238,7 +238,7 @@ def _run_python(model, s, m, d, drives, pairs, t_out, n_sub, h, n_steps, weights
             forces.tau[:] = forces.feeds[-1] - armature * d.qacc[drive_dof]
         begin = time.perf_counter()
         for n in range(n_steps + 1):
-            t = n * h
+            t = min(n * h, float(t_out[-1]))   # n h may pass the run's end by an ulp (past an excitation's block)
             d.time = t
             forces.feeds.clear()
             mujoco.mj_forward(m, d)

@@ -130,7 +130,7 @@ def run(model, s: dict, m, d, drives: list, pairs: list, t_out: np.ndarray, n_su
                 uses_w, site_pairs, float(s["closure_limit"]), lay.values, rec_qpos, rec_qvel, rec_act, rec_val,
                 rec_qacc, gaps, drive_at, work_of, sign,
                 function_address("mj_subtreeVel") if np.any(work_of == EXCITATION) else 0, d.subtree_linvel, mass,
-                model.excitation.block if model.excitation is not None else np.zeros(1), rec_work)
+                model.excitation.block if model.excitation is not None else np.zeros(1), rec_work, float(t_out[-1]))
         K.step_loop.compile(tuple(numba.typeof(a) for a in args))   # (or load) before the clock starts
         begin = time.perf_counter()
         tracking, failed = K.step_loop(*args)

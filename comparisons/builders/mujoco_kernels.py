@@ -273,7 +273,7 @@ def work_powers(ud, values, sign, work_of, power, fn_subtree, m_addr, d_addr, li
 def step_loop(fn_forward, fn_advance, rk4, m_addr, d_addr, time, qpos, qvel, act, qacc, site_xpos, ud,
               n_sub, n_steps, h, weights, acc_half, q_at, qd_at, drive_qa, uses_ptr, uses_k, uses_w,
               pairs, closure_limit, values, rec_qpos, rec_qvel, rec_act, rec_val, rec_qacc, gaps, drive_at,
-              work_of, sign, fn_subtree, linvel, mass, ground, rec_work):
+              work_of, sign, fn_subtree, linvel, mass, ground, rec_work, t_end):
     """comparisons.builders.mujoco.simulate's step loop, natively, in the same order of operations.
 
     Records, at every output time, qpos, qvel, act, qacc, each element's last law value, the loop gap
@@ -286,7 +286,7 @@ def step_loop(fn_forward, fn_advance, rk4, m_addr, d_addr, time, qpos, qvel, act
     nw = work_of.shape[0]
     work, power, now = np.zeros(nw), np.zeros(nw), np.zeros(nw)
     for n in range(n_steps + 1):
-        t = n * h
+        t = min(n * h, t_end)   # n h may pass the run's end by an ulp, past a closed-form excitation's block
         time[0] = t
         ud[COUNT] = 0.0
         ud[T_STEP] = t
