@@ -108,7 +108,7 @@ from comparisons.builders.exudyn_replay import SeriesReader
 from comparisons.builders.exudyn_solver import (CHOICES, RELAXED_REL_TOL, check_settings, default_settings,  # noqa: F401
                                                 SPARSE_ABOVE, redundant_constraints, solver_settings, unknowns)
 from comparisons.builders.exudyn_work import Work
-from comparisons.engines.base import EngineError
+from comparisons.engines.base import EngineError, check_step_count
 from comparisons.builders.exudyn_quiet import quiet_allocation_warning
 from nsd_core.model.assemble import initial_state
 from nsd_core.model.description import GROUND, Model
@@ -360,6 +360,9 @@ def simulate(model: Model, duration: float, dt_out: float, settings: dict | None
     """The run; with closures, a Newton failure (a singular position, as A02's) is retried once at
     newton_rel_tol = RELAXED_REL_TOL (``on_newton_failure``; the module's docstring)."""
     s = check_settings(settings, model)
+    t_out = output_times(duration, dt_out)   # a runaway step count fails its case before anything is built
+    per_out = max(1, int(math.ceil((t_out[1] - t_out[0]) / s["step_size"] - 1e-9)))
+    check_step_count("exudyn", per_out * (len(t_out) - 1))
     retry = bool(model.loops) and s["on_newton_failure"] == "relax" and s["newton_rel_tol"] < RELAXED_REL_TOL
     begin = time.perf_counter()
     exu.config.printToConsole = not retry   # a failure that is retried is no news: Exudyn's banner is kept off
