@@ -18,8 +18,7 @@ from __future__ import annotations
 
 import argparse
 
-from nsd_core.device.describe import _v
-from nsd_core.device.describe_seismic import _inline
+from nsd_core.device.describe_seismic import _inline, plate_body
 from nsd_core.device.isolation import Structure
 from nsd_core.device.params import ParameterError
 
@@ -41,7 +40,7 @@ def isolator_description(st: Structure, ground: str | dict, duration: float, dt_
     if iso is None or st.building is not None or st.restrainer is not None:
         raise ParameterError("isolator description: a structure with a baseline isolator, no building, no restrainer")
     excitation = f"record = {_inline(ground)}" if isinstance(ground, dict) else f'ground = "{ground}"'
-    J, r2 = st.polar_inertia, st.support_radius ** 2
+    r2 = st.support_radius ** 2
     supports = "".join(f'''
 [[forces]]   # the isolator's linear part {label} (k_d{extra}, c{extra})
 name = "support_{label}"
@@ -74,13 +73,7 @@ gravity = [0.0, 0.0, -9.81]
 type = "ground_acceleration"
 {excitation}
 
-[[bodies]]   # the plate with the isolated structure: x, y relative to the ground, a turn about Z
-name = "plate"
-joint = {{ type = "planar", position = [0.0, 0.0, 0.0], normal = [0.0, 0.0, 1.0] }}
-mass = {st.mass!r}
-com = [0.0, 0.0, 0.0]
-inertia = {_v([J / 2, J / 2, J])}
-{supports}
+{plate_body(st)}{supports}
 [[forces]]   # the isolator's hysteretic part on the plate's (x, y): -Q z, z its coupled state
 name = "isolator"
 law = "bidirectional_hysteresis"

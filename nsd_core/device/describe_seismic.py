@@ -31,17 +31,21 @@ from nsd_core.device.isolation import Structure
 from nsd_core.device.params import Params
 
 
-def _structure_lines(st: Structure) -> str:
+def plate_body(st: Structure) -> str:
+    """The plate carrying the isolated structure (mass M, polar inertia M r_g^2) on its planar joint."""
     J = st.polar_inertia
-    kt, ct = st.stiffness * st.support_radius ** 2, st.damping * st.support_radius ** 2
-    out = f'''
-[[bodies]]   # the plate with the isolated structure: x, y relative to the ground, a turn about Z
+    return f'''[[bodies]]   # the plate with the isolated structure: x, y relative to the ground, a turn about Z
 name = "plate"
 joint = {{ type = "planar", position = [0.0, 0.0, 0.0], normal = [0.0, 0.0, 1.0] }}
 mass = {st.mass!r}
 com = [0.0, 0.0, 0.0]
 inertia = {_v([J / 2, J / 2, J])}
 '''
+
+
+def _structure_lines(st: Structure) -> str:
+    kt, ct = st.stiffness * st.support_radius ** 2, st.damping * st.support_radius ** 2
+    out = "\n" + plate_body(st)
     forces = "".join(f'''
 [[forces]]   # the supports {label} (k_b{extra}, c_b{extra})
 name = "support_{label}"
