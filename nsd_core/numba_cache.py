@@ -16,7 +16,10 @@ install of the same version elsewhere (another clone, a CI runner's fresh checko
 site-packages) would miss every kernel and compile them again. ``relocatable_cache`` names it after the
 file's place inside the package instead (``nsd_core/engine`` -> ``nsd_core_engine``): the folder is
 already keyed by the content of every source file, so the same version finds the same machine code
-wherever it is installed (tests/test_numba_cache.py).
+wherever it is installed (tests/test_numba_cache.py). A child process (a pool's worker, ``nsd warm``'s
+helpers) inherits the folder in NUMBA_CACHE_DIR and the mark NSD_VERSIONED_CACHE that this module chose
+it, and names its sub-folders the same way: before the mark, the children took the folder for a user's
+own and kept numba's naming, so a parent and its workers never loaded each other's machine code.
 """
 from __future__ import annotations
 
@@ -27,6 +30,7 @@ import warnings
 from pathlib import Path
 
 PACKAGES = ("nsd_core", "comparisons")
+CHOSEN = "NSD_VERSIONED_CACHE"   # the folder use_versioned_cache chose, for the child processes
 
 
 def source_fingerprint(root: Path) -> str:
@@ -48,14 +52,21 @@ def cache_folder(root: Path, environ=os.environ) -> Path:
 def use_versioned_cache(environ=os.environ) -> str | None:
     """Point numba's cache at this source version's folder (unless NUMBA_CACHE_DIR is set); the
     folder, or None where the user's own setting stands or no folder can be made."""
-    if environ.get("NUMBA_CACHE_DIR"):
-        return None
+    given = environ.get("NUMBA_CACHE_DIR")
+    if given:
+        if given != environ.get(CHOSEN):
+            return None
+        # a child process (a pool's worker, a helper) of one that chose this folder: the same naming of
+        # its sub-folders, or the two would never find each other's machine code (they did not, before)
+        relocatable_cache()
+        return given
     try:
         folder = cache_folder(Path(__file__).resolve().parents[1], environ)
         folder.mkdir(parents=True, exist_ok=True)
     except OSError:  # no writable home: numba's default (beside the source) still works
         return None
     environ["NUMBA_CACHE_DIR"] = str(folder)  # child processes compile into the same folder
+    environ[CHOSEN] = str(folder)  # ... named as here (not a user's own NUMBA_CACHE_DIR)
     if "numba" in sys.modules:  # numba read its configuration already: tell it too
         from numba.core import config
         config.CACHE_DIR = str(folder)

@@ -123,3 +123,20 @@ def test_a_copy_of_the_same_version_elsewhere_loads_what_another_compiled(tmp_pa
         assert p.returncode == 0, p.stderr
         outs.append(p.stdout.split())
     assert outs[0][0] == outs[1][0] and int(outs[0][1]) >= 1 and int(outs[1][1]) == 0, outs
+
+
+def test_a_child_process_names_the_sub_folders_as_its_parent(tmp_path):
+    """A pool's worker or a helper inherits the folder this package chose (NUMBA_CACHE_DIR and the mark
+    NSD_VERSIONED_CACHE): it names the sub-folders by the place in the package, as its parent does,
+    so each loads what the other compiled. A user's own NUMBA_CACHE_DIR keeps numba's naming."""
+    from nsd_core.numba_cache import CHOSEN
+    code = ("import nsd_core\nfrom numba.core import caching\n"
+            "print(any(getattr(c, 'nsd_relocatable', False) for c in caching.CacheImpl._locator_classes))")
+    folder = str(tmp_path / "chosen")
+    base = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR", CHOSEN)}
+    for extra, relocatable in (({"NUMBA_CACHE_DIR": folder, CHOSEN: folder}, "True"),
+                               ({"NUMBA_CACHE_DIR": folder}, "False"),
+                               ({"NUMBA_CACHE_DIR": folder, CHOSEN: str(tmp_path / "other")}, "False")):
+        p = subprocess.run([sys.executable, "-c", code], env={**base, **extra}, capture_output=True, text=True,
+                           timeout=120)
+        assert p.returncode == 0 and p.stdout.strip() == relocatable, (extra, p.stdout, p.stderr)

@@ -21,6 +21,7 @@ from nsd_core.device.geometry import DeviceGeometry, device_geometry
 from nsd_core.engine.integrate import SolverError, check_tolerances, integrate
 from nsd_core.engine.elements import AxialElements
 from nsd_core.engine.mechanism import Cut, Mechanism, mechanism
+from nsd_core.engine.rk import METHODS
 from nsd_core.device.outputs import device_columns
 from nsd_core.device.params import ParameterError, Params
 from nsd_core.device.results import RunResult
@@ -48,7 +49,7 @@ MAX_WIRE_STRAIN = 0.2  # beyond it the SMA law (Eq. 17, fitted up to ~8 %) says 
 MAX_STEPS_PER_CYCLE = 100_000
 DEFAULT_SOLVER = {"method": "DOP853", "rtol": 1e-7, "atol": 1e-12, "max_step": 1e-3, "backend": "auto"}
 BACKENDS = ("auto", "compiled", "scipy", "numpy")  # auto: compiled where it offers the method
-COMPILED_METHODS = ("DOP853", "RK45")
+COMPILED_METHODS = METHODS   # the compiled step loop's pairs (nsd_core.engine.rk)
 
 
 def device_mechanism(g: DeviceGeometry) -> Mechanism:

@@ -34,10 +34,12 @@ import time
 from functools import partial
 from pathlib import Path
 
+from nsd_core.device import first_compile
 from nsd_core.engine import compile_once as co
 
-MARK = ".compiled-every-mode"      # the in-house engine's modes and the peers' callbacks (``nsd warm``)
-MARK_IN_HOUSE = ".compiled-in-house"   # the in-house engine's modes (``ensure_all(peers=False)``)
+# the in-house engine's modes and the peers' callbacks (``nsd warm``); the in-house modes alone
+# (``ensure_all(peers=False)``): first_compile reads them too (every kind ready)
+MARK, MARK_IN_HOUSE = first_compile.EVERY_MODE_MARKS
 LOCK = "warm-all"
 HELPER = "NSD_WARM_HELPER"
 # tiny runs of the layers above, as "module:function" returning a list of callables (the gate's
@@ -89,6 +91,7 @@ def ensure_all(peers: bool = False, stream=None) -> float:
 
 def _warm_here(peers: bool, stream) -> None:
     co.quiet_notices()   # this line is the only one: the units' own notices would repeat it
+    first_compile.disable()   # its own helpers share every mode: the runs start none
     t0 = time.perf_counter()
     n = max(0, (os.cpu_count() or 1) - 1)
     print(NOTICE.format(peers=PEERS if peers else "", processes=n + 1, seconds=NOTICE_SECONDS[peers]), end="",
@@ -112,6 +115,7 @@ def _warm_here(peers: bool, stream) -> None:
 def helper(peers: bool = False) -> None:
     """A helper process: the same items, shared out with the process that started it."""
     co.quiet_notices()
+    first_compile.disable()
     co.share_work(items(peers))
 
 

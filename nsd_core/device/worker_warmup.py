@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from functools import partial
 
-from nsd_core.device import ground
+from nsd_core.device import first_compile, ground
 from nsd_core.device.model import DEFAULT_SOLVER, simulate
 from nsd_core.device.seismic import simulate_seismic
 from nsd_core.device.warmup import PATHS, warm
@@ -34,6 +34,7 @@ def warm_worker(kinds=(), record_sets=(), calls=()) -> None:
     (``share_work``): while one compiles an item the others take the next ones instead of waiting,
     so two workers are ready in about half the time one would take. A failure is left to the job
     that meets it, with its own inputs."""
+    first_compile.disable()   # the pool's workers share the compiling: no helper of their own
     items = []
     if kinds:
         items += [(f"warm-unit-{u}", partial(compile_now, u)) for u in engine_units()]

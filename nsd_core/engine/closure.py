@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from nsd_core.engine.kinematics import SCRATCH_ROWS, Kinematics, cross3
+from nsd_core.engine.kinematics import SCRATCH_ROWS, Kinematics, cross3, frozen
 from nsd_core.engine.mechanism import Mechanism
 
 
@@ -102,8 +102,8 @@ def closure(m: Mechanism, k: Kinematics, with_rates: bool = False):
     a = m.arrays
     Z = k.Z if with_rates else np.zeros((m.n, 6))
     vp = k.vp if with_rates else Z
-    closure_kernel(a.parent, a.cut_kind, a.cut_a, a.cut_va, a.cut_b, a.cut_vb, k.A, k.r, k.B, Z, vp,
-                   with_rates, Phi, J, c, np.empty((SCRATCH_ROWS, 3)))
+    closure_kernel(*frozen(a.parent, a.cut_kind, a.cut_a, a.cut_va, a.cut_b, a.cut_vb), k.A, k.r, k.B, Z, vp,
+                   bool(with_rates), Phi, J, c, np.empty((SCRATCH_ROWS, 3)), True)   # every argument: see frozen
     return Phi, J, (c if with_rates else None)
 
 

@@ -25,7 +25,7 @@ from numba import types
 
 NOTICE = ("nsd: compiling the in-house engine once for this version of the source (about {seconds} s on "
           "2 cores; later runs load it from the cache) ...")
-NOTICE_SECONDS = 30  # measured, quiet, cold cache: `nsd cycle` 32.9 s wall in one process; the gate's two workers 25 s
+NOTICE_SECONDS = 15  # measured, quiet, cold cache: `nsd cycle` 13.1 s wall (this process and one helper: device.first_compile)
 # The seismic mode's own kernels (the ground motions, the structure's and the building's forces) compile
 # at the first seismic run; when the engine came from the cache (a drive run compiled it before), that
 # run says so in its own words rather than repeating the engine's line.

@@ -34,6 +34,8 @@ NOT_FINITE, TOO_SMALL_STEP, TOO_MANY_STEPS = 20, 21, 22
 def _f(x):
     return np.ascontiguousarray(x, dtype=float)
 
+METHODS = ("DOP853", "RK45")   # the pairs the compiled step loop offers (``tableau``)
+
 
 def tableau(method: str) -> Tableau:
     if method == "RK45":

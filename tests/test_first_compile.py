@@ -1,0 +1,72 @@
+"""A first run's compilation shared with one helper process (nsd_core.device.first_compile): only on
+a cold cache, never in a helper, a pool's worker or ``nsd warm``; the helper names the cache's
+sub-folders as its parent does and is gone when the command ends."""
+from __future__ import annotations
+
+import subprocess
+
+import pytest
+
+from nsd_core.device import first_compile
+from nsd_core.engine.compile_once import UNITS
+
+from tests.test_warm_all import NOTICE_START, _nsd
+
+KEY = ("drive", "DOP853", "auto", "line")
+
+
+@pytest.fixture
+def folder(tmp_path, monkeypatch):
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    monkeypatch.delenv(first_compile.HELPER, raising=False)
+    monkeypatch.setattr(first_compile, "_enabled", [True])
+    monkeypatch.setattr(first_compile.os, "cpu_count", lambda: 2)
+    return tmp_path
+
+
+def test_a_helper_only_where_the_kind_is_not_ready(folder, monkeypatch):
+    assert first_compile.worth_a_helper(KEY)
+    first_compile.mark_ready(KEY)
+    assert not first_compile.worth_a_helper(KEY)
+    assert first_compile.worth_a_helper(("seismic",) + KEY[1:])   # another kind is not ready
+    (folder / first_compile.EVERY_MODE_MARKS[1]).touch()   # nsd warm compiled every in-house mode
+    assert not first_compile.worth_a_helper(("seismic",) + KEY[1:])
+
+
+@pytest.mark.parametrize("why", ["helper", "disabled", "one core"])
+def test_never_from_a_helper_a_pool_worker_or_one_core(folder, monkeypatch, why):
+    if why == "helper":
+        monkeypatch.setenv(first_compile.HELPER, "1")
+    elif why == "disabled":
+        first_compile.disable()
+    else:
+        monkeypatch.setattr(first_compile.os, "cpu_count", lambda: 1)
+    assert not first_compile.worth_a_helper(KEY)
+
+
+def test_the_items_are_the_kinds_units_its_callbacks_then_its_tiny_run():
+    for mode in ("drive", "seismic"):
+        names = [lock for lock, _ in first_compile.items((mode,) + KEY[1:], lambda: None)]
+        assert names[-1] == f"warm-kind-{mode}" and f"first-callbacks-{mode}" in names
+        units = [n.removeprefix("warm-unit-") for n in names if n.startswith("warm-unit-")]
+        assert "step_loop" in units and ("seismic_outputs" in units) == (mode == "seismic")
+        import nsd_core.device.compiled_seismic  # noqa: F401 (registers the seismic outputs' unit)
+        assert all(u in UNITS for u in units), units
+
+
+@pytest.mark.slow
+def test_a_cold_first_cycle_shares_its_compilation_and_leaves_nothing_behind(tmp_path):
+    first = _nsd(["cycle", "--amplitude", "0.01", "--frequency", "10", "--out", str(tmp_path / "c")], tmp_path)
+    assert first.returncode == 0, first.stderr[-2000:]
+    assert len([ln for ln in first.stderr.splitlines() if ln.startswith(NOTICE_START)]) == 1, first.stderr
+    folders = list((tmp_path / "nsd-harness" / "numba").iterdir())
+    assert len(folders) == 1
+    sub = sorted(p.name for p in folders[0].iterdir() if p.is_dir())
+    # the helper's kernels in the package-named sub-folders, where the command loads them (before the
+    # child processes' naming was fixed they went to numba's hash-named ones, never found)
+    assert sub == ["nsd_core_device", "nsd_core_engine"], sub
+    assert (folders[0] / first_compile._mark(KEY)).exists()
+    left = subprocess.run(["pgrep", "-f", "first_compile_helper"], capture_output=True, text=True)
+    assert left.stdout.strip() == "", left.stdout
+    again = _nsd(["cycle", "--amplitude", "0.01", "--frequency", "10", "--out", str(tmp_path / "d")], tmp_path)
+    assert again.returncode == 0 and NOTICE_START not in again.stderr, again.stderr
