@@ -7,11 +7,17 @@ import json
 from functools import partial
 
 from nsd_core.device import first_compile, warmup
-from nsd_core.device.model import simulate
-from nsd_core.device.seismic import simulate_seismic
 from nsd_core.engine.compile_once import quiet_notices, share_work
 
-RUNS = {"drive": simulate, "seismic": simulate_seismic}
+
+def run_function(mode: str):
+    """The in-house run of ``mode``; only its own modules imported (the helper starts while the
+    command compiles: the seismic mode's imports would delay a drive cycle's helper)."""
+    if mode == "drive":
+        from nsd_core.device.model import simulate
+        return simulate
+    from nsd_core.device.seismic import simulate_seismic
+    return simulate_seismic
 
 
 def helper(key_json: str) -> None:
@@ -19,4 +25,4 @@ def helper(key_json: str) -> None:
     quiet_notices()
     key = tuple(json.loads(key_json))
     warmup._WARM.add(key)   # its tiny run is the last item, not again inside the wrapped run
-    share_work(first_compile.items(key, partial(warmup.TINY[key[0]], RUNS[key[0]], *key[1:])))
+    share_work(first_compile.items(key, partial(warmup.TINY[key[0]], run_function(key[0]), *key[1:])))
