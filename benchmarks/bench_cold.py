@@ -67,7 +67,7 @@ def timed(args: list[str], out: Path, cache: Path, root: Path = ROOT) -> dict:
     return row
 
 
-def record(before: Path, after: Path, commits: tuple[str, str], out: Path) -> None:
+def record(before: Path, after: Path, commits: tuple[str, str], out: Path, change: str = "") -> None:
     """benchmarks/results/bench_cold.json in benchmarks.measure's record format from two runs of this
     script side by side (before and after a change, each on a `git archive` of its commit): the load is
     the worst either saw, the command the two runs'."""
@@ -83,16 +83,17 @@ def record(before: Path, after: Path, commits: tuple[str, str], out: Path) -> No
                         "wall_s": sum(r["wall_s"] for d in (b, a) for runs in d["rows"].values()
                                       for rr in runs.values() for r in rr),
                         "versions": a["versions"], "git_commit": commits[1]},
-           "data": {"before": {**b, "commit": commits[0]}, "after": {**a, "commit": commits[1]}}}
+           "data": {"before": {**b, "commit": commits[0]}, "after": {**a, "commit": commits[1]},
+                    **({"change": change} if change else {})}}
     from benchmarks.docs import loaded
     rec["measured"]["loaded"] = loaded(rec["measured"])
     atomic_write_json(out, rec)
 
 
 def main(argv=None) -> int:
-    if argv is None and sys.argv[1:2] == ["--record"]:   # --record BEFORE AFTER BEFORE_COMMIT AFTER_COMMIT OUT
+    if argv is None and sys.argv[1:2] == ["--record"]:   # --record BEFORE AFTER BEFORE_COMMIT AFTER_COMMIT OUT [CHANGE]
         b, a, cb, ca, out = sys.argv[2:7]
-        record(Path(b), Path(a), (cb, ca), Path(out))
+        record(Path(b), Path(a), (cb, ca), Path(out), " ".join(sys.argv[7:]))
         return 0
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", required=True, help="folder for bench_cold.json")

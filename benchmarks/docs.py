@@ -585,8 +585,9 @@ def bench_cold() -> str:
                          g(a["cpu_s"]), f"{g(b['compile_notices'])} / {g(a['compile_notices'])}",
                          f"{g(b['load_before'])} / {g(a['load_before'])}"] + [g(x.get("compare_wall_s")) for x in (b, a)])
     return (provenance(rec) + "\n"
-            + "A newcomer's first commands, before and after compiling every mode at once (each commit a `git archive`, the two run one "
-              "after the other on the same machine): `cycle` (`nsd cycle --amplitude 0.015 --frequency 1`), `sweep` "
+            + f"A newcomer's first commands, before and after {d.get('change', 'compiling every mode at once')} (each "
+              "commit a `git archive`, the two run one after the other on the same machine; median of "
+              f"{d['after'].get('repeats', 1)}, each repeat on its own empty cache): `cycle` (`nsd cycle --amplitude 0.015 --frequency 1`), `sweep` "
               "(`nsd sweep --paper`) and `compare` (the README's first command, `nsd compare --convergence --report`) "
               "each on its own empty cache folder, cold then warm; `one cache:` a drive cycle, a seismic window and "
               "the same window under a 3-story building one after another on one empty cache (how many times each "
