@@ -621,6 +621,30 @@ def bench_peer_seismic() -> str:
             + table(["case", "engine", "model s", "wall s / model s", "CPU s / model s", "settings"], rows))
 
 
+def bench_dask() -> str:
+    """A record set's IDA on a Dask cluster of local worker processes, beside the local pool."""
+    rec = load("bench_dask")
+    d = rec["data"]
+    rows = [[r["where"], str(r["workers"]), str(r["runs"]), g(r["ida_elapsed_s"]), g(r["sum_of_run_wall_s"]),
+             g(r["efficiency_from_1"]) if "efficiency_from_1" in r else "–",
+             g(1e3 * r["overhead_per_task_s"]) if "overhead_per_task_s" in r else "–",
+             f"{g(r['load_before'])} / {g(r['load_after'])}"] for r in d["rows"]]
+    m = rec["measured"]
+    load_text = (f"load average {m['load_average_before'][0]:g} before, {m['load_average_after'][0]:g} after"
+                 + (" (**loaded**)" if m.get("loaded") else ""))
+    return (f"*Measured {m['date_utc']} UTC by `{rec['command']}` (exit {rec['exit_code']}, {m['wall_s']:.0f} s), "
+            f"`python benchmarks/bench_dask.py --records {d['records']} --out benchmarks/results/bench_dask.json`; "
+            f"{m['machine']}, {m['cpus']} CPUs, {load_text}; commit {m['git_commit'][:12]}{m['git_commit'][40:]}.*\n\n"
+            + f"`nsd ida` over far-field records {d['records']} with and without the device (hunt and fill, "
+              "in-house engine, no cross-check), on a Dask `LocalCluster` of 1 and 2 worker processes (one thread "
+              "each, warmed before: their start-up is not in the number) and on the local pool of 2 workers (its "
+              "start-up is). IDA s: from the first job submitted to the last result stored; efficiency from 1 "
+              "worker: T1 / (k Tk); overhead per task: empty tasks mapped onto the cluster and gathered, wall "
+              "ms per task; load: the 1-minute load when each command started / ended.\n\n"
+            + table(["where", "workers", "runs", "IDA s", "sum of the runs' own wall s", "efficiency from 1 worker",
+                     "overhead per empty task, ms", "load start / end"], rows))
+
+
 RENDER = {"compare-gate": compare_gate, "convergence": convergence, "tables-5-6": tables_5_6,
           "engine-benchmarks": engine_benchmarks, "direction-study": direction_study, "bench-cycle": bench_cycle,
           "bench-rhs": bench_rhs, "bench-seismic": bench_seismic,
@@ -630,7 +654,7 @@ RENDER = {"compare-gate": compare_gate, "convergence": convergence, "tables-5-6"
           "model-builders": model_builders, "described-gate": described_gate,
           "gate-described": gate_described,
           "work-precision": work_precision, "bench-cold": bench_cold, "bench-peer-seismic": bench_peer_seismic,
-          "bench-ida-farfield": bench_ida_farfield}
+          "bench-ida-farfield": bench_ida_farfield, "bench-dask": bench_dask}
 
 
 def regenerate(text: str) -> str:

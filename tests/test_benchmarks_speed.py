@@ -67,8 +67,23 @@ def test_short_mode_commands():
 
 
 @pytest.mark.parametrize("name,render", [("bench_start", docs.bench_start), ("bench_record_set", docs.bench_record_set),
-                                         ("work_precision", docs.work_precision)])
+                                         ("work_precision", docs.work_precision), ("bench_dask", docs.bench_dask)])
 def test_generated_tables_come_from_the_committed_json(name, render):
     rec = json.loads((docs.RESULTS / f"{name}.json").read_text())
     text = render()
     assert rec["command"] in text and text.count("\n|") >= 3
+
+
+@pytest.mark.slow
+def test_bench_dask_measures_the_efficiency_and_the_overhead_per_task(tmp_path):
+    """One record on a LocalCluster of one worker process and on the local pool: the rows the docs read."""
+    import subprocess
+    import sys
+    out = tmp_path / "bench_dask.json"
+    p = subprocess.run([sys.executable, "benchmarks/bench_dask.py", "--records", "1", "--workers", "1", "--tasks", "20",
+                        "--out", str(out)], cwd=docs.ROOT, capture_output=True, text=True, timeout=900)
+    assert p.returncode == 0, p.stderr[-2000:]
+    rows = json.loads(out.read_text())["data"]["rows"]
+    dask, pool = rows
+    assert dask["where"] == "dask" and dask["efficiency_from_1"] == 1.0 and 0 < dask["overhead_per_task_s"] < 1
+    assert pool["where"] == "local pool" and pool["runs"] == dask["runs"] > 0
