@@ -94,7 +94,14 @@ def main() -> None:
     ap.add_argument("--tasks", type=int, default=400, help="empty tasks for the overhead per task")
     ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results" / "bench_dask.json"))
     a = ap.parse_args()
-    counts = [int(x) for x in a.workers.split(",")]
+    try:
+        counts = [int(x) for x in a.workers.split(",")]
+    except ValueError:
+        counts = []
+    if not counts or min(counts) < 1 or a.tasks < 1:
+        print(f"--workers {a.workers} --tasks {a.tasks}: worker counts must be integers >= 1, comma separated, "
+              "and tasks >= 1", file=sys.stderr)
+        raise SystemExit(2)
     load0 = os.getloadavg()
     from benchmarks.measure import _git_commit
     commit = _git_commit()

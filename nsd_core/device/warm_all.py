@@ -11,8 +11,10 @@ step, ``.ci/run``), after which no command of this version compiles anything.
 
 It is not run automatically at a command's first run. That was tried (issue 35) and measured
 (docs/performance.md, "A newcomer's first commands"): the first ``nsd cycle`` on a cold cache went
-from 27.9 to 38.7 s wall (28 to 65 s CPU: the two processes compile ~40 shared callee kernels twice,
-a unit's lock not covering the kernels it calls) and the README's first compare from 79 to 139 s.
+from 27.9 to 38.7 s wall (28 to 65 s CPU) and the README's first compare from 79 to 139 s. Most of
+that doubled CPU was the child processes' cache naming, fixed since (nsd_core.numba_cache: the helpers'
+machine code went where the first process never looked); a first run now shares only its own kind's
+items with one helper (nsd_core.device.first_compile).
 
 The work runs in this process and ``cpu_count - 1`` helper processes that share the items out
 (``compile_once.share_work``: no two processes compile the same item at once), prints one line, and
