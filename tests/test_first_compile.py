@@ -22,7 +22,7 @@ def folder(tmp_path, monkeypatch):
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
     monkeypatch.delenv(first_compile.HELPER, raising=False)
     monkeypatch.setattr(first_compile, "_enabled", [True])
-    monkeypatch.setattr(first_compile.os, "cpu_count", lambda: 2)
+    monkeypatch.setattr(first_compile, "usable_cores", lambda: 2)
     return tmp_path
 
 
@@ -42,7 +42,7 @@ def test_never_from_a_helper_a_pool_worker_or_one_core(folder, monkeypatch, why)
     elif why == "disabled":
         first_compile.disable()
     else:
-        monkeypatch.setattr(first_compile.os, "cpu_count", lambda: 1)
+        monkeypatch.setattr(first_compile, "usable_cores", lambda: 1)
     assert not first_compile.worth_a_helper(KEY)
 
 
@@ -78,3 +78,10 @@ def test_a_cold_first_cycle_shares_its_compilation_and_leaves_nothing_behind(tmp
     assert left.stdout.strip() == "", left.stdout
     again = _nsd(["cycle", "--amplitude", "0.01", "--frequency", "10", "--out", str(tmp_path / "d")], tmp_path)
     assert again.returncode == 0 and NOTICE_START not in again.stderr, again.stderr
+
+
+def test_the_usable_cores_follow_the_affinity():
+    import os
+    if hasattr(os, "sched_getaffinity"):
+        assert first_compile.usable_cores() == len(os.sched_getaffinity(0))
+    assert first_compile.usable_cores() >= 1

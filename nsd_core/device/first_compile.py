@@ -60,10 +60,17 @@ def mark_ready(key: tuple) -> None:
             pass
 
 
+def usable_cores() -> int:
+    """The cores this process may run on (its affinity: `taskset -c 0` leaves one of a machine's two)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:   # not Linux
+        return os.cpu_count() or 1
+
+
 def worth_a_helper(key: tuple) -> bool:
     """Share this kind's first compilation with a helper: enabled here, two cores or more, not ready."""
-    return (_enabled[0] and not os.environ.get(HELPER) and (os.cpu_count() or 1) >= 2
-            and not is_ready(key))
+    return _enabled[0] and not os.environ.get(HELPER) and usable_cores() >= 2 and not is_ready(key)
 
 
 def _import(module: str, block: bool = True) -> None:
