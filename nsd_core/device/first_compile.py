@@ -87,14 +87,20 @@ def _unit(module: str, name: str, block: bool = False):
     return compile_now(name, block)
 
 
+def unit_items() -> list:
+    """``share_work`` items of the engine's units (``rk.engine_units``), under the lock names every warm-up
+    uses (a first run's, a pool worker's, ``nsd warm``'s), so processes of any of them share the units."""
+    from nsd_core.engine.compile_once import compile_now
+    from nsd_core.engine.rk import engine_units
+    return [(f"warm-unit-{u}", partial(compile_now, u)) for u in engine_units()]
+
+
 def items(key: tuple, tiny) -> list:
     """The kind's ``share_work`` items: the evaluation's two halves, the mode's callbacks, the
     evaluation, the step loop (the seismic outputs' unit in seismic mode), then ``tiny`` (the kind's
     tiny run, which loads them all). The order is the one that splits a cold drive cycle best
     (docs/compilation.md)."""
-    from nsd_core.engine.compile_once import compile_now
-    from nsd_core.engine.rk import engine_units
-    units = [(f"warm-unit-{u}", partial(compile_now, u)) for u in engine_units()]
+    units = unit_items()
     mode = key[0]
     out = units[:2] + [(f"first-callbacks-{mode}", partial(_import, CALLBACKS[mode]))] + units[2:]
     if mode == "seismic":

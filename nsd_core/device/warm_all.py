@@ -151,8 +151,7 @@ def items(peers: bool = True) -> list:
     from nsd_core.device.model import DEFAULT_SOLVER, simulate
     from nsd_core.device.seismic import simulate_seismic
     from nsd_core.device.warmup import PATHS, warm
-    from nsd_core.engine.rk import engine_units
-    out = [(f"warm-unit-{u}", partial(co.compile_now, u)) for u in engine_units()]
+    out = first_compile.unit_items()
     m, b = DEFAULT_SOLVER["method"], DEFAULT_SOLVER["backend"]
     # one lock per mode and per peer: the runs under one lock compile the same kernels (every drive
     # path the drive's), so two processes never compile them side by side; the modes go on meanwhile

@@ -14,8 +14,7 @@ from nsd_core.device import first_compile, ground
 from nsd_core.device.model import DEFAULT_SOLVER, simulate
 from nsd_core.device.seismic import simulate_seismic
 from nsd_core.device.warmup import PATHS, warm
-from nsd_core.engine.compile_once import compile_now, share_work
-from nsd_core.engine.rk import engine_units
+from nsd_core.engine.compile_once import share_work
 
 
 def kind(mode: str, settings: dict | None = None, path: str = "line") -> tuple:
@@ -37,7 +36,7 @@ def warm_worker(kinds=(), record_sets=(), calls=()) -> None:
     first_compile.disable()   # the pool's workers share the compiling: no helper of their own
     items = []
     if kinds:
-        items += [(f"warm-unit-{u}", partial(compile_now, u)) for u in engine_units()]
+        items += first_compile.unit_items()
     # one lock per peer engine and one per in-house mode: the runs under one lock compile the same
     # kernels (MuJoCo's step loop for a line and a circle), so two workers never take two of them at once
     items += [(f"warm-call-{_name(call)}", partial(_quietly, call)) for call in calls]
