@@ -206,6 +206,9 @@ def source(model: Model, lay: Layout, nbody: int) -> tuple[str, dict]:
         f"    qfrc = {ptr('qfrc_passive', (lay.nv,))}",
         f"    xpos = {ptr('xpos', (nbody, 3))}",
         f"    xmat = {ptr('xmat', (nbody, 9))}",
+        # the kernels' integer arguments as int64, not literals: numba compiles a kernel once per literal
+        # value it is called with (a 3-story building's 21 elements: 42 compilations, ~12 s, instead of 3)
+        f"    nv = np.int64({lay.nv})",
     ]
     if lay.na:   # the states' advance along the actual change of x since the last one (Euler; see Passive)
         lines += [f"    act = {ptr('act', (lay.na,))}",
@@ -214,7 +217,7 @@ def source(model: Model, lay: Layout, nbody: int) -> tuple[str, dict]:
                   f"    dt = now - ud[{K.T_COMMIT}]",
                   "    moved = advance and not dt <= 0.0   # (NaN before the first: x recorded, no advance)"]
     if lay.slots:
-        lines.append(f"    prepare_bodies(m, d, ud, ud_addr, xpos, qvel, {lay.nv})")
+        lines.append("    prepare_bodies(m, d, ud, ud_addr, xpos, qvel, nv)")
     for e, (f, at, (p0, p1)) in enumerate(zip(model.forces, lay.blocks, lay.params)):
         law = names[id(f.law.force)]
         lines.append(f"    # {f.name}: {f.law.name}")
@@ -224,7 +227,7 @@ def source(model: Model, lay: Layout, nbody: int) -> tuple[str, dict]:
             continue
         if f.law.acts_on == POINTS:
             state = "points_state" if f.direction is None else "points_state_along"
-            lines.append(f"    x, xd = {state}(ud, {at}, xpos, xmat, {lay.nv})")
+            lines.append(f"    x, xd = {state}(ud, np.int64({at}), xpos, xmat, nv)")
             slot, previous = at + K.P_SLOT, at + K.P_PREVIOUS
         else:
             lines.append(f"    x, xd = qpos[int(ud[{at}])], qvel[int(ud[{at + 1}])]")
@@ -244,7 +247,7 @@ def source(model: Model, lay: Layout, nbody: int) -> tuple[str, dict]:
         lines.append(f"    ud[{lay.values[e]}] = f")
         if any(o.kind == "work" for o in model.outputs):   # x' beside the value: the step loop's power
             lines.append(f"    ud[{lay.values[e] + 1}] = xd")
-        lines.append(f"    apply_points(ud, {at}, f, {lay.nv})" if f.law.acts_on == POINTS
+        lines.append(f"    apply_points(ud, np.int64({at}), f, nv)" if f.law.acts_on == POINTS
                      else f"    qfrc[int(ud[{at + 1}])] += f")
     if lay.na:
         lines += ["    if moved:", f"        ud[{K.T_COMMIT}] = now"]
@@ -252,9 +255,9 @@ def source(model: Model, lay: Layout, nbody: int) -> tuple[str, dict]:
         lines += [f"    ground = carray(double_ptr(ud_addr + {8 * lay.excitation_at}), "
                   f"(np.int64(ud[{K.EXCITATION_SIZE}]),))",
                   f"    ag = ground_values(carray(d, ({o['time'] + 1},), dtype=np.float64)[{o['time']}], ground, 0)",
-                  f"    ground_load(ud, xmat, ag[4], ag[5], {lay.nv})"]
+                  "    ground_load(ud, xmat, ag[4], ag[5], nv)"]
     if lay.slots:
-        lines.append(f"    finish_bodies(ud, qfrc, {lay.nv})")
+        lines.append("    finish_bodies(ud, qfrc, nv)")
     if model.prescribed:
         lines.append(f"    drive_feeds(ud, qfrc, carray(d, ({o['time'] + 1},), dtype=np.float64)[{o['time']}])")
     lines += ["", "",
