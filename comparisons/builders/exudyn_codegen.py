@@ -178,6 +178,16 @@ def source(elements, nb: int, npts: int, nj: int, params: list[tuple[int, int]],
              "        XD[k, :] = xd",
              "    return 0", "", "",
              "@njit(cache=True)",
+             "def values(q, q_t, F, I, W, x, xd, T):",
+             "    # every element's (x, x') and law value at the committed states: exudyn_work's powers",
+             f"    R, G = np.empty(({nb}, 3, 3)), np.empty(({nb}, 3, 4))",
+             f"    r, v, w = np.empty(({nb}, 3)), np.empty(({nb}, 3)), np.empty(({nb}, 3))",
+             f"    N, S = np.empty(({ne}, 3)), np.empty(({ne}, 2, 3))",
+             f"    f = np.empty({7 * nb})",
+             "    _state(F, I, W, f, q, q_t, x, xd, T, N, S, R, G, r, v, w)",
+             *_committed_values(elements, params, names, o["s"]),
+             "    return 0", "", "",
+             "@njit(cache=True)",
              "def advance(q_all, q_t_all, q_tt_all, index, h, predict, F, I, W, f):",
              "    q, q_t = q_all[index], q_t_all[index]",
              "    commit(q, q_t, F, I, W)",
@@ -186,6 +196,27 @@ def source(elements, nb: int, npts: int, nj: int, params: list[tuple[int, int]],
              "        evaluate(q + h * q_t + (0.5 * h * h) * a, q_t + h * a, F, I, W, f)",
              "    return f", ""]
     return "\n".join(head + body), {names[id(fn)]: fn for fn in fns}
+
+
+def _committed_values(elements, params, names: dict, s_at: int) -> list[str]:
+    """``values``' lines: each element's law at its committed state (Element.force, plane_force: what
+    exudyn_work read through Python before), a plane law's once for both entries."""
+    lines, k, planes = [], 0, set()
+    for j, (f, (p0, p1)) in enumerate(zip(elements, params)):
+        law, p = names[id(f.law.force)], f"F[{p0}:{p1}]"
+        if f.law.acts_on == PLANE:
+            if f.name not in planes:
+                planes.add(f.name)
+                st = f"W[{s_at + k}], W[{s_at + k + 1}]" if f.law.state is not None else "0.0, 0.0"
+                lines.append(f"    T[{j}], T[{j + 1}] = {law}(x[{j}], x[{j + 1}], xd[{j}], xd[{j + 1}], {st}, {p})")
+                k += f.law.state_size
+            continue
+        if f.law.state is None:
+            lines.append(f"    T[{j}] = {law}(x[{j}], xd[{j}], {p})")
+        else:
+            lines.append(f"    T[{j}] = {law}(x[{j}], xd[{j}], W[{s_at + k}], {p})")
+            k += 1
+    return lines
 
 
 def _plane_laws(j: int, f, law: str, rate: str | None, s_at: int, r_at: int, p0: int, p1: int) -> list[str]:

@@ -36,40 +36,53 @@ class Work:
         self.velocity_index = None   # the nodes' velocity entries in Exudyn's ODE2 rates, once assembled
         self.work = np.zeros(len(self.outputs))
         self.power, self.t = None, 0.0
+        self.entries = None   # each work element's entry in the compiled elements (compiled_terms)
 
     def arguments(self):
-        """Each work element's (x, x', committed state): the compiled paths' kinematics in one call
-        (exudyn_compiled.CompiledForces.rates), the connectors' read from the poses as its outputs are."""
+        """Each work element's (x, x', committed state), read from the poses as its outputs are (the
+        connectors' path; the compiled paths take ``compiled_terms``)."""
         b, states = self.b, self.b.states
         slot = states.slot
 
         def state(f):   # its committed state (a plane law's: two slots; none: zeros)
             k = slot.get(f.name)
             return tuple(0.0 if k is None else states.s[k + i] for i in range(2 if f.law.acts_on == PLANE else 1))
-        if b.compiled is not None:
-            x, xd = b.compiled.rates(b.mbs)
-            at = {}
-            for j, f in enumerate(b.compiled.elements):   # a plane law's first entry (x; y is the next)
-                at.setdefault(f.name, j)
-
-            def args(f):
-                j = at[f.name]
-                return (x[j], x[j + 1], xd[j], xd[j + 1]) if f.law.acts_on == PLANE else (x[j], xd[j])
-            return [None if f is None else (*args(f), *state(f)) for f in self.elements]
         P = self.sample.read(self.joints)
         return [None if f is None else (*law_arguments(b, P, self.sample.q, f), *state(f)) for f in self.elements]
 
+    def compiled_terms(self) -> list:
+        """The compiled paths' work elements' powers at the converged state: x' and the law's value at
+        the committed state of every element in one compiled call (CompiledForces.values), then per
+        output Q x' (a plane law's Q_x x' + Q_y y'; a points law's -T x'), the same arithmetic as
+        ``element_power``."""
+        compiled = self.b.compiled
+        if self.entries is None:
+            at = {}
+            for j, f in enumerate(compiled.elements):   # a plane law's first entry (x; y is the next)
+                at.setdefault(f.name, j)
+            self.entries = [None if f is None else at[f.name] for f in self.elements]
+        xd, T = compiled.values(self.b.mbs)
+        out = []
+        for f, j in zip(self.elements, self.entries):
+            if f is None:
+                out.append(None)
+            elif f.law.acts_on == PLANE:
+                out.append(T[j] * xd[j] + T[j + 1] * xd[j + 1])
+            else:
+                out.append((-1.0 if f.law.acts_on == POINTS else 1.0) * T[j] * xd[j])
+        return out
+
     def powers(self, t: float) -> np.ndarray:
         b, out = self.b, np.zeros(len(self.outputs))
-        args = self.arguments() if any(f is not None for f in self.elements) else None
+        if not any(f is not None for f in self.elements):
+            terms = None
+        elif b.compiled is not None:
+            terms = self.compiled_terms()
+        else:
+            terms = [None if a is None else element_power(f, a) for f, a in zip(self.elements, self.arguments())]
         for k, (o, f) in enumerate(zip(self.outputs, self.elements)):
-            if f is not None and f.law.acts_on == PLANE:   # Q_x x' + Q_y y'
-                x, y, xd, yd, sx, sy = args[k]
-                qx, qy = f.plane_force(x, y, xd, yd, sx, sy)
-                out[k] = qx * xd + qy * yd
-            elif f is not None:
-                x, xd, s = args[k]
-                out[k] = (-1.0 if f.law.acts_on == POINTS else 1.0) * f.force(x, xd, s) * xd
+            if f is not None:
+                out[k] = terms[k]
             elif o.source == "excitation":
                 if self.velocity_index is None:
                     self.velocity_index = np.array([[b.mbs.GetNodeODE2Index(b.node[body.name]) + c for c in range(3)]
@@ -86,3 +99,14 @@ class Work:
         if self.power is not None:
             self.work += 0.5 * (t - self.t) * (self.power + now)
         self.power, self.t = now, t
+
+
+def element_power(f, args) -> float:
+    """A force element's power from its law at (x, x', committed state): Q_x x' + Q_y y' for a plane
+    law, -T x' for a points law (its tension pulls the ends together), Q q' for a joint law."""
+    if f.law.acts_on == PLANE:
+        x, y, xd, yd, sx, sy = args
+        qx, qy = f.plane_force(x, y, xd, yd, sx, sy)
+        return qx * xd + qy * yd
+    x, xd, s = args
+    return (-1.0 if f.law.acts_on == POINTS else 1.0) * f.force(x, xd, s) * xd
