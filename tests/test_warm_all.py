@@ -50,6 +50,30 @@ def test_nothing_to_do_in_a_helper_or_once_done(monkeypatch):
     assert warm_all.ensure_all() == 0.0
 
 
+@pytest.mark.parametrize("cores, helpers", [(1, 0), (2, 1), (4, 3)])
+def test_nsd_warm_starts_one_helper_per_further_core_this_process_may_use(monkeypatch, tmp_path, cores, helpers):
+    """The helpers follow the process's affinity (`taskset -c 0` on a 2-core machine: none), not the
+    machine's core count; the notice says how many processes share the work."""
+    import io
+    started = []
+    monkeypatch.setattr(warm_all.first_compile, "usable_cores", lambda: cores)
+    monkeypatch.setattr(warm_all.os, "cpu_count", lambda: 64)   # what the machine has is not what is used
+    monkeypatch.setattr(warm_all.subprocess, "Popen", lambda *a, **k: started.append(a) or _Done())
+    monkeypatch.setattr(warm_all.co, "share_work", lambda items: None)
+    monkeypatch.setattr(warm_all.co, "quiet_notices", lambda: None)   # process-wide switches, kept as they are
+    monkeypatch.setattr(warm_all.first_compile, "disable", lambda: None)
+    monkeypatch.setattr(warm_all, "cache_dir", lambda: str(tmp_path))
+    stream = io.StringIO()
+    warm_all._warm_here(False, stream)
+    assert len(started) == helpers
+    assert f"{helpers + 1} process" in stream.getvalue(), stream.getvalue()
+
+
+class _Done:
+    def wait(self):
+        return 0
+
+
 def test_a_run_does_not_compile_every_mode_by_itself():
     """The in-house runs' and the pool workers' warm-ups compile what they use, not every mode: the
     automatic every-mode compilation made the first drive cycle slower (27.9 -> 38.7 s wall, measured)."""

@@ -16,8 +16,8 @@ that doubled CPU was the child processes' cache naming, fixed since (nsd_core.nu
 machine code went where the first process never looked); a first run now shares only its own kind's
 items with one helper (nsd_core.device.first_compile).
 
-The work runs in this process and ``cpu_count - 1`` helper processes that share the items out
-(``compile_once.share_work``: no two processes compile the same item at once), prints one line, and
+The work runs in this process and one helper per further core it may use (its affinity), sharing the
+items out (``compile_once.share_work``: no two processes compile the same item at once), prints one line, and
 leaves a mark in the cache folder: a later ``nsd warm`` of the same version, or of a new install of it
 (the folder is keyed by the source's content and named independently of where it is installed,
 nsd_core.numba_cache), finds the mark and compiles nothing. A second ``nsd warm`` started while one
@@ -95,7 +95,7 @@ def _warm_here(peers: bool, stream) -> None:
     co.quiet_notices()   # this line is the only one: the units' own notices would repeat it
     first_compile.disable()   # its own helpers share every mode: the runs start none
     t0 = time.perf_counter()
-    n = max(0, (os.cpu_count() or 1) - 1)
+    n = max(0, first_compile.usable_cores() - 1)   # the cores this process may use (taskset: fewer)
     print(NOTICE.format(peers=PEERS if peers else "", processes=n + 1, seconds=NOTICE_SECONDS[peers]), end="",
           file=stream, flush=True)
     env = {**os.environ, HELPER: "1"}
