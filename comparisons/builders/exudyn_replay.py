@@ -46,9 +46,11 @@ class SeriesReader:
         the samples (the law states' and works' second axis, by slot and by name)."""
         self.recorded = recorded
         n, nb = len(recorded), len(self.bodies)
-        self.Q = np.array([r[1] for r in recorded])[:, self.index]
-        self.Q_t = np.array([r[2] for r in recorded])[:, self.index]
-        self.Q_tt = np.array([r[3] for r in recorded])[:, self.index]
+        # C order: numpy gives a[:, index] in Fortran order, and its rows ('A' layout to numba) compiled
+        # the force call's kinematics (_state) a second time for the series, ~2 s on a cold cache per shape
+        self.Q = np.ascontiguousarray(np.array([r[1] for r in recorded])[:, self.index])
+        self.Q_t = np.ascontiguousarray(np.array([r[2] for r in recorded])[:, self.index])
+        self.Q_tt = np.ascontiguousarray(np.array([r[3] for r in recorded])[:, self.index])
         self.lam = np.array([r[4] for r in recorded]).reshape(n, -1)
         self.R, self.G = np.empty((n, nb, 3, 3)), np.empty((n, nb, 3, 4))
         self.r, self.v, self.w = np.empty((n, nb, 3)), np.empty((n, nb, 3)), np.empty((n, nb, 3))
