@@ -6,8 +6,11 @@ series kept, and checked against other models on the same output times:
   ``comparisons.seismic.seismic_metrics`` (max |difference| / max over the run of u, device force,
   a_abs; the peaks' relative differences);
 - on the supports alone (which MuJoCo and Exudyn do not model): the exact solution of the linear
-  oscillator M u'' + c_b u' + k_b u = -M a_g per component by ``eqsig`` (Nigam and Jennings 1968,
-  exact for a piecewise-linear input), on the record's own samples.
+  oscillator (nsd_cli.ida_exact, eqsig's Nigam-Jennings recursion on the record's own samples).
+
+Each peer runs the record at its step and at half of it (its own error estimate, judged by the gate's
+rule); one that is not converged there runs it once more at the step its runs ask for (nsd_cli.ida_refine),
+its first pair's verdict kept beside the refined one.
 
 A limit reached by the rod's length stops the run; the check then runs at the bracket's lower end,
 the highest level below the limit, where every model runs the whole record (said in the entry).
@@ -28,8 +31,6 @@ import time
 import traceback
 from functools import partial
 from pathlib import Path
-
-import numpy as np
 
 from comparisons.seismic import building_metrics, seismic_metrics
 from nsd_core.device.isolation import Structure
@@ -58,11 +59,11 @@ PEER_STEPS = {"mujoco": ("timestep", 2e-5, 1e-5), "exudyn": ("step_size", 1e-4, 
 METRIC_TOLERANCE = {"du": "max_du_rel", "dF": "max_dF_device_rel", "da": "peak_a_rel"}
 
 
-def peer_settings(engine: str, building: bool, half: bool = False) -> dict:
-    """The settings of a peer's cross-check run: its step on a whole record (``PEER_STEPS``), halved
-    for the run that estimates its error."""
+def peer_settings(engine: str, building: bool, half: bool = False, step: float | None = None) -> dict:
+    """The settings of a peer's cross-check run: its step on a whole record (``PEER_STEPS``; ``step``:
+    a refined one, nsd_cli.ida_refine), halved for the run that estimates its error."""
     key, h, h_building = PEER_STEPS[engine]
-    step = h_building if building else h
+    step = step if step is not None else (h_building if building else h)
     return {key: step / 2 if half else step}
 
 
@@ -142,48 +143,6 @@ def cross_check_job(r, run_engine) -> dict:
     return run_ida_point(r, run_engine) if r.engine == "semirecursive" else run_peer(r, run_engine)
 
 
-def _not_applicable(why: str) -> dict:
-    return {"engine": "exact (eqsig, Nigam-Jennings)", "status": "not applicable", "error": why}
-
-
-def exact_supports_alone(run: RunResult, trace: Trace, level: float) -> tuple[dict, dict | None]:
-    """The supports-alone run against the exact linear oscillator on the run's output times: eqsig's
-    Nigam-Jennings recursion on each component's own samples (exact for the record, linear between
-    them; zeros after its end), u and u' there, cubic Hermite between them (the solution is smooth
-    inside a sample interval), the pair rotated as the run's input. eqsig's u is -(the displacement
-    relative to the ground) for an input ground acceleration: the sign is turned."""
-    from eqsig import sdof
-    from scipy.interpolate import CubicHermiteSpline
-    from nsd_core.device.ground import fema_record
-    p = trace.point(level)
-    s = Structure(**p.structure)
-    if s.building is not None:   # several masses: no single oscillator to compare with, no series
-        return _not_applicable("a building on the slab: the exact solution here is the single oscillator's (the "
-                               "building's is checked in tests/test_building.py)"), None
-    motion = fema_record(p.set, p.record, **p.ground)
-    t_out = run["t"]
-    period = 2.0 * math.pi * math.sqrt(s.mass / s.stiffness)
-    comps = []
-    for c in motion.comp:
-        dt = float(c.t[1] - c.t[0])
-        n = max(len(c.t), int(math.ceil(t_out[-1] / dt)) + 2)
-        a = np.zeros(n)
-        a[:len(c.a)] = c.a
-        resp_u, resp_v, _ = sdof.response_series(a, dt, np.array([period]), s.damping_ratio)
-        grid = c.t[0] + dt * np.arange(n)
-        comps.append(CubicHermiteSpline(grid, -resp_u[0], -resp_v[0])(t_out))
-    ux, uy = motion.rotation @ np.vstack(comps)
-    ref = np.hypot(ux, uy)
-    diff = np.hypot(run["x"] - ux, run["y"] - uy)
-    if "restrainer_F" in run.columns and np.max(run["restrainer_F"]) > 0:
-        return _not_applicable("the restrainer engaged: the exact linear solution holds without contact"), \
-            {"t": t_out, "x": ux, "y": uy, "u": ref}
-    metrics = {"engine": "exact (eqsig, Nigam-Jennings)", "du": float(np.max(diff) / max(np.max(ref), 1e-300)),
-               "peak_displacement": float((np.max(run["u"]) - np.max(ref)) / max(np.max(ref), 1e-300)),
-               "period_s": period, "damping_ratio": s.damping_ratio}
-    return metrics, {"t": t_out, "x": ux, "y": uy, "u": ref}
-
-
 def cross_check(traces: list[Trace], store: Store, frag: dict, peers: list[str], workers: int, scheduler,
                 log, run_engine, mode: str = "median") -> tuple[dict, float]:
     """Run the checks (see the module docstring); returns ida.json's "cross_check" and the seconds the
@@ -217,20 +176,82 @@ def cross_check(traces: list[Trace], store: Store, frag: dict, peers: list[str],
     if not jobs:
         return out, 0.0
     fresh = {j.key for j in jobs if (rec := store.load(j.key)) is None or rec["status"] == "failed"}
-    elapsed = run_stored(jobs, store, partial(cross_check_job, run_engine=run_engine), workers, scheduler, True, log,
+    job = partial(cross_check_job, run_engine=run_engine)
+    elapsed = run_stored(jobs, store, job, workers, scheduler, True, log,
                          None, f"ida cross-check ({mode}): {len(jobs)} runs (those stored as failed run again)")
+    # a peer not converged on its record runs it once more at the step its own runs ask for (ida_refine)
+    steps = {id(p): _refinements(p, store, peers) for p in chosen if p["trace"].device}
+    again = [p["trace"].point(p["level"], keep_series=True, engine=e,
+                              settings=peer_settings(e, _building(p["trace"]), half, step))
+             for p in chosen for e, step in steps.get(id(p), {}).items() for half in (False, True)]
+    if again:
+        fresh |= {j.key for j in again if (rec := store.load(j.key)) is None or rec["status"] == "failed"}
+        elapsed += run_stored(again, store, job, workers, scheduler, True, log, None,
+                              f"ida cross-check ({mode}): {len(again)} runs of the engines not converged at "
+                              "their step, at the step their runs ask for")
     for name, pick in picks.items():
         if pick and "trace" in pick:
-            out[name] = _entry(pick, store, peers, store.root / "cross_check" / name, fresh)
+            out[name] = _entry(pick, store, peers, store.root / "cross_check" / name, fresh, steps.get(id(pick)))
     if mode == "all":
         out["records"] = {name: [_entry(p, store, peers, store.root / "cross_check" / name / f"record_{p['record']}",
-                                        fresh) if "trace" in p else p for p in lst] for name, lst in others.items()}
+                                        fresh, steps.get(id(p))) if "trace" in p else p for p in lst]
+                          for name, lst in others.items()}
     return out, elapsed
 
 
-def _entry(pick: dict, store: Store, peers: list[str], folder: Path, fresh: set) -> dict:
+def _building(tr: Trace) -> bool:
+    return tr.common["structure"].get("building") is not None
+
+
+def _refinements(pick: dict, store: Store, peers: list[str]) -> dict:
+    """{engine: step} of the peers whose first pair on this record says "not converged" (ida_refine)."""
+    from comparisons.estimate import nominal_order
+    from nsd_cli.ida_refine import refined_step
+    tr, level = pick["trace"], pick["level"]
+    ref_rec = store.load(tr.point(level, keep_series=True).key)
+    if ref_rec is None or ref_rec["status"] != "ok":
+        return {}
+    ref_key = tr.point(level, keep_series=True).key
+    ref = _stored_series(store.folder(ref_key) / "seismic.csv", store.folder(ref_key))
+    out = {}
+    for e in peers:
+        first = _peer_runs(tr, level, e, store)
+        if first is None:
+            continue
+        (rec, peer), (rec2, check) = first
+        verdict = judged(e, seismic_metrics(ref, peer), seismic_metrics(check, peer), rec, rec2)
+        settings = (rec.get("metrics", {}).get("solver") or {}).get("settings") or {}
+        step = settings.get(PEER_STEPS[e][0])
+        if step:
+            new = refined_step(float(step), verdict, seismic_metrics(ref, peer), seismic_metrics(ref, check),
+                               nominal_order(e, settings))
+            if new is not None:
+                out[e] = new
+    return out
+
+
+def _peer_runs(tr: Trace, level: float, e: str, store: Store, step: float | None = None):
+    """((record, series) at h, (record, series) at h/2) of a peer's stored pair, or None if one failed."""
+    pair = []
+    for half in (False, True):
+        key = tr.point(level, keep_series=True, engine=e, settings=peer_settings(e, _building(tr), half, step)).key
+        rec = store.load(key)
+        if rec is None or rec["status"] != "ok":
+            return None
+        pair.append((rec, _stored_series(store.folder(key) / "seismic.csv", store.folder(key), e)))
+    return pair
+
+
+def _entry(pick: dict, store: Store, peers: list[str], folder: Path, fresh: set, steps: dict | None = None) -> dict:
     """One checked record: its runs' series copied into ``folder``, the differences, each run's wall
-    time and whether it ran in this call (``run_now``) or was read from the store."""
+    time and whether it ran in this call (``run_now``) or was read from the store. A peer refined
+    (``steps``: {engine: step}) is judged on its refined pair; its first pair's verdict is kept as
+    "first"."""
+    steps = steps or {}
+    if any(steps.values()):
+        firsts = _entry(pick, store, [e for e in peers if e in steps], folder, fresh)
+    else:
+        firsts = {}
     tr, level = pick["trace"], pick["level"]
     folder.mkdir(parents=True, exist_ok=True)
     ref_key = tr.point(level, keep_series=True).key
@@ -245,21 +266,27 @@ def _entry(pick: dict, store: Store, peers: list[str], folder: Path, fresh: set)
     entry["wall_time"] = {"semirecursive": ref_rec.get("wall_time")}
     entry["run_now"] = {"semirecursive": ref_key in fresh}
     if not tr.device:
+        from nsd_cli.ida_exact import exact_supports_alone
         metrics, cols = exact_supports_alone(ref, tr, level)
         if cols is not None:
             write_columns(folder / "exact.csv", cols)
         entry["engines"]["exact"] = metrics
         return entry
-    building = tr.common["structure"].get("building") is not None
+    building = _building(tr)
     for e in peers:
         runs = {}
         for half in (False, True):
-            key = tr.point(level, keep_series=True, engine=e, settings=peer_settings(e, building, half)).key
+            key = tr.point(level, keep_series=True, engine=e, settings=peer_settings(e, building, half,
+                                                                                     steps.get(e))).key
             runs[half] = (key, store.load(key))
         (key, rec), (key2, rec2) = runs[False], runs[True]
         timing = {"wall_time": (rec or {}).get("wall_time"), "run_now": key in fresh,
                   "check_wall_time": (rec2 or {}).get("wall_time"), "check_run_now": key2 in fresh,
-                  "settings": peer_settings(e, building)}
+                  "settings": peer_settings(e, building, step=steps.get(e))}
+        if e in steps:
+            first = {k: v for k, v in firsts["engines"][e].items() if k != "building"}
+            timing["first"] = first
+            timing["refined"] = {"from": first["settings"], "to": timing["settings"]}
         if rec is None or rec["status"] != "ok" or rec2 is None or rec2["status"] != "ok":
             bad = rec if rec is None or rec["status"] != "ok" else rec2
             entry["engines"][e] = {"status": "failed", "error": (bad or {}).get("error"), **timing}
@@ -320,6 +347,13 @@ def describe_entry(name: str, c: dict) -> str:
         if d is None:
             return ""
         need = "".join(f"; not converged: needs {k} <= {v:.2g} s" for k, v in (m.get("step_needed") or {}).items())
+        r = m.get("refined")
+        if r:   # the first pair's verdict, then the step it ran again at
+            (k, a), (_, b) = next(iter(r["from"].items())), next(iter(r["to"].items()))
+            f = m.get("first") or {}
+            was = (f.get("estimates") or {}).get("du")
+            need += (f"; refined: {k} {a:.3g} -> {b:.3g} s, where its first pair said {f.get('verdict')}"
+                     + (f" (du estimate {was['estimate']:.1e})" if was else ""))
         return f" (estimate {d['estimate']:.1e}, {m['verdict']}{need})"
     parts = [(f"{e} du {m['du']:.2e}" + est(m) if "du" in m else f"{e} {m.get('status')}") + when(m)
              for e, m in c["engines"].items()]
@@ -336,7 +370,8 @@ def cost(check: dict) -> dict:
     for _, c in entries(check):
         timed = [("semirecursive", (c.get("wall_time") or {}).get("semirecursive"),
                   (c.get("run_now") or {}).get("semirecursive"))]
-        timed += [(e, m.get(w), m.get(n)) for e, m in (c.get("engines") or {}).items() if e != "exact"
+        timed += [(e, mm.get(w), mm.get(n)) for e, m in (c.get("engines") or {}).items() if e != "exact"
+                  for mm in (m, m.get("first") or {})   # a refined peer: its first pair too
                   for w, n in (("wall_time", "run_now"), ("check_wall_time", "check_run_now"))]
         for e, t, now in timed:
             if now and isinstance(t, (int, float)):

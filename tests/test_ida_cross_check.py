@@ -109,3 +109,33 @@ def test_a_peer_its_own_estimate_calls_unconverged_gets_the_step_it_needs():
     entry = {"record": 15, "level": 0.78, "engines": {"exudyn": {**diff, **v, "wall_time": 26.4, "run_now": True}}}
     assert "exudyn du 2.70e-02 (estimate 3.2e-02, FAIL; not converged: needs step_size <= 1.2e-05 s)" in \
         describe_entry("device", entry)
+
+
+def _verdict(est: dict, tol: float = 1e-3, consistent: bool = True) -> dict:
+    estimates = {m: {"estimate": e, "tolerance": tol, "consistent": consistent, "accurate": e <= tol}
+                 for m, e in est.items()}
+    ok = consistent and all(v["accurate"] for v in estimates.values())
+    return {"estimates": estimates, "verdict": "PASS" if ok else "FAIL"}
+
+
+def test_a_peer_not_converged_is_refined_from_its_half_step_run_at_the_order_its_record_shows():
+    """ida_refine.refined_step: from the h/2 run's measured error down to 0.8 x the tolerance at the
+    order log2(d(h) / d(h/2)), clamped to [1, the method's]; none for a PASS or a disagreement; at most
+    8 x the steps. The far-field median record's dF (1.4e-2 at 1e-4 s), were it to fall at ~1.5 to h/2,
+    asks for about 1.5e-5 s, where order 2 from the first estimate asked 2.2e-5 s (1.1e-3 measured at 2e-5 s)."""
+    import math
+    from nsd_cli.ida_refine import refined_step
+    d = {"du": 1.7e-4, "dF": 1.37e-2, "da": 6.4e-3}
+    d2 = {"du": 4.3e-5, "dF": 4.84e-3, "da": 2.0e-3}   # dF falls at order 1.5 from h to h/2
+    v = _verdict({"du": 2.1e-4, "dF": 1.64e-2, "da": 7.7e-3})
+    step = refined_step(1e-4, v, d, d2, 2.0)
+    by_dF = 0.5e-4 * (0.8e-3 / 4.84e-3) ** (1 / math.log2(1.37e-2 / 4.84e-3))   # order 1.50
+    by_da = 0.5e-4 * (0.8e-3 / max(2.0e-3, 7.7e-3 / 4)) ** (1 / min(2.0, math.log2(6.4e-3 / 2.0e-3)))
+    assert step == pytest.approx(min(by_dF, by_da)) and 1.4e-5 < step < 1.6e-5
+    assert refined_step(1e-4, _verdict({"du": 1e-5, "dF": 2e-4, "da": 3e-4}), d, d2, 2.0) is None   # PASS
+    assert refined_step(1e-4, _verdict({"du": 1e-2, "dF": 1e-2, "da": 1e-2}, consistent=False), d, d2, 2.0) is None
+    far = refined_step(1e-4, _verdict({"du": 1e-4, "dF": 0.5, "da": 1e-4}), {**d, "dF": 0.4}, {**d2, "dF": 0.1}, 2.0)
+    assert far == pytest.approx(1e-4 / 8)   # capped: at most 8 x the first run's steps
+    slow = refined_step(1e-4, _verdict({"du": 1e-4, "dF": 3e-3, "da": 1e-4}), {**d, "dF": 2e-3}, {**d2, "dF": 1.9e-3},
+                        2.0)   # an error that hardly falls: order 1, not less
+    assert slow == pytest.approx(max(0.5e-4 * 0.8e-3 / 1.9e-3, 1e-4 / 8))
