@@ -530,8 +530,8 @@ def bench_ida_farfield() -> str:
     rows.append(["cross-check, elapsed", "-", plain(check), f"{100 * check / m['wall_s']:.0f} % of the whole"])
     rows.append(["whole command", "-", plain(m["wall_s"]), f"aim ≤ 600 s: {'met' if m['wall_s'] <= 600 else 'not met'}"])
     dev = ((d.get("cross_check") or {}).get("device") or {})
-    verdicts = ", ".join(f"{e} du {v['du']:.1e}" + (f" (estimate {v['estimates']['du']['estimate']:.1e}, {v['verdict']})"
-                                                     if isinstance(v.get("estimates"), dict) else "")
+    verdicts = ", ".join(f"{e} du {v['du']:.1e}" + (f" (estimate {v['estimates']['du']['estimate']:.1e}, {v['verdict']}"
+                                                     + _refined(v) + ")" if isinstance(v.get("estimates"), dict) else "")
                          for e, v in (dev.get("engines") or {}).items() if "du" in v)
     load_text = (f"load average {m['load_average_before'][0]:g} before, {m['load_average_after'][0]:g} after"
                  + (" (**loaded**)" if m.get("loaded") else ""))
@@ -543,6 +543,21 @@ def bench_ida_farfield() -> str:
               f"{plain(d['model_seconds_completed_runs'])} model s in the completed ones; the median record "
               f"({dev.get('record')}) with the device: {verdicts or 'not cross-checked'}.\n\n"
             + table(["part", "runs", "wall s", "note"], rows))
+
+
+def _refined(v: dict) -> str:
+    """A refined peer's cross-check (nsd_cli.ida_refine): its first step and verdict, the step it ran again at."""
+    r, first = v.get("refined"), v.get("first") or {}
+    if not r:
+        return ""
+    (k, a), (_, b) = next(iter(r["from"].items())), next(iter(r["to"].items()))
+    worst = max(((m, e) for m, e in (first.get("estimates") or {}).items()), key=lambda x: x[1]["estimate"],
+                default=None)
+    said = f", its largest estimate {worst[0]} {worst[1]['estimate']:.1e}" if worst else ""
+    dF = v.get("dF")
+    cap = f" (its runs asked {g(r['asked'])} s; at most 8 x the steps)" if r.get("capped") else ""
+    return (f"; refined: {k} {g(a)} -> {g(b)} s{cap}, where its first pair said {first.get('verdict')}{said}"
+            + (f"; dF {dF:.1e}, estimate {v['estimates']['dF']['estimate']:.1e}" if dF is not None else ""))
 
 
 def _setting(s: dict) -> str:

@@ -182,8 +182,8 @@ def cross_check(traces: list[Trace], store: Store, frag: dict, peers: list[str],
     # a peer not converged on its record runs it once more at the step its own runs ask for (ida_refine)
     steps = {id(p): _refinements(p, store, peers) for p in chosen if p["trace"].device}
     again = [p["trace"].point(p["level"], keep_series=True, engine=e,
-                              settings=peer_settings(e, _building(p["trace"]), half, step))
-             for p in chosen for e, step in steps.get(id(p), {}).items() for half in (False, True)]
+                              settings=peer_settings(e, _building(p["trace"]), half, r["step"]))
+             for p in chosen for e, r in steps.get(id(p), {}).items() for half in (False, True)]
     if again:
         fresh |= {j.key for j in again if (rec := store.load(j.key)) is None or rec["status"] == "failed"}
         elapsed += run_stored(again, store, job, workers, scheduler, True, log, None,
@@ -204,9 +204,10 @@ def _building(tr: Trace) -> bool:
 
 
 def _refinements(pick: dict, store: Store, peers: list[str]) -> dict:
-    """{engine: step} of the peers whose first pair on this record says "not converged" (ida_refine)."""
+    """{engine: {"step": the refined step, "asked": what its runs asked for, before the cap}} of the
+    peers whose first pair on this record says "not converged" (ida_refine)."""
     from comparisons.estimate import nominal_order
-    from nsd_cli.ida_refine import refined_step
+    from nsd_cli.ida_refine import asked_step, refined_step
     tr, level = pick["trace"], pick["level"]
     ref_rec = store.load(tr.point(level, keep_series=True).key)
     if ref_rec is None or ref_rec["status"] != "ok":
@@ -223,10 +224,11 @@ def _refinements(pick: dict, store: Store, peers: list[str]) -> dict:
         settings = (rec.get("metrics", {}).get("solver") or {}).get("settings") or {}
         step = settings.get(PEER_STEPS[e][0])
         if step:
-            new = refined_step(float(step), verdict, seismic_metrics(ref, peer), seismic_metrics(ref, check),
-                               nominal_order(e, settings))
+            args = (float(step), verdict, seismic_metrics(ref, peer), seismic_metrics(ref, check),
+                    nominal_order(e, settings))
+            new = refined_step(*args)
             if new is not None:
-                out[e] = new
+                out[e] = {"step": new, "asked": asked_step(*args)}
     return out
 
 
@@ -242,13 +244,14 @@ def _peer_runs(tr: Trace, level: float, e: str, store: Store, step: float | None
     return pair
 
 
-def _entry(pick: dict, store: Store, peers: list[str], folder: Path, fresh: set, steps: dict | None = None) -> dict:
+def _entry(pick: dict, store: Store, peers: list[str], folder: Path, fresh: set, refined: dict | None = None) -> dict:
     """One checked record: its runs' series copied into ``folder``, the differences, each run's wall
     time and whether it ran in this call (``run_now``) or was read from the store. A peer refined
-    (``steps``: {engine: step}) is judged on its refined pair; its first pair's verdict is kept as
+    (``refined``: _refinements') is judged on its refined pair; its first pair's verdict is kept as
     "first"."""
-    steps = steps or {}
-    if any(steps.values()):
+    refined = refined or {}
+    steps = {e: r["step"] for e, r in refined.items()}
+    if steps:
         firsts = _entry(pick, store, [e for e in peers if e in steps], folder, fresh)
     else:
         firsts = {}
@@ -286,7 +289,9 @@ def _entry(pick: dict, store: Store, peers: list[str], folder: Path, fresh: set,
         if e in steps:
             first = {k: v for k, v in firsts["engines"][e].items() if k != "building"}
             timing["first"] = first
-            timing["refined"] = {"from": first["settings"], "to": timing["settings"]}
+            asked = refined[e]["asked"]
+            timing["refined"] = {"from": first["settings"], "to": timing["settings"], "asked": asked,
+                                 "capped": asked < steps[e]}
         if rec is None or rec["status"] != "ok" or rec2 is None or rec2["status"] != "ok":
             bad = rec if rec is None or rec["status"] != "ok" else rec2
             entry["engines"][e] = {"status": "failed", "error": (bad or {}).get("error"), **timing}

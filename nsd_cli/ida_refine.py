@@ -25,7 +25,15 @@ MARGIN = 0.8       # the step's target: 0.8 x the tolerance (comparisons.estimat
 
 
 def refined_step(step: float, verdict: dict, diff: dict, diff_half: dict, order: float) -> float | None:
-    """The step the refined pair runs at, or None when none is needed or none can help.
+    """The step the refined pair runs at (``asked_step``, not below ``step / MAX_REFINE``), or None
+    when none is needed or none can help."""
+    asked = asked_step(step, verdict, diff, diff_half, order)
+    return None if asked is None else max(asked, step / MAX_REFINE)
+
+
+def asked_step(step: float, verdict: dict, diff: dict, diff_half: dict, order: float) -> float | None:
+    """The step the first pair's errors ask for (the module's docstring), uncapped; None when none is
+    needed (a PASS) or none can help (a disagreement).
 
     ``step``: the first run's; ``verdict``: its judgment (``ida_check.judged``: per metric its
     estimate, tolerance, consistent, accurate); ``diff``, ``diff_half``: the h and h/2 runs'
@@ -45,6 +53,4 @@ def refined_step(step: float, verdict: dict, diff: dict, diff_half: dict, order:
         if not error_half > 0 or not math.isfinite(error_half):
             continue
         asked.append(0.5 * step * min(1.0, MARGIN * v["tolerance"] / error_half) ** (1.0 / p))
-    if not asked:
-        return None
-    return max(min(asked), step / MAX_REFINE)
+    return min(asked) if asked else None

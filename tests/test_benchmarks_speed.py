@@ -87,3 +87,18 @@ def test_bench_dask_measures_the_efficiency_and_the_overhead_per_task(tmp_path):
     dask, pool = rows
     assert dask["where"] == "dask" and dask["efficiency_from_1"] == 1.0 and 0 < dask["overhead_per_task_s"] < 1
     assert pool["where"] == "local pool" and pool["runs"] == dask["runs"] > 0
+
+
+def test_the_ida_table_says_a_refined_peer_its_first_verdict_and_its_steps():
+    """bench-ida-farfield: a peer the cross-check refined (nsd_cli.ida_refine) is shown with the step it
+    ran at first, its first verdict and its largest estimate there, and the step it passed at."""
+    v = {"du": 1.2e-6, "dF": 4.4e-4, "verdict": "PASS",
+         "estimates": {"du": {"estimate": 6.8e-6}, "dF": {"estimate": 4.4e-4}},
+         "first": {"verdict": "FAIL", "estimates": {"du": {"estimate": 2.1e-4}, "dF": {"estimate": 1.6e-2}}},
+         "refined": {"from": {"step_size": 1e-4}, "to": {"step_size": 1.25e-5}, "asked": 1.1e-5, "capped": True}}
+    text = docs._refined(v)
+    assert "step_size 0.0001 -> 1.25e-05 s (its runs asked 1.1e-05 s; at most 8 x the steps)" in text
+    assert "first pair said FAIL" in text and "dF 1.6e-02" in text
+    assert docs._refined({"du": 1e-5, "verdict": "PASS"}) == ""
+    rec = json.loads((docs.RESULTS / "bench_ida_farfield.json").read_text())
+    assert rec["command"] in docs.bench_ida_farfield()
