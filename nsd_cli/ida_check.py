@@ -181,6 +181,14 @@ def cross_check(traces: list[Trace], store: Store, frag: dict, peers: list[str],
                          None, f"ida cross-check ({mode}): {len(jobs)} runs (those stored as failed run again)")
     # a peer not converged on its record runs it once more at the step its own runs ask for (ida_refine)
     steps = {id(p): _refinements(p, store, peers) for p in chosen if p["trace"].device}
+    planned = sum(3.0 * r["duration"] / r["step"] for per in steps.values() for r in per.values())
+    if planned > STEPS_MAX:   # the refinements' own bound (--cross-check all: several records at up to 8x)
+        n = sum(len(per) for per in steps.values())
+        out["refinement_skipped"] = (f"{n} engine run(s) not converged at their step were not run again: about "
+                                     f"{planned:.3g} peer steps, over {STEPS_MAX:.0e} (--cross-check median refines "
+                                     "the median record alone)")
+        log(f"ida cross-check ({mode}): {out['refinement_skipped']}")
+        steps = {}
     again = [p["trace"].point(p["level"], keep_series=True, engine=e,
                               settings=peer_settings(e, _building(p["trace"]), half, r["step"]))
              for p in chosen for e, r in steps.get(id(p), {}).items() for half in (False, True)]
@@ -228,7 +236,7 @@ def _refinements(pick: dict, store: Store, peers: list[str]) -> dict:
                     nominal_order(e, settings))
             new = refined_step(*args)
             if new is not None:
-                out[e] = {"step": new, "asked": asked_step(*args)}
+                out[e] = {"step": new, "asked": asked_step(*args), "duration": float(ref["t"][-1])}
     return out
 
 
