@@ -169,6 +169,8 @@ def cross_check(traces: list[Trace], store: Store, frag: dict, peers: list[str],
     for pick in chosen:
         tr, level = pick["trace"], pick["level"]
         jobs.append(tr.point(level, keep_series=True))
+        if tr.device and peers:   # the in-house run's own error: the same point at the converged settings
+            jobs.append(_converged(tr, level))
         if tr.device:
             building = tr.common["structure"].get("building") is not None
             jobs += [tr.point(level, keep_series=True, engine=e, settings=peer_settings(e, building, half))
@@ -207,6 +209,25 @@ def cross_check(traces: list[Trace], store: Store, frag: dict, peers: list[str],
     return out, elapsed
 
 
+def _converged(tr: Trace, level: float):
+    """The in-house run of a checked point at the gate's converged settings (rtol 1e-10): the re-run at
+    the IDA's own settings is judged against it, its difference being that run's own error."""
+    import dataclasses
+    from comparisons.reference import CONVERGED_SETTINGS
+    r = tr.point(level, keep_series=True)
+    return dataclasses.replace(r, settings={**r.settings, **CONVERGED_SETTINGS})
+
+
+def _own_error(tr: Trace, level: float, ref, store: Store) -> dict | None:
+    """The IDA's in-house re-run's own error on this record (du, dF, da against the converged run), or
+    None when that run is missing or failed."""
+    key = _converged(tr, level).key
+    rec = store.load(key)
+    if rec is None or rec["status"] != "ok":
+        return None
+    return seismic_metrics(_stored_series(store.folder(key) / "seismic.csv", store.folder(key)), ref)
+
+
 def _building(tr: Trace) -> bool:
     return tr.common["structure"].get("building") is not None
 
@@ -222,13 +243,14 @@ def _refinements(pick: dict, store: Store, peers: list[str]) -> dict:
         return {}
     ref_key = tr.point(level, keep_series=True).key
     ref = _stored_series(store.folder(ref_key) / "seismic.csv", store.folder(ref_key))
+    own = _own_error(tr, level, ref, store)
     out = {}
     for e in peers:
         first = _peer_runs(tr, level, e, store)
         if first is None:
             continue
         (rec, peer), (rec2, check) = first
-        verdict = judged(e, seismic_metrics(ref, peer), seismic_metrics(check, peer), rec, rec2)
+        verdict = judged(e, seismic_metrics(ref, peer), seismic_metrics(check, peer), rec, rec2, own)
         settings = (rec.get("metrics", {}).get("solver") or {}).get("settings") or {}
         step = settings.get(PEER_STEPS[e][0])
         if step:
@@ -284,6 +306,8 @@ def _entry(pick: dict, store: Store, peers: list[str], folder: Path, fresh: set,
         entry["engines"]["exact"] = metrics
         return entry
     building = _building(tr)
+    own = _own_error(tr, level, ref, store)
+    entry["in_house_error"] = own   # the re-run's own error against the converged in-house run
     for e in peers:
         runs = {}
         for half in (False, True):
@@ -308,17 +332,19 @@ def _entry(pick: dict, store: Store, peers: list[str], folder: Path, fresh: set,
         peer = _stored_series(folder / f"seismic_{e}.csv", store.folder(key), e)
         check = _stored_series(store.folder(key2) / "seismic.csv", store.folder(key2), e)
         entry["engines"][e] = {**seismic_metrics(ref, peer), **timing,
-                               **judged(e, seismic_metrics(ref, peer), seismic_metrics(check, peer), rec, rec2)}
+                               **judged(e, seismic_metrics(ref, peer), seismic_metrics(check, peer), rec, rec2, own)}
         if "floor1_x" in ref.columns:   # a building on the slab: its floors and stories too
             entry["engines"][e]["building"] = building_metrics(ref, peer)
     return entry
 
 
-def judged(engine: str, diff: dict, h_vs_h2: dict, rec: dict, rec2: dict) -> dict:
+def judged(engine: str, diff: dict, h_vs_h2: dict, rec: dict, rec2: dict, own: dict | None = None) -> dict:
     """The peer's own error estimate on this record (Richardson from its h and h/2 runs, the gate's
     order for its method) and the gate's rule on du, dF and da (comparisons/tolerances.toml): consistent
-    when the difference from the in-house run is within k (3) x the estimate, accurate when both are
-    within the tolerance. (The in-house run's own error, at the IDA's tolerance, is inside the difference.)"""
+    when the difference from the in-house run is within k (3) x (the estimate + the in-house run's own
+    error, ``own``: its difference from the converged in-house run; as the gate adds its reference's),
+    accurate when the estimate and the difference are within the tolerance. Without ``own`` the in-house
+    run counts as exact: a peer refined below its error then reads as disagreeing."""
     from comparisons.config import load_tolerances
     from comparisons.estimate import nominal_order, richardson_factor, step_needed, step_ratio
     stats, stats2 = (r.get("metrics", {}).get("solver") or {} for r in (rec, rec2))
@@ -329,7 +355,7 @@ def judged(engine: str, diff: dict, h_vs_h2: dict, rec: dict, rec2: dict) -> dic
     out, ok, needed = {}, True, []
     for m, name in METRIC_TOLERANCE.items():
         est, tol = h_vs_h2[m] * factor, float(rule.engineering[name])
-        consistent, accurate = diff[m] <= rule.k * est, max(est, diff[m]) <= tol
+        consistent, accurate = diff[m] <= rule.k * (est + (own or {}).get(m, 0.0)), max(est, diff[m]) <= tol
         out[m] = {"estimate": est, "tolerance": tol, "consistent": consistent, "accurate": accurate}
         ok = ok and consistent and accurate
         if not accurate and step:
@@ -373,7 +399,9 @@ def describe_entry(name: str, c: dict) -> str:
     own = (c.get("wall_time") or {}).get("semirecursive")
     if isinstance(own, (int, float)):
         stored = "" if (c.get("run_now") or {}).get("semirecursive") else ", stored"
-        parts.append(f"in-house re-run ({own:.1f} s{stored})")
+        err = c.get("in_house_error") or {}
+        mine = f"; its own error du {err['du']:.1e}, dF {err['dF']:.1e}" if "du" in err and "dF" in err else ""
+        parts.append(f"in-house re-run ({own:.1f} s{stored}{mine})")
     return f"cross-check {name}: record {c['record']} at {c['level']:.4g} m/s^2: " + ", ".join(parts)
 
 

@@ -139,3 +139,22 @@ def test_a_peer_not_converged_is_refined_from_its_half_step_run_at_the_order_its
     slow = refined_step(1e-4, _verdict({"du": 1e-4, "dF": 3e-3, "da": 1e-4}), {**d, "dF": 2e-3}, {**d2, "dF": 1.9e-3},
                         2.0)   # an error that hardly falls: order 1, not less
     assert slow == pytest.approx(max(0.5e-4 * 0.8e-3 / 1.9e-3, 1e-4 / 8))
+
+
+def test_a_peer_refined_below_the_in_house_runs_own_error_is_not_called_a_disagreement():
+    """Near-field no-pulse record 16 (measured): MuJoCo refined to 2.5e-6 s differs from the IDA's
+    in-house re-run by dF 1.2e-4 against its own estimate 1.7e-5; the in-house run at the IDA's rtol
+    carries its own error, measured against the converged in-house run. Within 3 x (estimate + that
+    error) it is consistent; counted as exact (no ``own``) it was called a disagreement."""
+    from nsd_cli.ida_check import judged
+    rec = {"metrics": {"solver": {"settings": {"timestep": 2.5e-6}, "steps": 8000}}}
+    rec2 = {"metrics": {"solver": {"settings": {"timestep": 1.25e-6}, "steps": 16000}}}
+    diff = {"du": 1.43e-5, "dF": 1.18e-4, "da": 5.8e-5}
+    h_vs_h2 = {"du": 1.3e-6, "dF": 8.3e-6, "da": 6.3e-6}   # MuJoCo Euler, order 1: estimate = 2 x this
+    alone = judged("mujoco", diff, h_vs_h2, rec, rec2)
+    assert alone["verdict"] == "FAIL" and not alone["estimates"]["dF"]["consistent"]
+    own = {"du": 1.2e-5, "dF": 1.1e-4, "da": 5e-5}
+    both = judged("mujoco", diff, h_vs_h2, rec, rec2, own)
+    assert both["verdict"] == "PASS" and all(v["consistent"] and v["accurate"] for v in both["estimates"].values())
+    far = judged("mujoco", {**diff, "dF": 5e-4}, h_vs_h2, rec, rec2, own)   # beyond both: still a disagreement
+    assert far["verdict"] == "FAIL" and not far["estimates"]["dF"]["consistent"]
