@@ -308,6 +308,9 @@ def _entry(pick: dict, store: Store, peers: list[str], folder: Path, fresh: set,
     building = _building(tr)
     own = _own_error(tr, level, ref, store)
     entry["in_house_error"] = own   # the re-run's own error against the converged in-house run
+    conv_key = _converged(tr, level).key
+    entry["wall_time"]["converged"] = (store.load(conv_key) or {}).get("wall_time")   # that run's, counted in cost()
+    entry["run_now"]["converged"] = conv_key in fresh
     for e in peers:
         runs = {}
         for half in (False, True):
@@ -409,8 +412,8 @@ def cost(check: dict) -> dict:
     """The cross-check's runs done in this call: count and wall seconds per engine (stored runs excluded)."""
     per = {}
     for _, c in entries(check):
-        timed = [("semirecursive", (c.get("wall_time") or {}).get("semirecursive"),
-                  (c.get("run_now") or {}).get("semirecursive"))]
+        timed = [("semirecursive", (c.get("wall_time") or {}).get(k), (c.get("run_now") or {}).get(k))
+                 for k in ("semirecursive", "converged")]   # the re-run and, with the device, its converged one
         timed += [(e, mm.get(w), mm.get(n)) for e, m in (c.get("engines") or {}).items() if e != "exact"
                   for mm in (m, m.get("first") or {})   # a refined peer: its first pair too
                   for w, n in (("wall_time", "run_now"), ("check_wall_time", "check_run_now"))]
