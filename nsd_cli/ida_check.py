@@ -238,10 +238,10 @@ def _refinements(pick: dict, store: Store, peers: list[str]) -> dict:
     from comparisons.estimate import nominal_order
     from nsd_cli.ida_refine import asked_step, refined_step
     tr, level = pick["trace"], pick["level"]
-    ref_rec = store.load(tr.point(level, keep_series=True).key)
+    ref_key = tr.point(level, keep_series=True).key
+    ref_rec = store.load(ref_key)
     if ref_rec is None or ref_rec["status"] != "ok":
         return {}
-    ref_key = tr.point(level, keep_series=True).key
     ref = _stored_series(store.folder(ref_key) / "seismic.csv", store.folder(ref_key))
     own = _own_error(tr, level, ref, store)
     out = {}
@@ -250,12 +250,12 @@ def _refinements(pick: dict, store: Store, peers: list[str]) -> dict:
         if first is None:
             continue
         (rec, peer), (rec2, check) = first
-        verdict = judged(e, seismic_metrics(ref, peer), seismic_metrics(check, peer), rec, rec2, own)
+        diff = seismic_metrics(ref, peer)
+        verdict = judged(e, diff, seismic_metrics(check, peer), rec, rec2, own)
         settings = (rec.get("metrics", {}).get("solver") or {}).get("settings") or {}
         step = settings.get(PEER_STEPS[e][0])
         if step:
-            args = (float(step), verdict, seismic_metrics(ref, peer), seismic_metrics(ref, check),
-                    nominal_order(e, settings))
+            args = (float(step), verdict, diff, seismic_metrics(ref, check), nominal_order(e, settings))
             new = refined_step(*args)
             if new is not None:
                 out[e] = {"step": new, "asked": asked_step(*args), "duration": float(ref["t"][-1])}
