@@ -223,6 +223,13 @@ class GroundMotion:
             return out[0, 0:2], out[0, 2:4], out[0, 4:6]
         return tuple(out[:, j:j + 2].reshape(ts.shape + (2,)) for j in (0, 2, 4))
 
+    def values_at(self, t: float) -> np.ndarray:
+        """(d_x, d_y, v_x, v_y, a_x, a_y) at one time: ``__call__``'s compiled evaluation without its
+        array handling (a peer's step asks for the acceleration once or twice: ~1 us against ~5 us)."""
+        out = np.empty((1, 6))
+        ground_series(np.array([t], dtype=float), self._block(), out)
+        return out[0]
+
     def _block(self) -> np.ndarray:
         cached = self.__dict__.get("_cached_block")
         if cached is None:

@@ -34,8 +34,8 @@ class Excitation:
 
     def acceleration(self, t: float) -> np.ndarray:
         """a_g(t) = (a_x, a_y, 0) [m/s^2]: the ground's acceleration, horizontal."""
-        a = self.motion(float(t))[2]
-        return np.array([a[0], a[1], 0.0])
+        a = self.motion.values_at(float(t))
+        return np.array([a[4], a[5], 0.0])
 
     def gravity(self, g, t: float) -> np.ndarray:
         """The uniform field every body feels in the ground's frame: g - a_g(t) [m/s^2]."""
