@@ -182,7 +182,7 @@ def cross_check(traces: list[Trace], store: Store, frag: dict, peers: list[str],
     elapsed = run_stored(jobs, store, job, workers, scheduler, True, log,
                          None, f"ida cross-check ({mode}): {len(jobs)} runs (those stored as failed run again)")
     # a peer not converged on its record runs it once more at the step its own runs ask for (ida_refine)
-    steps = {id(p): _refinements(p, store, peers) for p in chosen if p["trace"].device}
+    steps = {id(p): _refinements(p, store, peers, fresh) for p in chosen if p["trace"].device}
     planned = sum(3.0 * r["duration"] / r["step"] for per in steps.values() for r in per.values())
     if planned > STEPS_MAX:   # the refinements' own bound (--cross-check all: several records at up to 8x)
         n = sum(len(per) for per in steps.values())
@@ -232,9 +232,9 @@ def _building(tr: Trace) -> bool:
     return tr.common["structure"].get("building") is not None
 
 
-def _refinements(pick: dict, store: Store, peers: list[str]) -> dict:
-    """{engine: {"step": the refined step, "asked": what its runs asked for, before the cap}} of the
-    peers whose first pair on this record says "not converged" (ida_refine)."""
+def _refinements(pick: dict, store: Store, peers: list[str], fresh: set) -> dict:
+    """{engine: {"step": the refined step, "asked": what its runs asked for, before the cap, "first": its
+    first pair's entry}} of the peers whose first pair on this record says "not converged" (ida_refine)."""
     from comparisons.estimate import nominal_order
     from nsd_cli.ida_refine import asked_step, refined_step
     tr, level = pick["trace"], pick["level"]
@@ -246,45 +246,25 @@ def _refinements(pick: dict, store: Store, peers: list[str]) -> dict:
     own = _own_error(tr, level, ref, store)
     out = {}
     for e in peers:
-        first = _peer_runs(tr, level, e, store)
-        if first is None:
+        first, parts = _peer_entry(tr, level, e, store, ref, own, fresh)
+        if parts is None:
             continue
-        (rec, peer), (rec2, check) = first
-        diff = seismic_metrics(ref, peer)
-        verdict = judged(e, diff, seismic_metrics(check, peer), rec, rec2, own)
-        settings = (rec.get("metrics", {}).get("solver") or {}).get("settings") or {}
+        settings = (parts["rec"].get("metrics", {}).get("solver") or {}).get("settings") or {}
         step = settings.get(PEER_STEPS[e][0])
         if step:
-            args = (float(step), verdict, diff, seismic_metrics(ref, check), nominal_order(e, settings))
+            args = (float(step), parts["verdict"], parts["diff"], parts["ref_check"], nominal_order(e, settings))
             new = refined_step(*args)
             if new is not None:
-                out[e] = {"step": new, "asked": asked_step(*args), "duration": float(ref["t"][-1])}
+                out[e] = {"step": new, "asked": asked_step(*args), "duration": float(ref["t"][-1]), "first": first}
     return out
-
-
-def _peer_runs(tr: Trace, level: float, e: str, store: Store, step: float | None = None):
-    """((record, series) at h, (record, series) at h/2) of a peer's stored pair, or None if one failed."""
-    pair = []
-    for half in (False, True):
-        key = tr.point(level, keep_series=True, engine=e, settings=peer_settings(e, _building(tr), half, step)).key
-        rec = store.load(key)
-        if rec is None or rec["status"] != "ok":
-            return None
-        pair.append((rec, _stored_series(store.folder(key) / "seismic.csv", store.folder(key), e)))
-    return pair
 
 
 def _entry(pick: dict, store: Store, peers: list[str], folder: Path, fresh: set, refined: dict | None = None) -> dict:
     """One checked record: its runs' series copied into ``folder``, the differences, each run's wall
     time and whether it ran in this call (``run_now``) or was read from the store. A peer refined
-    (``refined``: _refinements') is judged on its refined pair; its first pair's verdict is kept as
-    "first"."""
+    (``refined``: _refinements') is judged on its refined pair; its first pair's entry, judged there, is
+    kept as "first"."""
     refined = refined or {}
-    steps = {e: r["step"] for e, r in refined.items()}
-    if steps:
-        firsts = _entry(pick, store, [e for e in peers if e in steps], folder, fresh)
-    else:
-        firsts = {}
     tr, level = pick["trace"], pick["level"]
     folder.mkdir(parents=True, exist_ok=True)
     ref_key = tr.point(level, keep_series=True).key
@@ -305,40 +285,51 @@ def _entry(pick: dict, store: Store, peers: list[str], folder: Path, fresh: set,
             write_columns(folder / "exact.csv", cols)
         entry["engines"]["exact"] = metrics
         return entry
-    building = _building(tr)
     own = _own_error(tr, level, ref, store)
     entry["in_house_error"] = own   # the re-run's own error against the converged in-house run
     conv_key = _converged(tr, level).key
     entry["wall_time"]["converged"] = (store.load(conv_key) or {}).get("wall_time")   # that run's, counted in cost()
     entry["run_now"]["converged"] = conv_key in fresh
     for e in peers:
-        runs = {}
-        for half in (False, True):
-            key = tr.point(level, keep_series=True, engine=e, settings=peer_settings(e, building, half,
-                                                                                     steps.get(e))).key
-            runs[half] = (key, store.load(key))
-        (key, rec), (key2, rec2) = runs[False], runs[True]
-        timing = {"wall_time": (rec or {}).get("wall_time"), "run_now": key in fresh,
-                  "check_wall_time": (rec2 or {}).get("wall_time"), "check_run_now": key2 in fresh,
-                  "settings": peer_settings(e, building, step=steps.get(e))}
-        if e in steps:
-            first = {k: v for k, v in firsts["engines"][e].items() if k != "building"}
-            timing["first"] = first
-            asked = refined[e]["asked"]
-            timing["refined"] = {"from": first["settings"], "to": timing["settings"], "asked": asked,
-                                 "capped": asked < steps[e]}
-        if rec is None or rec["status"] != "ok" or rec2 is None or rec2["status"] != "ok":
-            bad = rec if rec is None or rec["status"] != "ok" else rec2
-            entry["engines"][e] = {"status": "failed", "error": (bad or {}).get("error"), **timing}
-            continue
-        _copy(store.folder(key) / "seismic.csv", folder / f"seismic_{e}.csv")
-        peer = _stored_series(folder / f"seismic_{e}.csv", store.folder(key), e)
-        check = _stored_series(store.folder(key2) / "seismic.csv", store.folder(key2), e)
-        entry["engines"][e] = {**seismic_metrics(ref, peer), **timing,
-                               **judged(e, seismic_metrics(ref, peer), seismic_metrics(check, peer), rec, rec2, own)}
-        if "floor1_x" in ref.columns:   # a building on the slab: its floors and stories too
-            entry["engines"][e]["building"] = building_metrics(ref, peer)
+        r = refined.get(e)
+        entry["engines"][e], _ = _peer_entry(tr, level, e, store, ref, own, fresh, r and r["step"], folder)
+        if r:
+            first = {k: v for k, v in r["first"].items() if k != "building"}
+            entry["engines"][e]["first"] = first
+            entry["engines"][e]["refined"] = {"from": first["settings"], "to": entry["engines"][e]["settings"],
+                                              "asked": r["asked"], "capped": r["asked"] < r["step"]}
     return entry
+
+
+def _peer_entry(tr: Trace, level: float, e: str, store: Store, ref, own, fresh: set, step: float | None = None,
+                folder: Path | None = None) -> tuple[dict, dict | None]:
+    """A peer's pair (at ``step``, or its own) on a checked point: its entry (differences, timing, the
+    gate's verdict) and the parts the refinement reads (None when a run failed); ``folder``: the h
+    run's series copied there."""
+    building = _building(tr)
+    runs = {}
+    for half in (False, True):
+        key = tr.point(level, keep_series=True, engine=e, settings=peer_settings(e, building, half, step)).key
+        runs[half] = (key, store.load(key))
+    (key, rec), (key2, rec2) = runs[False], runs[True]
+    timing = {"wall_time": (rec or {}).get("wall_time"), "run_now": key in fresh,
+              "check_wall_time": (rec2 or {}).get("wall_time"), "check_run_now": key2 in fresh,
+              "settings": peer_settings(e, building, step=step)}
+    if rec is None or rec["status"] != "ok" or rec2 is None or rec2["status"] != "ok":
+        bad = rec if rec is None or rec["status"] != "ok" else rec2
+        return {"status": "failed", "error": (bad or {}).get("error"), **timing}, None
+    source = store.folder(key) / "seismic.csv"
+    if folder is not None:
+        _copy(source, folder / f"seismic_{e}.csv")
+        source = folder / f"seismic_{e}.csv"
+    peer = _stored_series(source, store.folder(key), e)
+    check = _stored_series(store.folder(key2) / "seismic.csv", store.folder(key2), e)
+    diff = seismic_metrics(ref, peer)
+    verdict = judged(e, diff, seismic_metrics(check, peer), rec, rec2, own)
+    out = {**diff, **timing, **verdict}
+    if "floor1_x" in ref.columns:   # a building on the slab: its floors and stories too
+        out["building"] = building_metrics(ref, peer)
+    return out, {"rec": rec, "verdict": verdict, "diff": diff, "ref_check": seismic_metrics(ref, check)}
 
 
 def judged(engine: str, diff: dict, h_vs_h2: dict, rec: dict, rec2: dict, own: dict | None = None) -> dict:
