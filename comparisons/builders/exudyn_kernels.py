@@ -132,7 +132,7 @@ def arguments(q, q_t, ref, ia, pa, ib, pb, e, jc, jp, jax, jx, jy, jpos, jorig, 
             vp = v[p] + _cross(w[p], a[0:3] - r[p])
             vrel = a[6:9] - vp - _cross(w[p], rel)   # the slide seen from the turning parent
             wrel = w[c] - w[p]
-        N[j] = ax
+        N[j, 0], N[j, 1], N[j, 2] = ax[0], ax[1], ax[2]   # not N[j] = ax: its shape check's error path compiles ~1.5 s
         if turn[m]:
             cx = _mv(R[c], jx[m])
             raw = math.atan2(_dot(by, cx), _dot(bx, cx))

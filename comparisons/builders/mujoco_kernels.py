@@ -310,10 +310,15 @@ def step_loop(fn_forward, fn_advance, rk4, m_addr, d_addr, time, qpos, qvel, act
                 dz = site_xpos[a, 2] - site_xpos[b, 2]
                 gap = max(gap, np.sqrt(dx * dx + dy * dy + dz * dz))
             gaps[k] = gap
-            rec_qpos[k, :] = qpos
-            rec_qvel[k, :] = qvel
-            rec_act[k, :] = act
-            rec_qacc[k, :] = qacc
+            # element by element: a row assigned from an array (rec[k, :] = a) makes numba compile its
+            # shape-mismatch error path, ~2 s in every process that compiles this loop
+            for i in range(qpos.shape[0]):
+                rec_qpos[k, i] = qpos[i]
+            for i in range(qvel.shape[0]):
+                rec_qvel[k, i] = qvel[i]
+                rec_qacc[k, i] = qacc[i]
+            for i in range(act.shape[0]):
+                rec_act[k, i] = act[i]
             for e in range(values.shape[0]):
                 rec_val[k, e] = ud[values[e]]
             if not (np.all(np.isfinite(qpos)) and gap < closure_limit):

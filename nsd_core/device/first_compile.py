@@ -100,12 +100,20 @@ def items(key: tuple, tiny) -> list:
     evaluation, the step loop (the seismic outputs' unit in seismic mode), then ``tiny`` (the kind's
     tiny run, which loads them all). The order is the one that splits a cold drive cycle best
     (docs/compilation.md)."""
-    units = unit_items()
     mode = key[0]
-    out = units[:2] + [(f"first-callbacks-{mode}", partial(_import, CALLBACKS[mode]))] + units[2:]
-    if mode == "seismic":
-        out.append(("warm-unit-seismic_outputs", partial(_unit, CALLBACKS[mode], "seismic_outputs")))
-    return out + [(f"warm-kind-{mode}", lambda block=True: tiny())]
+    return mode_items((mode,)) + [(f"warm-kind-{mode}", lambda block=True: tiny())]
+
+
+def mode_items(modes) -> list:
+    """``share_work`` items of the engine's units and of each mode's own callbacks (and the seismic
+    outputs' unit): the callbacks between the evaluation's halves and the rest of the chain, so that a
+    second process compiles them while the first is on the long evaluation and step loop."""
+    units = unit_items()
+    calls = [(f"first-callbacks-{m}", partial(_import, CALLBACKS[m])) for m in ("drive", "seismic") if m in modes]
+    out = units[:2] + calls + units[2:]
+    if "seismic" in modes:
+        out.append(("warm-unit-seismic_outputs", partial(_unit, CALLBACKS["seismic"], "seismic_outputs")))
+    return out
 
 
 def run_shared(key: tuple, tiny) -> None:

@@ -35,8 +35,10 @@ def warm_worker(kinds=(), record_sets=(), calls=()) -> None:
     that meets it, with its own inputs."""
     first_compile.disable()   # the pool's workers share the compiling: no helper of their own
     items = []
-    if kinds:
-        items += first_compile.unit_items()
+    if kinds:   # the units, and each compiled mode's callbacks as items of their own, not inside its
+        # tiny run: one worker takes them while another is on the evaluation and step loop
+        from nsd_core.engine.rk import METHODS
+        items += first_compile.mode_items({k[0] for k in kinds if k[1] in METHODS and k[2] in ("auto", "compiled")})
     # one lock per peer engine and one per in-house mode: the runs under one lock compile the same
     # kernels (MuJoCo's step loop for a line and a circle), so two workers never take two of them at once
     items += [(f"warm-call-{_name(call)}", partial(_quietly, call)) for call in calls]
