@@ -25,6 +25,7 @@ from nsd_core.device.inputs import check_regular, printable, read_regular_text
 from nsd_core.device.params import ParameterError
 from nsd_core.device.results import RunResult, check_output_target, read_csv
 
+from reports import render
 from reports import style  # noqa: F401  (selects the Agg backend before pyplot is imported anywhere)
 
 REQUIRED = {"verdict": str, "exit_code": int, "failures": list, "engines": list, "cases": list, "runs": dict,
@@ -363,10 +364,10 @@ def _malformed(results_dir, e: Exception) -> ParameterError:
                           f"{printable(' '.join(str(e).split()))[:160]}); nothing written")
 
 
-def build_report(results_dir: str | Path, out_dir: str | Path) -> dict[str, Any]:
-    """Write ``out_dir/validation.pdf`` and ``out_dir/NN_page.png``; returns their paths."""
+def build_report(results_dir: str | Path, out_dir: str | Path, processes: int | None = None) -> dict[str, Any]:
+    """Write ``out_dir/validation.pdf`` and ``out_dir/NN_page.png``; returns their paths. ``processes``:
+    1 or 2 processes draw the pages (reports.render; None: two where a second core is free)."""
     import matplotlib.pyplot as plt
-    from matplotlib.backends.backend_pdf import PdfPages
     start = time.perf_counter()
     plan, footer = checked_plan(results_dir)  # everything is checked before anything is written
     title = footer.split("  |  ")[0]
@@ -378,17 +379,7 @@ def build_report(results_dir: str | Path, out_dir: str | Path) -> dict[str, Any]
     for target in [pdf_path] + [out / f"{n:02d}_{stem}.png" for n, (stem, _) in enumerate(plan, start=1)]:
         check_output_target(target)   # a FIFO or a device where a page goes: refused before drawing
     try:
-        with plt.rc_context(style.RC), naming(pdf_path), PdfPages(tmp_pdf, metadata={"Title": title}) as pdf:
-            for n, (stem, make) in enumerate(plan, start=1):
-                fig = make()
-                style.footer(fig, f"{footer}  |  page {n} of {len(plan)}")
-                pdf.savefig(fig)
-                png = out / f"{n:02d}_{stem}.png"
-                tmp = out / f".{png.name}.{os.getpid()}.tmp.png"
-                with naming(png):
-                    fig.savefig(tmp)
-                written.append((tmp, png))
-                plt.close(fig)
+        written = render.draw(plan, footer, title, out, tmp_pdf, pdf_path, naming, processes)
         for tmp, png in written:
             with naming(png):
                 os.replace(tmp, png)
