@@ -27,6 +27,8 @@ def _plan(n, bad=None, error=KeyError):
 
 def _build(monkeypatch, tmp_path, plan, processes, name):
     import reports.build as build
+    from reports.render import processes_for
+    assert processes_for(len(plan), processes) == processes   # two really fork (no other thread runs here)
     monkeypatch.setattr(build, "checked_plan", lambda d: (plan, "Render test  |  a footer"))
     return build.build_report(tmp_path, tmp_path / name, processes=processes)
 
