@@ -10,28 +10,24 @@ the pages keep their order and their footers ("page n of N"). A fork, not a new 
 child has the plan (closures over the data already read and checked) without reading it again.
 Only when this process runs no other thread (a fork copies the calling thread alone: a lock another
 thread held would stay held in the child); otherwise, on one core, or for a short report, one process
-draws everything. The PNGs are the same bytes either way; the PDF's pages draw the same, its bytes
+draws everything. An error in the child comes back pickled through a pipe and is raised here as it
+was raised there (its type, message, errno, file name), so a bad field or a full disk reads the same
+whichever process drew the page; when this process fails first, the child is stopped before their
+temporary files are removed. The PNGs are the same bytes either way; the PDF's pages draw the same, its bytes
 differ (two embedded font subsets instead of one, pypdf's writer).
 """
 from __future__ import annotations
 
+import contextlib
 import os
+import pickle
+import signal
 import threading
 from pathlib import Path
 
-from nsd_core.device.params import ParameterError
+from nsd_core.device.first_compile import usable_cores
 
-# the errors build_report turns into "malformed data" (one line, exit 2), re-raised here as their type
-# when the child meets one, so that a bad field reads the same whichever process drew its page
-PASSED_ON = {e.__name__: e for e in (TypeError, KeyError, IndexError, AttributeError, ValueError, ParameterError)}
 MIN_PAGES = 6   # below this the fork and the merge cost more than the second process saves
-
-
-def usable_cores() -> int:
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:   # not Linux
-        return os.cpu_count() or 1
 
 
 def processes_for(n_pages: int, processes: int | None = None) -> int:
@@ -56,44 +52,50 @@ def draw(plan, footer: str, title: str, out: Path, tmp_pdf: Path, pdf_name: Path
     tag = str(os.getpid())
     if processes_for(n, processes) == 1:
         return _draw_pages(pages, n, footer, title, tmp_pdf, pdf_name, tag, naming)
-    child_pdf, error_file = out / f".{tmp_pdf.name}.child", out / f".report-error.{tag}.child"
-    child_tag = f"{tag}.child"
+    child_pdf, child_tag = out / f".{tmp_pdf.name}.child", f"{tag}.child"
     mine, theirs = pages[0::2], pages[1::2]   # pages 1, 3, 5, ... here; 2, 4, ... in the child
+    said, tell = os.pipe()   # the child's error, pickled: raised here as it was raised there
     pid = os.fork()
     if pid == 0:   # the child: its pages, then out at once (no cleanup of the parent's state, no flush)
+        os.close(said)
         code = 0
         try:
             _draw_pages(theirs, n, footer, title, child_pdf, pdf_name, child_tag, naming)
         except BaseException as e:   # noqa: BLE001 (said to the parent, which raises it)
             code = 1
             try:
-                said = e.args[0] if len(e.args) == 1 and isinstance(e.args[0], str) else str(e)   # KeyError's unquoted
-                error_file.write_text(f"{type(e).__name__}\n{said}")
-            except OSError:
-                pass
+                data = pickle.dumps(e)
+            except Exception:   # noqa: BLE001 (an exception that does not pickle: its text)
+                data = pickle.dumps(RuntimeError(f"{type(e).__name__}: {e} (in the report's second process)"))
+            with contextlib.suppress(OSError):
+                while data:
+                    data = data[os.write(tell, data):]
         os._exit(code)
+    os.close(tell)
     written, theirs_written = [], [(out / f".{png.name}.{child_tag}.tmp.png", png) for _, _, png in theirs]
     try:
         written = _draw_pages(mine, n, footer, title, tmp_pdf, pdf_name, tag, naming)
+        data = b"".join(iter(lambda: os.read(said, 65536), b""))   # until the child ends
         _, status = os.waitpid(pid, 0)
         pid = 0
         if status != 0:
-            said = error_file.read_text() if error_file.exists() else f"RuntimeError\nits status {status}"
-            name, _, message = said.partition("\n")
-            raise PASSED_ON.get(name, RuntimeError)(f"{message} (in the report's second process)"
-                                                    if name not in PASSED_ON else message)
+            raise (pickle.loads(data) if data else
+                   RuntimeError(f"the report's second process ended with status {status}"))
         with naming(pdf_name):
             _merge(tmp_pdf, child_pdf, n)
         return [written[k // 2] if k % 2 == 0 else theirs_written[k // 2] for k in range(n)]
     except BaseException:
+        if pid:   # this process failed first: the child is stopped before its files are removed
+            os.kill(pid, signal.SIGKILL)
+            os.waitpid(pid, 0)
+            pid = 0
         for tmp, _ in written + theirs_written:
             if tmp.exists():
                 tmp.unlink()
         raise
     finally:
-        if pid:   # this process failed first: the child is waited for, its files removed
-            os.waitpid(pid, 0)
-        for f in (child_pdf, error_file, tmp_pdf.with_name(tmp_pdf.name + ".merged")):
+        os.close(said)
+        for f in (child_pdf, tmp_pdf.with_name(tmp_pdf.name + ".merged")):
             if f.exists():
                 f.unlink()
 
