@@ -88,7 +88,7 @@ class CompiledForces:
         self.J = np.zeros((7 * nb, 7 * nb))
         # load (or compile) the machine code now, not in the timed run's first call; on copies of the states
         z = np.zeros(7 * nb)
-        if not predicted:   # the Jacobian only where Newton calls it (~3.3 s to compile per model shape)
+        if not predicted:   # the Jacobian only where Newton calls it (0.6-3.3 s to compile per model shape)
             self.gen.jacobian(z, z, self.F, self.I, self.W.copy(), 1.0, 1.0, self.J.copy())
         self.gen.commit(z, z, self.F, self.I, self.W.copy())
         self.gen.advance(z, z, z, np.arange(7 * nb), 0.0, True, self.F, self.I, self.W.copy(), self.f.copy())
