@@ -216,16 +216,17 @@ class GroundMotion:
 
     def __call__(self, t):
         """ground_values on this motion's block: the one implementation, here and in the compiled path."""
+        if np.ndim(t) == 0:
+            v = self.values_at(float(t))
+            return v[0:2], v[2:4], v[4:6]
         ts = np.ascontiguousarray(t, dtype=float)
         out = np.empty((ts.size, 6))
         ground_series(ts.ravel(), self._block(), out)
-        if np.ndim(t) == 0:
-            return out[0, 0:2], out[0, 2:4], out[0, 4:6]
         return tuple(out[:, j:j + 2].reshape(ts.shape + (2,)) for j in (0, 2, 4))
 
     def values_at(self, t: float) -> np.ndarray:
-        """(d_x, d_y, v_x, v_y, a_x, a_y) at one time: ``__call__``'s compiled evaluation without its
-        array handling (a peer's step asks for the acceleration once or twice: ~1 us against ~5 us)."""
+        """(d_x, d_y, v_x, v_y, a_x, a_y) at one time, without an array's handling (a peer's step asks
+        for the acceleration once or twice: ~1 us against ~5 us); ``__call__``'s scalar case."""
         out = np.empty((1, 6))
         ground_series(np.array([t], dtype=float), self._block(), out)
         return out[0]
