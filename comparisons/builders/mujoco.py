@@ -109,6 +109,7 @@ import numpy as np
 
 from comparisons.builders import mujoco_codegen, mujoco_compiled
 from comparisons.builders.mujoco_passive import DRIVE, Passive, work_plan
+from comparisons.builders.mujoco_start import rigid_start
 from comparisons.builders.mujoco_mjcf import build_mjcf, connects, joint_name, state_activations
 from comparisons.engines.base import EngineError, check_step_count
 from nsd_core.model.assemble import initial_state
@@ -236,6 +237,12 @@ def _run_python(model, s, m, d, drives, pairs, t_out, n_sub, h, n_steps, weights
             forces.feeds.clear()
             mujoco.mj_forward(m, d)
             forces.tau[:] = forces.feeds[-1] - armature * d.qacc[drive_dof]
+        start = None
+        if pairs:   # the loops' soft constraints start with a transient: t = 0 taken as rigid (mujoco_start)
+            if not drives:   # (with drives, the refinement above left d evaluated at t = 0)
+                mujoco.mj_forward(m, d)
+            feeds = np.array(forces.feeds[-1]) if drives else np.zeros(0)
+            start = rigid_start(m, d, drives, feeds, pairs, np.array([p(0.0)[2] for p, *_ in drives]))
         begin = time.perf_counter()
         for n in range(n_steps + 1):
             t = min(n * h, float(t_out[-1]))   # n h may pass the run's end by an ulp (past an excitation's block)
@@ -253,7 +260,13 @@ def _run_python(model, s, m, d, drives, pairs, t_out, n_sub, h, n_steps, weights
                 if not (np.all(np.isfinite(d.qpos)) and gap < s["closure_limit"]):
                     raise EngineError(f"mujoco: unstable at t = {t:.6g} s (loop gap {gap:.3g} m); "
                                       "try a smaller timestep")
-                rows.append(sample())
+                if n == 0 and start is not None:   # the rigid start's accelerations for this sample alone:
+                    soft = d.qacc.copy()                # the step below begins from MuJoCo's own
+                    d.qacc[:] = start[0]
+                    rows.append(sample())
+                    d.qacc[:] = soft
+                else:
+                    rows.append(sample())
             if n == n_steps:
                 if drives and not rk4:   # Euler's last output: this evaluation's (qacc is mj_forward's)
                     measure(n, t)
@@ -271,6 +284,8 @@ def _run_python(model, s, m, d, drives, pairs, t_out, n_sub, h, n_steps, weights
     finally:
         mujoco.set_mjcb_passive(previous[0])
         mujoco.set_mjcb_act_dyn(previous[1])
+    if start is not None:
+        drive_at[0] = start[1]
     return np.array(rows, dtype=float), drive_at, wall, closure, tracking, rec_work
 
 

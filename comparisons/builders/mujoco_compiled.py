@@ -29,6 +29,7 @@ from comparisons.builders.mujoco_cabi import data_offsets, function_address
 from comparisons.builders.mujoco_codegen import callbacks, layout, pack
 from comparisons.builders.mujoco_mjcf import joint_name, state_activations
 from comparisons.builders.mujoco_passive import EXCITATION
+from comparisons.builders.mujoco_start import rigid_start
 from comparisons.engines.base import EngineError
 
 REPLAYED = ("point", "point_velocity", "point_acceleration", "energy")
@@ -125,6 +126,14 @@ def run(model, s: dict, m, d, drives: list, pairs: list, t_out: np.ndarray, n_su
             for i, (_, _, da, A) in enumerate(drives):
                 b = lay.drives_at + K.DRIVE_SIZE * i
                 ud[b + K.D_TAU] = ud[b + K.D_FEED + int(ud[K.COUNT]) - 1] - A * d.qacc[da]
+        start = None
+        if len(pairs):   # the loops' soft constraints start with a transient: t = 0 taken as rigid (mujoco_start)
+            if not nd:   # (with drives, the refinement above left d evaluated at t = 0)
+                advance, ud[K.ADVANCE] = ud[K.ADVANCE], 0.0
+                mujoco.mj_forward(m, d)
+                ud[K.ADVANCE] = advance
+            feeds = [ud[lay.drives_at + K.DRIVE_SIZE * i + K.D_FEED + int(ud[K.COUNT]) - 1] for i in range(nd)]
+            start = rigid_start(m, d, drives, np.array(feeds), pairs, acc_half[:, 0] if nd else np.zeros(0))
         args = (fn_forward, fn_advance, rk4, m._address, d._address, clock, d.qpos, d.qvel, d.act, d.qacc,
                 d.site_xpos, ud, n_sub, n_steps, h, weights, acc_half, q_at, qd_at, drive_qa, uses_ptr, uses_k,
                 uses_w, site_pairs, float(s["closure_limit"]), lay.values, rec_qpos, rec_qvel, rec_act, rec_val,
@@ -139,6 +148,8 @@ def run(model, s: dict, m, d, drives: list, pairs: list, t_out: np.ndarray, n_su
         if failed >= 0:
             raise EngineError(f"mujoco: unstable at t = {t_out[failed]:.6g} s (loop gap {gaps[failed]:.3g} m); "
                               "try a smaller timestep")
+        if start is not None:
+            rec_qacc[0], drive_at[0] = start
         data = np.full((n_out, len(model.outputs)), np.nan)
         names, acts = [f.name for f in model.forces], state_activations(model, m)
         for c, o in enumerate(model.outputs):
