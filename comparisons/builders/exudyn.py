@@ -102,9 +102,10 @@ from exudyn.rigidBodyUtilities import RigidBodyInertia
 from comparisons.builders.exudyn_compiled import CompiledForces
 from comparisons.builders.exudyn_forces import LawStates, add_force
 from comparisons.builders.exudyn_frames import (AXIS_OF_DOF, constrained_axes, cross, frame_with_z, joint_coordinates,
-                                                joint_frame, planar_normal)
+                                                joint_frame, law_axis, planar_normal)
 from comparisons.builders.exudyn_outputs import Sampler
 from comparisons.builders.exudyn_replay import SeriesReader
+from comparisons.builders.exudyn_start import consistent_start
 from comparisons.builders.exudyn_solver import (CHOICES, RELAXED_REL_TOL, check_settings, default_settings,  # noqa: F401
                                                 SPARSE_ABOVE, redundant_constraints, solver_settings, unknowns)
 from comparisons.builders.exudyn_work import Work
@@ -112,6 +113,7 @@ from comparisons.engines.base import EngineError, check_step_count
 from comparisons.builders.exudyn_quiet import quiet_allocation_warning
 from nsd_core.model.assemble import initial_state
 from nsd_core.model.description import GROUND, Model
+from nsd_core.model.laws import PLANE, POINTS
 from nsd_core.model.errors import ModelError
 from nsd_core.model.run import ModelRun, output_times
 
@@ -277,12 +279,13 @@ def _offset(mbs, t, itemNumber, offsetUserFunctionParameters):
     return offsetUserFunctionParameters
 
 
-def _offsets(slots: dict, t: float, J: np.ndarray | None) -> list[float]:
-    """The six offsets at t: the prescribed coordinates in the joint frame, translations turned by J
-    (the joint frame, when Exudyn reads them in global coordinates; None: as they are)."""
+def _offsets(slots: dict, t: float, J: np.ndarray | None, derivative: int = 0) -> list[float]:
+    """The six offsets at t (or their ``derivative``-th time derivative, 0 or 2): the prescribed coordinates
+    in the joint frame, translations turned by J (the joint frame, when Exudyn reads them in global
+    coordinates; None: as they are)."""
     out = [0.0] * 6
     for k, p in slots.items():
-        out[k] = p(t)[0]
+        out[k] = p(t)[derivative]
     if J is not None:
         out[:3] = [float(v) for v in J @ np.asarray(out[:3])]
     return out
@@ -300,6 +303,8 @@ def _run(model: Model, s: dict, duration: float, dt_out: float) -> ModelRun:
     predicted = compiled is not None and compiled.predicted
     advance = compiled is not None and (predicted or bool(sample.stateful))
 
+    start_lambda = None
+
     def pre_step(mbs, t):
         """t is the END of the step (Exudyn's convention); the state is the converged one at t - h."""
         n = counter[0]
@@ -312,6 +317,8 @@ def _run(model: Model, s: dict, duration: float, dt_out: float) -> ModelRun:
             sample.commit()
         if work is not None:   # the converged state at t - h, the states committed (no state moves after)
             work.step(t - h)
+        if n == 0 and start_lambda is not None:   # Exudyn zeroes them when it does not compute its own
+            build.mbs.systemData.SetAECoordinates(list(start_lambda), exu.ConfigurationType.Current)
         if n % per_out == 0:
             sample.record(t_out[n // per_out])
         return True
@@ -326,6 +333,8 @@ def _run(model: Model, s: dict, duration: float, dt_out: float) -> ModelRun:
         ss.linearSolver.ignoreSingularJacobian = True
     elif unknowns(build.mbs) > SPARSE_ABOVE:   # dense LU grows as n^3: A02 with N = 40 (1.3k unknowns) 118 ms a
         ss.linearSolver.solverType = exu.LinearSolverType.EigenSparse   # step dense, 1.8 ms sparse, the same to 2e-11
+    # the drives' accelerations in the initial accelerations and multipliers (exudyn_start)
+    start_lambda = consistent_start(build, ss, _offsets) if s["solver"] == "generalized_alpha" else None
     solver = {"generalized_alpha": exu.DynamicSolverType.GeneralizedAlpha,
               "trapezoidal_index2": exu.DynamicSolverType.TrapezoidalIndex2}[s["solver"]]
     begin = time.perf_counter()
@@ -354,6 +363,33 @@ def _run(model: Model, s: dict, duration: float, dt_out: float) -> ModelRun:
                      **s, "redundant_found": redundant, "newton_relaxed_after": None,
                      "linear_solver": "sparse" if ss.linearSolver.solverType == exu.LinearSolverType.EigenSparse
                      else "dense"})
+
+
+def check(model: Model) -> None:
+    """What this builder cannot build, said before any run (ModelError, one line): a joint law on a turn of
+    a universal or spherical joint (Tait-Bryan angles no connector measures), a universal joint whose
+    axes are not perpendicular, a prescribed slide of a joint whose parent moves with every translation
+    locked (Exudyn then takes the offset in global coordinates)."""
+    for b in model.bodies:
+        joint_frame(b)
+    for f in model.forces:
+        if f.law.acts_on != POINTS:
+            b = model.body(f.joint)
+            for dof in (f.dofs if f.law.acts_on == PLANE else (f.dof,)):
+                if law_axis(b, dof) is None:
+                    raise ModelError(f"forces.{f.name}.joint = {f.joint!r}: the Exudyn builder applies joint laws on "
+                                     f"slides and on revolute and planar turns only (this is a turn of a "
+                                     f"{b.joint.type} joint)")
+    for p in model.prescribed:
+        b = model.body(p.joint)
+        axes = constrained_axes(b)
+        slots = [AXIS_OF_DOF[b.joint.type][q.dof] for q in model.prescribed if q.joint == b.name]
+        for k in slots:
+            axes[k] = 1
+        if all(axes[:3]) and AXIS_OF_DOF[b.joint.type][p.dof] < 3 and b.parent != GROUND:
+            raise ModelError(f"prescribed.{p.name}: the Exudyn builder drives a slide of {b.name}'s {b.joint.type} "
+                             f"joint on the ground or beside a free slide only (its parent {b.parent} moves, and "
+                             "Exudyn's joint then takes the offset in global coordinates)")
 
 
 def simulate(model: Model, duration: float, dt_out: float, settings: dict | None = None) -> ModelRun:

@@ -130,6 +130,10 @@ def add_force(build, f, states: LawStates):
     if axis is None:
         raise ModelError(f"forces.{f.name}.joint = {f.joint!r}: the Exudyn builder applies joint laws on slides and "
                          f"on revolute and planar turns only (this is a turn of a {b.joint.type} joint)")
+    if axis < 3 and b.parent != GROUND:   # its rate and its reaction are taken at the parent's marker, which
+        # is not the parent's material point under the child once the slide has moved and the parent turns
+        raise ModelError(f"forces.{f.name}.joint = {f.joint!r}: Exudyn's connectors apply a slide's law on a joint to "
+                         f"the ground only (its parent is {b.parent!r}); forces = \"compiled\" or \"predicted\" take any")
     J = build.frames[b.name]
     if axis < 3:   # the linear connector slides along its frame's x: turn J's slide axis onto x
         J = J[:, [axis, (axis + 1) % 3, (axis + 2) % 3]]

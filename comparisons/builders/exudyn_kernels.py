@@ -129,8 +129,9 @@ def arguments(q, q_t, ref, ia, pa, ib, pb, e, jc, jp, jax, jx, jy, jpos, jorig, 
         else:
             ax, bx, by = _mv(R[p], jax[m]), _mv(R[p], jx[m]), _mv(R[p], jy[m])
             rel = a[0:3] - (r[p] + _mv(R[p], jpos[m]))
-            vp = v[p] + _cross(w[p], a[0:3] - r[p])
-            vrel = a[6:9] - vp - _cross(w[p], rel)   # the slide seen from the turning parent
+            # the rate of ax . rel in the turning parent's frame: the child origin's velocity less that of the
+            # parent's material point under it (ax turns with the parent, which cancels rel's own turn)
+            vrel = a[6:9] - (v[p] + _cross(w[p], a[0:3] - r[p]))
             wrel = w[c] - w[p]
         N[j, 0], N[j, 1], N[j, 2] = ax[0], ax[1], ax[2]   # not N[j] = ax: its shape check's error path compiles ~1.5 s
         if turn[m]:

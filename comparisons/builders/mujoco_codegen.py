@@ -244,9 +244,10 @@ def source(model: Model, lay: Layout, nbody: int) -> tuple[str, dict]:
                       "    elif not advance:",
                       f"        ud[{lay.rates_at} + int(ud[{slot}])] = {names[id(f.law.rate)]}(x, xd, s, ud[{p0}:{p1}])",
                       f"    f = {law}(x, xd, s, ud[{p0}:{p1}])"]
-        lines.append(f"    ud[{lay.values[e]}] = f")
+        value = lay.values[lay.columns[e][0]]   # (a plane law before it takes three value columns)
+        lines.append(f"    ud[{value}] = f")
         if any(o.kind == "work" for o in model.outputs):   # x' beside the value: the step loop's power
-            lines.append(f"    ud[{lay.values[e] + 1}] = xd")
+            lines.append(f"    ud[{value + 1}] = xd")
         lines.append(f"    apply_points(ud, np.int64({at}), f, nv)" if f.law.acts_on == POINTS
                      else f"    qfrc[int(ud[{at + 1}])] += f")
     if lay.na:
