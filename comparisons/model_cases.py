@@ -14,7 +14,8 @@ A case is a ``[[case]]`` table, in the model file itself or in a separate cases 
 A reference file is a CSV whose first column is ``t`` [s] and whose other columns are named outputs of
 the model; its times must lie on the case's output grid (0, dt_out, ...) up to ``duration`` (later
 rows are ignored). ``accuracy`` is the reference solution's own error, as a fraction of each output's
-scale (default 0: exact).
+scale (default 0: exact). ``dt_out`` must divide ``duration`` (within a relative 1e-9): the output grid
+is 0, dt_out, ..., duration, never a step silently changed.
 """
 from __future__ import annotations
 
@@ -32,6 +33,7 @@ from nsd_core.model.run import output_times
 ALL_ENGINES = ("semirecursive", "mujoco", "exudyn")
 
 MAX_OUTPUTS = 1_000_000
+DIVIDES = 1e-9   # dt_out must divide the duration within this relative error (the output grid is exact)
 
 
 @dataclass(frozen=True)
@@ -84,14 +86,20 @@ def _case(i: int, t: dict, model: Model, folder: Path, engines) -> ModelCase:
         if k not in allowed:
             raise ModelError(f"{where}.{k}: unknown field; allowed: {', '.join(sorted(allowed))}")
     name = t.get("name")
-    if not isinstance(name, str) or not name or not all(c.isalnum() or c in "_-." for c in name):
-        raise ModelError(f"{where}.name = {name!r}: must be a name of letters, digits, '_', '-' or '.'")
+    if not isinstance(name, str) or not name or not all(c.isalnum() or c in "_-." for c in name) or name in (".", ".."):
+        raise ModelError(f"{where}.name = {name!r}: must be a name of letters, digits, '_', '-' or '.' (not '.' or "
+                         "'..': it names the case's folder in --out)")
     where = f"case.{name}"
     duration, dt = _positive(f"{where}.duration", t.get("duration")), _positive(f"{where}.dt_out", t.get("dt_out"))
     if dt > duration:
         raise ModelError(f"{where}.dt_out = {dt!r}: must be <= duration ({duration!r} s)")
     if duration / dt > MAX_OUTPUTS:
         raise ModelError(f"{where}.dt_out = {dt!r}: gives more than {MAX_OUTPUTS} output samples")
+    n = max(1, round(duration / dt))
+    if abs(n * dt - duration) > DIVIDES * duration:   # the grid would silently become duration / n
+        raise ModelError(f"{where}.dt_out = {dt!r}: must divide the duration ({duration:g} s) into whole intervals "
+                         f"(duration / n within a relative {DIVIDES:g}); the nearest is {duration:g}/{n} = "
+                         f"{duration / n:.6g} s")
     settings = {}
     for e in engines:
         s = t.get(e, {})

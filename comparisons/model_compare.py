@@ -131,7 +131,8 @@ def judge(model: Model, case: ModelCase, engines: list[str], runs: dict, rule: R
         ref_error = {**ref_error, **{k: case.reference.accuracy for k in sol}}
     names = [e for e in engines if e in values] + ([CONVERGED] if CONVERGED in values else [])
     sc_all = {**sc, **{k + SOLUTION: v for k, v in sc.items()}}
-    return case_verdicts(case.name, "model", names, values, estimates, ref_error, sc_all, evidence, rule)
+    return case_verdicts(case.name, "model", names, values, estimates, ref_error, sc_all, evidence, rule,
+                         reference_rtol=CONVERGED_SETTINGS["rtol"])
 
 
 def model_rule(model: Model, k: float) -> Rule:

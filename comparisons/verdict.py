@@ -80,7 +80,7 @@ def _finite(x) -> float:
 
 def case_verdicts(case, kind: str, engines: list[str], values: dict, estimates: dict, ref_error: dict,
                   scales: dict, evidence: dict, rule: Rule, floors: dict | None = None,
-                  ref_own: dict | None = None) -> tuple[list[dict], dict]:
+                  ref_own: dict | None = None, reference_rtol: float | None = None) -> tuple[list[dict], dict]:
     """Rows (one per engine and metric) and verdicts (one per engine) of one case.
 
     values[e]: metric -> e's difference from the converged reference (own checks: their value);
@@ -88,7 +88,8 @@ def case_verdicts(case, kind: str, engines: list[str], values: dict, estimates: 
     reference's own error; scales: metric -> (scale, unit) to state a tolerance in units;
     evidence[e]: step, order, observed order, ratio, setting (for the step needed); floors: metric -> the
     resolution below which a difference is not measurable (a region boundary: two output samples);
-    ref_own: the converged reference's own checks (its energy balance: the output grid's quadrature error)."""
+    ref_own: the converged reference's own checks (its energy balance: the output grid's quadrature error);
+    reference_rtol: the converged reference's rtol, as said in a verdict (None: the gate's, comparisons.reference)."""
     rows, verdicts = [], {}
     for e in engines:
         if e not in values:
@@ -117,7 +118,7 @@ def case_verdicts(case, kind: str, engines: list[str], values: dict, estimates: 
             err = max(est, value) if consistent else est
             erows.append(_row(case, e, CONVERGED, metric, value, est, ref, bound, tol, consistent, err <= tol, scales))
         rows += erows
-        verdicts[e] = _verdict(e, erows, ev, rule)
+        verdicts[e] = _verdict(e, erows, ev, rule, reference_rtol)
     return rows, verdicts
 
 
@@ -131,7 +132,7 @@ def _row(case, engine, reference, metric, value, est, ref, bound, tol, consisten
             "pass": bool((consistent is not False) and accurate), "gated": True}
 
 
-def _verdict(engine: str, rows: list[dict], ev: dict, rule: Rule) -> dict:
+def _verdict(engine: str, rows: list[dict], ev: dict, rule: Rule, reference_rtol: float | None = None) -> dict:
     """One engine's verdict on one case, in words."""
     incons = [r for r in rows if r["consistent"] is False]
     inacc = [r for r in rows if not r["accurate"]]
@@ -166,9 +167,12 @@ def _verdict(engine: str, rows: list[dict], ev: dict, rule: Rule) -> dict:
     unresolved = [r for r in rows if r["metric"] not in OWN and (r["reference_error"] or 0.0) > r["tolerance"]]
     if unresolved:
         r = max(unresolved, key=lambda r: r["reference_error"] / r["tolerance"])
+        if reference_rtol is None:
+            from comparisons.reference import CONVERGED_SETTINGS
+            reference_rtol = CONVERGED_SETTINGS["rtol"]
         out["reference_unresolved"] = True
         parts.append(f"the converged reference itself is not converged to the tolerance on this case ({r['metric']}: "
-                     f"its own error {r['reference_error']:.3g} against rtol 1e-11 > {r['tolerance']:.3g})")
+                     f"its own error {r['reference_error']:.3g} at rtol {reference_rtol:g} > {r['tolerance']:.3g})")
     p_obs, p = ev.get("observed_order"), ev.get("order")
     if not incons and p and p_obs is not None and math.isfinite(p_obs) and p_obs < p - 1.0 \
             and ev.get("primary_error", 0.0) > FLOOR * 1e3:

@@ -106,7 +106,7 @@ BAD = [
     ("unknown loop body", lambda d: d["loops"][0].update(body_b="gama"), "loops.E_K3.body_b = 'gama'"),
     ("bad inertia", lambda d: d["bodies"][0].update(inertia=[1.0, 1.0, 3.0]), "bodies.beta.inertia"),
     ("unknown output", lambda d: d["outputs"].append({"name": "x", "kind": "force", "element": "nope"}), "outputs.x.element = 'nope'"),
-    ("unknown field", lambda d: d["bodies"][0].update(colour="red"), "bodies[0].colour: unknown field"),
+    ("unknown field", lambda d: d["bodies"][0].update(colour="red"), "bodies.beta.colour: unknown field"),
 ]
 
 

@@ -271,7 +271,7 @@ def start(model: Model, system: SemiRecursiveSystem, tree: Tree):
     for i in system.partition.dependent:
         if names[i] in model.initial_velocities and abs(ev.zd[i] - zd[i]) > 1e-8 * max(1.0, float(np.max(np.abs(ev.zd)))):
             body, k = names[i]
-            raise ModelError(f"[initial].velocities.{body} = {zd[i]!r} (coordinate {k}): the loops require "
+            raise ModelError(f"[initial].velocities.{body} = {float(zd[i])!r} (coordinate {k}): the loops require "
                              f"{ev.zd[i]:.6g}; give the rates of the free coordinates only")
     return z, ev.zd.copy(), system.state(z, ev.zd, extra0), ev
 

@@ -20,6 +20,11 @@ from nsd_core.model.laws import JOINT, PLANE, POINTS, get_law
 from nsd_core.model.load_plane import plane_component, plane_dofs
 
 POINT_UNITS = {"point": "m", "point_velocity": "m/s", "point_acceleration": "m/s^2"}
+# the direction keys each joint type uses (docs/models.md's joint table); any other is refused
+JOINT_KEYS = {"revolute": ("axis",), "prismatic": ("axis",), "universal": ("axis", "axis2"), "spherical": (),
+              "planar": ("normal",), "planar_translation": ("normal",), "translational": ()}
+MAX_COORDINATE = 1e6   # m or rad: an initial coordinate beyond has a resolution coarser than 1e-10 (a step is lost)
+TURN = 2.0 * math.pi   # an angle beyond this in magnitude looks like degrees (angles_in_degrees)
 TOP = {"model", "bodies", "loops", "forces", "prescribed", "outputs", "initial", "case", "excitation"}
 
 
@@ -139,7 +144,9 @@ def _bodies(items) -> tuple[Body, ...]:
         raise ModelError("[[bodies]]: at least one body is needed")
     out, names = [], {}
     for i, t in enumerate(items):
-        where = f"bodies[{i}]"
+        # a body is named by its name wherever it is known (its index only when the name is missing or bad)
+        given = t.get("name") if isinstance(t, dict) else None
+        where = f"bodies.{given}" if _is_name(given) and given not in names else f"bodies[{i}]"
         _fields(where, t, {"name", "parent", "joint", "mass", "com", "inertia", "source"}, ("name", "joint", "mass"))
         name = _name(f"{where}.name", t["name"])
         where = f"bodies.{name}"
@@ -152,6 +159,11 @@ def _bodies(items) -> tuple[Body, ...]:
         jt = _fields(f"{where}.joint", t["joint"], {"type", "position", "axis", "axis2", "normal"}, ("type",))
         if jt["type"] not in JOINT_DOFS:
             raise ModelError(f"{where}.joint.type = {jt['type']!r}: allowed: {', '.join(JOINT_DOFS)}")
+        for k in ("axis", "axis2", "normal"):   # a direction the joint does not use would be ignored: refused
+            if k in jt and k not in JOINT_KEYS[jt["type"]]:
+                uses = ", ".join(JOINT_KEYS[jt["type"]]) or "no direction"
+                raise ModelError(f"{where}.joint.{k}: not a key of a {jt['type']} joint (it uses {uses}); "
+                                 "remove it or change the joint's type")
         axis = jt.get("normal" if jt["type"].startswith("planar") else "axis", [0.0, 0.0, 1.0])
         joint = Joint(jt["type"], _vec(f"{where}.joint.position", jt.get("position", [0.0, 0.0, 0.0])),
                       _vec(f"{where}.joint.axis", axis, nonzero=True),
@@ -165,6 +177,10 @@ def _bodies(items) -> tuple[Body, ...]:
                         _inertia(f"{where}.inertia", t.get("inertia", [0.0, 0.0, 0.0])), str(t.get("source", ""))))
         names[name] = i
     return tuple(out)
+
+
+def _is_name(v) -> bool:
+    return isinstance(v, str) and bool(v) and all(c.isalnum() or c in "_-." for c in v) and v != GROUND
 
 
 def _is_num(v) -> bool:
@@ -391,9 +407,12 @@ def _initial(t, bodies, prescribed) -> dict:
                                  f"of its {by[body].joint.type} joint")
             for k, x in enumerate(vals):
                 x = _num(f"[initial].{key}.{body}", x)
+                if key == "coordinates" and abs(x) > MAX_COORDINATE:
+                    raise ModelError(f"[initial].{key}.{body} = {v!r}: coordinate {k} must be within "
+                                     f"+-{MAX_COORDINATE:g} (m or rad; beyond, a double cannot resolve its motion)")
                 if (body, k) in prescribed:   # its motion gives its value: a value given must be that one
                     motion = prescribed[(body, k)]
-                    at0 = motion(0.0)[0 if key == "coordinates" else 1]
+                    at0 = float(motion(0.0)[0 if key == "coordinates" else 1])
                     if abs(x - at0) > 1e-12 * max(1.0, abs(at0)):
                         raise ModelError(f"[initial].{key}.{body} = {v!r}: coordinate {k} is prescribed "
                                          f"({motion.name}), whose motion gives {at0!r} at t = 0")
@@ -404,4 +423,27 @@ def _initial(t, bodies, prescribed) -> dict:
         raise ModelError(f"[initial].free = {free!r}: must be a list of body names (their joints' coordinates "
                          "are kept independent)")
     out["free"] = tuple((b, k) for b in free for k in range(JOINT_DOFS[by[b].joint.type]))
+    return out
+
+
+def angles_in_degrees(model: Model) -> list[str]:
+    """One warning line per angle that looks like degrees (|value| > 2 pi): an initial coordinate of a
+    turning coordinate (revolute, universal, spherical, a planar joint's turn), or a prescribed
+    ``start``, ``amplitude`` or ``centre`` of one. Such a value is legal (a crank started ten turns on),
+    so it is said, not refused."""
+    out = []
+    for (body, k), x in model.initial_coordinates.items():
+        if model.coordinate_unit(body, k) == "rad" and abs(x) > TURN:
+            n = JOINT_DOFS[model.body(body).joint.type]
+            at = f"[{k}]" if n > 1 else ""
+            out.append(f"[initial].coordinates.{body}{at} = {x:g}: looks like degrees; angles are in rad "
+                       f"({x:g} deg = {math.radians(x):.6g} rad)")
+    for p in model.prescribed:
+        if p.kind == "device_path" or model.coordinate_unit(p.joint, p.dof) != "rad":
+            continue
+        for k in ("start", "amplitude", "centre"):
+            x = p.values.get(k)
+            if x is not None and abs(x) > TURN:
+                out.append(f"prescribed.{p.name}.{k} = {x:g}: looks like degrees; angles are in rad "
+                           f"({x:g} deg = {math.radians(x):.6g} rad)")
     return out
