@@ -130,10 +130,11 @@ def add_force(build, f, states: LawStates):
     if axis is None:
         raise ModelError(f"forces.{f.name}.joint = {f.joint!r}: the Exudyn builder applies joint laws on slides and "
                          f"on revolute and planar turns only (this is a turn of a {b.joint.type} joint)")
-    if axis < 3 and b.parent != GROUND:   # its rate and its reaction are taken at the parent's marker, which
-        # is not the parent's material point under the child once the slide has moved and the parent turns
-        raise ModelError(f"forces.{f.name}.joint = {f.joint!r}: Exudyn's connectors apply a slide's law on a joint to "
-                         f"the ground only (its parent is {b.parent!r}); forces = \"compiled\" or \"predicted\" take any")
+    if axis < 3 and _turns(build.model, b.parent):   # its rate and its reaction are taken at the parent's marker,
+        # which is not the parent's material point under the child once the slide has moved and the parent turns
+        raise ModelError(f"forces.{f.name}.joint = {f.joint!r}: Exudyn's connectors apply a slide's law on a joint "
+                         f"whose parent does not turn only (its parent {b.parent!r} turns); forces = \"compiled\" or "
+                         "\"predicted\" take any")
     J = build.frames[b.name]
     if axis < 3:   # the linear connector slides along its frame's x: turn J's slide axis onto x
         J = J[:, [axis, (axis + 1) % 3, (axis + 2) % 3]]
@@ -149,6 +150,16 @@ def add_force(build, f, states: LawStates):
     turns = mbs.AddNode(NodeGenericData(initialCoordinates=[round(q0 / (2 * math.pi))], numberOfDataCoordinates=1))
     return mbs.AddObject(ObjectConnectorTorsionalSpringDamper(markerNumbers=markers, nodeNumber=turns,
                                                               springTorqueUserFunction=user))
+
+
+def _turns(model, body: str) -> bool:
+    """Whether ``body`` can turn: a joint with a turn on its path to the ground."""
+    while body != GROUND:
+        b = model.body(body)
+        if b.joint.type not in ("prismatic", "translational", "planar_translation"):
+            return True
+        body = b.parent
+    return False
 
 
 def add_plane(build, f, states: LawStates):
