@@ -40,7 +40,8 @@ def open_chain(d) -> dict:
         dofs = {"revolute": 1, "prismatic": 1, "universal": 2, "spherical": 3, "planar": 3,
                 "planar_translation": 2, "translational": 3}[kind]
         q = [d.uniform(-0.3, 0.3) if k in TURNS.get(kind, ()) else d.uniform(-0.02, 0.02) for k in range(dofs)]
-        v = [d.uniform(-1.0, 1.0) if k in TURNS.get(kind, ()) else d.uniform(-0.1, 0.1) for k in range(dofs)]
+        spin = 0.3 if kind == "spherical" else 1.0   # rad/s (a ball's Euler angles: far from +-90 deg)
+        v = [d.uniform(-spin, spin) if k in TURNS.get(kind, ()) else d.uniform(-0.1, 0.1) for k in range(dofs)]
         coords[name], rates[name] = (q[0], v[0]) if dofs == 1 else (q, v)
         for k in SLIDES.get(kind, ()):   # every slide on a spring: nothing drifts out of reach
             forces.append({"name": f"{name}_slide{k}", "law": "joint_spring_damper", "joint": name, "dof": k,
@@ -56,13 +57,17 @@ def open_chain(d) -> dict:
                                           "exponent": 2.0}})
         names.append(name)
     forces += _point_laws(d, names, total)
+    # a ball joint has no spring (Exudyn measures no Tait-Bryan angle), so nothing may swing it far: no
+    # gravity and no ground motion where there is one (its Euler angles then stay within ~0.6 rad)
+    ball = any(b["joint"]["type"] == "spherical" for b in bodies)
     description = {"model": {"name": f"open_chain_{n}", "source": "generated: open chain of "
-                             + ", ".join(b["joint"]["type"] for b in bodies), "gravity": gravity(d)},
+                             + ", ".join(b["joint"]["type"] for b in bodies),
+                             "gravity": [0.0, 0.0, 0.0] if ball else gravity(d)},
                    "bodies": bodies, "forces": forces}
     prescribed = _drive(d, bodies, coords, rates)
     if prescribed:
         description["prescribed"] = [prescribed]
-    if d.integer(0, 3) == 0:
+    if d.integer(0, 3) == 0 and not ball:
         description["excitation"] = {"type": "ground_acceleration", "ground": (
             f"harmonic:amplitude={d.uniform(0.5, 3.0):.4g},frequency={d.uniform(0.5, 4.0):.4g},"
             f"azimuth={d.uniform(0.0, 360.0):.4g},duration=10")}
