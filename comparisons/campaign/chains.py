@@ -74,7 +74,41 @@ def open_chain(d) -> dict:
     description["initial"] = {"coordinates": coords, "velocities": rates}
     description["outputs"] = _outputs(d, bodies, forces, prescribed)
     description["case"] = [case(d)]
+    _hang(d, description)
     return description
+
+
+def _hang(d, description: dict) -> None:
+    """Each point-to-point law set to start near its free length, measured at the assembled start (the
+    shared initial state's poses: kinematics, no dynamics): a spring within 10 %, a rope just taut, a stop
+    just open, a wire barely stretched, a push spring barely pushing."""
+    from nsd_core.model.assemble import initial_state
+    from nsd_core.model.load import parse_model
+    state = initial_state(parse_model(description, "generated.toml"))
+
+    def world(body, point):
+        p = np.asarray(point, float)
+        return p if body == "ground" else state.origin[body] + state.rotation[body] @ p
+    for f in description["forces"]:
+        if "body_a" not in f:
+            continue
+        a = world(f["body_a"], f["point_a"])
+        L = float(np.linalg.norm(a - world(f["body_b"], f["point_b"])))
+        if L < 0.03:   # too near to give the line a direction that lasts: the ground end moved out
+            f["point_b"] = vec(np.asarray(f["point_b"], float) + 0.05 * unit(d))
+            L = float(np.linalg.norm(a - world(f["body_b"], f["point_b"])))
+        par = f["parameters"]
+        if f["law"] == "linear_spring_damper":
+            par["free_length"] = L * d.uniform(0.9, 1.1)
+        elif f["law"] == "rope":
+            par["free_length"] = L * d.uniform(0.97, 1.0)
+        elif f["law"] == "hunt_crossley_stop":
+            par["gap"] = L * d.uniform(1.0, 1.03)
+        elif f["law"] == "sma_wire":
+            par["area"] *= L / par["natural_length"] * 0.998   # E A / L as drawn, at the real length
+            par["natural_length"] = L * 0.998
+        elif f["law"] == "push_spring":
+            par["free_length"] = L * 1.02
 
 
 G_LOAD = 9.81   # N/kg: the plane law's strength scale
@@ -82,7 +116,7 @@ G_LOAD = 9.81   # N/kg: the plane law's strength scale
 
 def _point_laws(d, names: list[str], total: float) -> list[dict]:
     """Point-to-point laws between random points: a spring always, a rope, a stop, a wire, a push spring
-    sometimes (each hung so that it starts near its free length: the motion stays small)."""
+    sometimes (their lengths set by ``_hang`` once the start is assembled)."""
     out = []
     for i in range(d.integer(1, 2)):
         a = d.choice(names)
