@@ -9,7 +9,7 @@
   z), not a ball joint: its coordinates are then the description's own (outputs, joint laws and
   prescribed motions address them directly, no quaternion-to-angle conversion) and the in-house engine
   has the same three-turn chain, with the same singularity at q2 = +-90 deg.
-- Inertial: mass at ``com``, the full inertia tensor about it (``fullinertia``). MuJoCo rejects a
+- Inertial: mass at ``com``, the full inertia tensor about it (its principal moments and axes, ``principal``). MuJoCo rejects a
   principal moment below ~1e-15 kg m^2 (a point mass); such a moment is raised to ``inertia_floor``
   [kg m^2] (only those below it; the default 1e-12 changes A01's moment about the pivot, 1 kg m^2, by
   1e-12 relative, far below any step's error). Moments above the floor are passed unchanged.
@@ -30,6 +30,7 @@
 """
 from __future__ import annotations
 
+import mujoco
 import numpy as np
 
 from nsd_core.model.description import GROUND, Model
@@ -49,6 +50,19 @@ def floored_inertia(J: np.ndarray, floor: float) -> np.ndarray:
     if w.min() >= floor:
         return np.asarray(J, dtype=float)
     return (V * np.maximum(w, floor)) @ V.T
+
+
+def principal(J) -> str:
+    """A full tensor as its principal moments (on the triangle, ``on_triangle``) and axes (``quat``):
+    MuJoCo's own eigen-decomposition of a ``fullinertia`` can put a body whose moments lie on the
+    triangle inequality (a thin plate turned in its plane, [1, 1, 2, 0.3, 0, 0]) a rounding outside it,
+    and then refuses the model."""
+    w, V = np.linalg.eigh(np.asarray(J, float))
+    if np.linalg.det(V) < 0:
+        V[:, 2] = -V[:, 2]
+    quat = np.zeros(4)
+    mujoco.mju_mat2Quat(quat, V.flatten())
+    return f'diaginertia="{_f(on_triangle(w))}" quat="{_f(quat)}"'
 
 
 def on_triangle(moments) -> list[float]:
@@ -130,7 +144,7 @@ def build_mjcf(model: Model, s: dict, h: float, rotation: dict, armature: dict, 
         # a diagonal tensor goes as it is written: MuJoCo's eigen-decomposition of a fullinertia can put a
         # plate's Izz = Ixx + Iyy (the description's advice for planar bodies) a rounding below the
         # triangle inequality it then enforces
-        given = f'diaginertia="{_f(on_triangle(full[:3]))}"' if not any(full[3:]) else f'fullinertia="{_f(full)}"'
+        given = f'diaginertia="{_f(on_triangle(full[:3]))}"' if not any(full[3:]) else principal(J)
         lines = [f'{indent}<body name="{b.name}" pos="{_f(b.joint.position)}">',
                  f'{indent}  <inertial pos="{_f(b.com)}" mass="{_f(b.mass)}" {given}/>']
         for k, (kind, axis) in enumerate(b.joint.dofs()):
