@@ -288,6 +288,12 @@ def model_benchmarks() -> str:
                      "wall s (settings)"], rows))
 
 
+def campaign() -> str:
+    """The randomized differential campaign (benchmarks/campaign.py; benchmarks/docs_campaign.py)."""
+    from benchmarks.docs_campaign import campaign as render
+    return render(load, provenance, table, g, plain)
+
+
 def model_builders() -> str:
     """The device's description in MuJoCo against the hand-written adapter (bench_model_builders)."""
     rec = load("bench_model_builders")
@@ -665,7 +671,7 @@ RENDER = {"compare-gate": compare_gate, "convergence": convergence, "tables-5-6"
           "bench-rhs": bench_rhs, "bench-seismic": bench_seismic,
           "gate-times": gate_times, "bench-start": bench_start, "compile-units": compile_units,
           "bench-record-set": bench_record_set, "compare-variant": compare_variant, "power": power,
-          "verdict-cost": verdict_cost, "model-benchmarks": model_benchmarks,
+          "verdict-cost": verdict_cost, "model-benchmarks": model_benchmarks, "campaign": campaign,
           "model-builders": model_builders, "described-gate": described_gate,
           "gate-described": gate_described,
           "work-precision": work_precision, "bench-cold": bench_cold, "bench-peer-seismic": bench_peer_seismic,

@@ -44,6 +44,8 @@ MEASUREMENTS = {
     "tables": (NSD + ["tables", "--out", "OUT"], "tables.csv", "csv"),
     # issue 32: every mechanism description in models/ through nsd compare --model, in every engine
     "bench_models": (PY + ["benchmarks/bench_models.py", "--out", "OUT"], "bench_models.json", "json"),
+    # 300 generated mechanisms through every engine, each non-PASS refined and classified (docs/validation.md)
+    "campaign": (PY + ["benchmarks/campaign.py", "--seeds", "0-299", "--out", "OUT"], "campaign.json", "json"),
     # (bench_model_builders, bench_described_gate, bench_gate_described: the peers' hand-written adapters
     # against their described models, side by side, before the adapters were removed; their results stay
     # in results/, their scripts in the git history)

@@ -32,3 +32,21 @@ def test_the_drive_torque_at_t0_is_the_rigid_loops(crank_rocker, settings):
     assert first < 1e-10, first   # 1.9e-5 at every step before: the soft loop's start-up transient
     later = np.max(np.abs(run.outputs["drive_torque"][1:] - ref.outputs["drive_torque"][1:])) / peak
     assert later < 1e-5   # the later samples as before (their own step's error)
+
+
+def test_the_reference_rocker_angle_is_the_closed_form_closure(crank_rocker):
+    """The converged reference's rocker angle against the four-bar's closure solved by hand (circle
+    intersection; no engine code): crank 0.05 m at 1 turn/s, coupler 0.2, rocker 0.15, ground 0.2."""
+    model, _ = crank_rocker
+    ref = semirecursive.simulate(model, 1.0, 0.01, {"rtol": 1e-12, "atol": 1e-14})   # a whole turn
+    t = ref.t
+    bx, by = 0.05 * np.cos(2 * np.pi * t), 0.05 * np.sin(2 * np.pi * t)
+    dx, dy = 0.2 - bx, -by
+    dist = np.hypot(dx, dy)
+    along = (0.2 ** 2 - 0.15 ** 2 + dist ** 2) / (2 * dist)
+    h = np.sqrt(0.2 ** 2 - along ** 2)
+    branch = 1.0 if ref.outputs["rocker_angle"][0] > 0 else -1.0   # the branch the start's guesses chose
+    cx, cy = bx + (along * dx - branch * h * dy) / dist, by + (along * dy + branch * h * dx) / dist
+    exact = np.unwrap(np.arctan2(cy, cx - 0.2))
+    exact += 2 * np.pi * np.round((ref.outputs["rocker_angle"][0] - exact[0]) / (2 * np.pi))
+    assert np.max(np.abs(ref.outputs["rocker_angle"] - exact)) < 1e-10
