@@ -14,6 +14,7 @@ from comparisons.energy import energy_balance_rel
 from comparisons.engines import REFERENCE
 from comparisons.estimate import STEP_SETTING
 from comparisons.metrics import own_metrics, pair_metrics
+from comparisons.reference import CONVERGED_SETTINGS
 from comparisons.seismic import gate_metrics, own_seismic_metrics, seismic_metrics
 from comparisons.verdict import (CHECK, CONVERGED, PRIMARY, Rule, case_verdicts, drive_scales, estimate_from_pair,
                                  peer_evidence, peer_label, seismic_scales)
@@ -84,7 +85,8 @@ def judge_case(case, engines: list[str], results: dict, entries: dict, rule: Rul
     # a stiffness-region boundary is a sample of the output grid: it can move by a sample either way
     floors = {} if seismic else {"region_shift_rel": 2.0 * 2.0 * math.pi / case.drive.samples_per_cycle}
     rows, verdicts = case_verdicts(case.name, "seismic" if seismic else "drive", list(values), values, estimates,
-                                   ref_error, scales, evidence, rule, floors, own_checks(case, conv))
+                                   ref_error, scales, evidence, rule, floors, own_checks(case, conv),
+                                   reference_rtol=CONVERGED_SETTINGS["rtol"])
     for e, v in verdicts.items():
         v["evidence"] = evidence.get(e, {})
         if not check:

@@ -89,7 +89,7 @@ def case_verdicts(case, kind: str, engines: list[str], values: dict, estimates: 
     evidence[e]: step, order, observed order, ratio, setting (for the step needed); floors: metric -> the
     resolution below which a difference is not measurable (a region boundary: two output samples);
     ref_own: the converged reference's own checks (its energy balance: the output grid's quadrature error);
-    reference_rtol: the converged reference's rtol, as said in a verdict (None: the gate's, comparisons.reference)."""
+    reference_rtol: the converged reference's rtol, as said in a verdict (None: not said)."""
     rows, verdicts = [], {}
     for e in engines:
         if e not in values:
@@ -167,12 +167,10 @@ def _verdict(engine: str, rows: list[dict], ev: dict, rule: Rule, reference_rtol
     unresolved = [r for r in rows if r["metric"] not in OWN and (r["reference_error"] or 0.0) > r["tolerance"]]
     if unresolved:
         r = max(unresolved, key=lambda r: r["reference_error"] / r["tolerance"])
-        if reference_rtol is None:
-            from comparisons.reference import CONVERGED_SETTINGS
-            reference_rtol = CONVERGED_SETTINGS["rtol"]
+        at = "its rtol" if reference_rtol is None else f"rtol {reference_rtol:g}"
         out["reference_unresolved"] = True
         parts.append(f"the converged reference itself is not converged to the tolerance on this case ({r['metric']}: "
-                     f"its own error {r['reference_error']:.3g} at rtol {reference_rtol:g} > {r['tolerance']:.3g})")
+                     f"its own error {r['reference_error']:.3g} at {at} > {r['tolerance']:.3g})")
     p_obs, p = ev.get("observed_order"), ev.get("order")
     if not incons and p and p_obs is not None and math.isfinite(p_obs) and p_obs < p - 1.0 \
             and ev.get("primary_error", 0.0) > FLOOR * 1e3:

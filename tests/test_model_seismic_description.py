@@ -98,14 +98,16 @@ def _device_seismic(stories: int, duration: float):
 def test_the_seismic_description_is_the_hand_built_seismic_mode(stories):
     """The device (a variant) in seismic mode, written as data, against the in-house seismic mode
     built by hand (nsd_core.device.seismic): relative displacement, turn, cap height and, with a
-    building, every floor, to 1e-7 of each peak (both at rtol 1e-10; measured ~1e-8)."""
+    building, every floor, to 1e-7 of each peak (both at rtol 1e-10; measured ~1e-8) and, for an output
+    whose peak is small against the others (the turn: 1.4e-5 rad), to what the two runs' absolute
+    tolerance resolves, 1e-13 a step over their ~300 steps (measured 1.5e-12 rad on the turn)."""
     run, ref = _device_seismic(stories, 0.3)
     pairs = [("u_x", "x"), ("u_y", "y"), ("theta", "theta"), ("cap_z", "cap_z")]
     pairs += [(f"floor{i}_{a}", f"floor{i}_{a}") for i in range(1, stories + 1) for a in "xy"]
     for mine, theirs in pairs:
         r = np.asarray(ref[theirs])
         assert np.max(np.abs(r)) > 0.0, theirs
-        assert np.max(np.abs(run.outputs[mine] - r)) < 1e-7 * np.max(np.abs(r)), mine
+        assert np.max(np.abs(run.outputs[mine] - r)) < 1e-7 * np.max(np.abs(r)) + 300 * 1e-13, mine
 
 
 def test_the_committed_seismic_descriptions_load():

@@ -27,10 +27,13 @@ def both(model, duration, dt_out, settings):
     return [mj_builder.simulate(model, duration, dt_out, {**settings, "passive": p}) for p in ("compiled", "python")]
 
 
-def assert_same(model, compiled, python, rtol=1e-12, drive_rtol=5e-12):
-    """Every output within rtol of its peak |value|. A drive force is the difference of two terms ~1e6
-    times larger (the heavy virtual drive's feed-forward A q'' and A q'', A = 1e6 x the coordinate's
-    inertia): one rounding of those (the order of a sum) is ~1e-12 of the force's peak."""
+def assert_same(model, compiled, python, rtol=1e-11, drive_rtol=2e-11):
+    """Every output within rtol of its peak |value|: the two paths sum the same terms in another order, so
+    they part by round-off that grows over the steps (on an Intel Xeon here: 1.9e-12 of a floor
+    acceleration's peak on the building, where 1e-12 had held on the machine the limits were first set on).
+    A drive force is the difference of two terms ~1e6 times larger (the heavy virtual drive's feed-forward
+    A q'' and A q'', A = 1e6 x the coordinate's inertia): its rounding reached 6.1e-12 of the force's peak
+    (the device, Euler). A defect in either path is far above: a law value in the wrong column read 0."""
     assert compiled.stats["passive"] == "compiled" and python.stats["passive"] == "python"
     for o in model.outputs:
         a, b = compiled.outputs[o.name], python.outputs[o.name]

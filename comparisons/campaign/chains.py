@@ -5,7 +5,7 @@ import math
 
 import numpy as np
 
-from comparisons.campaign.generate import (JOINTS, SLIDES, TURNS, body, case, gravity, inertia, outputs_for, spring,
+from comparisons.campaign.parts import (JOINTS, SLIDES, TURNS, body, case, gravity, inertia, outputs_for, spring,
                                            unit, vec)
 
 # the device's stateful laws at a scale a 0.1-2 kg body feels (the device's own wire is 3.5e6 N/m)
