@@ -26,9 +26,13 @@ sys.path.insert(0, str(ROOT))
 
 
 def seeds_of(text: str) -> list[int]:
+    """'0-299' or '1,5,7-9' as the seeds; a malformed list raises ValueError naming the flag."""
     out = []
     for part in text.split(","):
-        lo, _, hi = part.partition("-")
+        lo, _, hi = part.strip().partition("-")
+        if not lo.isdigit() or not (hi or lo).isdigit() or int(hi or lo) < int(lo):
+            raise ValueError(f"--seeds {text!r}: {part!r} is not a seed or a range LO-HI of whole numbers >= 0 "
+                             "(e.g. 0-299 or 1,5,7-9)")
         out += list(range(int(lo), int(hi or lo) + 1))
     return out
 
@@ -128,9 +132,17 @@ def main(argv=None) -> int:
     p.add_argument("--workers", type=int, default=2)
     p.add_argument("--timeout", type=float, default=600.0)
     a = p.parse_args(argv)
+    try:   # bad input: one line, exit 2, nothing written
+        seeds = seeds_of(a.seeds)
+        if a.workers < 1:
+            raise ValueError(f"--workers {a.workers}: must be a whole number >= 1")
+        if not 0 < a.timeout < float("inf"):
+            raise ValueError(f"--timeout {a.timeout}: must be a number of seconds > 0")
+    except ValueError as e:
+        print(f"campaign: {e}", file=sys.stderr)
+        return 2
     folder = Path(a.out)
     folder.mkdir(parents=True, exist_ok=True)
-    seeds = seeds_of(a.seeds)
     from comparisons.campaign import run as _warm   # noqa: F401 (imports paid once, before the forks)
     import comparisons.builders.exudyn, comparisons.builders.mujoco, nsd_core.model.semirecursive  # noqa: F401,E401
     start = time.perf_counter()

@@ -123,3 +123,17 @@ def test_hypothesis_drawn_descriptions_load_and_assemble():
         ex.check(model)
         initial_state(model)
     check()
+
+
+@pytest.mark.parametrize("argv", [["--seeds", "x-3"], ["--seeds", "5-2"], ["--workers", "0"], ["--timeout", "-1"],
+                                  ["--timeout", "nan"]])
+def test_the_campaign_refuses_bad_flags_in_one_line(argv, tmp_path, capsys):
+    import importlib.util
+    spec = importlib.util.spec_from_file_location("campaign", Path(__file__).resolve().parents[1] / "benchmarks" / "campaign.py")
+    campaign = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(campaign)
+    out = tmp_path / "out"
+    assert campaign.main(argv + ["--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"campaign: {argv[0]}")
+    assert not out.exists()
