@@ -28,6 +28,12 @@ import math
 
 # the setting each fixed-step peer's step is read from, and the settings that scale with it
 STEP_SETTING = {"mujoco": "timestep", "exudyn": "step_size"}
+# an adaptive peer's tolerance ladder: (setting, factor, order). Its estimate is its difference from its
+# own run at setting x factor (a far tighter tolerance: the same code, much nearer the exact solution),
+# as the in-house engine's is its difference from its converged run; ``order`` the error's assumed
+# power of the tolerance (1: error ~ rtol), for the tolerance a verdict says it needs
+TOLERANCE_LADDER = {"symbolic": ("rtol", 0.01, 1.0)}
+TIGHT_LABEL = "{engine}_tight"
 REFINED_LABEL = "{engine}_h{div}"
 
 

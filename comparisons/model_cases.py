@@ -30,7 +30,7 @@ from nsd_core.model.errors import ModelError
 from nsd_core.model.load import read_toml
 from nsd_core.model.run import output_times
 
-ALL_ENGINES = ("semirecursive", "mujoco", "exudyn")
+ALL_ENGINES = ("semirecursive", "mujoco", "exudyn", "symbolic")
 
 MAX_OUTPUTS = 1_000_000
 DIVIDES = 1e-9   # dt_out must divide the duration within this relative error (the output grid is exact)

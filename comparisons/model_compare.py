@@ -18,14 +18,15 @@ import time
 
 import numpy as np
 
-from comparisons.estimate import STEP_SETTING, nominal_order, observed_order, richardson_factor, step_ratio
+from comparisons.estimate import (STEP_SETTING, TIGHT_LABEL, TOLERANCE_LADDER, nominal_order, observed_order,
+                                  richardson_factor, step_ratio)
 from comparisons.model_cases import ModelCase
 from comparisons.verdict import Rule, case_verdicts, pass_sentence
 from nsd_core.model.description import Model
 from nsd_core.model.run import ModelRun
 
 BUILDERS = {"semirecursive": "nsd_core.model.semirecursive", "mujoco": "comparisons.builders.mujoco",
-            "exudyn": "comparisons.builders.exudyn"}
+            "exudyn": "comparisons.builders.exudyn", "symbolic": "comparisons.builders.symbolic"}
 REFERENCE = "semirecursive"
 CONVERGED, CHECK = "converged", "converged_check"
 CONVERGED_SETTINGS = {"rtol": 1e-12, "atol": 1e-14}
@@ -49,9 +50,21 @@ def run_plan(case: ModelCase, engines: list[str]) -> list[tuple[str, str, dict]]
             key = STEP_SETTING[e]
             step = own.get(key, builder(e).default_settings[key])
             plan.append((f"{e}_h2", e, {**own, key: step / 2.0}))
+        if e in TOLERANCE_LADDER:   # an adaptive peer: once more at a far tighter tolerance (its estimate)
+            plan.append((TIGHT_LABEL.format(engine=e), e, tightened(e, own)))
     base = dict(case.settings.get(REFERENCE, {}))
     plan += [(CONVERGED, REFERENCE, {**base, **CONVERGED_SETTINGS}), (CHECK, REFERENCE, {**base, **CHECK_SETTINGS})]
     return plan
+
+
+def tightened(engine: str, own: dict) -> dict:
+    """An adaptive peer's settings one rung down its tolerance ladder (rtol and atol x the factor)."""
+    key, factor, _ = TOLERANCE_LADDER[engine]
+    merged = {**builder(engine).default_settings, **own}
+    out = {**own, key: merged[key] * factor}
+    if "atol" in merged:
+        out["atol"] = merged["atol"] * factor
+    return out
 
 
 def run_one(model: Model, case: ModelCase, engine: str, settings: dict) -> dict:
@@ -116,6 +129,11 @@ def judge(model: Model, case: ModelCase, engines: list[str], runs: dict, rule: R
                            "step": float(runs[e].stats.get(key) or {**builder(e).default_settings,
                                                                   **case.settings.get(e, {})}[key]),
                            "observed_order": observed_order(d[primary], d2[primary], ratio), "primary_error": d[primary]}
+        elif e in TOLERANCE_LADDER and TIGHT_LABEL.format(engine=e) in runs:   # its own tolerance ladder
+            key, factor, order = TOLERANCE_LADDER[e]
+            estimates[e] = differences(runs[e], runs[TIGHT_LABEL.format(engine=e)], sc)
+            merged = {**builder(e).default_settings, **case.settings.get(e, {})}
+            evidence[e] = {"order": order, "setting": key, "step": float(merged[key]), "ladder": factor}
         else:   # the in-house engine: its estimate is its distance from the converged run
             estimates[e] = dict(d)
             evidence[e] = {}
@@ -158,6 +176,10 @@ def compare_model(model: Model, cases: list[ModelCase], engines: list[str], k: f
             if res["status"] == "ok":
                 runs[label] = res["run"]
                 timing[label].update({k_: v for k_, v in res["run"].stats.items() if isinstance(v, (int, float, str))})
+                if "derive_time" in res["run"].stats:   # a derived engine: its derivation, generation and run
+                    st = res["run"].stats
+                    log(f"  {case.name}: {label}: derived in {st['derive_time']:.2f} s, generated in "
+                        f"{st['codegen_time']:.2f} s (cache {st['cache']}), ran in {st['wall_time']:.2f} s")
             else:
                 failures[label] = res["message"]
         entry = {"duration": case.duration, "dt_out": case.dt_out, "failures": failures, "runs": timing,
