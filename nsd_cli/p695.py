@@ -18,6 +18,10 @@ from nsd_core.device.params import ParameterError
 HELP = "FEMA P695 evaluation (CMR, SSF, beta_TOT, ACMR) on the far-field set, with and without the device"
 G_RECORDS = 9.80665   # m/s^2: the records and the package's spectra are in g of this value
 COLLAPSE = "capacity | drift=VALUE | impact=VALUE"
+# Hunt and fill for Ŝ_CT (docs/p695.md): each record's collapse bracketed to 5 % of its level (Ŝ_CT read
+# at the bracket's geometric midpoint is then within 2.5 %); 10 runs cover the hunt (3-5 runs to the
+# collapse levels of the design basis, 0.5-2 m/s^2) and the 3-4 halvings from its last step; no fill.
+P695_HUNT = {"resolution": 0.05, "max_runs": 10, "fill": False}
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -41,8 +45,15 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--duration", type=float, default=None, help="model seconds of each record (default whole records)")
     p.add_argument("--start", type=float, default=None, help="hunt and fill: first level [m/s^2] (default 0.25)")
     p.add_argument("--step", type=float, default=None, help="hunt and fill: first step [m/s^2] (default 0.25)")
-    p.add_argument("--max-runs", type=int, default=None, help="runs per record and configuration (default 6)")
-    p.add_argument("--resolution", type=float, default=None, help="bracket until hi - lo <= resolution hi (0.1)")
+    p.add_argument("--max-runs", type=int, default=None,
+                   help=f"runs per record and configuration (default {P695_HUNT['max_runs']}; a record whose "
+                        "bracket is not within --resolution when they are spent is listed as out of budget)")
+    p.add_argument("--resolution", type=float, default=None,
+                   help=f"bracket each record's collapse until hi - lo <= resolution hi (default "
+                        f"{P695_HUNT['resolution']:g})")
+    p.add_argument("--fill", action="store_true",
+                   help="after the bracket, fill the IDA curve below collapse with the runs left (default off: "
+                        "S_CT needs the brackets only)")
     p.add_argument("--bootstrap", type=int, default=2000, help="bootstrap resamples of the median (default 2000)")
     p.add_argument("--seed", type=int, default=None, help="the bootstrap's seed (default fixed: same numbers)")
     p.add_argument("--building", action="append", default=[], metavar="NAME=VALUE",
@@ -83,6 +94,21 @@ def _numbers(structure) -> dict:
     return d
 
 
+def _what_passes(traces, store, params, structures, states, limit, level, ratings) -> dict:
+    """The displacement capacity at which each configuration passes (nsd_core.study.p695_capacity),
+    with the capacity surrogate only (a drift or impact collapse has no capacity to move)."""
+    from functools import lru_cache
+    from nsd_core.study import p695, p695_capacity
+    if limit.kind != "stroke":
+        return {"note": f"with --collapse {limit.kind} the collapse does not depend on a displacement capacity"}
+
+    def mu_of(device, st):
+        return lru_cache(maxsize=None)(lambda c: p695.pushover(params, st, c, device=device)["mu_T"])
+    pushovers = {name: (dev, mu_of(dev, st)) for name, (dev, st) in structures.items()}
+    return p695_capacity.what_passes(p695_capacity.curves(traces, store), states.capacity, pushovers, level, ratings,
+                                     params.rod_length)
+
+
 def run(args) -> int:
     from comparisons.engines import run_seismic_engine
     from comparisons.harness import code_fingerprint
@@ -117,7 +143,7 @@ def run(args) -> int:
         raise ParameterError(f"--duration = {args.duration!r}: allowed: model seconds in [0.1, 1000]")
     configs = _isolators(args.isolators)
     hunt_given = {n: getattr(args, n) for n in ("start", "step", "max_runs", "resolution") if getattr(args, n) is not None}
-    hunt = Hunt(**hunt_given)
+    hunt = Hunt(**{**P695_HUNT, **hunt_given, "fill": bool(args.fill)})
     params = base_params(args)
     args.restrainer = args.restrainer or args.collapse.strip().startswith("impact")
     # the isolation level as designed: its supplemental damping (docs/design.md), every device alike
@@ -157,7 +183,11 @@ def run(args) -> int:
     index = write_ida(traces, store, index)
     result = evaluation(traces, params, structures, states, limit, level, s_nrt, ratings, args.bootstrap,
                         args.seed if args.seed is not None else p695.SEED, records, elapsed, os.getloadavg())
+    result["what_passes"] = _what_passes(traces, store, params, structures, states, limit, level, ratings)
     write_p695(result, out)
     print("\n".join(print_lines(result)))
+    if result["what_passes"].get("configurations"):
+        from nsd_core.study.p695_capacity import lines
+        print("\n".join(lines(result["what_passes"])))
     print(f"wrote {out / 'p695.json'}, {out / 'p695.png'}, {out / 'limit_states.json'}, {out / 'ida.csv'}")
     return 3 if any(t["undetermined"] for t in index["traces"]) else 0

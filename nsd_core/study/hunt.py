@@ -50,6 +50,7 @@ class Hunt:
     max_runs: int = 6        # runs per record and configuration, all phases together (a whole record costs
                              # ~0.1-1 wall s per model s: 6 runs x 14 records x 2 configurations ~ 10 min on 2 cores)
     resolution: float = 0.1  # bracket until (hi - lo) <= resolution * hi
+    fill: bool = True        # after the bracket, fill the gaps below the limit with the runs left
 
     def __post_init__(self):
         lo, hi = IM_RANGE
@@ -87,6 +88,8 @@ def next_hunt_level(h: Hunt, history: list[tuple[float, bool]]) -> float | None:
         return level if level <= IM_RANGE[1] else None  # beyond the bound: the record is censored there
     if hi - lo > h.resolution * hi:  # bracket
         return tidy(0.5 * (lo + hi))
+    if not h.fill:
+        return None
     safe = sorted({0.0, *(lv for lv, r in history if not r and lv < hi)})  # fill below the limit
     gaps = [(b - a, a, b) for a, b in zip(safe, safe[1:])]
     if not gaps:
@@ -95,6 +98,19 @@ def next_hunt_level(h: Hunt, history: list[tuple[float, bool]]) -> float | None:
     if width <= h.resolution * hi:
         return None  # the curve below the limit is as fine as the bracket: nothing left worth a run
     return tidy(0.5 * (a + b))
+
+
+def bracket_state(h: Hunt | None, history: list[tuple[float, bool]]) -> dict:
+    """A record's bracket after its runs: lo, hi (None: never reached), width (hi - lo) / hi, and
+    whether it is within ``h.resolution`` ("resolved"), or why not: "budget" (max_runs spent first),
+    "never reached" (censored: no level reached the limit), "stopped" (the hunt ended otherwise)."""
+    lo, hi = bracket(history)
+    if hi is None:
+        return {"lo": lo, "hi": None, "width": None, "resolved": False, "why": "never reached"}
+    width = (hi - lo) / hi
+    ok = h is not None and width <= h.resolution * (1 + 1e-9)
+    why = "resolved" if ok else ("budget" if h is not None and len(history) >= h.max_runs else "stopped")
+    return {"lo": lo, "hi": hi, "width": width, "resolved": ok, "why": why}
 
 
 def next_stripe_level(levels: list[float], history: list[tuple[float, bool]]) -> float | None:

@@ -1,7 +1,8 @@
 """The outputs of an incremental dynamic analysis (nsd_core.study.ida), written from the store after
 every trace has ended (each file atomically; a resumed IDA writes the same bytes):
 
-    ida.csv          one row per run: record, device on/off, level (IM), scale, peaks, limit reached
+    ida.csv          one row per run: record, device on/off, configuration, level (IM), scale, peaks,
+                     limit reached
     fragility.json   per configuration: the lognormal fit (nsd_core.study.fragility), each record's
                      limit intensity, the records that never reached the limit (censored) and those
                      left undetermined
@@ -22,7 +23,7 @@ from nsd_core.study.store import Store
 
 CONFIGS = {True: "device", False: "nodevice"}
 IDA_COLUMNS = [  # name, unit ("" for text)
-    ("set", ""), ("record", ""), ("device", ""), ("order", ""), ("im", "m/s^2"), ("scale", "-"),
+    ("set", ""), ("record", ""), ("device", ""), ("configuration", ""), ("order", ""), ("im", "m/s^2"), ("scale", "-"),
     ("peak_u", "m"), ("peak_a_abs", "m/s^2"), ("peak_base_shear", "N"), ("residual_u", "m"),
     ("peak_drift_ratio", "-"), ("peak_floor_a_abs", "m/s^2"),   # the worst story / floor of a building, if any
     ("stop_t", "s"), ("limit_reached", ""), ("why", ""), ("status", ""), ("key", ""),
@@ -48,12 +49,16 @@ def row_status(rec: dict) -> str:
 
 def ida_rows(traces: list[Trace], store: Store) -> list[dict]:
     """One row per run, by record, configuration and level."""
+    from nsd_core.study.limit_state_outputs import configuration
     rows = []
+    rank: dict[str, int] = {}
     for tr in traces:
+        name = configuration(tr)   # device, nodevice, or the baseline isolator the runs stand on
+        rank.setdefault(name, len(rank))
         for order, (level, reached, why, key) in enumerate(tr.history, 1):
             rec = store.load(key)
             row = {"set": tr.common["set"], "record": tr.record, "device": "yes" if tr.device else "no",
-                   "order": order, "im": level, "scale": rec["design"]["ground"]["scale"],
+                   "configuration": name, "order": order, "im": level, "scale": rec["design"]["ground"]["scale"],
                    "limit_reached": {True: "yes", False: "no", None: "unknown"}[reached], "why": why,
                    "status": row_status(rec), "key": key}
             m = rec.get("metrics") or {}
@@ -65,7 +70,7 @@ def ida_rows(traces: list[Trace], store: Store) -> list[dict]:
             else:
                 row["stop_t"] = m.get("t")
             rows.append(row)
-    rows.sort(key=lambda r: (r["record"], r["device"] == "no", r["im"]))
+    rows.sort(key=lambda r: (r["record"], rank[r["configuration"]], r["im"]))
     return rows
 
 

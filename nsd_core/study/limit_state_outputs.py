@@ -22,7 +22,7 @@ from nsd_core.study.store import Store
 
 TABLE_COLUMNS = [("configuration", ""), ("state", ""), ("threshold", ""), ("median", "m/s^2"), ("dispersion", "-"),
                  ("n_reached", ""), ("n_censored", ""), ("n_not_observed", ""), ("first_t_median", "s"),
-                 ("note", "")]
+                 ("first_t_median_low", "s"), ("first_t_median_high", "s"), ("n_first_t_unknown", ""), ("note", "")]
 
 
 def configuration(trace) -> str:
@@ -64,10 +64,8 @@ def state_report(traces, store: Store, ls: LimitStates) -> dict:
             recs = entry["records"]
             fit = fit_lognormal([r["limit_im"] for r in recs if r["limit_im"] is not None],
                                 [r["censored_at"] for r in recs if r["censored_at"] is not None])
-            times = [r["t"] for r in recs if r["limit_im"] is not None and r["t"] is not None]
-            entry.update(fit, state=s, threshold=ls.describe(s),
-                         n_not_observed=sum(r["masked"] for r in recs),
-                         first_t_median=float(np.median(times)) if times else None)
+            entry.update(fit, state=s, threshold=ls.describe(s), n_not_observed=sum(r["masked"] for r in recs),
+                         **first_time_median([(r["t"], r.get("before_t")) for r in recs if r["limit_im"] is not None]))
     return {"states": {s: DESCRIPTION_OF[s] for s in STATES}, "thresholds": ls.to_dict(),
             "rules": ("a run stopped by the rod's reach counts as reaching the capacity (and a zero-force restrainer "
                       "engagement) when their thresholds lie below the rod's length (|u| passed them); drift and "
@@ -75,6 +73,22 @@ def state_report(traces, store: Store, ls: LimitStates) -> dict:
                       "level below, never counted; t: the first output time at or over the threshold (before_t: "
                       "before the stop at the rod's reach)"),
             "configurations": configs, "runs": runs}
+
+
+def first_time_median(times: list[tuple[float | None, float | None]]) -> dict:
+    """The median first time over every record that reached a state, [(t, before_t)]: t known, or
+    unknown and bounded by 0 and before_t (reached before the run stopped; no bound when None).
+    The median lies between the median with every unknown at 0 and with each at its upper bound;
+    ``first_t_median`` is it when the two agree (the unknowns cannot move it), else None, and
+    ``first_t_median_range`` gives both."""
+    n = len(times)
+    unknown = sum(t is None for t, _ in times)
+    if n == 0:
+        return {"first_t_median": None, "first_t_median_range": None, "n_first_t_unknown": 0}
+    low = float(np.median([0.0 if t is None else t for t, _ in times]))
+    high = float(np.median([t if t is not None else (b if b is not None else np.inf) for t, b in times]))
+    return {"first_t_median": low if low == high else None,
+            "first_t_median_range": [low, None if np.isinf(high) else high], "n_first_t_unknown": unknown}
 
 
 DESCRIPTION_OF = {"stroke": "device stroke (the rod's reach)", "restrainer": "restrainer impact",
@@ -97,6 +111,7 @@ def state_table(report: dict) -> str:
         for s, e in cfg.items():
             w.writerow([_cell(v) for v in (name, s, e["threshold"], e["median"], e["dispersion"], e["n_reached"],
                                            e["n_censored"], e["n_not_observed"], e["first_t_median"],
+                                           *(e.get("first_t_median_range") or [None, None]), e.get("n_first_t_unknown"),
                                            e.get("note", ""))])
     return text.getvalue()
 
@@ -154,10 +169,22 @@ def summary_lines(report: dict) -> list[str]:
         for s, e in cfg.items():
             fit = (f"median {e['median']:.4g} m/s^2, dispersion {e['dispersion']:.3f}" if e["median"] is not None
                    else "no fit")
-            t = "" if e["first_t_median"] is None else f", first reached at t ~ {e['first_t_median']:.3g} s (median)"
+            t = _time_text(e)
             out.append(f"  {name} {DESCRIPTION_OF[s]}: {fit} ({e['n_reached']} reached, {e['n_censored']} censored, "
                        f"{e['n_not_observed']} not observed{t})")
     return out
+
+
+def _time_text(e: dict) -> str:
+    """The median first time, or the range it lies in when some records' times are unknown."""
+    rng = e.get("first_t_median_range")
+    if e["first_t_median"] is not None:
+        return f", first reached at t ~ {e['first_t_median']:.3g} s (median)"
+    if not rng:
+        return ""
+    hi = "?" if rng[1] is None else f"{rng[1]:.3g}"
+    return (f", first reached at t between {rng[0]:.3g} and {hi} s (median; {e['n_first_t_unknown']} record(s) "
+            "without a known time)")
 
 
 def save_png(fig, path) -> None:

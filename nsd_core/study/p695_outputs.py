@@ -17,6 +17,10 @@ from nsd_core.study import p695
 from nsd_core.study.fragility import fit_lognormal, fragility_curve
 from nsd_core.study.limit_state_outputs import configuration, save_png
 
+from nsd_core.study.hunt import bracket_state
+from nsd_core.study import p695_resolution as res_
+
+
 def _mode(why: str, limit) -> str:
     from nsd_core.study.ida import PASSED_ON_THE_WAY
     if why == "stroke":   # the capacity surrogate is the ida's stroke=VALUE limit: named as the surrogate
@@ -44,6 +48,8 @@ def _collapses(traces) -> dict:
                          below_im=max(lower) if lower else None)
         elif safe and not tr.stopped:
             entry["censored_at"] = max(safe)
+        state = bracket_state(tr.hunt, [(lv, bool(r)) for lv, r, _, _ in tr.history])
+        entry.update(bracket_width=state["width"], bracket_resolved=state["resolved"], bracket_why=state["why"])
         out.setdefault(configuration(tr), []).append(entry)
     return out
 
@@ -55,9 +61,13 @@ def evaluation(traces, params, structures: dict, states, limit, level: dict, s_n
     configs = {}
     warnings = []
     for name, recs in _collapses(traces).items():
-        ims = [r["collapse_im"] for r in recs if r["undetermined"] is None]
-        s_ct = p695.median_collapse(ims)
-        fit = fit_lognormal([r["collapse_im"] for r in recs if r["collapse_im"] is not None],
+        det = [r for r in recs if r["undetermined"] is None]
+        sct = res_.s_ct_bracketed(det)
+        for r, e in zip(det, sct.pop("estimates")):
+            r["estimate_im"] = e
+        ims = [r["estimate_im"] for r in det]
+        s_ct = sct["S_CT"]
+        fit = fit_lognormal([r["estimate_im"] for r in det if r["estimate_im"] is not None],
                             [r["censored_at"] for r in recs if r["censored_at"] is not None])
         device, structure = structures[name]
         push = p695.pushover(params, structure, states.capacity, device=device)
@@ -71,7 +81,11 @@ def evaluation(traces, params, structures: dict, states, limit, level: dict, s_n
             warnings.append(f"{name}: {spent} of {sum(modes.values())} collapse runs stopped at the rod's reach "
                             "(stroke exhausted)" + ("" if "surrogate passed, then the rod's reach" in modes
                                                     else ", not at the stated surrogate"))
-        configs[name] = {**ev, "S_CT_interval": p695.bootstrap_median(ims, n_boot, seed) if ims else None,
+        configs[name] = {**ev, **sct, "S_CT_interval": res_.bootstrap(ims, n_boot, seed),
+                         "S_CT_top": p695.median_collapse([r["collapse_im"] for r in det]),
+                         "verdict_over_bracket": res_.verdict_over_bracket(sct["S_CT_bracket"], level["S_MT"],
+                                                                           ev["SSF"], ev["ACMR10"], ev["ACMR20"]),
+                         "resolution": res_.resolution_summary(recs, hunt_resolution(traces)),
                          "S_CT_lognormal_fit": {k: fit[k] for k in ("median", "dispersion", "n_reached", "n_censored")},
                          "collapse_modes": modes, "records": recs, "pushover": push,
                          "n_collapsed": sum(r["collapse_im"] is not None for r in recs), "n_records": len(recs)}
@@ -86,11 +100,16 @@ def evaluation(traces, params, structures: dict, states, limit, level: dict, s_n
                           "unit": "m/s^2", "note": "a level is S_NRT x the set's common scale; S_NRT from the "
                                                    "chosen records' components (the package's table A-3 for all 44)"},
             "period_note": "T = the structure's first period on the supports alone in model time / sqrt(0.1)",
-            "configurations": configs, "restoring_force": check, "warnings": warnings,
+            "configurations": configs, "ranking": res_.ranking(configs),
+            "restoring_force": check, "warnings": warnings,
             "structures": {n: {"device": dev, **st.to_dict()} for n, (dev, st) in structures.items()},
             "acceptance": "ACMR >= ACMR20% (an archetype) and ACMR >= ACMR10% (a performance group's mean)",
             "runtime": {"ida_s": elapsed, "load_average_1_5_15": list(load), "cpus": __import__("os").cpu_count(),
                         "finished": time.strftime("%Y-%m-%d %H:%M:%S")}}
+
+
+def hunt_resolution(traces) -> float | None:
+    return next((tr.hunt.resolution for tr in traces if tr.hunt is not None), None)
 
 
 def print_lines(res: dict) -> list[str]:
@@ -103,9 +122,19 @@ def print_lines(res: dict) -> list[str]:
         verdict = ("undetermined" if c["ACMR"] is None else
                    f"ACMR {c['ACMR']:.3g} vs ACMR20% {c['ACMR20']:.3g}: {'PASS' if c['pass_ACMR20'] else 'FAIL'}, "
                    f"vs ACMR10% {c['ACMR10']:.3g}: {'PASS' if c['pass_ACMR10'] else 'FAIL'}")
+        br, rs = c.get("S_CT_bracket") or [None, None], c.get("resolution") or {}
+        band += (f", bracket ({_num(br[0])}, {_num(br[1])}], {rs.get('n_within')} of {rs.get('n_records')} records "
+                 f"within {_num(rs.get('resolution'))}" if rs else "")
         out.append(f"  {name}: S_CT {_num(c['S_CT'])} m/s^2{band}, CMR {_num(c['CMR'])}, mu_T {c['mu_T']:.3g}, "
                    f"SSF {c['SSF']:.3g}, beta_TOT {c['beta_TOT']:.3g}; {verdict}; {c['n_collapsed']} of "
                    f"{c['n_records']} collapsed {c['collapse_modes']}")
+    rk = res.get("ranking")
+    if rk and rk["pairs"]:
+        out.append("  ranking by S_CT: " + "; ".join(
+            f"{p['higher']} > {p['lower']} {'resolved' if p['resolved'] else 'NOT resolved'}"
+            + ("" if p["resolved"] else f" (brackets {'overlap' if p['brackets_overlap'] else 'apart'}, "
+                                         f"intervals {'overlap' if p['intervals_overlap'] else 'apart'})")
+            for p in rk["pairs"]))
     out += [f"warning: {w}" for w in res["warnings"]]
     return out
 
@@ -143,14 +172,17 @@ def draw_page(res: dict, path) -> None:
     lv = res["design_level"]
     fig.suptitle(f"FEMA P695 evaluation: far-field set ({len(res['records'])} record pairs, normalised), "
                  f"design level {lv['level']} (SSF: SDC {lv['sdc']}), T = {lv['T']:.3g} s", fontsize=11)
-    rows = ["S_CT [m/s^2]", "S_CT 90% CI", "S_MT [m/s^2]", "CMR", "mu_T", "SSF", "beta_TOT", "ACMR", "ACMR10%",
+    rows = ["S_CT [m/s^2]", "S_CT bracket", "S_CT 90% CI", "S_MT [m/s^2]", "CMR", "mu_T", "SSF", "beta_TOT", "ACMR",
+            "ACMR10%",
             "ACMR20%", "pass ACMR20%", "pass ACMR10%", "collapsed"]
     cols = list(res["configurations"])
     cells = []
     for name in cols:
         c = res["configurations"][name]
         ci = c["S_CT_interval"] or {}
-        cells.append([_num(c["S_CT"]), f"{_num(ci.get('low'))} - {_num(ci.get('high'))}", _num(c["S_MT"]),
+        br = c.get("S_CT_bracket") or [None, None]
+        cells.append([_num(c["S_CT"]), f"{_num(br[0])} - {_num(br[1])}",
+                      f"{_num(ci.get('low'))} - {_num(ci.get('high'))}", _num(c["S_MT"]),
                       _num(c["CMR"]), _num(c["mu_T"]), _num(c["SSF"]), _num(c["beta_TOT"]), _num(c["ACMR"]),
                       _num(c["ACMR10"]), _num(c["ACMR20"]), str(c["pass_ACMR20"]), str(c["pass_ACMR10"]),
                       f"{c['n_collapsed']} / {c['n_records']}"])
