@@ -181,8 +181,10 @@ def run(args) -> int:
              "limit_option": args.collapse, "hunt": hunt.__dict__, "levels": None, "structure": structure.to_dict(),
              "ground": ground, "code": common["code"], "elapsed_this_run_s": elapsed}
     index = write_ida(traces, store, index)
+    from nsd_core.study.p695_capacity import curves
     result = evaluation(traces, params, structures, states, limit, level, s_nrt, ratings, args.bootstrap,
-                        args.seed if args.seed is not None else p695.SEED, records, elapsed, os.getloadavg())
+                        args.seed if args.seed is not None else p695.SEED, records, elapsed, os.getloadavg(),
+                        curves=curves(traces, store))
     result["what_passes"] = _what_passes(traces, store, params, structures, states, limit, level, ratings)
     write_p695(result, out)
     print("\n".join(print_lines(result)))

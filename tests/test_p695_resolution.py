@@ -173,3 +173,37 @@ def test_ida_csv_names_each_row_s_configuration():
     assert got == [(1, "yes", "device")] * 2 + [(1, "no", "linear")] * 2 + [(1, "no", "bilinear")] * 2 \
         + [(1, "no", "friction-pendulum")] * 2 + [(2, "yes", "device")] * 2 + [(2, "no", "nodevice")] * 2 \
         + [(3, "no", "bilinear")] * 2
+
+
+def test_evaluation_reads_each_capacity_collapse_from_the_peaks():
+    """Synthetic traces of three records (capacity 25 mm): each record's collapse level interpolated
+    in ln-ln between its bracket's two peaks, Ŝ_CT the 2nd of 3, its bracket the 2nd lo and hi."""
+    from nsd_core.device.isolation import default_structure
+    from nsd_core.device.params import Params
+    from nsd_core.study import p695
+    from nsd_core.study.ida import Limit, Trace
+    from nsd_core.study.limit_states import LimitStates
+    from nsd_core.study.p695_outputs import evaluation
+    params = Params()
+    s = default_structure(params)
+    limit = Limit("stroke", 0.025)
+    pts = {1: [(1.0, 0.020), (1.05, 0.026)], 2: [(0.9, 0.024), (0.95, 0.030)], 3: [(1.2, 0.0249), (1.25, 0.0251)]}
+    traces = []
+    for rid, (a, b) in pts.items():
+        tr = Trace(rid, False, 1.0, {"set": "farfield"}, limit, config="linear")
+        tr.history = [(a[0], False, "", "k"), (b[0], True, "stroke", "k")]
+        traces.append(tr)
+    level = p695.design_level("basis", s.first_period, math.sqrt(0.1), 9.80665)
+    res = evaluation(traces, params, {"linear": (False, s)}, LimitStates(capacity=0.025, rod_length=0.03), limit,
+                     level, 0.7, {"DR": "B", "TD": "C", "MDL": "B"}, 200, 1, [1, 2, 3], 1.0, (0.0, 0.0, 0.0),
+                     curves={"linear": pts})
+    c = res["configurations"]["linear"]
+
+    def interp(a, b):
+        return math.exp(math.log(a[0]) + math.log(0.025 / a[1]) * math.log(b[0] / a[0]) / math.log(b[1] / a[1]))
+    est = sorted(interp(*pts[r]) for r in (1, 2, 3))
+    assert sorted(r["estimate_im"] for r in c["records"]) == pytest.approx(est, rel=1e-14)
+    assert c["S_CT"] == pytest.approx(est[1], rel=1e-14)
+    assert c["S_CT_bracket"] == [1.0, 1.05]    # 2nd smallest lo of (1.0, 0.9, 1.2), hi of (1.05, 0.95, 1.25)
+    assert c["S_CT_top"] == 1.05
+    assert c["CMR"] == pytest.approx(est[1] / level["S_MT"], rel=1e-12)

@@ -55,13 +55,20 @@ def _collapses(traces) -> dict:
 
 
 def evaluation(traces, params, structures: dict, states, limit, level: dict, s_nrt: float, ratings: dict,
-               n_boot: int, seed: int, records: list, elapsed: float, load: tuple) -> dict:
-    """p695.json's content; ``structures``: {configuration: (device, Structure)}."""
+               n_boot: int, seed: int, records: list, elapsed: float, load: tuple, curves: dict | None = None) -> dict:
+    """p695.json's content; ``structures``: {configuration: (device, Structure)}; ``curves``: the
+    records' (level, peak |u|) points (nsd_core.study.p695_capacity.curves), from which a capacity
+    collapse's level is interpolated inside its bracket (without them: the bracket's geometric midpoint)."""
     from nsd_core.device.restoring_force import restoring_force_check
     configs = {}
     warnings = []
     for name, recs in _collapses(traces).items():
         det = [r for r in recs if r["undetermined"] is None]
+        if curves is not None and limit.kind == "stroke":
+            from nsd_core.study.p695_capacity import collapse_level
+            for r in det:
+                if r["collapse_im"] is not None:
+                    r["estimate_im"], _ = collapse_level(curves[name][r["record"]], limit.value)
         sct = res_.s_ct_bracketed(det)
         for r, e in zip(det, sct.pop("estimates")):
             r["estimate_im"] = e

@@ -2,9 +2,12 @@
 bracket Ŝ_CT comes from, and whether the configurations' ranking is resolved (docs/p695.md).
 
 A record's collapse bracket is (lo, hi]: hi the lowest level at which it collapsed, lo the highest
-level below hi at which it did not (0 when none ran below). Its collapse level lies inside, and the
-record's estimate is the bracket's geometric midpoint sqrt(lo hi) (hi / 2 when lo = 0): the levels and
-the fragility are lognormal, so the midpoint in ln IM is the estimate whose worst error, in ln IM, is
+level below hi at which it did not (0 when none ran below). Its collapse level lies inside. With the
+capacity surrogate the record's estimate is read from the two runs' peak displacements, ln level
+interpolated against ln peak |u| at the capacity (nsd_core.study.p695_capacity.collapse_level: inside
+the bracket, exact for a linear system); otherwise (a drift or impact surrogate, a run stopped by the
+rod's reach) the bracket's geometric midpoint sqrt(lo hi) (hi / 2 when lo = 0): the levels and the
+fragility are lognormal, so the midpoint in ln IM is the estimate whose worst error, in ln IM, is
 smallest (half the bracket's log-width; 2.5 % of the level at a 5 % bracket).
 
 Ŝ_CT is the ceil(n/2)-th smallest estimate (a record that never collapsed counted above every level,
@@ -38,7 +41,8 @@ def _order_stat(values: list[float]) -> float | None:
 
 
 def s_ct_bracketed(recs: list[dict]) -> dict:
-    """Ŝ_CT from records {collapse_im (hi), below_im (lo), censored_at}: the median estimate, its
+    """Ŝ_CT from records {collapse_im (hi), below_im (lo), censored_at, estimate_im (optional: the
+    collapse level read inside the bracket; else its geometric midpoint)}: the median estimate, its
     bracket (the same order statistic of the records' lo and hi) and the bracket's width / hi."""
     los, his, est = [], [], []
     for r in recs:
@@ -50,12 +54,15 @@ def s_ct_bracketed(recs: list[dict]) -> dict:
         else:
             los.append(r.get("below_im") or 0.0)
             his.append(hi)
-            est.append(record_estimate(r.get("below_im"), hi))
+            given = r.get("estimate_im")   # interpolated from the runs' peaks (nsd_core.study.p695_capacity)
+            est.append(given if given is not None else record_estimate(r.get("below_im"), hi))
     s_ct, lo, hi = _order_stat(est), _order_stat(los), _order_stat(his)
     return {"S_CT": s_ct, "S_CT_bracket": [lo, hi],
             "S_CT_bracket_width": None if (hi is None or lo is None) else (hi - lo) / hi,
-            "estimate": "the ceil(n/2)-th smallest record estimate, each the geometric midpoint sqrt(lo hi) of "
-                        "the record's collapse bracket (hi / 2 when nothing ran below hi)",
+            "estimate": "the ceil(n/2)-th smallest record estimate, each its collapse level read inside its "
+                        "bracket: interpolated in ln level against ln peak |u| between the bracket's two runs "
+                        "(capacity surrogate), else the geometric midpoint sqrt(lo hi) (hi / 2 when nothing ran "
+                        "below hi)",
             "bracket": "the same order statistic of the records' lo and of their hi: the set's median collapse "
                        "level lies in (lo, hi] whatever each record's level inside its own bracket",
             "estimates": [None if math.isinf(e) else e for e in est]}
