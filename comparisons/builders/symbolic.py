@@ -35,6 +35,7 @@ import time
 
 import numpy as np
 from scipy.integrate import solve_ivp
+from scipy.linalg import cho_factor, cho_solve
 
 from comparisons.builders.symbolic_codegen import equations
 from comparisons.builders.symbolic_forces import Forces
@@ -44,8 +45,9 @@ from nsd_core.model.errors import ModelError
 from nsd_core.model.run import ModelRun, output_times
 
 name = "symbolic"
-default_settings = {"method": "DOP853", "rtol": 1e-10, "atol": 1e-12, "max_step": 0.01, "baumgarte": 10.0,
-                    "rank_tol": 1e-12}
+default_settings = {"method": "DOP853", "rtol": 1e-10, "atol": 1e-12, "max_step": 0.01, "baumgarte": 100.0,
+                    "penalty": 1e6, "constraint_tol": 1e-14}
+MAX_ITERATIONS = 50   # augmented-Lagrangian iterations of one evaluation (a few where Phi_q is regular)
 METHODS = ("DOP853", "Radau")
 
 
@@ -111,14 +113,11 @@ class System:
         udot = np.empty(self.n)
         udot[p] = ap
         lam = np.zeros(len(Phi))
-        if len(Phi):
+        if len(Phi) and len(f):
             C, wb = Phi_q[:, f], self.s["baumgarte"]
             c = -Phi_q[:, p] @ ap - gamma - 2.0 * wb * (Phi_q @ u) - wb * wb * Phi
-            X = _solve(A, np.column_stack([b, C.T]))
-            S = C @ X[:, 1:]
-            lam = np.linalg.lstsq(S, c - C @ X[:, 0], rcond=self.s["rank_tol"])[0]
-            udot[f] = X[:, 0] + X[:, 1:] @ lam
-        else:
+            udot[f], lam = multipliers(A, b, C, c, self.s)
+        elif len(f):
             udot[f] = _solve(A, b)
         tau = (M @ udot - total - Phi_q.T @ lam)[p] if len(p) else np.zeros(0)
         return {"t": t, "q": q, "u": u, "udot": udot, "s": s, "w": w, "M": M, "Phi": Phi, "R": R, "J": J,
@@ -169,6 +168,25 @@ class System:
             return 0.5 * ev["u"] @ ev["M"] @ ev["u"]
         g = np.asarray(self.model.gravity, dtype=float)
         return -sum(m * (g @ ev["R"][k]) for m, k in zip(self.mass, self.coms))
+
+
+def multipliers(A, b, C, c, s) -> tuple[np.ndarray, np.ndarray]:
+    """u' and lambda of A u' = b + C^T lambda, C u' = c, by augmented-Lagrangian iterations on the
+    regular matrix A + alpha C^T C (alpha = ``penalty`` x A's scale over C^T C's): lambda += alpha (c -
+    C u') until C u' = c to ``constraint_tol`` of its scale. The fixed point is the exact solution; a
+    redundant row or a singular position (Phi_q losing rank) leaves the matrix regular, where a direct
+    solve for lambda would divide by a vanishing pivot."""
+    CtC = C.T @ C
+    alpha = s["penalty"] * float(np.max(np.abs(np.diag(A)))) / max(float(np.max(np.abs(np.diag(CtC)))), 1e-300)
+    factor = cho_factor(A + alpha * CtC)
+    lam = np.zeros(len(c))
+    for _ in range(MAX_ITERATIONS):
+        udot = cho_solve(factor, b + C.T @ (lam + alpha * c))
+        r = c - C @ udot
+        lam += alpha * r
+        if np.max(np.abs(r)) <= s["constraint_tol"] * (np.max(np.abs(c)) + np.max(np.abs(C)) * np.max(np.abs(udot)) + 1e-300):
+            break
+    return udot, lam
 
 
 def _solve(A, B):

@@ -67,18 +67,25 @@ def build_tree(model: Model) -> Tree:
     u = list(me.dynamicsymbols(f"u0:{len(coords)}")) if coords else []
     index = {c: i for i, c in enumerate(coords)}
     frames, origins = {GROUND: N}, {GROUND: O}
+    t = me.dynamicsymbols._t
     for b in model.bodies:
-        frame, shift = frames[b.parent], vector(b.joint.position, frames[b.parent])
+        parent = frames[b.parent]
+        frame, shift, slide = parent, vector(b.joint.position, parent), sp.S.Zero * parent.x
         for k, (kind, axis) in enumerate(b.joint.dofs()):
             qi = q[index[(b.name, k)]]
-            if kind == "P":
+            if kind == "P":   # the format's slides come before its turns: along the parent's axes
                 shift = shift + qi * vector(axis, frame)
+                slide = slide + sp.diff(qi, t) * vector(axis, frame)
             else:
                 turned = me.ReferenceFrame(f"F_{len(frames)}_{k}")
                 turned.orient_axis(frame, vector(axis, frame), qi)
                 frame = turned
         frames[b.name] = frame
-        origins[b.name] = origins[b.parent].locatenew(f"P_{b.name}", shift)
+        origin = origins[b.parent].locatenew(f"P_{b.name}", shift)
+        # the velocity by the rigid parent's transfer (compact expressions in mixed frames, not N's)
+        origin.set_vel(parent, slide)
+        origin.v1pt_theory(origins[b.parent], N, parent)
+        origins[b.name] = origin
     return Tree(N, O, frames, origins, q, u, coords)
 
 
@@ -94,7 +101,7 @@ def kane(model: Model, tree: Tree, g: list) -> tuple[sp.Matrix, sp.Matrix]:
     for b in model.bodies:
         frame = tree.frames[b.name]
         com = tree.origins[b.name].locatenew(f"G_{b.name}", vector(b.com, frame))
-        com.set_vel(tree.N, com.pos_from(tree.O).dt(tree.N))
+        com.v2pt_theory(tree.origins[b.name], tree.N, frame)
         J = np.asarray(b.inertia, dtype=float)
         inertia = me.inertia(frame, number(J[0, 0]), number(J[1, 1]), number(J[2, 2]),
                              number(J[0, 1]), number(J[1, 2]), number(J[0, 2]))
