@@ -23,9 +23,9 @@ def default_capacity(params, structure) -> tuple[float, str]:
     own = getattr(structure, "displacement_capacity", None)
     if own:
         return float(own), "the structure's displacement capacity"
-    from nsd_core.device.restoring_force import NoDefaultError, default_design_displacement
+    from nsd_core.device.restoring_force import NoDefaultError, working_range
     try:
-        return default_design_displacement(params), "the device's working range X_max"
+        return working_range(params), "the device's working range X_max"
     except NoDefaultError:
         return params.rod_length, "the rod's length (the device has no working range)"
 

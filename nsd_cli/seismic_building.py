@@ -61,6 +61,7 @@ def run_compare(args, params, structure, motion, solver, out, head: dict) -> int
     """--compare-building: the three runs written, the ratios; exit 4 if the device run was ended by
     the device's failure (the runs are still written), 0 otherwise."""
     from nsd_cli.options import Progress
+    from nsd_cli.seismic_checks import for_run
     from nsd_cli.seismic_extras import warn
     from nsd_core.device.results import atomic_write_json, versions, write_csv
     from nsd_core.study.building_compare import CONFIGURATIONS, run_three
@@ -76,6 +77,7 @@ def run_compare(args, params, structure, motion, solver, out, head: dict) -> int
                    "params": params.describe()}
         if name == "fixed_base":   # no isolation level: the restoring-force check is the isolated runs'
             summary.pop("restoring_force", None)
+        for_run(summary, name == "device")
         warn(summary, f"{name}: ")
         (out / name).mkdir(parents=True, exist_ok=True)
         write_csv(out / name / "seismic.csv", run["result"])

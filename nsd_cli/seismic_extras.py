@@ -138,6 +138,7 @@ def run_compare(args, params, structure, motion, solver, out, head: dict) -> int
     """--compare-supports: both runs, both written, the ratios; exit 4 if the device run was ended by
     the device's failure (both runs are still written), 0 otherwise."""
     from nsd_cli.options import Progress
+    from nsd_cli.seismic_checks import for_run
     from nsd_core.device.results import atomic_write_json, versions, write_csv
     from nsd_core.study.with_without import ratio_rows, run_with_and_without
     both = run_with_and_without(params, structure, motion, duration=args.duration, dt_out=args.dt_out,
@@ -149,6 +150,7 @@ def run_compare(args, params, structure, motion, solver, out, head: dict) -> int
             continue
         summary = {**head, "device": name == "device", **run["summary"], "solver": run["result"].stats,
                    "complete": run["complete"], "versions": versions(), "params": params.describe()}
+        for_run(summary, name == "device")
         warn(summary, f"{name}: ")
         (out / name).mkdir(parents=True, exist_ok=True)
         write_csv(out / name / "seismic.csv", run["result"])

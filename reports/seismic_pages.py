@@ -200,13 +200,23 @@ def _ground_text(g: dict) -> str:
             + f", rotated {fmt(g.get('rotate_deg', 0), 5)} deg" + ("" if g.get("normalised", True) else ", as recorded"))
 
 
+def _restoring_lines(fig, check) -> None:
+    """The restoring-force verdict of each configuration (nsd_core.device.restoring_force), a FAIL in red."""
+    from nsd_core.device.restoring_force import verdict_line
+    if not isinstance(check, dict):
+        return
+    for k, c in enumerate([check] + ([check["baseline"]] if isinstance(check.get("baseline"), dict) else [])):
+        line = verdict_line(c) if "directions" in c or "skipped" in c else f"restoring force: pass = {c.get('pass')}"
+        fig.text(0.06, getattr(fig, "_nsd_top", 0.92) - 0.02 * k, line, fontsize=7.5, va="top", color=RED if c.get("pass") is False else "black")
+
+
 def set_table_figure(index: dict):
     """The record-set table: peaks with and without the device and their ratios, one row per record."""
     rows = index["rows"]
     fig = new_figure(LANDSCAPE, f"Record set {index.get('set')}: the isolation effect",
                      f"each record with the device and on the supports alone (in-house engine); ratio = with / "
                      f"without; {_ground_text(index.get('ground') or {})}")
-    ax = fig.add_axes([0.06, 0.6, 0.8, 0.28])
+    ax = fig.add_axes([0.06, 0.6, 0.8, 0.24])
     ids = [str(r["id"]) for r in rows]
     xs = np.arange(len(rows))
     for k, (key, lab, col) in enumerate((("peak_u_ratio", "peak |u| ratio", "#1f4e9c"),
@@ -221,6 +231,7 @@ def set_table_figure(index: dict):
     ax.axhline(1.0, color=GREY, lw=0.8)
     ax.set_xticks(xs, ids)
     ax.set(xlabel="record", ylabel="with device / supports alone")
+    _restoring_lines(fig, index.get("restoring_force"))
     ax.legend(loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize=7.5, frameon=False)
     cells = [[_fmt(r.get(key), f) for key, _, f in SET_SHOWN] for r in rows]
     colors = [[RED if key == "status" and r.get("status") != "ok" else None for key, _, _ in SET_SHOWN] for r in rows]

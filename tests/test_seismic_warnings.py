@@ -39,9 +39,10 @@ def test_a_run_stopped_at_the_rods_reach_warns_of_stroke_exhaustion(tmp_path, ca
     out = tmp_path / "stop"
     assert main(["seismic", "--ground", STOP, "--out", str(out)]) == 4
     s = json.loads((out / "summary.json").read_text())
-    assert s["warning_kinds"] == ["stroke_exhausted"]       # and no last-sample warning: the event ends it
+    # no last-sample warning: the event ends it; the device fails the restoring-force check at D_M (45 deg)
+    assert s["warning_kinds"] == ["stroke_exhausted", "restoring_force_fails"]
     assert "stroke exhausted: the run stopped at t = 0.3647" in s["warnings"][0]
-    assert len(_warned(capsys)) == 1
+    assert len(_warned(capsys)) == 2
 
 
 def test_restrainer_impacts_warn_with_their_count_energy_and_force(tmp_path, capsys):
@@ -65,8 +66,9 @@ def test_compare_supports_warns_per_run_and_draws_the_warnings_page(tmp_path, ca
                  "--out", str(out)]) == 4
     dev = json.loads((out / "device" / "summary.json").read_text())
     sup = json.loads((out / "supports" / "summary.json").read_text())
-    assert dev["warning_kinds"] == ["stroke_exhausted"]
+    assert dev["warning_kinds"] == ["stroke_exhausted", "restoring_force_fails"]   # the device fails at D_M (45 deg)
     assert sup["peak_displacement"]["value"] > 0.03 and "beyond_stroke" in sup["warning_kinds"]
+    assert "restoring_force_fails" not in sup["warning_kinds"]   # the linear supports pass at D_M (+533 N)
     err = _warned(capsys)
     assert any(ln.startswith("nsd seismic: warning: device: stroke exhausted") for ln in err)
     assert any(ln.startswith("nsd seismic: warning: supports: beyond the device's stroke") for ln in err)
@@ -90,7 +92,7 @@ def test_a_record_set_warns_per_record_in_set_json_on_stderr_and_on_its_warnings
     assert main(["seismic", "--record-set", "nearfield-pulse", "--records", "1", "--window", "2,3", "--scale", "16",
                  "--dt-out", "0.002", "--workers", "1", "--out", str(out)]) == 4
     index = json.loads((out / "set.json").read_text())
-    assert index["restoring_force"]["pass"] and index["restoring_force"]["D_source"].startswith("default")
+    assert index["restoring_force"]["pass"] is False and index["restoring_force"]["D_source"].startswith("default")  # D_M, 45 deg
     entry = index["entries"][0]
     assert entry["warnings"][0].startswith("device: stroke exhausted: the run stopped at t = ")
     assert any(w.startswith("nodevice: beyond the device's stroke") for w in entry["warnings"])
@@ -109,7 +111,7 @@ def test_compare_building_warns_per_configuration_and_checks_only_the_isolated_r
                  "--compare-building", "--design-displacement", "0.02", "--out", str(out)]) == 0
     kinds = {c: json.loads((out / c / "summary.json").read_text()) for c in ("fixed_base", "supports", "device")}
     assert "restoring_force" not in kinds["fixed_base"]
-    assert kinds["device"]["restoring_force"]["W"] == pytest.approx(2 * kinds["device"]["structure"]["mass"] * 9.81)
+    assert kinds["device"]["restoring_force"]["W"] == pytest.approx(2 * kinds["device"]["structure"]["mass"] * 9.80665)
     assert json.loads((out / "summary.json").read_text())["restoring_force"]["pass"] is False   # 934 N < 1836 N
     for c in ("supports", "device"):   # at D = 20 mm both isolated configurations fail (W doubled by the floors)
         assert kinds[c]["warning_kinds"] == ["peaks_at_last_sample", "restoring_force_fails"]

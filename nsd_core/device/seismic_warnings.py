@@ -11,6 +11,9 @@ A run's warnings, each {"kind", "text"}:
 * ``beyond_stroke``: a run without the device (the supports alone, which have no stroke limit in the
   model) whose peak |u| is at least the device's rod length: a comparison with the device is not one
   at equal displacement capacity;
+* ``beyond_design_stroke``: a run without the device (a baseline isolator or the linear supports)
+  whose peak |u| passes the design basis's stroke (the displacement capacity the design allows,
+  ``nsd_core.device.design``: 25.46 mm at model scale) but not the rod's length;
 * ``restrainer_impacts``: the restrainer was touched (any contact): how many, the largest impact
   energy and velocity, the peak contact force;
 * ``peaks_at_last_sample``: a response peak falls on the run's last sample (a complete run only: a
@@ -22,8 +25,8 @@ A run's warnings, each {"kind", "text"}:
 from __future__ import annotations
 
 STROKE_FRACTION = 0.95   # of the rod's length l_d: |u| this close to it leaves no stroke to speak of (assumed)
-KINDS = ("stroke_exhausted", "stroke_nearly_exhausted", "beyond_stroke", "restrainer_impacts", "peaks_at_last_sample",
-         "restoring_force_fails")
+KINDS = ("stroke_exhausted", "stroke_nearly_exhausted", "beyond_stroke", "beyond_design_stroke", "restrainer_impacts",
+         "peaks_at_last_sample", "restoring_force_fails")
 
 
 def rod_length_of(summary: dict) -> float | None:
@@ -64,6 +67,16 @@ def _stroke(summary: dict, rod: float | None) -> list[dict]:
                          f"at t = {u['t']:.4g} s, more than the rod's length {rod * 1e3:.4g} mm (the model's supports "
                          "have no stroke limit): a comparison with the device is not one at equal displacement "
                          "capacity"}]
+    if not summary.get("device", True):
+        from nsd_core.device.design import design, scale
+        stroke = float(design()["stroke_m"]) * scale()
+        if u["value"] > stroke:
+            iso = (summary.get("structure") or {}).get("isolator") or {}
+            what = iso.get("kind", "linear supports") if isinstance(iso, dict) else "linear supports"
+            return [{"kind": "beyond_design_stroke",
+                     "text": f"beyond the design stroke: the {what} run reached peak |u| = {u['value'] * 1e3:.4g} mm "
+                             f"at t = {u['t']:.4g} s, past the design basis's stroke {stroke * 1e3:.4g} mm (the "
+                             "displacement capacity the design allows, docs/design.md)"}]
     return []
 
 
@@ -93,19 +106,23 @@ def _last_sample(summary: dict) -> list[dict]:
 
 def _restoring_force(summary: dict) -> list[dict]:
     rf = summary.get("restoring_force")
-    if not isinstance(rf, dict) or "skipped" in rf or summary.get("fixed_base"):
+    if not isinstance(rf, dict) or summary.get("fixed_base"):
         return []
-    with_device = rf.get("with_device") if summary.get("device", True) else None
-    if isinstance(with_device, dict) and rf.get("governing_direction_deg") is not None:
-        e, what = with_device.get(f"{rf['governing_direction_deg']:g}") or {}, "with the device"
-    else:
-        e, what = rf.get("supports_alone") or {}, "on the supports alone"
-    if e.get("pass") is not False:
+    if not summary.get("device", True) and isinstance(rf.get("baseline"), dict):
+        rf = rf["baseline"]   # the run without the device stands on the baseline
+    if "skipped" in rf or rf.get("pass") is not False:
         return []
+    psi = rf.get("governing_direction_deg")
+    e = (rf.get("directions") or {}).get(f"{psi:g}") if psi is not None else None
+    if e is None:   # a summary written before the check had directions for every configuration
+        e = (rf.get("with_device") or {}).get(f"{psi:g}") if psi is not None else None
+        e = e or rf.get("supports_alone") or {}
+    what = rf.get("configuration") or ("device" if summary.get("device", True) else "supports")
+    along = "" if psi is None else f" along {psi:g} deg"
     return [{"kind": "restoring_force_fails",
-             "text": f"restoring force: the isolation level {what} fails {rf.get('code')} at D = "
-                     f"{rf['D'] * 1e3:.4g} mm: F(D) - F(D/2) = {e['difference']:.4g} N < 0.025 W = "
-                     f"{rf['required']:.4g} N"}]
+             "text": f"restoring force: the {what} isolation level FAILS {rf.get('code')} at D = "
+                     f"{rf['D'] * 1e3:.4g} mm{along}: F(D) - F(D/2) = {e['difference']:.4g} N < 0.025 W = "
+                     f"{rf['required']:.4g} N (margin {e['difference'] - rf['required']:+.4g} N)"}]
 
 
 def run_warnings(summary: dict, rod_length: float | None = None) -> list[dict]:

