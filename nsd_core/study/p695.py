@@ -112,13 +112,14 @@ def pushover(params, structure, delta_u: float, device: bool, directions_deg=(0.
     (structure.isolator): k_d u + Q min(u / D_y, 1), the ideal bilinear its smooth law tends to (its
     force is at most this, so V_max is not under-stated and mu_T not over-stated). A new isolator
     kind adds its force here."""
+    from nsd_core.device.design import G
     from nsd_core.device.restoring_force import weight
-    w = weight(structure, params.gravity)
+    w = weight(structure)   # W = M g with the design's g, and the same g below (mu_T depends on W / g = M only)
     u = np.linspace(0.0, delta_u, points)
     iso = None if device else getattr(structure, "isolator", None)
     if iso is not None:
         force = iso.stiffness * u + iso.q_fast * np.minimum(u / iso.yield_displacement, 1.0)
-        return {**ductility(u, force, w, params.gravity, structure.first_period), "direction_deg": None,
+        return {**ductility(u, force, w, G, structure.first_period), "direction_deg": None,
                 "W": w, "how": f"{iso.kind}: F(u) = k_d u + Q min(u / D_y, 1) (ideal bilinear), u from 0 to delta_u"}
     per = {}
     for psi in (directions_deg if device else (0.0,)):
@@ -127,7 +128,7 @@ def pushover(params, structure, delta_u: float, device: bool, directions_deg=(0.
             from nsd_core.device.quasistatic import quasi_static_path
             with np.errstate(all="ignore"):
                 f = f + quasi_static_path(params, u, psi, substeps=4)["F_device"]
-        per[f"{psi:g}"] = ductility(u, f, w, params.gravity, structure.first_period)
+        per[f"{psi:g}"] = ductility(u, f, w, G, structure.first_period)
     gov = min(per, key=lambda k: per[k]["mu_T"])
     return {**per[gov], "direction_deg": float(gov), "per_direction": per, "W": w,
             "how": "F(u) = k_b u (+ the device's quasi-static force on first loading), u from 0 to delta_u"}
