@@ -17,7 +17,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results"
-DOCS = (ROOT / "docs" / "validation.md", ROOT / "docs" / "performance.md", ROOT / "docs" / "engine-codegen.md")
+DOCS = (ROOT / "docs" / "validation.md", ROOT / "docs" / "performance.md", ROOT / "docs" / "engine-codegen.md",
+        ROOT / "docs" / "models.md")
 BLOCK = re.compile(r"(<!-- generated: (?P<name>[a-z0-9_-]+) -->\n)(?P<body>.*?)(<!-- end generated: (?P=name) -->)", re.S)
 
 
@@ -291,6 +292,18 @@ def model_benchmarks() -> str:
 def campaign() -> str:
     """The randomized differential campaign (benchmarks/campaign.py; benchmarks/docs_campaign.py)."""
     from benchmarks.docs_campaign import campaign as render
+    return render(load, provenance, table, g, plain)
+
+
+def symbolic_equations() -> str:
+    """The symbolic engine's derived equations of one small mechanism (benchmarks/docs_symbolic.py)."""
+    from benchmarks.docs_symbolic import equations as render
+    return render(load, provenance, table, g, plain)
+
+
+def symbolic_models() -> str:
+    """The symbolic engine on every benchmark description (benchmarks/docs_symbolic.py)."""
+    from benchmarks.docs_symbolic import models as render
     return render(load, provenance, table, g, plain)
 
 
@@ -675,7 +688,8 @@ RENDER = {"compare-gate": compare_gate, "convergence": convergence, "tables-5-6"
           "model-builders": model_builders, "described-gate": described_gate,
           "gate-described": gate_described,
           "work-precision": work_precision, "bench-cold": bench_cold, "bench-peer-seismic": bench_peer_seismic,
-          "bench-ida-farfield": bench_ida_farfield, "bench-dask": bench_dask}
+          "bench-ida-farfield": bench_ida_farfield, "bench-dask": bench_dask,
+          "symbolic-equations": symbolic_equations, "symbolic-models": symbolic_models}
 
 
 def regenerate(text: str) -> str:

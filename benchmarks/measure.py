@@ -69,6 +69,12 @@ MEASUREMENTS = {
     "bench_peer_seismic": (PY + ["benchmarks/bench_peer_seismic.py", "--repeats", "3", "--out", "OUT"],
                            "bench_peer_seismic.json", "json"),
 }
+MEASUREMENTS.update({
+    # the symbolic engine: the derived equations of one small mechanism, and every benchmark description
+    "symbolic_equations": (PY + ["benchmarks/bench_symbolic.py", "equations", "--out", "OUT"],
+                           "symbolic_equations.json", "json"),
+    "symbolic_models": (PY + ["benchmarks/bench_symbolic.py", "models", "--out", "OUT"], "symbolic_models.json", "json"),
+})
 SHORT = ("bench_start", "bench_record_set", "work_precision", "bench_peer_seismic")   # their --short: fewer cases or records, 1 repeat
 
 
