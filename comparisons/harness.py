@@ -63,16 +63,19 @@ def job_key(case: Case, engine: str, order: dict | None = None) -> str:
     d = case.drive
     drive = dict(d.describe(), samples_per_cycle=d.samples_per_cycle, minor=d.minor)
     if d._table is not None:  # a path read from a file: its content, not its name
-        drive["table"] = hashlib.sha256(Path(d.path).read_bytes()).hexdigest()
+        from nsd_core.device.drive import MAX_TABLE_BYTES
+        from nsd_core.device.inputs import read_input_bytes
+        drive["table"] = hashlib.sha256(read_input_bytes(d.path, "path", MAX_TABLE_BYTES)).hexdigest()
     text = json.dumps([engine, params.to_dict(), drive, settings, code_fingerprint()], sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:20]
 
 
 def load_kept(out: Path, case: Case, engine: str, order: dict | None = None) -> dict | None:
     """A run an earlier call kept for exactly these inputs, or None."""
+    from nsd_core.device.inputs import read_regular_text
     csv = run_csv(out, case, engine)
     try:
-        rec = json.loads(csv.with_suffix(".json").read_text())
+        rec = json.loads(read_regular_text(csv.with_suffix(".json"), "stored run"))
         if rec.get("key") != job_key(case, engine, order) or not csv.is_file():
             return None
         res = read_csv(csv, engine)

@@ -25,6 +25,9 @@ from pathlib import Path
 
 import numpy as np
 
+from nsd_core.device.inputs import MAX_REFERENCE_BYTES, input_stream, printable
+from nsd_core.device.params import ParameterError
+from nsd_core.model.bounds import check_case_count, check_case_work
 from nsd_core.model.description import Model
 from nsd_core.model.errors import ModelError
 from nsd_core.model.load import read_toml
@@ -68,6 +71,7 @@ def load_model_cases(model: Model, cases_path: str | None, engines) -> list[Mode
     items = raw.get("case", [])
     if not isinstance(items, list) or not items:
         raise ModelError(f"{path}: no [[case]] table; give at least one (name, duration, dt_out)")
+    check_case_count(f"--cases {printable(path)}" if cases_path else printable(path), items)
     cases = [_case(i, t, model, path.parent, engines) for i, t in enumerate(items)]
     names = [c.name for c in cases]
     dup = {n for n in names if names.count(n) > 1}
@@ -95,6 +99,7 @@ def _case(i: int, t: dict, model: Model, folder: Path, engines) -> ModelCase:
         raise ModelError(f"{where}.dt_out = {dt!r}: must be <= duration ({duration!r} s)")
     if duration / dt > MAX_OUTPUTS:
         raise ModelError(f"{where}.dt_out = {dt!r}: gives more than {MAX_OUTPUTS} output samples")
+    check_case_work(where, duration, dt, len(model.outputs), None)
     n = max(1, round(duration / dt))
     if abs(n * dt - duration) > DIVIDES * duration:   # the grid would silently become duration / n
         raise ModelError(f"{where}.dt_out = {dt!r}: must divide the duration ({duration:g} s) into whole intervals "
@@ -125,8 +130,12 @@ def _reference(where: str, t, model: Model, folder: Path, grid: np.ndarray) -> R
         if k not in ("file", "source", "accuracy"):
             raise ModelError(f"{where}.reference.{k}: unknown field; allowed: accuracy, file, source")
     path = folder / str(t["file"])
+    try:   # through the input guard: a regular file, at most MAX_REFERENCE_BYTES, read within a time bound
+        stream = input_stream(path, f"{where}.reference.file", MAX_REFERENCE_BYTES, "a CSV file")
+    except ParameterError as e:
+        raise ModelError(str(e)) from None
     try:
-        data = np.genfromtxt(path, delimiter=",", names=True)
+        data = np.genfromtxt(stream, delimiter=",", names=True)
     except (OSError, ValueError) as e:
         raise ModelError(f"{where}.reference.file = {t['file']!r}: cannot read a CSV with a header ({e})") from None
     data = np.atleast_1d(data)

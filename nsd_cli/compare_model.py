@@ -36,6 +36,7 @@ from comparisons.model_compare import (BUILDERS, CHECK, CONVERGED, REFERENCE, bu
 from nsd_cli.options import check_out_dir, check_out_file
 from nsd_core.device.params import ParameterError
 from nsd_core.device.results import atomic_write_json, atomic_write_text
+from nsd_core.model.bounds import check_case_work
 
 NOT_WITH_MODEL = ("convergence", "power", "power_cases", "power_profiles", "power_size", "tolerances")
 
@@ -63,6 +64,8 @@ def run(args) -> int:
             b.check(model)   # a joint type or feature this engine lacks: bad input, before any run
         for c in cases:
             merged = check_settings(b, c.settings.get(e) or None, f"case.{c.name}.{e}")
+            if e == REFERENCE:   # its least step count (duration / max_step), before any run
+                check_case_work(f"case.{c.name}", c.duration, c.dt_out, len(model.outputs), merged)
             if e in STEP_SETTING:   # bounded work: the h/2 run takes twice the steps, found before any run
                 key = STEP_SETTING[e]
                 steps = 2 * c.duration / float(merged[key])
@@ -218,8 +221,9 @@ def clear_previous(out: Path) -> None:
     """Remove what an earlier ``nsd compare --model`` wrote into ``out`` (see the module's docstring):
     its report's files and the CSV of each run its results.json lists; a case folder left empty goes
     too. A results.json that is not a --model summary (or not readable) names no CSVs to remove."""
+    from nsd_core.device.inputs import read_regular_text
     try:
-        prev = json.loads((out / "results.json").read_text())
+        prev = json.loads(read_regular_text(out / "results.json", "results.json"))
     except (OSError, ValueError):
         prev = None
     if isinstance(prev, dict) and "model_file" in prev and isinstance(prev.get("cases"), dict):

@@ -17,6 +17,7 @@ import os
 
 from nsd_cli.options import (add_param_arguments, add_solver_arguments, base_params, check_out_dir,
                              solver_settings)
+from nsd_core.device.inputs import read_regular_text
 from nsd_core.device.params import ParameterError
 
 HELP = "incremental dynamic analysis and fragility over a record set, with and without the device"
@@ -173,7 +174,7 @@ def run(args) -> int:
     if (out / "limit_states.json").exists():
         import json
         print("limit states apart (limit_states.json, .csv, .png):")
-        print("\n".join(summary_lines(json.loads((out / "limit_states.json").read_text()))))
+        print("\n".join(summary_lines(json.loads(read_regular_text(out / "limit_states.json", "limit_states.json")))))
     from reports.build import draw_study  # the study's PNGs into its own folder (issue 20)
     draw_study(out)
     undetermined = [t["name"] for t in index["traces"] if t["undetermined"]]
@@ -187,7 +188,7 @@ def _cross_check(traces, store, engines, workers, args, index, runner, work: dic
     import sys
     from nsd_cli.ida_check import cost, cross_check, entries
     from nsd_core.device.results import atomic_write_json
-    frag = json.loads((store.root / "fragility.json").read_text())
+    frag = json.loads(read_regular_text(store.root / "fragility.json", "fragility.json"))
     if work["peer_steps"]:
         print(f"ida cross-check ({work['mode']}): up to {work['records']} record(s) in {', '.join(engines[1:])}, "
               f"about {work['peer_steps']:.3g} steps of theirs", file=sys.stderr, flush=True)

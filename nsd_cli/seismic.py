@@ -355,7 +355,9 @@ def run_set(args) -> int:
     if restoring is not None:   # the set's isolation level, as a single run's summary.json has it
         import json
         from nsd_core.device.results import atomic_write_json
-        atomic_write_json(out / "set.json", {**json.loads((out / "set.json").read_text()), "restoring_force": restoring})
+        from nsd_core.device.inputs import read_regular_text
+        atomic_write_json(out / "set.json", {**json.loads(read_regular_text(out / "set.json", "set.json")),
+                                             "restoring_force": restoring})
     c = index["counts"]
     for row in index["rows"]:
         ratio = ("" if row.get("peak_u_ratio") is None else

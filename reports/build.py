@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import contextlib
 import csv
+import io
 import json
 import os
 import time
@@ -21,7 +22,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from nsd_core.device.inputs import check_regular, printable, read_regular_text
+from nsd_core.device.inputs import input_stream, printable, read_regular_text
 from nsd_core.device.params import ParameterError
 from nsd_core.device.results import RunResult, check_output_target, read_csv
 
@@ -144,9 +145,7 @@ def _load_tables(path: Path) -> list[dict]:
     if not path.is_file():
         return []
     try:
-        check_regular(path, "tables.csv")
-        with open(path) as f:
-            rows = list(csv.DictReader(f))
+        rows = list(csv.DictReader(input_stream(path, "tables.csv", 1 << 32)))
         return [{"table": r["table"], "parameter": r["parameter"], "value": float(r["value"]),
                  "unit": r["unit"], "paper": float(r["paper_x_max [m]"]), "model": float(r["model_x_max [m]"]),
                  "diff_mm": float(r["difference [mm]"])} for r in rows]
@@ -169,12 +168,11 @@ def _load_study(folder: Path) -> list[dict]:
             for d in s.get("designs", []):
                 if d.get("status") == "ok" and d.get("steady_csv") and (folder / d["steady_csv"]).is_file():
                     path = folder / d["steady_csv"]
-                    check_regular(path, "steady CSV")
-                    with open(path) as f:
-                        names = [h.split(" [")[0] for h in f.readline().strip().split(",")]
+                    text = read_regular_text(path, "steady CSV")
+                    names = [h.split(" [")[0] for h in text.split("\n", 1)[0].strip().split(",")]
                     with warnings.catch_warnings():   # an empty file is said in one line (malformed), not warned
-                        warnings.simplefilter("ignore")
-                        arr = np.genfromtxt(path, delimiter=",", skip_header=1, ndmin=2)  # blanks (nan) allowed
+                        warnings.simplefilter("ignore")   # blanks (nan) allowed
+                        arr = np.genfromtxt(io.StringIO(text), delimiter=",", skip_header=1, ndmin=2)
                     cols = {n: arr[:, i] for i, n in enumerate(names)}
                     curves.append({"value": d["value"], "engine": d.get("engine", "semirecursive"), "u": cols["u"],
                                    "F": cols["F"], "design": d})

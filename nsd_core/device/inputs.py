@@ -1,4 +1,7 @@
-"""Reading input files safely, and naming paths on one line (issue 22).
+"""Reading input files safely, and naming paths on one line. Every file the program reads (a
+description, a cases, tolerance or parameter file, a reference CSV, a path table, a results folder
+given to ``nsd report --from``) is read through this module: tests/test_input_guard.py looks for any
+other read in the code.
 
 Only regular files are read as inputs: a FIFO, a character or block device, a socket or a folder
 given where a file is expected is bad input (``InputError``, exit 2) naming the path, found by
@@ -11,11 +14,21 @@ every message stays on one line and cannot rewrite the terminal.
 """
 from __future__ import annotations
 
+import io
 import os
 import stat
+import time
 from pathlib import Path
 
 from nsd_core.engine.errors import InputError as ParameterError  # params.py reads through this module
+
+# What every input file may weigh (bytes): far beyond any real one, small enough to read in seconds.
+# A description or a cases file: the largest shipped is 26 kB (81 bodies); 4 MB holds ~20 000 bodies'
+# tables, past every bound on a description's size (nsd_core.model.bounds). A reference CSV: its rows
+# lie on the output grid (at most 1e6 samples); 100 MB is 1e6 rows of ~100 characters.
+MAX_DESCRIPTION_BYTES = 4_000_000
+MAX_REFERENCE_BYTES = 100_000_000
+READ_SECONDS = 30.0   # a read slower than this (a stalled network file system) is refused, not waited for
 
 KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO (named pipe)"), (stat.S_ISCHR, "a character device"),
          (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"))
@@ -61,10 +74,11 @@ def check_regular(path: str | Path, what: str) -> os.stat_result:
     return st
 
 
-def read_input_bytes(path: str | Path, what: str, max_bytes: int) -> bytes:
-    """The bytes of a regular input file of at most ``max_bytes`` (ParameterError otherwise);
-    never blocks on a FIFO."""
+def read_input_bytes(path: str | Path, what: str, max_bytes: int, seconds: float = READ_SECONDS) -> bytes:
+    """The bytes of a regular input file of at most ``max_bytes``, read within ``seconds``
+    (ParameterError otherwise); never blocks on a FIFO."""
     where = f"{what} {printable(path)}"
+    deadline = time.monotonic() + seconds
     st = check_regular(path, what)
     if st.st_size > max_bytes:
         raise ParameterError(f"{where}: {st.st_size} bytes; at most {max_bytes} bytes expected")
@@ -87,6 +101,8 @@ def read_input_bytes(path: str | Path, what: str, max_bytes: int) -> bytes:
             if size > max_bytes:
                 raise ParameterError(f"{where}: more than {max_bytes} bytes; at most {max_bytes} bytes expected")
             chunks.append(chunk)
+            if time.monotonic() > deadline:
+                raise ParameterError(f"{where}: not read within {seconds:g} s; a local regular file is expected")
         return b"".join(chunks)
     except OSError as e:
         raise ParameterError(f"{where}: cannot be read ({e.strerror or e})") from None
@@ -101,6 +117,12 @@ def read_input_text(path: str | Path, what: str, max_bytes: int, expected: str =
         return data.decode("utf-8")
     except UnicodeDecodeError:
         raise ParameterError(f"{what} {printable(path)}: not a text file ({expected} expected)") from None
+
+
+def input_stream(path: str | Path, what: str, max_bytes: int, expected: str = "UTF-8 text") -> io.StringIO:
+    """A regular input file's text as a stream (for csv, numpy's loaders): read through the guard above,
+    so no parser ever opens the path itself."""
+    return io.StringIO(read_input_text(path, what, max_bytes, expected), newline=None)
 
 
 def read_regular_text(path: str | Path, what: str = "file") -> str:

@@ -196,10 +196,11 @@ def write_csv(path: str | Path, result: RunResult) -> None:
 
 
 def read_csv(path: str | Path, engine: str = "") -> RunResult:
-    from nsd_core.device.inputs import check_regular
-    check_regular(path, "CSV")  # a FIFO or a device in a results folder: one line, never a hang
-    with open(path) as f:
-        header = f.readline().strip().split(",")
+    import io
+
+    from nsd_core.device.inputs import read_regular_text
+    text = read_regular_text(path, "CSV")  # a FIFO or a device in a results folder: one line, never a hang
+    header = text.split("\n", 1)[0].strip().split(",")
     names, units = [], {}
     for h in header:
         name, _, unit = h.partition(" [")
@@ -208,7 +209,7 @@ def read_csv(path: str | Path, engine: str = "") -> RunResult:
     import warnings
     with warnings.catch_warnings():   # an empty table is said below, in one line, not warned about
         warnings.simplefilter("ignore")
-        data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+        data = np.loadtxt(io.StringIO(text), delimiter=",", skiprows=1, ndmin=2)
     if data.shape[0] == 0 or data.shape[1] != len(names):
         raise ValueError(f"{len(names)} columns named, {data.shape[1]} read in {data.shape[0]} rows")
     return RunResult(engine, {n: data[:, i] for i, n in enumerate(names)}, units)

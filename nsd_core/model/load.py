@@ -14,6 +14,8 @@ import numpy as np
 
 from nsd_core.model.description import (COMPONENTS, GROUND, JOINT_DOFS, MOTION_KINDS, OUTPUT_KINDS, WORK_SOURCES,
                                         Body, ForceElement, Joint, Loop, Model, Output, Prescribed)
+from nsd_core.device.params import ParameterError
+from nsd_core.model.bounds import check_sizes
 from nsd_core.model.errors import ModelError
 from nsd_core.model.excitation import parse_excitation
 from nsd_core.model.laws import JOINT, PLANE, POINTS, get_law
@@ -35,12 +37,19 @@ def load_model(path) -> Model:
 
 def read_toml(path, flag: str) -> dict:
     """A TOML file as a dict; unreadable or not TOML is one ModelError line naming ``flag``."""
+    from nsd_core.device.inputs import MAX_DESCRIPTION_BYTES, printable, read_input_text
+    try:   # a regular file only, at most MAX_DESCRIPTION_BYTES, read within a time bound
+        text = read_input_text(path, flag, MAX_DESCRIPTION_BYTES, "UTF-8 TOML")
+    except ModelError:
+        raise
+    except ParameterError as e:
+        raise ModelError(str(e)) from None
     try:
-        return tomllib.loads(Path(path).read_text())
-    except OSError as e:
-        raise ModelError(f"{flag} {path}: cannot read ({e.strerror or e})") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
-        raise ModelError(f"{flag} {path}: not valid TOML ({e})") from None
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise ModelError(f"{flag} {printable(path)}: not valid TOML ({e})") from None
+    except RecursionError:
+        raise ModelError(f"{flag} {printable(path)}: not valid TOML (nested too deeply)") from None
 
 
 def _fields(where: str, table, allowed: set, required: tuple = ()) -> dict:
@@ -98,6 +107,7 @@ def _inertia(where: str, v) -> np.ndarray:
 
 def parse_model(raw: dict, path: str = "") -> Model:
     _fields("model file", raw, TOP, ("bodies",))
+    check_sizes(raw)   # the work's bounds, before any table is parsed
     head = _fields("[model]", raw.get("model", {}), {"name", "source", "gravity", "description"})
     bodies = _bodies(raw["bodies"])
     names = {b.name for b in bodies}
