@@ -54,7 +54,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-device", action="store_true", help="the supports alone (the isolation effect's reference)")
     p.add_argument("--engines", default="semirecursive",
                    help="semirecursive (the reference, always first) and any of mujoco, exudyn to cross-check: "
-                        "each writes seismic_<engine>.csv; summary.json gets their differences")
+                        "each writes seismic_<engine>.csv; summary.json gets their differences. opensees: with "
+                        "--isolator bilinear or friction-pendulum only (building included), judged by the gate's "
+                        "rule (its step and half of it)")
     p.add_argument("--structure", action="append", default=[], metavar="NAME=VALUE",
                    help="override the default isolated structure: mass, stiffness, damping, "
                         "radius_of_gyration, support_radius, restrainer_gap, restrainer_stiffness, "
@@ -150,8 +152,9 @@ def run(args) -> int:
     from nsd_core.device.seismic import seismic_summary, simulate_seismic
     from comparisons.engines import parse_engine_list, run_seismic_engine
     from comparisons.seismic import seismic_metrics
+    from comparisons.engines import BASELINE_PEERS
     params = base_params(args)
-    engines = parse_engine_list(args.engines)
+    engines = parse_engine_list(args.engines, extra=BASELINE_PEERS)
     if engines[0] != "semirecursive":
         raise ParameterError(f"--engines {args.engines!r}: semirecursive (the reference) must come first")
     baseline = _baseline(args, engines)
@@ -202,6 +205,12 @@ def run(args) -> int:
     seismic_extras.warn(summary)
     others = {}
     for name in engines[1:]:
+        if name in BASELINE_PEERS:  # OpenSees's own bearing elements, judged by the gate's rule
+            from comparisons.engines.opensees_peer import judged_entry
+            other, entry = judged_entry(params, structure, motion, result, args.duration, args.dt_out)
+            others[name] = other
+            summary.setdefault("engines", {})[name] = entry
+            continue
         if baseline:  # the baseline isolator's peers: its description built by each (comparisons/engines/described_isolator.py)
             from comparisons.engines.described_isolator import run_isolator
             other = run_isolator(name, structure, motion, duration=args.duration, dt_out=args.dt_out)
@@ -235,6 +244,8 @@ def run(args) -> int:
     for name, m in summary.get("engines", {}).items():
         print(f"  {name}: max|du|/max|u| = {m['du']:.2e}, max|dF|/max|F| = {m['dF']:.2e}, "
               f"max|da|/max|a| = {m['da']:.2e}, {m['wall_time']:.1f} s")
+        if "verdict" in m:
+            print(f"    {name} ({m['element']}, step {m['step']:.3g} s and half of it): {m['verdict']['text']}")
         if "building" in m:
             b = m["building"]
             print(f"    building: floors {b['dfloor']:.2e}, drifts {b['ddrift']:.2e}, floor accelerations "
@@ -255,6 +266,10 @@ def _baseline(args, engines) -> bool:
     described_isolator.py)."""
     from nsd_core.device.isolators import KINDS
     kind = seismic_extras.isolator_choice(args)
+    if "opensees" in engines and (kind not in KINDS or args.compare_supports or args.compare_building):
+        raise ParameterError(f"--engines {args.engines!r}: opensees builds a single run on --isolator bilinear or "
+                             f"friction-pendulum only (given --isolator {kind}); it cannot build the "
+                             "negative-stiffness device")
     if kind == "device":
         return False
     if args.no_device:
@@ -262,11 +277,14 @@ def _baseline(args, engines) -> bool:
     if not (args.compare_supports or args.compare_building):
         args.no_device = True
     if kind in KINDS and args.no_device:
-        if set(engines[1:]) - {"mujoco", "exudyn"}:
-            raise ParameterError(f"--engines {args.engines!r}: --isolator {kind} cross-checks in mujoco and exudyn only")
-        if engines[1:] and (args.restrainer or getattr(args, "building", None)):
-            raise ParameterError(f"--engines {args.engines!r}: the isolator's described model has no restrainer and no "
-                                 "building")
+        if set(engines[1:]) - {"mujoco", "exudyn", "opensees"}:
+            raise ParameterError(f"--engines {args.engines!r}: --isolator {kind} cross-checks in mujoco, exudyn and "
+                                 "opensees only")
+        if engines[1:] and args.restrainer:
+            raise ParameterError(f"--engines {args.engines!r}: the isolator's peers have no restrainer")
+        if set(engines[1:]) - {"opensees"} and getattr(args, "building", None):
+            raise ParameterError(f"--engines {args.engines!r}: the isolator's described model (mujoco, exudyn) has no "
+                                 "building; opensees builds it")
         return True
     return False
 

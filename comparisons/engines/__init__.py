@@ -16,6 +16,9 @@ ENGINES = {
     "exudyn": ("comparisons.engines.peers", "ExudynEngine"),
 }
 REFERENCE = "semirecursive"
+# peers of the seismic mode's baseline isolators only (not of the device, not in the gate's cases):
+# OpenSees builds the structure on a lead-rubber bearing or a friction pendulum (comparisons/engines/opensees_peer.py)
+BASELINE_PEERS = ("opensees",)
 
 
 def get_engine(name: str):
@@ -94,12 +97,13 @@ def _with_times(name: str, result, warm: float, cpu: float):
     return result
 
 
-def parse_engine_list(text: str, option: str = "--engines") -> list[str]:
-    """Comma-separated engine names of the registry, each once (ParameterError otherwise)."""
+def parse_engine_list(text: str, option: str = "--engines", extra: tuple = ()) -> list[str]:
+    """Comma-separated engine names of the registry (and of ``extra``, e.g. BASELINE_PEERS), each once
+    (ParameterError otherwise)."""
     names = [e.strip() for e in text.split(",") if e.strip()]
     for e in names:
-        if e not in ENGINES:
-            raise ParameterError(f"{option} {e!r}: unknown engine; allowed: {', '.join(ENGINES)}")
+        if e not in ENGINES and e not in extra:
+            raise ParameterError(f"{option} {e!r}: unknown engine; allowed: {', '.join([*ENGINES, *extra])}")
     if not names or len(set(names)) != len(names):
         raise ParameterError(f"{option} {text!r}: give each engine once")
     return names
@@ -110,6 +114,10 @@ def run_seismic_engine(name: str, params: Params, structure, ground, duration=No
     """One engine's seismic run by name (Exudyn's prints go to stderr, as in ``run_engine``)."""
     from nsd_core.device.warmup import TINY_DT_OUT, TINY_DURATION, tiny_ground
     from nsd_core.engine.workers import stdout_to_stderr
+    if name in BASELINE_PEERS:   # the structure on its baseline isolator (the run without the device)
+        from comparisons.engines.opensees_peer import run_opensees
+        with stdout_to_stderr():
+            return _with_ground(run_opensees(structure, ground, duration, dt_out, settings), ground)
     settings = dict(settings or {})
     _, engine = _chosen(name, settings)
     with stdout_to_stderr():   # the warm-up's key names the model's shape: each shape compiles its own code
