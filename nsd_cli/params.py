@@ -4,9 +4,10 @@ bounds and provenance (a table of Dai et al. 2024, or "assumed" with the place i
 ``--format toml`` (the default with ``--out FILE``) writes a starting parameter file: every device
 parameter under ``[params]`` with its unit, bounds and provenance as a comment; edit the values you
 want, delete the rest, and pass it as ``--params FILE`` to cycle, compare, seismic, sweep or polar.
-The isolated structure follows as comments: it is set with ``nsd seismic --structure NAME=VALUE``
-or ``structure = {...}`` in a seismic case, not in a parameter file. ``--params``/``--set`` show a
-variant (its rows say "override"; its structure is derived again, ~20 s)."""
+The isolated structure follows as comments: the one ``nsd seismic`` uses (the same function builds
+it: ``nsd_cli.seismic_extras.isolated_structure``, the design basis's, the same for every device); it
+is set with ``nsd seismic --structure NAME=VALUE`` or ``structure = {...}`` in a seismic case, not in a
+parameter file. ``--params``/``--set`` show a variant (its rows say "override")."""
 from __future__ import annotations
 
 import argparse
@@ -38,8 +39,8 @@ def _table(title: str, rows: list[dict]) -> str:
 def table_text(params_rows: list[dict], structure_rows: list[dict]) -> str:
     return (f"values to {DIGITS} significant digits; every digit: --format toml\n\n"
             + _table("device parameters (--params FILE, --set NAME=VALUE; a case's params = {...})", params_rows)
-            + "\n\n" + _table("isolated structure of nsd seismic (--structure NAME=VALUE; a seismic case's "
-                              "structure = {...})", structure_rows) + "\n")
+            + "\n\n" + _table("isolated structure of nsd seismic (the design basis's, the same for every device; "
+                              "--structure NAME=VALUE; a seismic case's structure = {...})", structure_rows) + "\n")
 
 
 def toml_text(params_rows: list[dict], structure_rows: list[dict]) -> str:
@@ -53,7 +54,8 @@ def toml_text(params_rows: list[dict], structure_rows: list[dict]) -> str:
         out.append(f"{r['name']} = {toml_value(r['value'])}")
     out += ["", "# The isolated structure of nsd seismic is not part of a parameter file: set it with",
             "# `nsd seismic --structure NAME=VALUE` or `structure = { NAME = VALUE }` in a seismic case.",
-            "# Its values for this device (derived by the rules of docs/model.md, 'Seismic mode'):"]
+            "# Its values (the design basis's, the same for every device: the structure nsd seismic uses;",
+            "# nsd seismic --resize derives it from the device by the rules of docs/model.md instead):"]
     for r in structure_rows:
         out.append(f"#   {r['name']} = {toml_value(r['value'])}  # {r['doc']} [{r['unit']}]; {r['bounds']}; "
                    f"{r['provenance']}")
@@ -61,7 +63,7 @@ def toml_text(params_rows: list[dict], structure_rows: list[dict]) -> str:
 
 
 def run(args) -> int:
-    from nsd_core.device.isolation import default_structure
+    from nsd_cli.seismic_extras import isolated_structure
     from nsd_core.device.listing import param_rows, structure_rows
     from nsd_core.device.params import ParameterError
     from nsd_core.device.results import atomic_write_text
@@ -70,8 +72,8 @@ def run(args) -> int:
     check_out_file("--out", args.out)
     fmt = args.format or ("toml" if args.out else "table")
     try:
-        structure = default_structure(params)
-    except ParameterError as e:  # a variant without negative stiffness has no default structure
+        structure = isolated_structure(args, params)   # the structure nsd seismic uses (the same function)
+    except ParameterError as e:  # (kept for a structure that cannot be built)
         structure, note = None, f"# no default isolated structure: {e}\n"
     rows_p = param_rows(params)
     rows_s = structure_rows(structure, params) if structure is not None else []

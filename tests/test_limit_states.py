@@ -4,6 +4,7 @@ crossing times from a series, the thresholds' bad input, and one small real IDA 
 from __future__ import annotations
 
 import csv
+import math
 import json
 
 import numpy as np
@@ -102,16 +103,17 @@ class _Series:
         return self.columns[k]
 
 
-def test_first_crossings_are_the_first_samples_at_or_over_the_threshold():
+def test_first_crossings_are_interpolated_between_the_samples_around_the_threshold():
     t = np.linspace(0.0, 1.0, 11)
     u = np.array([0, 0.01, 0.02, 0.026, 0.02, 0.03, 0, 0, 0, 0, 0], dtype=float)
     cols = {"t": t, "u": u, "ax_abs": 6.0 * np.sin(np.pi * t), "ay_abs": np.zeros(11),
             "restrainer_F": np.where(u > 0.024, 50.0, 0.0)}
     got = first_crossings(_Series(cols), LS.to_dict())
-    assert got["capacity"] == pytest.approx(0.3)
-    assert got["restrainer"] == pytest.approx(0.3)    # the first positive force (impact 0: any engagement)
-    # 6 sin(pi t) >= 5 first at t = asin(5/6)/pi = 0.3128..., so the sample at 0.4
-    assert got["floor_acceleration"] == pytest.approx(0.4)
+    assert got["capacity"] == pytest.approx(0.2 + 0.1 * (0.025 - 0.02) / (0.026 - 0.02), rel=1e-12)   # 0.28333 s
+    assert got["restrainer"] == pytest.approx(0.3)    # the first positive force (impact 0: any engagement, an onset)
+    # 6 sin(pi t) >= 5 first at t = asin(5/6)/pi = 0.3128...: linear between the samples at 0.3 and 0.4
+    a3, a4 = 6 * math.sin(0.3 * math.pi), 6 * math.sin(0.4 * math.pi)
+    assert got["floor_acceleration"] == pytest.approx(0.3 + 0.1 * (5 - a3) / (a4 - a3), rel=1e-12)
     assert first_crossings(_Series({**cols, "u": u / 10}), LS.to_dict())["capacity"] is None
 
 

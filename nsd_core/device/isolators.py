@@ -7,8 +7,10 @@ Sizing rules (full scale, then the similitude; W = M g, k_eff = M (2 pi / T_D)^2
 * bilinear: effective period T_D and effective damping beta_D at D_D (ASCE 7-16 17.8.5.2:
   k_eff = k_d + Q_d / D_D, beta_eff = 4 Q_d (D_D - D_y) / (2 pi k_eff D_D^2)), D_y = yield_fraction D_D:
   Q_d = pi beta_D k_eff D_D^2 / (2 (D_D - D_y)), k_d = k_eff - Q_d / D_D;
-* friction pendulum: R from the target period (pendulum period 2 pi sqrt(R / g) = T_D), so
-  k_d = W / R = k_eff; Q = mu W, mu stated (its effective period and damping at D_D follow, reported).
+* friction pendulum: the same design point, T_eff = T_D and beta_eff = beta_D at D_D, with D_y its
+  pre-slip: mu W = Q = pi beta_D k_eff D_D^2 / (2 (D_D - D_y)) and W / R = k_eff - Q / D_D (its two
+  parameters, mu and R, fixed by the two targets; ParameterError where k_eff - Q / D_D <= 0, a
+  design point no pendulum reaches).
 Neither adds viscous damping (c = 0): its hysteresis is its damping.
 """
 from __future__ import annotations
@@ -91,15 +93,21 @@ def sized(kind: str, mass: float) -> Isolator:
                                                                      "k_eff_N_m": k_eff, "D_D_m": D}}
         iso = (k_d, Q, Q, 0.0, D_y, n)
     else:
-        R = ds.G * (T / (2.0 * math.pi)) ** 2
-        mu, mu_slow = float(ds.value("friction_pendulum", "mu")), float(ds.value("friction_pendulum", "mu_slow"))
-        rate = float(ds.value("friction_pendulum", "rate"))
         D_y = float(ds.value("friction_pendulum", "yield_displacement"))
+        Q = math.pi * beta * k_eff * D * D / (2.0 * (D - D_y))
+        if not k_eff - Q / D > 0.0:
+            raise ParameterError(f"friction pendulum: beta_D = {beta:g} at D_D = {D:g} m needs mu W = {Q:.4g} N >= "
+                                 f"k_eff D_D = {k_eff * D:.4g} N: no pendulum radius reaches T_D")
+        R, mu = W / (k_eff - Q / D), Q / W
+        mu_slow = mu * float(ds.value("friction_pendulum", "mu_slow_ratio"))
+        rate = float(ds.value("friction_pendulum", "rate"))
         n = float(ds.value("friction_pendulum", "exponent"))
         k_fps = W / R + mu * W / D
         beta_fps = 4.0 * mu * W * (D - D_y) / (2.0 * math.pi * k_fps * D * D)
-        prov = {"rule": "R = g (T_D / 2 pi)^2 (pendulum period = T_D); k_d = W / R; Q = mu W",
+        prov = {"rule": "T_eff = T_D, beta_eff = beta_D at D_D: mu W = pi beta_D k_eff D_D^2 / (2 (D_D - D_y)); "
+                        "W / R = k_eff - mu W / D_D",
                 "full_scale": {"R_m": R, "mu": mu, "mu_slow": mu_slow, "rate_s_m": rate, "W_N": W,
+                               "pendulum_period_s": 2.0 * math.pi * math.sqrt(R / ds.G),
                                "T_eff_at_D_D_s": 2.0 * math.pi * math.sqrt(M / k_fps), "beta_eff_at_D_D": beta_fps}}
         iso = (W / R, mu * W, mu_slow * W, rate, D_y, n)
     k_d, q_fast, q_slow, rate, D_y, n = iso

@@ -126,10 +126,13 @@ class IdaRun(RecordRun):
 def run_ida_point(r: IdaRun, run_engine: Callable | None = None) -> dict:
     """run_record, without the time series unless the run keeps them (in a worker); with ``states``,
     metrics["crossings"] holds when the run first reached each."""
-    out = run_record(r, run_engine)
-    if r.states and out["status"] == "ok":
+    out = run_record(r, run_engine, keep_partial=bool(r.states))
+    partial = out.pop("partial", None)   # a stopped run's series up to its stop (not stored)
+    if r.states and (out["status"] == "ok" or partial is not None):
         from nsd_core.study.limit_states import first_crossings
-        out["metrics"]["crossings"] = first_crossings(out["files"]["seismic.csv"], r.states)
+        series = out["files"]["seismic.csv"] if out["status"] == "ok" else partial
+        if len(series["t"]) >= 2:
+            out["metrics"]["crossings"] = first_crossings(series, r.states)
     if not r.keep_series:
         out["files"] = {}
     return out

@@ -14,13 +14,16 @@ States (``STATES``), each with its threshold (``LimitStates``):
 
 A run the rod's reach stopped passed, on its way to |u| = l_d, every displacement threshold below
 l_d: it counts as reaching ``capacity`` (and a zero-force restrainer engagement) when these lie
-below the rod's length, at a time before the stop (``t`` None, ``before_t`` the stop). Drift and
+below the rod's length, at the time its series crossed them (``t``; None when the series was not
+kept) before the stop (``before_t``). Drift and
 floor acceleration were never observed in it: for them the run is "stroke exhausted", neither
 reached nor below (a competing failure), so a trace that ends at the rod's reach is censored for
 drift at its last level that ran to the end, never counted as drift.
 
-The time a completed run first reached each state (``first_crossings``) is found in the worker from
-the run's series, which the IDA does not keep.
+The time a run first reached each state (``first_crossings``: linear between the output times around
+the crossing) is found in the worker from the run's series, which the IDA does not keep; for a run the
+rod's reach stopped, from its series up to the stop (so its capacity time is the series' crossing,
+not the stop).
 """
 from __future__ import annotations
 
@@ -87,14 +90,22 @@ def limit_states_for(structure, params, capacity: float, floor_acceleration: flo
 
 
 def _first(t: np.ndarray, values: np.ndarray, threshold: float, strict: bool = False) -> float | None:
+    """The first time the series reaches the threshold: linear between the last output below it and
+    the first at or over it (the first output time when the series starts there, and for ``strict``,
+    any value above a zero threshold: an onset, not a level crossed; None: never)."""
     hit = values > threshold if strict else values >= threshold
     k = np.flatnonzero(hit)
-    return float(t[k[0]]) if k.size else None
+    if not k.size:
+        return None
+    k = int(k[0])
+    if k == 0 or strict or values[k] == values[k - 1]:
+        return float(t[k])
+    return float(t[k - 1] + (threshold - values[k - 1]) * (t[k] - t[k - 1]) / (values[k] - values[k - 1]))
 
 
 def first_crossings(result, states: dict) -> dict:
-    """{state: the first output time at which a completed run reached it (None: never)} from its
-    series (``states``: LimitStates.to_dict())."""
+    """{state: the time a run first reached it (None: never)} from its series, interpolated between
+    output times (``_first``); a stopped run's series up to its stop (``states``: LimitStates.to_dict())."""
     c, t = result.columns, result["t"]
     out = {"capacity": _first(t, c["u"], states["capacity"])}
     if states.get("impact_force") is not None and "restrainer_F" in c:
@@ -138,8 +149,8 @@ def classify(rec: dict, ls: LimitStates, device: bool) -> dict:
                 out[s] = {"reached": None, "t": None, "peak": None, "note": f"run failed ({reason})"}
             elif s == "stroke":
                 out[s] = {"reached": True, "t": t_stop, "peak": None, "note": reason}
-            elif reason == "rod_reach" and _passed_on_the_way(s, ls):
-                out[s] = {"reached": True, "t": None, "before_t": t_stop, "peak": None,
+            elif reason == "rod_reach" and _passed_on_the_way(s, ls):   # t: its series' crossing, if kept
+                out[s] = {"reached": True, "t": (m.get("crossings") or {}).get(s), "before_t": t_stop, "peak": None,
                           "note": "passed on the way to the rod's reach"}
             else:
                 out[s] = {"reached": None, "t": None, "peak": None, "note": "stroke exhausted"}

@@ -150,8 +150,9 @@ def _failure(err: Exception) -> tuple[str, float | None]:
     return "error", t
 
 
-def run_record(r: RecordRun, run_engine: Callable | None = None) -> dict:
-    """Run one record on one engine (in a worker); never raises for the run's own failure.
+def run_record(r: RecordRun, run_engine: Callable | None = None, keep_partial: bool = False) -> dict:
+    """Run one record on one engine (in a worker); never raises for the run's own failure; keep_partial:
+    a stopped run's series up to its stop under "partial" (not stored).
 
     ``run_engine(name, params, structure, ground, duration=, dt_out=, settings=) -> RunResult`` runs
     a peer engine (comparisons.engines.run_seismic_engine: the study layer knows only the in-house engine)."""
@@ -183,9 +184,12 @@ def run_record(r: RecordRun, run_engine: Callable | None = None) -> dict:
                 "wall_time": time.perf_counter() - start}
     except Exception as e:  # noqa: BLE001 - the run failed; record it and let the set go on
         reason, t = _failure(e)
-        return {"status": "failed", "error": f"{type(e).__name__}: {e}".splitlines()[0],
-                "metrics": {"reason": reason, "t": t}, "traceback": traceback.format_exc(limit=6),
-                "wall_time": time.perf_counter() - start}
+        out = {"status": "failed", "error": f"{type(e).__name__}: {e}".splitlines()[0],
+               "metrics": {"reason": reason, "t": t}, "traceback": traceback.format_exc(limit=6),
+               "wall_time": time.perf_counter() - start}
+        if keep_partial:
+            out["partial"] = getattr(e, "partial", None)
+        return out
 
 
 def run_set(runs: list[RecordRun], out: str | Path, workers: int = 1, scheduler=None, retry_failed: bool = False,
