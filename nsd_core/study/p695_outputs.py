@@ -155,8 +155,8 @@ def restoring_lines(res: dict) -> list[str]:
     return [f"{name}: {verdict_line(c)}" for name, c in rf.items()]
 
 
-def _num(v) -> str:
-    return "n/a" if v is None else f"{v:.4g}"
+def _num(v, digits: int = 4) -> str:
+    return "n/a" if v is None else f"{v:.{digits}g}"
 
 
 def draw_page(res: dict, path) -> None:
@@ -171,7 +171,7 @@ def draw_page(res: dict, path) -> None:
                for r in c["records"]] + [s_mt]) * 1.2
     x = np.linspace(top / 500, top, 500)
     for k, (name, c) in enumerate(res["configurations"].items()):
-        ims = sorted(r["collapse_im"] for r in c["records"] if r["collapse_im"] is not None)
+        ims = sorted(r.get("estimate_im") or r["collapse_im"] for r in c["records"] if r["collapse_im"] is not None)
         ax.step(ims, np.arange(1, len(ims) + 1) / c["n_records"], where="post", color=f"C{k}", label=f"{name}: records")
         f = c["S_CT_lognormal_fit"]
         if f["median"] is not None:
@@ -197,8 +197,8 @@ def draw_page(res: dict, path) -> None:
         c = res["configurations"][name]
         ci = c["S_CT_interval"] or {}
         br = c.get("S_CT_bracket") or [None, None]
-        cells.append([_num(c["S_CT"]), f"{_num(br[0])} - {_num(br[1])}",
-                      f"{_num(ci.get('low'))} - {_num(ci.get('high'))}", _num(c["S_MT"]),
+        cells.append([_num(c["S_CT"]), f"{_num(br[0], 3)}-{_num(br[1], 3)}",
+                      f"{_num(ci.get('low'), 3)}-{_num(ci.get('high'), 3)}", _num(c["S_MT"]),
                       _num(c["CMR"]), _num(c["mu_T"]), _num(c["SSF"]), _num(c["beta_TOT"]), _num(c["ACMR"]),
                       _num(c["ACMR10"]), _num(c["ACMR20"]), str(c["pass_ACMR20"]), str(c["pass_ACMR10"]),
                       f"{c['n_collapsed']} / {c['n_records']}"])
