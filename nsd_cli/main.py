@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import errno
 import importlib
+import os
 import signal
 import sys
 import threading
@@ -70,14 +71,63 @@ class Interrupted(BaseException):
         self.signum = signum
 
 
+# An interrupt must stop the run however it is busy. Raised inside numba's or llvmlite's compiler (a
+# run compiling its evaluation), the exception is swallowed by their callbacks and the compiler goes
+# on (or hangs): there it is deferred and asked for again every RETRY s until the compiler returns;
+# after DEADLINE s without the run having ended, the process says its one line, releases its lock and
+# exits (its workers end with it: PR_SET_PDEATHSIG).
+RETRY, DEADLINE = 0.5, 5.0
+COMPILER = (f"{os.sep}numba{os.sep}", f"{os.sep}llvmlite{os.sep}")
+_state: dict = {}   # "signum", "tally", "done": an interrupt in progress
+
+
+def _in_compiler(frame) -> bool:
+    while frame is not None:
+        if any(part in frame.f_code.co_filename for part in COMPILER):
+            return True
+        frame = frame.f_back
+    return False
+
+
+def _watchdog(signum: int) -> None:
+    """Ask the main thread again while it is inside the compiler; end the process at DEADLINE."""
+    import _thread
+    import time
+    end = time.monotonic() + DEADLINE
+    while not _state.get("done") and time.monotonic() < end:
+        time.sleep(RETRY)
+        if _state.get("deferred") and not _state.get("done"):
+            _thread.interrupt_main(signum)
+    if _state.get("done"):
+        return
+    t = _state.get("tally") or {}
+    where = (f"; {t['kept']} of {t['total']} cases kept in {printable(t['dir'])}" if "total" in t else "; nothing kept")
+    try:
+        if not _state.get("said"):
+            sys.stderr.write(f"nsd: interrupted{where}\n")
+            sys.stderr.flush()
+        from nsd_cli.outlock import release_all
+        release_all()
+    finally:
+        os._exit(128 + int(signum))
+
+
 def _raise_interrupted(signum, frame):
-    raise Interrupted(signum)
+    if "signum" not in _state:
+        _state["signum"] = signum
+        threading.Thread(target=_watchdog, args=(signum,), daemon=True, name="nsd-interrupt").start()
+    if _in_compiler(frame):   # raised there it would be swallowed: asked again when the compiler returns
+        _state["deferred"] = True
+        return
+    _state["deferred"] = False
+    raise Interrupted(_state["signum"])
 
 
 def _handle_signals():
     """Ctrl-C and SIGTERM raise Interrupted in the main thread (returns the handlers to restore)."""
     if threading.current_thread() is not threading.main_thread():
         return {}
+    _state.clear()
     saved = {}
     for sig in (signal.SIGINT, signal.SIGTERM):
         saved[sig] = signal.signal(sig, _raise_interrupted)
@@ -95,6 +145,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     args.tally = {}  # subcommands that keep results as they go fill in kept / total / dir
     saved = _handle_signals()
+    _state["tally"] = args.tally
     try:
         from nsd_core.engine.codegen import evaluator_kind, prefer_generated
         evaluator_kind()  # a bad NSD_EVALUATOR: one line, exit 2, before any work
@@ -130,6 +181,7 @@ def main(argv: list[str] | None = None) -> int:
         where = (f"; {t['kept']} of {t['total']} cases kept in {printable(t['dir'])}" if "total" in t
                  else "; nothing kept")
         print(f"nsd: interrupted{where}", file=sys.stderr, flush=True)
+        _state["said"] = True
         # an interrupt inside numba's compiler (a run compiling its mechanism's evaluation) leaves
         # llvmlite objects half-built, whose finalizers print "Exception ignored ... Traceback" at exit:
         # the process is ending, and that noise must not follow the one line
@@ -138,6 +190,7 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         from nsd_cli.outlock import release_all
         release_all()
+        _state["done"] = True
         for sig, handler in saved.items():
             signal.signal(sig, handler)
 
