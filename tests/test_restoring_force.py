@@ -222,3 +222,29 @@ def test_p695_json_and_its_first_page_carry_each_configuration_s_check(tmp_path)
     write_p695(res, tmp_path)
     assert json.loads((tmp_path / "p695.json").read_text())["restoring_force"]["device"]["pass"] is False
     assert restoring_lines({"restoring_force": rf["device"]})[0].startswith("device: restoring force")
+
+
+def test_help_gives_the_default_it_uses(capsys):
+    """--design-displacement's help quotes D_M; checked against the design basis."""
+    from nsd_cli.main import main
+    from nsd_core.device.restoring_force import default_design_displacement
+    with pytest.raises(SystemExit):
+        main(["seismic", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert f"D_M ({default_design_displacement() * 1e3:.2f} mm at model scale)" in text
+
+
+def test_a_record_set_s_first_page_states_each_verdict(at_d_m):
+    """The set table (a record set's first page) carries each configuration's verdict, the FAIL in red,
+    inside the page."""
+    from page_checks import text_problems
+    from reports.seismic_pages import set_table_figure
+    from reports.style import RED
+    linear = restoring_force_check(P, S, device=False)
+    index = {"set": "nearfield-pulse", "ground": {}, "rows": [], "restoring_force": {**at_d_m, "baseline": linear}}
+    fig = set_table_figure(index)
+    lines = [t for t in fig.texts if t.get_text().startswith("restoring force")]
+    assert len(lines) == 2 and "device at D = 19.64 mm: FAIL along 45 deg" in lines[0].get_text()
+    assert "margin -39.74 N" in lines[0].get_text() and lines[0].get_color() == RED
+    assert "linear at D = 19.64 mm: PASS" in lines[1].get_text()
+    assert text_problems(fig) == []
