@@ -193,7 +193,7 @@ def test_the_device_structure_of_the_model_document_is_checked_too():
     assert c["W"] == pytest.approx(s.mass * G, rel=1e-15) and set(c["directions"]) == {"0", "45"}
 
 
-def test_p695_json_and_its_first_page_carry_each_configuration_s_check(tmp_path):
+def test_p695_json_and_its_first_page_carry_each_configuration_s_check(tmp_path, monkeypatch):
     """Synthetic traces through nsd p695's evaluation: p695.json's restoring_force per configuration, each
     with its own law (the device FAILS at D_M along 45 deg; the lead-rubber bearing passes, 944.7 N), and
     the printed lines and p695.png's notes say each verdict with its margin."""
@@ -219,7 +219,17 @@ def test_p695_json_and_its_first_page_carry_each_configuration_s_check(tmp_path)
     assert rf["nodevice"]["directions"]["0"]["difference"] == pytest.approx(944.67, abs=0.05)
     lines = print_lines(res)
     assert "FAIL along 45 deg" in lines[1] and "margin -39.74 N" in lines[1] and "PASS" in lines[2]
+    import matplotlib.figure
+    seen = []
+    save = matplotlib.figure.Figure.savefig
+
+    def spy(fig, *a, **k):   # p695.png: each verdict with its margin on the page
+        seen.append(" ".join(t.get_text() for t in fig.texts))
+        return save(fig, *a, **k)
+    monkeypatch.setattr(matplotlib.figure.Figure, "savefig", spy)
     write_p695(res, tmp_path)
+    assert seen and "device: restoring force (ASCE/SEI 7-16 Section 17.2.4.4), device at D = 19.64 mm: FAIL along " \
+        "45 deg" in seen[0] and "margin -39.74 N" in seen[0] and "nodevice: restoring force" in seen[0]
     assert json.loads((tmp_path / "p695.json").read_text())["restoring_force"]["device"]["pass"] is False
     assert restoring_lines({"restoring_force": rf["device"]})[0].startswith("device: restoring force")
 
