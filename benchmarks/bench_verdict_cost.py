@@ -39,7 +39,7 @@ def run_once(cwd: Path, out: Path) -> dict:
     cpu: dict[str, float] = {}
     for per in list(res["runs"].values()) + list(res.get("reference_runs", {}).values()):
         for label, r in per.items():
-            kind = ("peer at h/2" if label.endswith("_h2") else "converged check (rtol 1e-11)"
+            kind = ("peer at 2h" if label.endswith("_2h") else "converged check (rtol 1e-11)"
                     if label == "converged_check" else "converged reference" if label == "converged"
                     else "order check (h/4)" if label.endswith("_h4") else label)
             cpu[kind] = cpu.get(kind, 0.0) + float(r.get("cpu_time") or 0.0)

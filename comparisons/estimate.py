@@ -1,24 +1,27 @@
 """Each engine's numerical error, estimated from the run itself (Richardson extrapolation).
 
-A fixed-step peer runs twice on every case: at its case step h (the run the gate judges) and at h/2
-(run label ``ENGINE_h2``). For a method of order p the error of the h run is, asymptotically,
+A fixed-step peer runs twice on every case: at its case step h (the run the gate judges) and at a
+companion step 2h (run label ``ENGINE_2h``). For a method of order p the error of the h run is,
+asymptotically (e(h) ~ C h^p, so d(h, 2h) ~ (r^p - 1) e(h)),
 
-    e(h) ~= d(h, h/2) * r^p / (r^p - 1),     r = steps(h/2) / steps(h)  (2 when the step halves exactly)
+    e(h) ~= d(h, 2h) / (r^p - 1),     r = steps(h) / steps(2h)  (2 when the step doubles exactly)
 
-where d(h, h/2) is the same difference metric the gate uses, measured between the two runs of the
-engine (no other engine's numbers enter). p is the order the method has on this device
-(``nominal_order``): MuJoCo's Euler and implicit integrators 1, RK4 and Exudyn's generalized-alpha
-and trapezoidal solvers 2 (RK4 is fourth order on smooth problems, but slack ropes and contact make
-the force laws non-smooth, which limits any method to about second order; the lower p gives the
-larger, safer estimate). A modelling error is the same at h and h/2, so it never enters d: an engine
-that differs from the converged reference by much more than its estimate disagrees with it about
-the model.
+where d(h, 2h) is the same difference metric the gate uses, measured between the two runs of the
+engine (no other engine's numbers enter). The companion is coarser, not finer: the pair costs 1.5x
+the judged run instead of 3x (an h/2 companion), for an estimate of the same run with the same
+meaning (docs/validation.md compares the two on the gate's cases). p is the order the method has on
+this device (``nominal_order``): MuJoCo's Euler and implicit integrators 1, RK4 and Exudyn's
+generalized-alpha and trapezoidal solvers 2 (RK4 is fourth order on smooth problems, but slack ropes
+and contact make the force laws non-smooth, which limits any method to about second order; the lower
+p gives the larger, safer estimate). A modelling error is the same at h and 2h, so it never enters
+d: an engine that differs from the converged reference by much more than its estimate disagrees
+with it about the model.
 
 The in-house engine's estimate is its difference from the converged reference (its own run at rtol
 1e-10: the same code at a far tighter tolerance), and the converged reference's own estimate is its
 difference from a run at rtol 1e-11 (``comparisons.reference.CHECK_SETTINGS``).
 
-The order observed against the converged reference, log2(e(h) / e(h/2)), is kept as evidence: when
+The order observed against the converged reference, log2(e(2h) / e(h)), is kept as evidence: when
 the engine agrees with the reference and the observed order lies more than one below p, the
 estimate may be too small (the steps are not yet asymptotic) and the verdict says so.
 """
@@ -28,6 +31,7 @@ import math
 
 # the setting each fixed-step peer's step is read from, and the settings that scale with it
 STEP_SETTING = {"mujoco": "timestep", "exudyn": "step_size"}
+COMPANION = 2   # the companion run's step over the judged run's
 # an adaptive peer's tolerance ladder: (setting, factor, order). Its estimate is its difference from its
 # own run at setting x factor (a far tighter tolerance: the same code, much nearer the exact solution),
 # as the in-house engine's is its difference from its converged run; ``order`` the error's assumed
@@ -45,17 +49,46 @@ def nominal_order(engine: str, settings: dict) -> float:
 
 
 def richardson_factor(order: float, ratio: float = 2.0) -> float:
-    """r^p / (r^p - 1): the h run's error over its difference from the run at h / r."""
+    """r^p / (r^p - 1): a run's error over its difference from a run at a step r times smaller."""
     q = ratio ** order
     return q / (q - 1.0) if q > 1.0 else math.inf
 
 
-def step_ratio(stats_h: dict, stats_h2: dict) -> float:
-    """The steps' ratio the two runs really had (the step divides each output interval, so a halved
-    setting may not halve the step exactly); 2 when the runs do not say."""
-    n1, n2 = stats_h.get("steps"), stats_h2.get("steps")
-    if n1 and n2 and n2 > n1:
-        return float(n2) / float(n1)
+def companion_factor(order: float, ratio: float = 2.0) -> float:
+    """1 / (r^p - 1): a run's error over its difference from its companion at a step r times larger."""
+    q = ratio ** order
+    return 1.0 / (q - 1.0) if q > 1.0 else math.inf
+
+
+def companion_label(engine: str, step: float, dt_out: float | None = None) -> tuple[str, float]:
+    """(label, step multiplier) of a peer's companion run: its step x COMPANION, unless the judged step
+    already spans the output interval ``dt_out`` (a step divides each interval, so a coarser one
+    cannot be taken): then its step halved, the finer companion (label ``ENGINE_h2``)."""
+    if dt_out is not None and math.ceil(float(dt_out) / float(step) - 1e-9) < 2:
+        return f"{engine}_h2", 0.5
+    return f"{engine}_{COMPANION}h", float(COMPANION)
+
+
+def pair_factor(order: float, stats_h: dict, stats_c: dict, coarser: bool = True) -> tuple[float, float]:
+    """(factor, ratio): the judged run's error over its difference from its companion, from the step
+    counts the two runs really had (the companion's ``coarser`` side when they do not say); inf when
+    the two took the same steps (no estimate can be made from them)."""
+    n_h, n_c = stats_h.get("steps"), stats_c.get("steps")
+    if n_h and n_c:
+        if n_h == n_c:
+            return math.inf, 1.0
+        coarser = n_c < n_h
+    ratio = step_ratio(stats_h, stats_c)
+    return (companion_factor(order, ratio) if coarser else richardson_factor(order, ratio)), ratio
+
+
+def step_ratio(stats_a: dict, stats_b: dict) -> float:
+    """The steps' ratio the two runs really had, the finer's count over the coarser's (the step divides
+    each output interval, so a doubled or halved setting may not double or halve it exactly); 2 when
+    the runs do not say."""
+    n1, n2 = stats_a.get("steps"), stats_b.get("steps")
+    if n1 and n2 and n1 != n2:
+        return float(max(n1, n2)) / float(min(n1, n2))
     return 2.0
 
 
@@ -70,10 +103,10 @@ def refined_settings(engine: str, merged: dict, case_settings: dict, div: float)
     return out
 
 
-def observed_order(e_h: float, e_h2: float, ratio: float = 2.0) -> float:
-    """log_r(e(h) / e(h/r)) of two errors against the reference (nan when undefined)."""
-    if e_h > 0 and e_h2 > 0 and ratio > 1:
-        return math.log(e_h / e_h2) / math.log(ratio)
+def observed_order(e_coarse: float, e_fine: float, ratio: float = 2.0) -> float:
+    """log_r(e(rh) / e(h)) of two errors against the reference (nan when undefined)."""
+    if e_coarse > 0 and e_fine > 0 and ratio > 1:
+        return math.log(e_coarse / e_fine) / math.log(ratio)
     return float("nan")
 
 

@@ -125,14 +125,14 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
     rule = getattr(tolerances, "rule", None)   # None: the regression profile's fixed limits
     extra = [(c, CONVERGED) for c in cases] + [(by_name[n], lab) for n, lab in order_labels(order, engines)
                                                 if n in by_name]
-    if rule is not None:   # each peer at h/2 and the reference's own check: the engines' error estimates
+    if rule is not None:   # each peer at 2h and the reference's own check: the engines' error estimates
         extra += [j for j in estimate_labels(cases, engines) if j not in extra]
     jobs = [(c, e) for c in cases for e in engines] + extra
     # longest first: seismic runs cost ~10x a drive run per model second (loaded 2-core machine)
     jobs.sort(key=lambda j: -_cost(j[1]) * _model_time(j[0]) * (10.0 if isinstance(j[0], SeismicCase) else 1.0))
     workers = workers or min(len(jobs), os.cpu_count() or 1)
     runs: dict[str, dict[str, dict]] = {c.name: {} for c in cases}
-    reference_runs: dict[str, dict[str, dict]] = {c.name: {} for c in cases}   # converged and step-halved
+    reference_runs: dict[str, dict[str, dict]] = {c.name: {} for c in cases}   # converged, the companions and step-halved
     results: dict[tuple[str, str], RunResult] = {}
     started = time.perf_counter()
     tally = tally if tally is not None else {}
@@ -340,11 +340,13 @@ def _seismic_rows(c, engines, pairs, tolerances, results) -> list[dict]:
 
 
 def _cost(label: str) -> float:
-    """Rough relative cost of a run label, for scheduling (a halved step costs its divisor)."""
-    from comparisons.reference import HALVED
-    m = HALVED.fullmatch(label)
-    if m:
+    """Rough relative cost of a run label, for scheduling (a step divided by N costs N times, a step
+    times N costs 1/N)."""
+    from comparisons.reference import COARSER, HALVED
+    if m := HALVED.fullmatch(label):
         return ENGINE_COST.get(m.group(1), 1.0) * int(m.group(2))
+    if m := COARSER.fullmatch(label):
+        return ENGINE_COST.get(m.group(1), 1.0) / int(m.group(2))
     return ENGINE_COST.get(label, 1.0)
 
 

@@ -2,7 +2,7 @@
 
 For each case: every engine's difference from the converged reference (the gated values), the
 reference's own error (converged against its rtol 1e-11 check), each peer's difference between its
-h and h/2 runs (its estimate), its own checks (closure, tracking, energy balance); and, reported but
+h and 2h runs (its estimate), its own checks (closure, tracking, energy balance); and, reported but
 not gated, every engine against the in-house run at its case settings and the peers against each other.
 """
 from __future__ import annotations
@@ -70,16 +70,16 @@ def judge_case(case, engines: list[str], results: dict, entries: dict, rule: Rul
             evidence[e] = {"note": "its difference from the converged reference (the same code, rtol 1e-10)",
                            "setting": "rtol" if rtol else None, "step": rtol, "order": 1.0}
             continue
-        h2 = peer_label(e)
-        if e not in STEP_SETTING or (case.name, h2) not in results:
-            why = (entries.get(h2) or {}).get("message", "not run")
-            evidence[e] = {"note": f"no error estimate: its run at h/2 failed or did not run ({why})"}
+        pair = peer_label(e)
+        if e not in STEP_SETTING or (case.name, pair) not in results:
+            why = (entries.get(pair) or {}).get("message", "not run")
+            evidence[e] = {"note": f"no error estimate: its companion run at 2h failed or did not run ({why})"}
             continue
-        to_ref_h2 = diff(h2, CONVERGED)
+        to_ref_pair = diff(pair, CONVERGED)
         ev = peer_evidence(e, case.settings.get(e, {}), (entries.get(e) or {}).get("stats") or {},
-                           (entries.get(h2) or {}).get("stats") or {}, values[e][primary], to_ref_h2[primary],
+                           (entries.get(pair) or {}).get("stats") or {}, values[e][primary], to_ref_pair[primary],
                            seismic)
-        estimates[e] = estimate_from_pair(diff(e, h2), ev["factor"], rule.beta)
+        estimates[e] = estimate_from_pair(diff(e, pair), ev["factor"], rule.beta)
         evidence[e] = ev
     scales = seismic_scales(conv) if seismic else drive_scales(conv, case.drive.frequency, case.drive.amplitude)
     # a stiffness-region boundary is a sample of the output grid: it can move by a sample either way

@@ -4,7 +4,7 @@ Every engine builds the mechanism from the same description (nsd_core.model) thr
 (``BUILDERS``: one module each, ``simulate(model, duration, dt_out, settings) -> ModelRun``); no line
 here or in a builder knows which mechanism it runs. The verdict is the gate's rule
 (comparisons.verdict): each engine's difference from the converged in-house reference within
-k x its own error estimate (peers: Richardson from their runs at h and h/2; the in-house engine: its
+k x its own error estimate (peers: Richardson from their runs at h and 2h; the in-house engine: its
 difference from the converged run), and that error within each output's engineering tolerance
 (the output's ``tolerance``, a fraction of its ``scale``: given, or the reference's peak |value|).
 With a reference solution (a case's ``reference``), every engine and the converged reference are
@@ -18,8 +18,8 @@ import time
 
 import numpy as np
 
-from comparisons.estimate import (STEP_SETTING, TIGHT_LABEL, TOLERANCE_LADDER, nominal_order, observed_order,
-                                  richardson_factor, step_ratio)
+from comparisons.estimate import (STEP_SETTING, TIGHT_LABEL, TOLERANCE_LADDER, companion_label, nominal_order,
+                                  observed_order, pair_factor)
 from comparisons.model_cases import ModelCase
 from comparisons.verdict import Rule, case_verdicts, pass_sentence
 from nsd_core.model.description import Model
@@ -35,21 +35,37 @@ OWN_TOLERANCE = {"closure_max": 1e-6, "tracking_error": 1e-6}   # m (or rad): th
 SOLUTION = " vs solution"
 
 
+def companion(case: ModelCase, engine: str) -> tuple[str, dict]:
+    """(label, settings) of a fixed-step peer's companion run on ``case``: the second run of its
+    estimate, at twice its step (or half of it where its step spans an output interval)."""
+    own = dict(case.settings.get(engine, {}))
+    key = STEP_SETTING[engine]
+    step = float(own.get(key, builder(engine).default_settings[key]))
+    label, times = companion_label(engine, step, case.dt_out)
+    return label, {**own, key: step * times}
+
+
+def ordered(e_pair: float, e_run: float, stats_pair: dict, stats_run: dict) -> tuple[float, float]:
+    """(coarser run's error, finer run's error) of a run and its companion."""
+    finer_pair = (stats_pair.get("steps") or 0) > (stats_run.get("steps") or 0)
+    return (e_run, e_pair) if finer_pair else (e_pair, e_run)
+
+
 def builder(engine: str):
     return importlib.import_module(BUILDERS[engine])
 
 
 def run_plan(case: ModelCase, engines: list[str]) -> list[tuple[str, str, dict]]:
     """(label, engine, settings) of every run a case needs: each engine at its case settings, each
-    fixed-step peer again at half its step, and the converged reference and its check."""
+    fixed-step peer again at twice its step (its estimate's companion), and the converged reference and
+    its check."""
     plan = []
     for e in engines:
         own = dict(case.settings.get(e, {}))
         plan.append((e, e, own))
         if e in STEP_SETTING:
-            key = STEP_SETTING[e]
-            step = own.get(key, builder(e).default_settings[key])
-            plan.append((f"{e}_h2", e, {**own, key: step / 2.0}))
+            label, settings = companion(case, e)
+            plan.append((label, e, settings))
         if e in TOLERANCE_LADDER:   # an adaptive peer: once more at a far tighter tolerance (its estimate)
             plan.append((TIGHT_LABEL.format(engine=e), e, tightened(e, own)))
     base = dict(case.settings.get(REFERENCE, {}))
@@ -116,19 +132,19 @@ def judge(model: Model, case: ModelCase, engines: list[str], runs: dict, rule: R
         values[e] = {**d, "closure_max": runs[e].stats.get("closure_max", 0.0)}
         if model.prescribed:
             values[e]["tracking_error"] = runs[e].stats.get("tracking_error", 0.0)
-        if e in STEP_SETTING and f"{e}_h2" in runs:
-            h2 = runs[f"{e}_h2"]
+        if e in STEP_SETTING and companion(case, e)[0] in runs:
+            pair = runs[companion(case, e)[0]]
             p = nominal_order(e, {**builder(e).default_settings, **case.settings.get(e, {})})
-            ratio = step_ratio(runs[e].stats, h2.stats)
-            factor = richardson_factor(p, ratio)
-            estimates[e] = {k: factor * v for k, v in differences(runs[e], h2, sc).items()}
+            factor, ratio = pair_factor(p, runs[e].stats, pair.stats)
+            estimates[e] = {k: factor * v for k, v in differences(runs[e], pair, sc).items()}
             primary = max(d, key=lambda k: d[k])
-            d2 = differences(h2, conv, sc)
+            d2 = differences(pair, conv, sc)
             key = STEP_SETTING[e]
             evidence[e] = {"order": p, "ratio": ratio, "factor": factor, "setting": key,
                            "step": float(runs[e].stats.get(key) or {**builder(e).default_settings,
                                                                   **case.settings.get(e, {})}[key]),
-                           "observed_order": observed_order(d[primary], d2[primary], ratio), "primary_error": d[primary]}
+                           "observed_order": observed_order(*ordered(d2[primary], d[primary], pair.stats, runs[e].stats), ratio),
+                           "primary_error": d[primary]}
         elif e in TOLERANCE_LADDER and TIGHT_LABEL.format(engine=e) in runs:   # its own tolerance ladder
             key, factor, order = TOLERANCE_LADDER[e]
             estimates[e] = differences(runs[e], runs[TIGHT_LABEL.format(engine=e)], sc)

@@ -28,6 +28,7 @@ from comparisons.engines.perturb import KINDS, check, describe, perturbed
 from comparisons.harness import limit_for
 from comparisons.judge import differences, judge_case, own_checks
 from comparisons.reference import CHECK, CONVERGED, CONVERGED_SETTINGS, halved_settings, run_spec
+from comparisons.estimate import COMPANION
 from comparisons.verdict import peer_label
 from comparisons.warmup import job_warmup, spec as warm_spec
 from nsd_core.device.params import ParameterError
@@ -72,7 +73,7 @@ def _limits_verdict(case, engine: str, tolerances, run, ref, run_summary, ref_su
 
 
 def _rule_verdict(case, engine: str, rule, jobs: dict, refs: dict) -> dict[str, Any]:
-    """The estimated rule on one perturbed engine: its runs at h and h/2 against the nominal converged
+    """The estimated rule on one perturbed engine: its runs at h and 2h against the nominal converged
     reference and its check (comparisons.judge); seen when the verdict fails."""
     results, entries = {}, {}
     for label, job in {**refs, **jobs}.items():
@@ -120,7 +121,7 @@ def power_study(cases: list, engines: list[str], tolerances, out_dir: str | Path
                 log: Callable[[str], None] = print) -> dict[str, Any]:
     """Run every injection on every engine and case; write ``out_dir/power.json``; return the summary.
     Under the estimated rule (a tolerance file with [engineering]) each perturbed engine also runs at
-    h/2, so its estimate is its own; under fixed limits the run alone is measured."""
+    2h, so its estimate is its own; under fixed limits the run alone is measured."""
     injections = INJECTIONS if injections is None else injections
     rule = getattr(tolerances, "rule", None)
     started = time.perf_counter()
@@ -147,7 +148,7 @@ def power_study(cases: list, engines: list[str], tolerances, out_dir: str | Path
                     futs = {e: _submit(pool, c, e, c.params_for(e), settings)}
                     if rule is not None:
                         pc = dataclasses.replace(c, settings={**c.settings, e: settings})
-                        futs[peer_label(e)] = _submit(pool, c, e, c.params_for(e), halved_settings(pc, e, 2))
+                        futs[peer_label(e)] = _submit(pool, c, e, c.params_for(e), halved_settings(pc, e, 1.0 / COMPANION))
                     out.append((c, e, spec, s, scale, futs))
             expected[(describe(spec), scale)] = len(out)   # the runs this size of this error takes
             return out

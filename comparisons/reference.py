@@ -5,8 +5,9 @@ Every engine (the in-house run at the case's settings included) is measured agai
 reference*: the in-house engine at a tolerance far below any engine's error (CONVERGED_SETTINGS),
 computed once per case and kept like any other run. A more accurate run can then only come closer
 to it: tightening the in-house tolerance, or a change that moves the in-house results at round-off,
-cannot turn the gate red. Runs have labels: an engine's name, ``converged``, or ``ENGINE_hN`` (the
-engine with the step setting of its ``[order]`` entry divided by N).
+cannot turn the gate red. Runs have labels: an engine's name, ``converged``, ``ENGINE_hN`` (the
+engine with the step setting of its ``[order]`` entry divided by N) or ``ENGINE_Nh`` (its step times
+N: the companion run of its error estimate, comparisons.estimate).
 """
 from __future__ import annotations
 
@@ -24,6 +25,7 @@ CONVERGED_SETTINGS = {"method": "DOP853", "rtol": 1e-10, "atol": 1e-12, "max_ste
 CHECK_SETTINGS = {**CONVERGED_SETTINGS, "rtol": 1e-11, "atol": 1e-13}
 CHECK = "converged_check"   # the run label of the reference's own check (its error estimate)
 HALVED = re.compile(r"([a-z]+)_h(\d+)")
+COARSER = re.compile(r"([a-z]+)_(\d+)h")
 ORDER_METRIC = "max_dF_rel"   # the error whose fall with the step gives the observed order
 ORDER_DIVISORS = (2, 4)       # the step halved twice
 
@@ -39,11 +41,16 @@ def run_spec(case, label: str, order: dict | None = None) -> tuple[str, object, 
     if m:
         engine, div = m.group(1), int(m.group(2))
         return engine, case.params_for(engine), halved_settings(case, engine, div)
+    m = COARSER.fullmatch(label)
+    if m:
+        engine, times = m.group(1), int(m.group(2))
+        return engine, case.params_for(engine), halved_settings(case, engine, 1.0 / times)
     return label, case.params_for(label), case.settings.get(label, {})
 
 
-def halved_settings(case, engine: str, div: int) -> dict:
-    """The case's settings of ``engine`` with its step (and every cap on it) divided by ``div``."""
+def halved_settings(case, engine: str, div: float) -> dict:
+    """The case's settings of ``engine`` with its step (and every cap on it) divided by ``div``
+    (a ``div`` below 1 multiplies it)."""
     from comparisons.config import SeismicCase
     from comparisons.engines import get_engine
     from comparisons.estimate import refined_settings

@@ -5,7 +5,7 @@ whose estimate is uncertain (observed order far below its method's) runs once at
 The step asked for is the one at which the estimated error falls to 0.8 x the engineering tolerance
 (error ~ step^p, comparisons.estimate.step_needed). The cap: at most ``MAX_REFINE`` x the case's
 steps (the step not below the case's step / MAX_REFINE); a step the cap stops is used at the cap and
-the verdict says so. Only the refined runs (and their h/2 runs) are new: every other run is read back
+the verdict says so. Only the refined runs (and their 2h companions) are new: every other run is read back
 from the folder (the same inputs, the same kept runs).
 """
 from __future__ import annotations

@@ -13,7 +13,7 @@ PASS = every engine consistent and accurate enough on every case. The estimates 
 (``comparisons.estimate``): nothing here was derived on the nominal device, so a variant of the
 device, a user's case file or another mechanism gets a verdict of the same meaning.
 
-A scalar difference (a peak, the loop work) can cancel by chance between the h and h/2 runs; its
+A scalar difference (a peak, the loop work) can cancel by chance between the h and 2h runs; its
 estimate is at least ``beta`` x the estimate of the max-norm difference of the same quantity
 (``SCALAR_OF``). A floor below which differences are round-off (``FLOOR``) keeps two equal runs
 from failing on 0 <= 0.
@@ -25,8 +25,7 @@ import math
 import numpy as np
 
 from comparisons.engines import get_engine
-from comparisons.estimate import (STEP_SETTING, nominal_order, observed_order, richardson_factor, step_needed,
-                                  step_ratio)
+from comparisons.estimate import COMPANION, STEP_SETTING, nominal_order, observed_order, pair_factor, step_needed
 
 CONVERGED, CHECK = "converged", "converged_check"
 FLOOR = 1e-12                      # relative differences below this are round-off
@@ -45,12 +44,12 @@ K, BETA = 3.0, 0.1
 
 
 def peer_label(engine: str) -> str:
-    """The run label of a peer's step halved (the second run of its estimate)."""
-    return f"{engine}_h2"
+    """The run label of a peer's companion run, its step doubled (the second run of its estimate)."""
+    return f"{engine}_{COMPANION}h"
 
 
 def estimate_labels(cases, engines) -> list[tuple]:
-    """The extra runs the estimates need: each peer at h/2 on each case, the reference's check."""
+    """The extra runs the estimates need: each peer at 2h on each case, the reference's check."""
     peers = [e for e in engines if e in STEP_SETTING]
     return [(c, peer_label(e)) for c in cases for e in peers] + [(c, CHECK) for c in cases]
 
@@ -212,23 +211,24 @@ def _units(value: float, unit: str) -> str:
     return f"{value:.3g} {unit}"
 
 
-def peer_evidence(engine: str, case_settings: dict, stats_h: dict, stats_h2: dict, e_h: float, e_h2: float,
+def peer_evidence(engine: str, case_settings: dict, stats_h: dict, stats_2h: dict, e_h: float, e_2h: float,
                   seismic: bool) -> dict:
-    """The step, order and observed order of a peer's two runs on one case."""
+    """The step, order and observed order of a peer's two runs on one case (the judged run at h, its
+    companion at 2h; ``e_*``: each one's difference from the converged reference)."""
     eng = get_engine(engine)
     merged = {**(eng.seismic_default_settings if seismic else eng.default_settings), **(case_settings or {})}
     p = nominal_order(engine, merged)
-    ratio = step_ratio(stats_h, stats_h2)
+    factor, ratio = pair_factor(p, stats_h, stats_2h)
     setting = STEP_SETTING[engine]
     step = stats_h.get(setting) or merged[setting]
-    return {"order": p, "ratio": ratio, "factor": richardson_factor(p, ratio), "setting": setting, "step": float(step),
-            "observed_order": observed_order(e_h, e_h2, ratio), "primary_error": e_h}
+    return {"order": p, "ratio": ratio, "factor": factor, "setting": setting, "step": float(step),
+            "observed_order": observed_order(e_2h, e_h, ratio), "primary_error": e_h}
 
 
-def estimate_from_pair(diff_h_h2: dict, factor: float, beta: float) -> dict:
-    """Each metric's estimated error from its difference between the h and h/2 runs; a scalar one at
-    least beta x the estimate of the max-norm difference it derives from."""
-    out = {k: factor * _finite(v) for k, v in diff_h_h2.items()}
+def estimate_from_pair(diff_pair: dict, factor: float, beta: float) -> dict:
+    """Each metric's estimated error from its difference between the run and its companion (x
+    ``factor``); a scalar one at least beta x the estimate of the max-norm difference it derives from."""
+    out = {k: factor * _finite(v) for k, v in diff_pair.items()}
     for k, base in SCALAR_OF.items():
         if k in out and base in out:
             out[k] = max(out[k], beta * out[base])

@@ -206,7 +206,7 @@ def run(args) -> int:
     if args.power:
         if args.refine:
             raise ParameterError("--refine: applies to the gate, not to --power (each injected error is judged at "
-                                 "the case settings, with its own h/2 run)")
+                                 "the case settings, with its own 2h run)")
         return _run_power(args, base, own_files)
     for flag in ("power_cases",):
         if getattr(args, flag) is not None:

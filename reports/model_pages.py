@@ -74,7 +74,7 @@ def _case_page(summary: dict, case: str, outs: list, part: str):
     for k, o in enumerate(outs):
         ax, dx = axes[k]
         for label, r in runs.items():
-            if label.endswith("_h2") or label == "converged_check":
+            if label.endswith(("_2h", "_h2", "_tight")) or label == "converged_check":
                 continue
             style = "--" if label == "converged" else "-"
             ax.plot(r.t, r.outputs[o.name], style, color=COLORS.get(label, "C3"), lw=1, label=label)

@@ -42,7 +42,7 @@ def rule_pages(s: dict, defs: dict, units: dict, table_pages, subtitle) -> list:
     cols = [("metric", 1, "l"), ("unit", 1, "c"), ("definition (F_ref, u_ref: the converged reference's)", 1, "l"),
             ("engineering\ntolerance", 1, "r"), ("a fraction of", 1, "l")]
     k, beta = rule.get("k"), rule.get("beta")
-    text = [["estimated error", "a fixed-step peer: its difference between its runs at h and h/2 x r^p / (r^p - 1), "
+    text = [["estimated error", "a fixed-step peer: its difference between its runs at h and 2h / (r^p - 1), "
              "p its method's order (MuJoCo Euler 1, RK4 2, Exudyn 2); the in-house engine: its difference from the "
              "converged reference; the reference: its difference from its rtol 1e-11 check"],
             ["consistent", f"difference from the converged reference <= {fmt(k, 3)} x (estimated error + "
@@ -51,7 +51,7 @@ def rule_pages(s: dict, defs: dict, units: dict, table_pages, subtitle) -> list:
              "CONVERGED at these settings, with the step the estimate asks for (nsd compare --refine runs it)"],
             ["own checks", "closure, tracking and energy balance against their tolerance; an energy balance beyond the "
              "converged reference's own (the output grid's quadrature error)"],
-            ["scalar metrics", f"a peak or loop-work difference can cancel by chance between h and h/2: its estimate "
+            ["scalar metrics", f"a peak or loop-work difference can cancel by chance between h and 2h: its estimate "
              f"is at least {fmt(beta, 3)} x the estimate of the max-norm difference it comes from"],
             ["PASS", rule.get("text", "")]]
     blocks = [("The rule (comparisons/verdict.py; the constants: the tolerance file's [verdict])",
