@@ -156,7 +156,8 @@ def _building(ops, b, s: dict) -> None:
         ops.mass(node, b.masses[i], b.masses[i], 0.0, 0.0, 0.0, 0.0)
         c = 0.0 if s["building_damping"] == "rayleigh" else b.story_damping[i]
         ops.uniaxialMaterial("Elastic", tag, b.stiffnesses[i], c)
-        ops.element("zeroLength", 100 + i, below, node, "-mat", tag, tag, "-dir", 1, 2)
+        rayleigh = ["-doRayleigh", 1] if s["building_damping"] == "rayleigh" else []
+        ops.element("zeroLength", 100 + i, below, node, "-mat", tag, tag, "-dir", 1, 2, *rayleigh)
         if s["building_damping"] == "slab" and b.slab_damping[i] > 0:
             ops.uniaxialMaterial("Elastic", tag + 1, 0.0, b.slab_damping[i])
             ops.element("zeroLength", 200 + i, 2, node, "-mat", tag + 1, tag + 1, "-dir", 1, 2)
