@@ -18,7 +18,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results"
 DOCS = (ROOT / "docs" / "validation.md", ROOT / "docs" / "performance.md", ROOT / "docs" / "engine-codegen.md",
-        ROOT / "docs" / "models.md")
+        ROOT / "docs" / "models.md", ROOT / "docs" / "p695.md")
 BLOCK = re.compile(r"(<!-- generated: (?P<name>[a-z0-9_-]+) -->\n)(?P<body>.*?)(<!-- end generated: (?P=name) -->)", re.S)
 
 
@@ -679,6 +679,18 @@ def bench_dask() -> str:
                      "overhead per empty task, ms", "load start / end"], rows))
 
 
+def p695_evaluation() -> str:
+    """A whole nsd p695 run (benchmarks/p695_results.py; benchmarks/docs_p695.py)."""
+    from benchmarks.docs_p695 import evaluation
+    return evaluation(load, table, g, plain)
+
+
+def p695_what_passes() -> str:
+    """What passes: the capacities, the device variant, its three engines (benchmarks/docs_p695.py)."""
+    from benchmarks.docs_p695 import what_passes
+    return what_passes(load, table, g, plain)
+
+
 RENDER = {"compare-gate": compare_gate, "convergence": convergence, "tables-5-6": tables_5_6,
           "engine-benchmarks": engine_benchmarks, "direction-study": direction_study, "bench-cycle": bench_cycle,
           "bench-rhs": bench_rhs, "bench-seismic": bench_seismic,
@@ -689,7 +701,8 @@ RENDER = {"compare-gate": compare_gate, "convergence": convergence, "tables-5-6"
           "gate-described": gate_described,
           "work-precision": work_precision, "bench-cold": bench_cold, "bench-peer-seismic": bench_peer_seismic,
           "bench-ida-farfield": bench_ida_farfield, "bench-dask": bench_dask,
-          "symbolic-equations": symbolic_equations, "symbolic-models": symbolic_models}
+          "symbolic-equations": symbolic_equations, "symbolic-models": symbolic_models,
+          "p695-evaluation": p695_evaluation, "p695-what-passes": p695_what_passes}
 
 
 def regenerate(text: str) -> str:

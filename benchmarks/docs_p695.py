@@ -79,7 +79,10 @@ def evaluation(load, table, g, plain) -> str:
 
 def _capacity(e: dict, target: str, g) -> str:
     if not e["found"]:
-        return f"none ({e.get('note', '')})"
+        if e.get("ACMR") is None:
+            return f"none ({e.get('note', '')})"
+        return (f"none up to {g(e['capacity'] * 1e3, 4)} mm: there Ŝ_CT {g(e['S_CT'], 4)}, ACMR {g(e['ACMR'], 3)} "
+                f"< {g(e[target], 4)} (median record {e['how']})")
     return (f"**{g(e['capacity'] * 1e3, 4)} mm** ({g(e['capacity'] * 1e3 * LENGTH_SCALE, 3)} mm full scale): "
             f"Ŝ_CT {g(e['S_CT'], 4)}, ACMR {g(e['ACMR'], 4)} ≥ {g(e[target], 4)}, "
             f"μ_T {g(e['mu_T'], 4)}; median record {e['median_record']} {e['how']}, "
