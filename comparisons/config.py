@@ -382,6 +382,9 @@ def _seismic_case(i: int, raw: dict, d_params: dict, base_params: Params | None)
     engine_params = {e: params.replace(**p) for e, p in
                      _engine_tables(f"{w}.engine_params", raw.get("engine_params", {})).items()}
     building = None if "building" not in raw else dict(_table(f"{w}.building", raw["building"]))
+    for k, v in (building or {}).items():   # TOML numbers: a string here is a type mistake (the command line's are parsed)
+        if any(isinstance(x, str) for x in (v if isinstance(v, list) else [v])):
+            raise ParameterError(f"{w}.building.{k} = {v!r}: must be a number or an array of numbers, not a string")
     case = SeismicCase(name, motion, spec, params, duration, dt_out, device, dict(structure), settings, engine_params,
                        building)
     if building is not None:

@@ -81,7 +81,9 @@ def load_model_cases(model: Model, cases_path: str | None, engines) -> list[Mode
 
 
 def _case(i: int, t: dict, model: Model, folder: Path, engines) -> ModelCase:
-    where = f"case[{i}]"
+    given = t.get("name") if isinstance(t, dict) else None
+    where = (f"case.{given}" if isinstance(given, str) and given and given not in (".", "..")
+             and all(c.isalnum() or c in "_-." for c in given) else f"case[{i}]")
     if not isinstance(t, dict):
         raise ModelError(f"{where} = {t!r}: must be a table")
     # every engine's table is allowed (a file names settings for all three; --engines picks which run)

@@ -72,8 +72,20 @@ def _collapse_limit(text: str, capacity: float):
     if text.strip() == "capacity":
         return Limit("stroke", capacity)
     if text.split("=")[0].strip() in ("drift", "impact"):
-        return parse_limit(text)
+        try:   # nsd ida's --limit parser: its message names the option typed here
+            return parse_limit(text)
+        except ParameterError as e:
+            said = str(e)
+            raise ParameterError("--collapse" + said[len("--limit"):] if said.startswith("--limit ") else said) from None
     raise ParameterError(f"--collapse {text!r}: unknown surrogate; allowed: {COLLAPSE}")
+
+
+def _no_repeat(option: str, text: str | None) -> None:
+    """A NAME=VALUE list names each NAME once (a repeated one is refused, not the last kept)."""
+    names = [item.partition("=")[0].strip().upper() for item in (text or "").split(",") if item.strip()]
+    for n in names:
+        if names.count(n) > 1:
+            raise ParameterError(f"{option} {text!r}: {n} is given {names.count(n)} times; give each once")
 
 
 def _isolators(text: str) -> list[str]:
@@ -133,6 +145,7 @@ def run(args) -> int:
     reject_record_set_in_set(args.set)
     records = parse_records(args.records, "farfield")
     sdc = p695.check_sdc(args.sdc)
+    _no_repeat("--quality", args.quality)
     ratings = p695.parse_ratings(args.quality)
     whole("--bootstrap", args.bootstrap, 100, 100000)
     if args.seed is not None:
@@ -166,6 +179,11 @@ def run(args) -> int:
     # the set's median Sa at T (every component of the chosen records): a level is this x the common scale
     s_nrt = float(np.median([component_sa(c.t, c.a, period) for m in motions.values() for c in m.comp]))
     out = check_out_dir("--out", args.out)
+    if cap is None:   # a device without a working range: the capacity falls back to the rod's length, said
+        from nsd_cli.ida_states import default_capacity
+        value, source = default_capacity(params, structure)
+        if "rod" in source:
+            print(f"nsd p695: note: collapse capacity {value:g} m = {source}; give --capacity to choose another")
     common = dict(ground=ground, params=params.to_dict(), duration=args.duration, dt_out=1e-3, settings=solver,
                   code=code_fingerprint(), states=states.to_dict(), set="farfield")
     structures = {name: (name == "device", structure if name in ("device", "linear") else

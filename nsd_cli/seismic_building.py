@@ -32,6 +32,10 @@ def building_overrides(args) -> dict | None:
         table = read_toml(args.params, "--params").get("building")
         if table is not None and not isinstance(table, dict):
             raise ParameterError(f"--params {args.params}: building = {table!r}: must be a table of name = value")
+        for k, v in (table or {}).items():   # TOML numbers: a string here is a type mistake
+            if any(isinstance(x, str) for x in (v if isinstance(v, list) else [v])):
+                raise ParameterError(f"--params {args.params}: building.{k} = {v!r}: must be a number or an array "
+                                     "of numbers, not a string")
     items = getattr(args, "building", None) or []
     if table is None and not items:
         return None

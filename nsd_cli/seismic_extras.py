@@ -60,9 +60,13 @@ def isolated_structure(args, params):
 def isolator_choice(args) -> str:
     """--isolator's value, checked (one line on anything else)."""
     from nsd_core.device.isolators import CHOICES
-    kind = getattr(args, "isolator", None) or "device"
+    kind = getattr(args, "isolator", None)
+    kind = "device" if kind is None else kind
     if kind not in CHOICES:
         raise ParameterError(f"--isolator {kind!r}: allowed {', '.join(CHOICES)}")
+    if kind != "device" and getattr(args, "fixed_base", False):
+        raise ParameterError(f"--isolator {kind}: --fixed-base holds the slab to the ground, so the run has no "
+                             "isolator; leave one out")
     return kind
 
 

@@ -159,7 +159,7 @@ def _parse_with_output(name: str, output: dict):
     ("fourbar_spring", {"element": "spring", "source": "drive"},
      "outputs.W: give exactly one of element (a force element) or source (excitation, drive)"),
     ("fourbar_spring", {}, "outputs.W: give exactly one of element (a force element) or source (excitation, drive)"),
-    ("fourbar_spring", {"element": "spring", "term": "kinetic", "sorce": "x"}, "outputs[4].sorce: unknown field"),
+    ("fourbar_spring", {"element": "spring", "term": "kinetic", "sorce": "x"}, "outputs.W.sorce: unknown field"),
 ])
 def test_hostile_work_outputs_one_line(name, output, message):
     with pytest.raises(ModelError) as e:

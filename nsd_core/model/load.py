@@ -203,8 +203,14 @@ def _body_ref(where: str, v, names) -> str:
     return v
 
 
+def _where(kind: str, i: int, t) -> str:
+    """How a message names the i-th table of ``kind``: by its name where it has a usable one."""
+    given = t.get("name") if isinstance(t, dict) else None
+    return f"{kind}.{given}" if _is_name(given) else f"{kind}[{i}]"
+
+
 def _loop(i: int, t: dict, names) -> Loop:
-    where = f"loops[{i}]"
+    where = _where("loops", i, t)
     _fields(where, t, {"name", "type", "body_a", "point_a", "body_b", "point_b", "axis_a", "axis_b"},
             ("body_a", "body_b"))
     name = _name(f"{where}.name", t.get("name", f"loop{i}"))
@@ -240,7 +246,7 @@ def _dof(where: str, t: dict, bodies, key="joint") -> tuple[str, int]:
 
 
 def _force(i: int, t: dict, bodies) -> ForceElement:
-    where = f"forces[{i}]"
+    where = _where("forces", i, t)
     _fields(where, t, {"name", "law", "body_a", "point_a", "body_b", "point_b", "joint", "dof", "dofs", "parameters",
                        "direction"}, ("law",))
     name = _name(f"{where}.name", t.get("name", f"force{i}"))
@@ -278,7 +284,7 @@ def _force(i: int, t: dict, bodies) -> ForceElement:
 
 
 def _prescribed(i: int, t: dict, bodies) -> Prescribed:
-    where = f"prescribed[{i}]"
+    where = _where("prescribed", i, t)
     _fields(where, t, {"name", "joint", "dof", "motion"} | {k for v in MOTION_KINDS.values() for k in v},
             ("joint", "motion"))
     name = _name(f"{where}.name", t.get("name", f"drive{i}"))
@@ -328,7 +334,7 @@ def _device_path(where: str, t: dict) -> dict:
 
 
 def _output(i: int, t: dict, model: Model) -> Output:
-    where = f"outputs[{i}]"
+    where = _where("outputs", i, t)
     _fields(where, t, {"name", "kind", "body", "point", "component", "joint", "dof", "element", "term",
                        "source", "tolerance", "scale"}, ("kind",))
     name = _name(f"{where}.name", t.get("name", f"output{i}"))
