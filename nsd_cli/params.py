@@ -21,6 +21,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--format", choices=("table", "toml"), default=None,
                    help="table (default on the terminal) or toml (default with --out: a parameter file)")
     add_param_arguments(p, "parameter overrides to list instead of the defaults")
+    p.add_argument("--resize", action="store_true",
+                   help="list the isolated structure derived from the device (as nsd seismic --resize) instead of the "
+                        "design basis's")
     p.add_argument("--out", default=None, metavar="FILE", help="write to FILE instead of printing")
 
 
@@ -73,7 +76,7 @@ def run(args) -> int:
     fmt = args.format or ("toml" if args.out else "table")
     try:
         structure = isolated_structure(args, params)   # the structure nsd seismic uses (the same function)
-    except ParameterError as e:  # (kept for a structure that cannot be built)
+    except ParameterError as e:  # --resize: a variant without negative stiffness has no derived structure
         structure, note = None, f"# no default isolated structure: {e}\n"
     rows_p = param_rows(params)
     rows_s = structure_rows(structure, params) if structure is not None else []

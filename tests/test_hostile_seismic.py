@@ -412,13 +412,17 @@ def test_nsd_ida_resumes_a_folder_whose_stored_run_is_damaged(tmp_path, damage):
 
 
 def test_nsd_params_lists_a_device_without_a_default_structure(tmp_path):
-    """In a real process: the device variant's parameters and a note, exit 0, no traceback; nsd seismic
-    on it is one line naming the override, exit 2, unless the structure is given."""
+    """In a real process: the device variant's parameters and, with --resize, a note, exit 0, no traceback
+    (without it the design basis's structure, the one nsd seismic runs it on); nsd seismic --resize on it
+    is one line naming the override, exit 2, unless the structure is given."""
     run = lambda *a: subprocess.run([sys.executable, "-m", "nsd_cli.main", *a], capture_output=True, text=True,  # noqa: E731
                                     timeout=300, cwd=tmp_path)
-    p = run("params", "--set", "rope_stiffness=1000")
+    p = run("params", "--set", "rope_stiffness=1000", "--resize")   # the structure derived from the device
     assert p.returncode == 0 and "Traceback" not in p.stderr, p.stderr
     assert "rope_stiffness" in p.stdout and "cannot be sized" in p.stdout
+    p = run("params", "--set", "rope_stiffness=1000")   # the design basis's, which nsd seismic runs it on
+    assert p.returncode == 0 and "cannot be sized" not in p.stdout
+    assert next(ln.split()[1] for ln in p.stdout.splitlines() if ln.startswith("mass ")) == "3743.8"
     s = run("seismic", "--ground", GROUND, "--set", "rope_stiffness=1000", "--resize", "--out", str(tmp_path / "o"))
     assert s.returncode == 2 and len(s.stderr.strip().splitlines()) == 1 and "rope_stiffness" in s.stderr, s.stderr
     assert not (tmp_path / "o").exists()
