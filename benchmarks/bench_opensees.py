@@ -64,7 +64,10 @@ def one(set_: str, rid: int, scale: float, window, kind: str, building: bool = F
     j = judge(Params(), st, g)
     ref, h = j["runs"]["converged"], j["runs"]["h"]
     v = j["verdict"]
+    iso = st.isolator
     out = {"record": f"{set_}:{rid}", "scale": scale, "window": list(window), "isolator": kind, "building": building,
+           "constants": {"k_d_N_m": iso.stiffness, "Q_N": iso.q_fast, "D_y_m": iso.yield_displacement, "n": iso.exponent,
+                         "M_kg": st.mass},
            "peak_u_m": _peak(ref, "x", "y"), "element": h.stats["element"], "step_s": h.stats["step"],
            "verdict": {k: v[k] for k in ("pass", "consistent", "accurate", "text")},
            "against_converged": j["values"], "estimates": j["estimates"], "reference_error": j["reference_error"],
