@@ -112,7 +112,7 @@ def test_opensees_agrees_with_the_in_house_engine_by_the_rule(kind, record):
     st = _structure(kind)
     j = judge(Params(), st, fema_record(set_, rid, scale=scale, window=window))
     ref = j["runs"]["converged"]
-    assert float(np.max(np.hypot(ref["x"], ref["y"]))) > 5 * st.isolator.yield_displacement   # it slid / yielded
+    assert float(np.max(np.hypot(ref["x"], ref["y"]))) > 4 * st.isolator.yield_displacement   # it slid / yielded
     assert j["verdict"]["pass"], j["verdict"]["text"]
     # the estimate is not vacuous: the observed order against the reference is near the assumed 1
     assert 0.5 < j["evidence"]["observed_order"] < 2.0, j["evidence"]
