@@ -14,6 +14,7 @@ and its check), and what each by-construction difference of OpenSees's other ele
 from __future__ import annotations
 
 import argparse
+import importlib.metadata
 import sys
 from pathlib import Path
 
@@ -82,9 +83,16 @@ def one(set_: str, rid: int, scale: float, window, kind: str, building: bool = F
 
 
 def main(argv=None) -> None:
+    import datetime as dt
+    import os
+    import platform
+    import time
+    from benchmarks.docs import loaded
+    from benchmarks.measure import _git_commit
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--out", required=True)
     a = p.parse_args(argv)
+    commit, load0, t0 = _git_commit(), os.getloadavg(), time.perf_counter()
     rows = []
     for set_, rid, scale, window, used in RECORDS:
         for kind in KINDS:
@@ -97,8 +105,16 @@ def main(argv=None) -> None:
                   flush=True)
     b = one("nearfield-pulse", 1, 0.6, (2.0, 5.0), "bilinear", building=True)
     print(f"building: {b['verdict']['text']}; rayleigh: {b['rayleigh_damping']}", flush=True)
-    atomic_write_json(a.out, {"runs": rows, "building": b, "versions": versions(),
-                              "command": "python benchmarks/bench_opensees.py --out " + a.out})
+    measured = {"date_utc": dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%d %H:%M"),
+                "machine": platform.platform(), "processor": platform.machine(), "cpus": os.cpu_count() or 1,
+                "load_average_before": [round(x, 2) for x in load0],
+                "load_average_after": [round(x, 2) for x in os.getloadavg()],
+                "wall_s": time.perf_counter() - t0, "git_commit": commit,
+                "versions": {**versions(), "openseespy": importlib.metadata.version("openseespy")}}
+    measured["loaded"] = loaded(measured)
+    atomic_write_json(a.out, {"name": "bench_opensees", "command": "python benchmarks/bench_opensees.py --out "
+                              "benchmarks/results/bench_opensees.json", "measured": measured,
+                              "data": {"runs": rows, "building": b}})
 
 
 if __name__ == "__main__":
