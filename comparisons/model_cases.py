@@ -20,6 +20,7 @@ is 0, dt_out, ..., duration, never a step silently changed.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -136,9 +137,14 @@ def _reference(where: str, t, model: Model, folder: Path, grid: np.ndarray) -> R
         stream = input_stream(path, f"{where}.reference.file", MAX_REFERENCE_BYTES, "a CSV file")
     except ParameterError as e:
         raise ModelError(str(e)) from None
+    if not stream.getvalue().strip():
+        raise ModelError(f"{where}.reference.file = {t['file']!r}: empty; a CSV with a header (t, then outputs) "
+                         "is expected")
     try:
-        data = np.genfromtxt(stream, delimiter=",", names=True)
-    except (OSError, ValueError) as e:
+        with warnings.catch_warnings():   # numpy's warnings on a damaged file: the one line below says it
+            warnings.simplefilter("ignore")
+            data = np.genfromtxt(stream, delimiter=",", names=True)
+    except (OSError, ValueError, IndexError) as e:
         raise ModelError(f"{where}.reference.file = {t['file']!r}: cannot read a CSV with a header ({e})") from None
     data = np.atleast_1d(data)
     names = data.dtype.names or ()

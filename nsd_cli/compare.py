@@ -180,6 +180,10 @@ def junit_xml(summary: dict) -> str:
 
 
 def run(args) -> int:
+    for flag in ("model", "cases", "tolerances", "junit"):   # '' is no file, not the default one
+        given = getattr(args, flag, None)
+        if given is not None and not given.strip():
+            raise ParameterError(f"--{flag} {given!r}: name a file")
     if args.model:
         from nsd_cli.compare_model import run as run_model
         return run_model(args)
