@@ -47,6 +47,7 @@ import time
 
 import numpy as np
 
+from comparisons.engines.base import EngineError
 from nsd_core.device.params import ParameterError
 
 # the shared libraries openseespylinux bundles, in the order their dependencies need them
@@ -210,7 +211,7 @@ def _static(ops) -> None:
     ops.integrator("LoadControl", 1.0)
     ops.analysis("Static")
     if ops.analyze(1) != 0:
-        raise ParameterError("engine opensees: the static step applying the weight did not converge")
+        raise EngineError("opensees: the static step applying the weight did not converge")
     ops.loadConst("-time", 0.0)
     ops.wipeAnalysis()
 
@@ -257,9 +258,9 @@ def simulate(structure, ground, t_out: np.ndarray, settings: dict | None = None)
     stories = structure.building.stories if structure.building is not None else 0
     rows = [_sample(ops, stories, element)]
     for k in range(1, len(t_out)):
-        if ops.analyze(n_sub, h) != 0:
+        if ops.analyze(n_sub, h) != 0:   # the solver's failure on this run (exit 3), not bad input
             ops.wipe()
-            raise ParameterError(f"engine opensees: Newton did not converge in the step ending near t = "
+            raise EngineError(f"opensees: Newton did not converge in the step ending near t = "
                                  f"{t_out[k]:.6g} s (tolerance {s['tolerance']:g} m, {s['max_iterations']} iterations)")
         rows.append(_sample(ops, stories, element))
     ops.wipe()
