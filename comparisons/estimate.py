@@ -60,13 +60,24 @@ def companion_factor(order: float, ratio: float = 2.0) -> float:
     return 1.0 / (q - 1.0) if q > 1.0 else math.inf
 
 
-def companion_label(engine: str, step: float, dt_out: float | None = None) -> tuple[str, float]:
-    """(label, step multiplier) of a peer's companion run: its step x COMPANION, unless the judged step
-    already spans the output interval ``dt_out`` (a step divides each interval, so a coarser one
-    cannot be taken): then its step halved, the finer companion (label ``ENGINE_h2``)."""
-    if dt_out is not None and math.ceil(float(dt_out) / float(step) - 1e-9) < 2:
-        return f"{engine}_h2", 0.5
-    return f"{engine}_{COMPANION}h", float(COMPANION)
+def companion_times(engine: str, merged: dict) -> float:
+    """The companion's step over the judged run's: COMPANION (coarser) where the method's nominal order
+    is the order it shows, 1/2 (finer) for MuJoCo's Euler and implicit integrators. Their nominal order
+    1 understates the 2 they show on a smooth drive; with the order understated, a coarser companion
+    inflates the estimate by (2^q - 1) / (2^p - 2^(p - q)) (2x for p = 1, q = 2) and so halves the
+    gate's power to see a modelling error, where a finer one does not."""
+    return 0.5 if engine == "mujoco" and nominal_order(engine, merged) < 2.0 else float(COMPANION)
+
+
+def companion_label(engine: str, merged: dict, dt_out: float | None = None) -> tuple[str, float]:
+    """(label, step multiplier) of a peer's companion run with these (merged) settings: ``ENGINE_2h``
+    at twice its step (``companion_times``), ``ENGINE_h2`` at half of it, also where the judged step
+    already spans the output interval ``dt_out`` (a step divides each interval: none coarser exists)."""
+    times = companion_times(engine, merged)
+    step = float(merged[STEP_SETTING[engine]])
+    if times > 1.0 and dt_out is not None and math.ceil(float(dt_out) / step - 1e-9) < 2:
+        times = 0.5
+    return (f"{engine}_h2", 0.5) if times < 1.0 else (f"{engine}_{COMPANION}h", times)
 
 
 def pair_factor(order: float, stats_h: dict, stats_c: dict, coarser: bool = True) -> tuple[float, float]:
@@ -108,6 +119,14 @@ def observed_order(e_coarse: float, e_fine: float, ratio: float = 2.0) -> float:
     if e_coarse > 0 and e_fine > 0 and ratio > 1:
         return math.log(e_coarse / e_fine) / math.log(ratio)
     return float("nan")
+
+
+def pair_order(e_run: float, e_pair: float, stats_run: dict, stats_pair: dict, ratio: float) -> float:
+    """The order observed against the reference from a run's and its companion's errors, whichever of
+    the two is the finer (by their step counts)."""
+    if (stats_pair.get("steps") or 0) > (stats_run.get("steps") or 0):
+        return observed_order(e_run, e_pair, ratio)
+    return observed_order(e_pair, e_run, ratio)
 
 
 def step_needed(step: float, estimate: float, tolerance: float, order: float, margin: float = 0.8) -> float:

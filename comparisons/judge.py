@@ -70,10 +70,10 @@ def judge_case(case, engines: list[str], results: dict, entries: dict, rule: Rul
             evidence[e] = {"note": "its difference from the converged reference (the same code, rtol 1e-10)",
                            "setting": "rtol" if rtol else None, "step": rtol, "order": 1.0}
             continue
-        pair = peer_label(e)
+        pair = peer_label(e, case)
         if e not in STEP_SETTING or (case.name, pair) not in results:
             why = (entries.get(pair) or {}).get("message", "not run")
-            evidence[e] = {"note": f"no error estimate: its companion run at 2h failed or did not run ({why})"}
+            evidence[e] = {"note": f"no error estimate: its companion run ({pair}) failed or did not run ({why})"}
             continue
         to_ref_pair = diff(pair, CONVERGED)
         ev = peer_evidence(e, case.settings.get(e, {}), (entries.get(e) or {}).get("stats") or {},

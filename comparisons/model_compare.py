@@ -19,7 +19,7 @@ import time
 import numpy as np
 
 from comparisons.estimate import (STEP_SETTING, TIGHT_LABEL, TOLERANCE_LADDER, companion_label, nominal_order,
-                                  observed_order, pair_factor)
+                                  pair_factor, pair_order)
 from comparisons.model_cases import ModelCase
 from comparisons.verdict import Rule, case_verdicts, pass_sentence
 from nsd_core.model.description import Model
@@ -37,18 +37,12 @@ SOLUTION = " vs solution"
 
 def companion(case: ModelCase, engine: str) -> tuple[str, dict]:
     """(label, settings) of a fixed-step peer's companion run on ``case``: the second run of its
-    estimate, at twice its step (or half of it where its step spans an output interval)."""
+    estimate (comparisons.estimate.companion_label)."""
     own = dict(case.settings.get(engine, {}))
+    merged = {**builder(engine).default_settings, **own}
     key = STEP_SETTING[engine]
-    step = float(own.get(key, builder(engine).default_settings[key]))
-    label, times = companion_label(engine, step, case.dt_out)
-    return label, {**own, key: step * times}
-
-
-def ordered(e_pair: float, e_run: float, stats_pair: dict, stats_run: dict) -> tuple[float, float]:
-    """(coarser run's error, finer run's error) of a run and its companion."""
-    finer_pair = (stats_pair.get("steps") or 0) > (stats_run.get("steps") or 0)
-    return (e_run, e_pair) if finer_pair else (e_pair, e_run)
+    label, times = companion_label(engine, merged, case.dt_out)
+    return label, {**own, key: float(merged[key]) * times}
 
 
 def builder(engine: str):
@@ -143,7 +137,7 @@ def judge(model: Model, case: ModelCase, engines: list[str], runs: dict, rule: R
             evidence[e] = {"order": p, "ratio": ratio, "factor": factor, "setting": key,
                            "step": float(runs[e].stats.get(key) or {**builder(e).default_settings,
                                                                   **case.settings.get(e, {})}[key]),
-                           "observed_order": observed_order(*ordered(d2[primary], d[primary], pair.stats, runs[e].stats), ratio),
+                           "observed_order": pair_order(d[primary], d2[primary], runs[e].stats, pair.stats, ratio),
                            "primary_error": d[primary]}
         elif e in TOLERANCE_LADDER and TIGHT_LABEL.format(engine=e) in runs:   # its own tolerance ladder
             key, factor, order = TOLERANCE_LADDER[e]

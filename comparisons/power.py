@@ -28,8 +28,8 @@ from comparisons.engines.perturb import KINDS, check, describe, perturbed
 from comparisons.harness import limit_for
 from comparisons.judge import differences, judge_case, own_checks
 from comparisons.reference import CHECK, CONVERGED, CONVERGED_SETTINGS, halved_settings, run_spec
-from comparisons.estimate import COMPANION
-from comparisons.verdict import peer_label
+from comparisons.estimate import companion_label
+from comparisons.verdict import merged_settings
 from comparisons.warmup import job_warmup, spec as warm_spec
 from nsd_core.device.params import ParameterError
 
@@ -148,7 +148,8 @@ def power_study(cases: list, engines: list[str], tolerances, out_dir: str | Path
                     futs = {e: _submit(pool, c, e, c.params_for(e), settings)}
                     if rule is not None:
                         pc = dataclasses.replace(c, settings={**c.settings, e: settings})
-                        futs[peer_label(e)] = _submit(pool, c, e, c.params_for(e), halved_settings(pc, e, 1.0 / COMPANION))
+                        label, times = companion_label(e, merged_settings(e, pc))
+                        futs[label] = _submit(pool, c, e, c.params_for(e), halved_settings(pc, e, 1.0 / times))
                     out.append((c, e, spec, s, scale, futs))
             expected[(describe(spec), scale)] = len(out)   # the runs this size of this error takes
             return out

@@ -25,7 +25,8 @@ import math
 import numpy as np
 
 from comparisons.engines import get_engine
-from comparisons.estimate import COMPANION, STEP_SETTING, nominal_order, observed_order, pair_factor, step_needed
+from comparisons.estimate import (STEP_SETTING, companion_label, nominal_order, pair_factor, pair_order,
+                                  step_needed)
 
 CONVERGED, CHECK = "converged", "converged_check"
 FLOOR = 1e-12                      # relative differences below this are round-off
@@ -43,15 +44,24 @@ ENGINEERING = {"max_dF_rel": 1e-3, "rms_dF_rel": 1e-3, "loop_area_rel": 1e-3, "p
 K, BETA = 3.0, 0.1
 
 
-def peer_label(engine: str) -> str:
-    """The run label of a peer's companion run, its step doubled (the second run of its estimate)."""
-    return f"{engine}_{COMPANION}h"
+def merged_settings(engine: str, case) -> dict:
+    """A peer's settings on ``case`` over its defaults (the seismic defaults on a seismic case)."""
+    from comparisons.config import SeismicCase
+    eng = get_engine(engine)
+    defaults = eng.seismic_default_settings if isinstance(case, SeismicCase) else eng.default_settings
+    return {**defaults, **(case.settings.get(engine) or {})}
+
+
+def peer_label(engine: str, case) -> str:
+    """The run label of a peer's companion run on ``case`` (the second run of its estimate:
+    comparisons.estimate.companion_label)."""
+    return companion_label(engine, merged_settings(engine, case))[0]
 
 
 def estimate_labels(cases, engines) -> list[tuple]:
-    """The extra runs the estimates need: each peer at 2h on each case, the reference's check."""
+    """The extra runs the estimates need: each peer's companion on each case, the reference's check."""
     peers = [e for e in engines if e in STEP_SETTING]
-    return [(c, peer_label(e)) for c in cases for e in peers] + [(c, CHECK) for c in cases]
+    return [(c, peer_label(e, c)) for c in cases for e in peers] + [(c, CHECK) for c in cases]
 
 
 class Rule:
@@ -211,18 +221,18 @@ def _units(value: float, unit: str) -> str:
     return f"{value:.3g} {unit}"
 
 
-def peer_evidence(engine: str, case_settings: dict, stats_h: dict, stats_2h: dict, e_h: float, e_2h: float,
+def peer_evidence(engine: str, case_settings: dict, stats_h: dict, stats_pair: dict, e_h: float, e_pair: float,
                   seismic: bool) -> dict:
-    """The step, order and observed order of a peer's two runs on one case (the judged run at h, its
-    companion at 2h; ``e_*``: each one's difference from the converged reference)."""
+    """The step, order and observed order of a peer's two runs on one case (the judged run at h and its
+    companion; ``e_*``: each one's difference from the converged reference)."""
     eng = get_engine(engine)
     merged = {**(eng.seismic_default_settings if seismic else eng.default_settings), **(case_settings or {})}
     p = nominal_order(engine, merged)
-    factor, ratio = pair_factor(p, stats_h, stats_2h)
+    factor, ratio = pair_factor(p, stats_h, stats_pair)
     setting = STEP_SETTING[engine]
     step = stats_h.get(setting) or merged[setting]
     return {"order": p, "ratio": ratio, "factor": factor, "setting": setting, "step": float(step),
-            "observed_order": observed_order(e_2h, e_h, ratio), "primary_error": e_h}
+            "observed_order": pair_order(e_h, e_pair, stats_h, stats_pair, ratio), "primary_error": e_h}
 
 
 def estimate_from_pair(diff_pair: dict, factor: float, beta: float) -> dict:
