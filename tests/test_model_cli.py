@@ -72,7 +72,7 @@ def test_compare_model_fails_when_the_reference_solution_disagrees(tmp_path):
 
 
 BAD = [
-    (["--model", "nope.toml"], "--model nope.toml: cannot read"),
+    (["--model", "nope.toml"], "--model nope.toml: file not found"),
     (["--model", str(MODELS / "andrews.toml"), "--engines", "semirecursive,bullet"], "--engines 'bullet'"),
     (["--model", str(MODELS / "andrews.toml"), "--set", "n_wires=8"], "--profile/--set/--params"),
     (["--model", str(MODELS / "andrews.toml"), "--cases", str(MODELS / "slider_crank.toml")], "unknown table"),
