@@ -3,6 +3,8 @@
 The engines' seismic runs are in the one registry (``comparisons.engines``: ``run_seismic_engine``,
 ``run_seismic_job``); every one returns the columns of ``nsd_core.device.seismic`` it can measure
 (at least t, x, y, theta, ax_abs, ay_abs, device_Fx, device_Fy, cap_z) on the same output times.
+OpenSees (``comparisons.engines.opensees_peer``) runs the baseline isolators only (no device); its runs
+are judged there by the gate's rule on these metrics, the isolator's force in the device force's place.
 """
 from __future__ import annotations
 

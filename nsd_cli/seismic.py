@@ -324,7 +324,12 @@ def run_set(args) -> int:
         flag = "--fixed-base" if args.fixed_base else "--compare-building"
         raise ParameterError(f"{flag}: --record-set runs every record with and without the device (a building: "
                              "--building)")
-    engines = parse_engine_list(args.engines)
+    from comparisons.engines import BASELINE_PEERS
+    engines = parse_engine_list(args.engines, extra=BASELINE_PEERS)
+    if set(engines) & set(BASELINE_PEERS):
+        raise ParameterError(f"--engines {args.engines!r}: a record set's cross-check runs mujoco and exudyn; opensees "
+                             "runs one record: nsd seismic --record SET:ID --isolator bilinear|friction-pendulum "
+                             "--engines semirecursive,opensees")
     if engines[0] != "semirecursive":
         raise ParameterError(f"--engines {args.engines!r}: semirecursive (the reference) must come first")
     workers = os.cpu_count() or 1 if args.workers is None else args.workers

@@ -86,6 +86,15 @@ def test_opensees_refuses_what_it_cannot_build_in_one_line_exit_2(tmp_path, caps
     assert not out.exists()
 
 
+def test_a_record_set_refuses_opensees_in_one_line_naming_the_single_run(tmp_path, capsys):
+    out = tmp_path / "out"
+    code = main(["seismic", "--record-set", "farfield", "--records", "1", "--engines", "semirecursive,opensees",
+                 "--out", str(out)])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "nsd seismic --record SET:ID" in err[0], err
+    assert not out.exists()
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("kind", ["bilinear", "friction-pendulum"])
 def test_nsd_seismic_with_opensees_writes_its_run_and_verdict(tmp_path, kind):
