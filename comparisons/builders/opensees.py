@@ -70,10 +70,10 @@ def opensees():
         if spec is None or spec.origin is None:
             raise ParameterError("engine opensees: openseespy is not installed (pip install 'nsd[opensees]')")
         folder = os.path.join(os.path.dirname(spec.origin), "lib")
-        for name in _BUNDLED:
-            path = os.path.join(folder, name)
-            if os.path.exists(path):
-                ctypes.CDLL(path, mode=ctypes.RTLD_GLOBAL)
+        present = sorted(f for f in os.listdir(folder) if ".so" in f) if os.path.isdir(folder) else []
+        # the known ones in their dependencies' order, then any other a later build bundles
+        for name in [n for n in _BUNDLED if n in present] + [n for n in present if n not in _BUNDLED]:
+            ctypes.CDLL(os.path.join(folder, name), mode=ctypes.RTLD_GLOBAL)
         _OPS = importlib.import_module("openseespy.opensees")
     return _OPS
 
