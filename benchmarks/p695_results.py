@@ -57,8 +57,11 @@ def _check(folder: Path) -> dict:
     res = json.loads((Path(folder) / "p695.json").read_text())
     keep = ("S_CT", "S_CT_bracket", "S_CT_interval", "mu_T", "SSF", "ACMR", "ACMR10", "ACMR20", "pass_ACMR20",
             "pass_ACMR10", "verdict_over_bracket", "collapse_modes")
+    wp = {n: {t: {k: e[t].get(k) for k in ("found", "capacity", "S_CT", "ACMR", "how", "n_extrapolated")}
+              for t in ("ACMR20", "ACMR10")} for n, e in (res.get("what_passes") or {}).get("configurations", {}).items()}
     return {"capacity": res["limit_states"]["capacity"], "runs": _runs(Path(folder)),
-            "configurations": {n: {k: c[k] for k in keep} for n, c in res["configurations"].items()}}
+            "configurations": {n: {k: c[k] for k in keep} for n, c in res["configurations"].items()},
+            "what_passes": wp}
 
 
 def _cross_check(folder: Path) -> dict:
