@@ -91,6 +91,8 @@ def compact(r: dict) -> dict:
                 for e, v in per.items()} for case, per in r[stage].items()}
     if "refine_changes" in r:
         out["refine_changes"] = r["refine_changes"]
+    if "referee" in r:   # the symbolic engine's side where a peer disagreed (comparisons.campaign.referee)
+        out["referee"] = r["referee"]
     return out
 
 
@@ -117,7 +119,13 @@ def collect(seeds: list[int], folder: Path, wall: float) -> dict:
     return {"n": len(records), "seeds": [min(seeds), max(seeds)], "classes": dict(classes), "families": dict(families),
             "wall_s": wall, "mechanism_wall_s": {"median": _median([r.get("wall_time", 0.0) for r in records]),
                                                   "max": max((r.get("wall_time", 0.0) for r in records), default=0.0)},
-            "worst_pass": worst(records), "records": [compact(r) for r in records]}
+            "worst_pass": worst(records), "referee": referee_sides(records), "records": [compact(r) for r in records]}
+
+
+def referee_sides(records: list[dict]) -> dict:
+    """side -> how many (mechanism, case, disagreeing peer) the symbolic referee put there."""
+    return dict(collections.Counter(f["side"] for r in records for per in (r.get("referee") or {}).values()
+                                    for f in per.values()))
 
 
 def _median(v):
@@ -131,6 +139,10 @@ def main(argv=None) -> int:
     p.add_argument("--out", required=True)
     p.add_argument("--workers", type=int, default=2)
     p.add_argument("--timeout", type=float, default=600.0)
+    p.add_argument("--engines", default="semirecursive,mujoco,exudyn",
+                   help="the engines each mechanism runs in (symbolic: the symbolic engine as a 4th peer)")
+    p.add_argument("--referee", choices=("symbolic", "none"), default="symbolic",
+                   help="where a peer disagrees, run the symbolic engine and record whose side it takes")
     a = p.parse_args(argv)
     try:   # bad input: one line, exit 2, nothing written
         seeds = seeds_of(a.seeds)
@@ -138,13 +150,21 @@ def main(argv=None) -> int:
             raise ValueError(f"--workers {a.workers}: must be a whole number >= 1")
         if not 0 < a.timeout < float("inf"):
             raise ValueError(f"--timeout {a.timeout}: must be a number of seconds > 0")
+        from comparisons.model_compare import BUILDERS, REFERENCE
+        engines = [e.strip() for e in a.engines.split(",") if e.strip()]
+        if REFERENCE not in engines or not set(engines) <= set(BUILDERS) or len(set(engines)) != len(engines):
+            raise ValueError(f"--engines {a.engines!r}: each engine once, {REFERENCE} included; allowed: "
+                             f"{', '.join(BUILDERS)}")
     except ValueError as e:
         print(f"campaign: {e}", file=sys.stderr)
         return 2
     folder = Path(a.out)
     folder.mkdir(parents=True, exist_ok=True)
-    from comparisons.campaign import run as _warm   # noqa: F401 (imports paid once, before the forks)
+    from comparisons.campaign import run as _warm   # (imports paid once, before the forks)
+    _warm.ENGINES[:] = engines          # the forked children inherit the engines and the referee's switch
+    _warm.REFEREE["on"] = a.referee == "symbolic"
     import comparisons.builders.exudyn, comparisons.builders.mujoco, nsd_core.model.semirecursive  # noqa: F401,E401
+    import comparisons.builders.symbolic, comparisons.campaign.referee  # noqa: F401,E401
     start = time.perf_counter()
     run(seeds, folder, a.workers, a.timeout)
     summary = collect(seeds, folder, time.perf_counter() - start)

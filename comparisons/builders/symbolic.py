@@ -46,8 +46,7 @@ from nsd_core.model.run import ModelRun, output_times
 
 name = "symbolic"
 default_settings = {"method": "DOP853", "rtol": 1e-10, "atol": 1e-12, "max_step": 0.01, "baumgarte": 100.0,
-                    "penalty": 1e6, "constraint_tol": 1e-14}
-MAX_ITERATIONS = 50   # augmented-Lagrangian iterations of one evaluation (a few where Phi_q is regular)
+                    "regularisation": 1e-8, "refinements": 50}
 METHODS = ("DOP853", "Radau")
 
 
@@ -171,22 +170,23 @@ class System:
 
 
 def multipliers(A, b, C, c, s) -> tuple[np.ndarray, np.ndarray]:
-    """u' and lambda of A u' = b + C^T lambda, C u' = c, by augmented-Lagrangian iterations on the
-    regular matrix A + alpha C^T C (alpha = ``penalty`` x A's scale over C^T C's): lambda += alpha (c -
-    C u') until C u' = c to ``constraint_tol`` of its scale. The fixed point is the exact solution; a
-    redundant row or a singular position (Phi_q losing rank) leaves the matrix regular, where a direct
-    solve for lambda would divide by a vanishing pivot."""
-    CtC = C.T @ C
-    alpha = s["penalty"] * float(np.max(np.abs(np.diag(A)))) / max(float(np.max(np.abs(np.diag(CtC)))), 1e-300)
-    factor = cho_factor(A + alpha * CtC)
-    lam = np.zeros(len(c))
-    for _ in range(MAX_ITERATIONS):
-        udot = cho_solve(factor, b + C.T @ (lam + alpha * c))
-        r = c - C @ udot
-        lam += alpha * r
-        if np.max(np.abs(r)) <= s["constraint_tol"] * (np.max(np.abs(c)) + np.max(np.abs(C)) * np.max(np.abs(udot)) + 1e-300):
+    """u' and lambda of A u' = b + C^T lambda, C u' = c in the range space: u' = A^-1 (b + C^T lambda),
+    S lambda = c - C A^-1 b, S = C A^-1 C^T, solved by iterated Tikhonov regularisation (S + mu I, mu =
+    ``regularisation`` x S's largest diagonal entry, at most ``refinements`` corrections): exact to round-off
+    where S is regular, smooth and bounded where it loses rank (a redundant row, IFToMM A02's singular
+    positions), where a plain solve divides by a vanishing pivot and a truncated least squares jumps."""
+    X = _solve(A, np.column_stack([b, C.T]))
+    S = C @ X[:, 1:]
+    r = c - C @ X[:, 0]
+    mu = s["regularisation"] * max(float(np.max(np.abs(np.diag(S)))), 1e-300)
+    factor = cho_factor(S + mu * np.eye(len(c)))
+    lam = cho_solve(factor, r)
+    for _ in range(s["refinements"]):   # until a correction no longer changes lambda
+        step = cho_solve(factor, r - S @ lam)
+        lam += step
+        if np.max(np.abs(step)) <= 1e-15 * np.max(np.abs(lam)):
             break
-    return udot, lam
+    return X[:, 0] + X[:, 1:] @ lam, lam
 
 
 def _solve(A, B):

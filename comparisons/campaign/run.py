@@ -24,6 +24,7 @@ import numpy as np
 from comparisons.campaign.generate import Draws, generate
 
 ENGINES = ["semirecursive", "mujoco", "exudyn"]
+REFEREE = {"on": True}   # a disagreeing peer's case run once more in the symbolic engine (comparisons.campaign.referee)
 
 
 def describe(seed: int) -> dict:
@@ -110,5 +111,10 @@ def run_seed(seed: int, folder) -> dict:
             rec["refined"] = _engine_records(refined)
             rec["refine_changes"] = changes
     rec["cls"] = classify(first, refined)
+    if REFEREE["on"]:
+        from comparisons.campaign.referee import disagreeing, referee
+        last = refined or first
+        if disagreeing(last):   # whose side the symbolic engine takes, peer or reference
+            rec["referee"] = referee(model, new_cases if refined is not None else cases, last)
     rec["wall_time"] = time.perf_counter() - start
     return rec
