@@ -8,9 +8,10 @@ Baumgarte's terms -2 w Phi' - w^2 Phi (``baumgarte`` = w, 1/s). Why the augmente
 Kane's dependent speeds: sympy's dependent-speed form inverts the constraint Jacobian's dependent
 block symbolically, whose expressions grow with every loop (Andrews' mechanism: six equations,
 Bricard's: a redundant one, which the symbolic inverse cannot take at all), while the augmented form
-keeps each derived quantity as small as the tree's and leaves the linear algebra to numbers, where a
-redundant or momentarily singular Phi_q (IFToMM A02's singular positions) is a least-squares solve
-of lambda (minimum norm; u' is unique while M is positive definite).
+keeps each derived quantity as small as the tree's and leaves the linear algebra to numbers
+(``multipliers``: the range space, lambda by iterated Tikhonov regularisation), where a redundant or
+momentarily singular Phi_q (IFToMM A02's singular positions) stays bounded and smooth (u' is unique
+while M is positive definite).
 
 Prescribed coordinates are not states: q_p(t), q_p'(t), q_p''(t) are inserted, the remaining rows
 are solved for u_f', and the drive's force is the prescribed rows' residual, tau = (M u' - F - Q -
@@ -21,8 +22,8 @@ g - a_g(t), a symbol of the derived forcing. The start is this engine's own Newt
 closure (comparisons.builders.symbolic_start).
 
 Settings (``default_settings``): ``method`` DOP853 or Radau (scipy.integrate.solve_ivp), ``rtol``,
-``atol``, ``max_step`` [s], ``baumgarte`` [1/s], ``rank_tol`` (the relative singular-value cut of the
-multipliers' least squares). The engine's error estimate is its own tolerance ladder: the run at
+``atol``, ``max_step`` [s], ``baumgarte`` [1/s], ``regularisation`` and ``refinements`` (the
+multipliers' solve). The engine's error estimate is its own tolerance ladder: the run at
 ``rtol`` against one at rtol x ``comparisons.estimate.TOLERANCE_LADDER`` (comparisons.model_compare).
 
 Run statistics (``ModelRun.stats``): ``wall_time`` (integration and outputs), ``derive_time`` and
