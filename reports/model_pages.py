@@ -15,7 +15,7 @@ from matplotlib.backends.backend_pdf import PdfPages  # noqa: E402
 import numpy as np  # noqa: E402
 
 
-COLORS = {"semirecursive": "C0", "mujoco": "C1", "exudyn": "C2", "converged": "k"}
+COLORS = {"semirecursive": "C0", "mujoco": "C1", "exudyn": "C2", "symbolic": "C4", "converged": "k"}
 PER_PAGE = 6   # outputs on one A4 page (a building's 17 take three pages, not one page 4 m tall)
 
 
