@@ -2,7 +2,7 @@
 
     python benchmarks/bench_symbolic.py equations --out DIR   the derived equations of models/fourbar_spring.toml
                                                               -> DIR/symbolic_equations.json
-    python benchmarks/bench_symbolic.py models [--engines E,...] [--models a,b] --out DIR
+    python benchmarks/bench_symbolic.py models [--engines E,...] [--models a,b] [--duration S] --out DIR
                                                               every benchmark description through
                                                               ``nsd compare --model``'s judgement, with the
                                                               symbolic engine's derivation, generation and run
@@ -49,7 +49,7 @@ def equations(out: Path) -> dict:
             "forcing": [short(e) for e in d.F], "constraints": [short(e) for e in d.Phi]}
 
 
-def models(out: Path, engines: list[str], names: list[str]) -> dict:
+def models(out: Path, engines: list[str], names: list[str], duration: float | None = None) -> dict:
     from comparisons.model_cases import load_model_cases
     from comparisons.model_compare import compare_model
     from nsd_core.model.load import load_model
@@ -58,6 +58,9 @@ def models(out: Path, engines: list[str], names: list[str]) -> dict:
         os.environ["XDG_CACHE_HOME"] = str(out / "cache" / name)   # a first derivation, on an empty cache
         model = load_model(ROOT / "models" / f"{name}.toml")
         cases = load_model_cases(model, None, engines)
+        if duration:   # a shorter window of each case (said in the JSON)
+            import dataclasses
+            cases = [dataclasses.replace(c, duration=min(duration, c.duration), reference=None) for c in cases]
         t0 = time.perf_counter()
         s = compare_model(model, cases, engines, log=lambda *_: None)
         wall = time.perf_counter() - t0
@@ -72,7 +75,7 @@ def models(out: Path, engines: list[str], names: list[str]) -> dict:
                          "symbolic_tight": {k: tight.get(k) for k in ("derive_time", "wall_time", "cache")},
                          "difference": _largest(s["rows"], case, "symbolic"),
                          "failures": entry["failures"]})
-    return {"engines": engines, "rows": rows}
+    return {"engines": engines, "rows": rows, "duration": duration}
 
 
 def _largest(rows: list[dict], case: str, engine: str) -> dict | None:
@@ -93,6 +96,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("what", choices=("equations", "models"))
     ap.add_argument("--engines", default="semirecursive,symbolic")
     ap.add_argument("--models", default=",".join(MODELS))
+    ap.add_argument("--duration", type=float, default=None, help="run each case over at most this many seconds")
     ap.add_argument("--out", required=True)
     a = ap.parse_args(argv)
     out = Path(a.out)
@@ -101,7 +105,7 @@ def main(argv: list[str] | None = None) -> int:
         os.environ["XDG_CACHE_HOME"] = str(out / "cache")
         data = equations(out)
     else:
-        data = models(out, [e for e in a.engines.split(",") if e], [m for m in a.models.split(",") if m])
+        data = models(out, [e for e in a.engines.split(",") if e], [m for m in a.models.split(",") if m], a.duration)
     (out / f"symbolic_{a.what}.json").write_text(json.dumps(data, indent=1))
     return 0
 

@@ -307,6 +307,18 @@ def symbolic_models() -> str:
     return render(load, provenance, table, g, plain)
 
 
+def symbolic_device() -> str:
+    """The device's drive description in the symbolic engine (benchmarks/docs_symbolic.py)."""
+    from benchmarks.docs_symbolic import device as render
+    return render(load, provenance, table, g, plain)
+
+
+def symbolic_campaign() -> str:
+    """Ten generated mechanisms with the symbolic engine as a 4th peer (benchmarks/docs_symbolic.py)."""
+    from benchmarks.docs_symbolic import campaign as render
+    return render(load, provenance, table, g, plain)
+
+
 def model_builders() -> str:
     """The device's description in MuJoCo against the hand-written adapter (bench_model_builders)."""
     rec = load("bench_model_builders")
@@ -702,6 +714,7 @@ RENDER = {"compare-gate": compare_gate, "convergence": convergence, "tables-5-6"
           "work-precision": work_precision, "bench-cold": bench_cold, "bench-peer-seismic": bench_peer_seismic,
           "bench-ida-farfield": bench_ida_farfield, "bench-dask": bench_dask,
           "symbolic-equations": symbolic_equations, "symbolic-models": symbolic_models,
+          "symbolic-campaign": symbolic_campaign, "symbolic-device": symbolic_device,
           "p695-evaluation": p695_evaluation, "p695-what-passes": p695_what_passes}
 
 

@@ -20,8 +20,12 @@ def equations(load, provenance, table, g, plain) -> str:
             + "```\n" + "\n".join(lines) + "\n```\n")
 
 
-def models(load, provenance, table, g, plain) -> str:
-    rec = load("symbolic_models")
+def device(load, provenance, table, g, plain) -> str:
+    return models(load, provenance, table, g, plain, "symbolic_device")
+
+
+def models(load, provenance, table, g, plain, name: str = "symbolic_models") -> str:
+    rec = load(name)
     d = rec["data"]
     rows = []
     for r in d["rows"]:
@@ -32,7 +36,9 @@ def models(load, provenance, table, g, plain) -> str:
                      f"{diff.get('metric', '–')} {g(diff.get('value'))}" if diff else "–",
                      g(s.get("closure_max")), (v.get("text") or "").replace("|", "/")[:160]])
     return (provenance(rec) + "\n"
-            + f"Each benchmark description judged with engines {', '.join(d['engines'])} (`nsd compare --model`'s "
+            + (f"Over the first {g(d['duration'])} s of each case (no reference solution over a shortened window). "
+               if d.get("duration") else "")
+            + f"Each description judged with engines {', '.join(d['engines'])} (`nsd compare --model`'s "
               "rule, the symbolic engine's estimate from its own run at rtol x 0.01), each derivation on an empty "
               "cache: derivation, code generation and run seconds of its first run (its tolerance-ladder run finds "
               "the cache: 0 s deriving), the integrator's steps, sympy's operation count of the derived "
@@ -40,3 +46,33 @@ def models(load, provenance, table, g, plain) -> str:
               "output's scale), its largest loop-closure residual [m]:\n\n"
             + table(["model", "case", "symbolic", "derive s", "generate s", "run s", "steps", "operations",
                      "largest difference", "closure m", "verdict"], rows))
+
+
+def campaign(load, provenance, table, g, plain) -> str:
+    rec = load("campaign_symbolic")
+    d = rec["data"]
+    rows = []
+    for r in d["records"]:
+        last = r.get("refined") or r.get("first") or {}
+        for case, per in last.items():
+            sym = per.get("symbolic", {})
+            others = [e for e, v in per.items() if e != "symbolic" and not v.get("pass")]
+            ref = (r.get("referee") or {}).get(case, {})
+            rows.append([str(r["seed"]), r.get("family", ""), f"`{r['cls']}`",
+                         "PASS" if sym.get("pass") else ("–" if not sym else "FAIL"),
+                         g(sym.get("ratio", (sym.get("worst") or {}).get("ratio"))),
+                         ", ".join(others) or "–",
+                         ", ".join(f"{p}: {f['side']}" for p, f in ref.items()) or "–",
+                         ("" if sym.get("pass") else (sym.get("text") or "")[:140]).replace("|", "/")])
+        if not last:
+            rows.append([str(r["seed"]), r.get("family", ""), f"`{r['cls']}`", "–", "–", "–", "–",
+                         (r.get("reason") or "")[:140].replace("|", "/")])
+    sides = ", ".join(f"{k} {v}" for k, v in sorted(d.get("referee", {}).items())) or "none (no peer disagreed)"
+    return (provenance(rec) + "\n"
+            + f"{d['n']} generated mechanisms (seeds {d['seeds'][0]}-{d['seeds'][1]}) with the symbolic engine as a "
+              f"4th peer, in {plain(d['wall_s'])} s: classes {', '.join(f'{k} {v}' for k, v in sorted(d['classes'].items()))}; "
+              f"the referee's sides: {sides}. Per mechanism and case: the symbolic engine's verdict and its "
+              "largest difference from the converged reference over its bound (PASS verdicts), the peers that "
+              "did not pass, and the referee's side where one disagreed:\n\n"
+            + table(["seed", "family", "class", "symbolic", "difference / bound", "peers not passing", "referee",
+                     "symbolic's verdict when not PASS"], rows))
