@@ -65,9 +65,12 @@ def initial_state(model, coordinates: list, constraints, prescribed: dict) -> tu
     candidates = [i for i in range(n) if i not in prescribed]
     preferred = [index[c] for c in model.free if c in index]
     dep = dependent(Phi_q, candidates, preferred)
+    polish = 2   # Newton steps past the tolerance, down to round-off (a drive's force at t = 0 feels 1e-13 m)
     for _ in range(NEWTON_ITER):
         if np.max(np.abs(Phi)) <= NEWTON_TOL:
-            break
+            if polish == 0:
+                break
+            polish -= 1
         step = np.linalg.lstsq(Phi_q[:, dep], -Phi, rcond=None)[0]
         q[dep] += step
         Phi, Phi_q = constraints(q)
