@@ -175,3 +175,18 @@ def test_the_drive_force_holds_the_weight_with_the_contract_sign(cache):
     run = symbolic.simulate(parse_model(raw, "turned_arm"), 1.0, 0.01)
     assert np.max(np.abs(run.outputs["tau"] - 9.81 * np.cos(run.t))) < 1e-12
     assert np.max(np.abs(run.outputs["W"] - (run.outputs["V"] - run.outputs["V"][0]))) < 1e-9
+
+
+@pytest.mark.slow   # every benchmark description: about 5 min on 2 cores (Bricard's 24,000-operation equations most)
+@pytest.mark.parametrize("name", ["fourbar_spring", "slider_crank", "iftomm_a01_pendulum", "andrews",
+                                  "iftomm_a02_fourbar", "iftomm_a04_bricard"])
+def test_every_benchmark_description_passes_in_the_symbolic_engine(cache, name):
+    """Its verdict under the rule against the converged in-house reference, and against the published
+    or closed-form solution where the case has one (docs/models.md's generated table)."""
+    from comparisons.model_cases import load_model_cases
+    model = load_model(MODELS / f"{name}.toml")
+    cases = load_model_cases(model, None, ["semirecursive", "symbolic"])
+    s = compare_model(model, cases, ["semirecursive", "symbolic"], log=lambda *a: None)
+    for case, entry in s["cases"].items():
+        assert not entry["failures"], entry["failures"]
+        assert entry["verdicts"]["symbolic"]["pass"], (case, entry["verdicts"]["symbolic"]["text"])
