@@ -21,3 +21,17 @@ def _evaluator_choice_kept():
         os.environ.pop("NSD_EVALUATOR", None)
     else:
         os.environ["NSD_EVALUATOR"] = before
+
+
+def pytest_collection_modifyitems(config, items):
+    """Under pytest-xdist (``--dist loadgroup``): the tests that share a module- or session-scoped
+    fixture go to one worker together (the fixture is built once), every other test wherever a worker
+    is free."""
+    for item in items:
+        info = getattr(item, "_fixtureinfo", None)
+        if info is None:
+            continue
+        shared = any(defs and defs[-1].scope in ("module", "package", "session")
+                     for name, defs in info.name2fixturedefs.items() if name in item.fixturenames)
+        if shared:
+            item.add_marker(pytest.mark.xdist_group(item.module.__name__))

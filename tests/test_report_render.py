@@ -4,11 +4,25 @@ nothing left behind."""
 from __future__ import annotations
 
 import os
+import subprocess
+import sys
 import threading
 
 import pytest
 
 pytest.importorskip("matplotlib")
+
+# a pytest-xdist worker runs a second thread (its channel), where a fork is unsafe and the report is
+# drawn on one process: there these tests run in one single-threaded pytest process of their own
+IN_WORKER = "PYTEST_XDIST_WORKER" in os.environ
+forking = pytest.mark.skipif(IN_WORKER, reason="run by test_forking_tests_in_a_single_threaded_process")
+
+
+@pytest.mark.skipif(not IN_WORKER, reason="the tests below run here directly")
+def test_forking_tests_in_a_single_threaded_process():
+    p = subprocess.run([sys.executable, "-m", "pytest", "-q", "-n", "0", "-p", "no:cacheprovider", __file__],
+                       capture_output=True, text=True, timeout=600, cwd=os.path.dirname(os.path.dirname(__file__)))
+    assert p.returncode == 0 and " passed" in p.stdout, p.stdout[-3000:] + p.stderr[-2000:]
 
 
 def _plan(n, bad=None, error=KeyError):
@@ -33,6 +47,7 @@ def _build(monkeypatch, tmp_path, plan, processes, name):
     return build.build_report(tmp_path, tmp_path / name, processes=processes)
 
 
+@forking
 def test_two_processes_draw_the_same_report(monkeypatch, tmp_path):
     from pypdf import PdfReader
     plan = _plan(7)
@@ -51,6 +66,7 @@ def test_two_processes_draw_the_same_report(monkeypatch, tmp_path):
     assert sorted(os.listdir(tmp_path / "two")) == sorted(os.path.basename(p) for p in two["pngs"] + [two["pdf"]])
 
 
+@forking
 @pytest.mark.parametrize("bad", [3, 4])   # page 3 is drawn here, page 4 by the child
 def test_a_failing_page_is_said_as_on_one_process_and_nothing_is_left(monkeypatch, tmp_path, bad):
     from nsd_core.device.params import ParameterError
@@ -70,6 +86,7 @@ def test_a_failing_page_is_said_as_on_one_process_and_nothing_is_left(monkeypatc
         os.waitpid(children[0], os.WNOHANG)
 
 
+@forking
 def test_an_error_of_another_kind_in_the_child_is_raised_as_on_one_process(monkeypatch, tmp_path):
     def full(message):   # a full disk while page 2 (the child's) is drawn
         return OSError(28, "No space left on device")
@@ -82,6 +99,7 @@ def test_an_error_of_another_kind_in_the_child_is_raised_as_on_one_process(monke
     assert said[2] == said[1] == (OSError, 28, "No space left on device", "validation.pdf")
 
 
+@forking
 def test_one_process_where_a_fork_is_unsafe_or_the_report_short():
     from reports.render import MIN_PAGES, processes_for
     assert processes_for(MIN_PAGES - 1) == 1 and processes_for(3, processes=2) == 2
