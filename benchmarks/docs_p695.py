@@ -163,4 +163,32 @@ def what_passes(load, table, g, plain) -> str:
                 f"(max |Δ| / max of u, device force, a_abs; one run per engine at its default step, "
                 + ("every difference within the gate's 1e-3 of each peak" if not over
                    else "over the gate's 1e-3 of the peak: " + ", ".join(over)) + ").\n")
+    out += _gate_rule(d.get("gate_rule_check"), g)
     return out
+
+
+def _gate_rule(x: dict | None, g) -> str:
+    """The governing record by the gate's rule (nsd ida's cross-check: each peer at h and h/2)."""
+    if not x or not x.get("device"):
+        return ""
+    parts = []
+    for n, v in (x["device"].get("engines") or {}).items():
+        est = v.get("estimates") or {}
+        ms = ", ".join(f"{k} {v[k]:.1e} (estimate {est[k]['estimate']:.1e})" for k in ("du", "dF", "da")
+                       if k in v and isinstance(est.get(k), dict))
+        ref = v.get("refined")
+        step = ""
+        if ref:
+            (k, a), (_, b) = next(iter(ref["from"].items())), next(iter(ref["to"].items()))
+            step = f", refined {k} {g(a)} -> {g(b)} s (its first pair: {(v.get('first') or {}).get('verdict')})"
+        why = ""
+        if v.get("verdict") != "PASS" and est:
+            agree = all(e.get("consistent") for e in est.values() if isinstance(e, dict))
+            need = ", ".join(f"{k} <= {g(val)} s" for k, val in (v.get("step_needed") or {}).items())
+            why = (" (not converged: every difference within its own estimate" if agree else " (disagrees") \
+                + (f"; needs {need}" if need else "") + ")"
+        parts.append(f"{n} **{v.get('verdict')}**{why}: {ms}{step}")
+    return (f"\nThe same record at the upper level (the same scale: nsd ida's level is the record's own Sa) by the "
+            f"gate's rule (`{x['command']}`, exit {x['exit_code']}, "
+            f"{x['wall_s']:.0f} s wall: each peer at its step and half of it, judged against its own estimate "
+            f"and the in-house run's error): " + "; ".join(parts) + ".\n")

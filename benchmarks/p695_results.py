@@ -81,6 +81,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--variant")
     ap.add_argument("--variant-log")
     ap.add_argument("--cross-check", action="append", default=[])
+    ap.add_argument("--ida-check", help="an nsd ida --cross-check median run of the governing record at one level "
+                                        "(the gate's rule: each peer at its step and half of it)")
+    ap.add_argument("--ida-check-log")
     ap.add_argument("--check", action="append", default=[],
                     help="an nsd p695 run at a capacity what-passes found (--isolators X --capacity C): kept as run")
     ap.add_argument("--note", default="")
@@ -103,6 +106,12 @@ def main(argv: list[str] | None = None) -> int:
                            "git_commit": vlog.get("git_commit")}
     data["cross_check"] = [_cross_check(Path(f)) for f in a.cross_check]
     data["capacity_checks"] = [_check(Path(f)) for f in a.check]
+    if a.ida_check:
+        ida = json.loads((Path(a.ida_check) / "ida.json").read_text())
+        ilog = _log(Path(a.ida_check_log)) if a.ida_check_log else {}
+        data["gate_rule_check"] = {"command": ilog.get("command"), "wall_s": ilog.get("wall_s"),
+                                   "exit_code": ilog.get("exit_code"),
+                                   "device": (ida.get("cross_check") or {}).get("device")}
     rec = {"name": "p695", "command": a.command or log["command"], "exit_code": log["exit_code"], "measured": measured,
            "data": data}
     RESULTS.mkdir(parents=True, exist_ok=True)
