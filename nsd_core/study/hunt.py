@@ -9,8 +9,12 @@ Engineering and Structural Dynamics 31(3), Section 5 ("the hunt & fill tracing a
 2. bracket: halve the interval between the highest level that did not reach it and the lowest that
    did (or between 0 and that level when the first run already reached it) until the interval is
    at most ``resolution`` times its upper end;
-3. fill: with the runs the budget has left, halve the largest gap between the levels that did not
-   reach the limit (from IM = 0), so the IDA curve below the limit is drawn evenly.
+3. fill (``Hunt.fill``, on by default; nsd p695 turns it off): with the runs the budget has left, halve
+   the largest gap between the levels that did not reach the limit (from IM = 0), so the IDA curve
+   below the limit is drawn evenly.
+
+``bracket_state`` says whether a record's bracket ended within the resolution, or why not (the
+budget spent first, the limit never reached).
 
 At most ``max_runs`` runs per record. ``--levels L1,L2,...`` instead runs the given levels upwards
 and stops at the first one that reaches the limit (a stripe analysis with the same stopping rule).
