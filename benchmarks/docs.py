@@ -714,6 +714,7 @@ RENDER = {"compare-gate": compare_gate, "convergence": convergence, "tables-5-6"
           "work-precision": work_precision, "bench-cold": bench_cold, "bench-peer-seismic": bench_peer_seismic,
           "bench-ida-farfield": bench_ida_farfield, "bench-dask": bench_dask,
           "symbolic-equations": symbolic_equations, "symbolic-models": symbolic_models,
+          "symbolic-campaign": symbolic_campaign, "symbolic-device": symbolic_device,
           "p695-evaluation": p695_evaluation, "p695-what-passes": p695_what_passes}
 
 

@@ -62,7 +62,8 @@ def campaign(load, provenance, table, g, plain) -> str:
                          "PASS" if sym.get("pass") else ("–" if not sym else "FAIL"),
                          g(sym.get("ratio", (sym.get("worst") or {}).get("ratio"))),
                          ", ".join(others) or "–",
-                         ", ".join(f"{p}: {f['side']}" for p, f in ref.items()) or "–",
+                         ", ".join(f"{p}: {f['side']} ({g(f.get('symbolic_vs_peer_ratio'))})" for p, f in ref.items())
+                         or "–",
                          ("" if sym.get("pass") else (sym.get("text") or "")[:140]).replace("|", "/")])
         if not last:
             rows.append([str(r["seed"]), r.get("family", ""), f"`{r['cls']}`", "–", "–", "–", "–",
@@ -73,6 +74,7 @@ def campaign(load, provenance, table, g, plain) -> str:
               f"4th peer, in {plain(d['wall_s'])} s: classes {', '.join(f'{k} {v}' for k, v in sorted(d['classes'].items()))}; "
               f"the referee's sides: {sides}. Per mechanism and case: the symbolic engine's verdict and its "
               "largest difference from the converged reference over its bound (PASS verdicts), the peers that "
-              "did not pass, and the referee's side where one disagreed:\n\n"
+              "did not pass, and the referee's side where one disagreed (in brackets: the symbolic engine's largest "
+              "difference from that peer over k x (its estimate + the peer's)):\n\n"
             + table(["seed", "family", "class", "symbolic", "difference / bound", "peers not passing", "referee",
                      "symbolic's verdict when not PASS"], rows))

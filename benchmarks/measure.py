@@ -74,9 +74,9 @@ MEASUREMENTS.update({
     "symbolic_equations": (PY + ["benchmarks/bench_symbolic.py", "equations", "--out", "OUT"],
                            "symbolic_equations.json", "json"),
     "symbolic_models": (PY + ["benchmarks/bench_symbolic.py", "models", "--out", "OUT"], "symbolic_models.json", "json"),
-    # the device's drive description in the symbolic engine (its first half cycle: 0.5 s of the 2 s case)
-    "symbolic_device": (PY + ["benchmarks/bench_symbolic.py", "models", "--models", "nsd_drive", "--duration", "0.5",
-                              "--out", "OUT"], "symbolic_models.json", "json"),
+    # the device's drive description in the symbolic engine (its case: two cycles at 1 Hz, A = 15 mm)
+    "symbolic_device": (PY + ["benchmarks/bench_symbolic.py", "models", "--models", "nsd_drive", "--out", "OUT"],
+                        "symbolic_models.json", "json"),
     # ten generated mechanisms with the symbolic engine as a 4th peer (and the referee where a peer disagrees)
     "campaign_symbolic": (PY + ["benchmarks/campaign.py", "--seeds", "0-9", "--engines",
                                 "semirecursive,mujoco,exudyn,symbolic", "--workers", "1", "--timeout", "1200", "--out",
