@@ -6,8 +6,6 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
-import pytest
-
 from comparisons.builders import mujoco as mj
 from comparisons.campaign.referee import disagreeing, referee
 from comparisons.model_cases import ModelCase
@@ -17,7 +15,6 @@ from nsd_core.model.load import load_model
 MODELS = Path(__file__).resolve().parents[1] / "models"
 
 
-@pytest.mark.slow   # MuJoCo's compiled callbacks and three engines' runs: minutes on a shared machine
 def test_the_referee_sides_with_the_reference_against_a_wrong_peer(tmp_path, monkeypatch):
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
     model = load_model(MODELS / "fourbar_spring.toml")
