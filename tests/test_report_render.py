@@ -20,8 +20,10 @@ forking = pytest.mark.skipif(IN_WORKER, reason="run by test_forking_tests_in_a_s
 
 @pytest.mark.skipif(not IN_WORKER, reason="the tests below run here directly")
 def test_forking_tests_in_a_single_threaded_process():
+    env = {k: v for k, v in os.environ.items() if not k.startswith("PYTEST_XDIST")}   # not a worker there
     p = subprocess.run([sys.executable, "-m", "pytest", "-q", "-n", "0", "-p", "no:cacheprovider", __file__],
-                       capture_output=True, text=True, timeout=600, cwd=os.path.dirname(os.path.dirname(__file__)))
+                       capture_output=True, text=True, timeout=600, cwd=os.path.dirname(os.path.dirname(__file__)),
+                       env=env)
     assert p.returncode == 0 and " passed" in p.stdout, p.stdout[-3000:] + p.stderr[-2000:]
 
 
