@@ -69,11 +69,12 @@ def companion_times(engine: str, merged: dict) -> float:
     return 0.5 if engine == "mujoco" and nominal_order(engine, merged) < 2.0 else float(COMPANION)
 
 
-def companion_label(engine: str, merged: dict, dt_out: float | None = None) -> tuple[str, float]:
+def companion_label(engine: str, merged: dict, dt_out: float | None = None, coarse: bool = True) -> tuple[str, float]:
     """(label, step multiplier) of a peer's companion run with these (merged) settings: ``ENGINE_2h``
-    at twice its step (``companion_times``), ``ENGINE_h2`` at half of it, also where the judged step
-    already spans the output interval ``dt_out`` (a step divides each interval: none coarser exists)."""
-    times = companion_times(engine, merged)
+    at twice its step (``companion_times``) where ``coarse`` allows it, else ``ENGINE_h2`` at half of it,
+    also where the judged step already spans the output interval ``dt_out`` (a step divides each
+    interval: none coarser exists)."""
+    times = companion_times(engine, merged) if coarse else 0.5
     step = float(merged[STEP_SETTING[engine]])
     if times > 1.0 and dt_out is not None and math.ceil(float(dt_out) / step - 1e-9) < 2:
         times = 0.5

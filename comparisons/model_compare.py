@@ -4,7 +4,7 @@ Every engine builds the mechanism from the same description (nsd_core.model) thr
 (``BUILDERS``: one module each, ``simulate(model, duration, dt_out, settings) -> ModelRun``); no line
 here or in a builder knows which mechanism it runs. The verdict is the gate's rule
 (comparisons.verdict): each engine's difference from the converged in-house reference within
-k x its own error estimate (peers: Richardson from their runs at h and 2h; the in-house engine: its
+k x its own error estimate (peers: Richardson from their runs at h and h/2; the in-house engine: its
 difference from the converged run), and that error within each output's engineering tolerance
 (the output's ``tolerance``, a fraction of its ``scale``: given, or the reference's peak |value|).
 With a reference solution (a case's ``reference``), every engine and the converged reference are
@@ -37,11 +37,13 @@ SOLUTION = " vs solution"
 
 def companion(case: ModelCase, engine: str) -> tuple[str, dict]:
     """(label, settings) of a fixed-step peer's companion run on ``case``: the second run of its
-    estimate (comparisons.estimate.companion_label)."""
+    estimate, at half its step. A described mechanism's order is not known beforehand: where a
+    non-smooth law holds a method below its nominal order q < p, a coarser companion would
+    underestimate the error 2^(p - q) times more than a finer one (comparisons.estimate)."""
     own = dict(case.settings.get(engine, {}))
     merged = {**builder(engine).default_settings, **own}
     key = STEP_SETTING[engine]
-    label, times = companion_label(engine, merged, case.dt_out)
+    label, times = companion_label(engine, merged, case.dt_out, coarse=False)
     return label, {**own, key: float(merged[key]) * times}
 
 
@@ -51,7 +53,7 @@ def builder(engine: str):
 
 def run_plan(case: ModelCase, engines: list[str]) -> list[tuple[str, str, dict]]:
     """(label, engine, settings) of every run a case needs: each engine at its case settings, each
-    fixed-step peer again at twice its step (its estimate's companion), and the converged reference and
+    fixed-step peer again at half its step (its estimate's companion), and the converged reference and
     its check."""
     plan = []
     for e in engines:

@@ -7,9 +7,9 @@ single line and exit 2, nothing written, no engine run.
 
 ``--refine``: the gate's rule (comparisons.refine.refinements): a peer that is 'not converged at these
 settings' runs again at the step its estimate asks for (at most MAX_REFINE x its steps), one whose
-estimate is uncertain once at half its step; only those peers' runs (at h and 2h) are new, every
+estimate is uncertain once at half its step; only those peers' runs (at h and h/2) are new, every
 other run of the case is re-used, and the case is judged again. A refined step is also held to the
-step-count bound checked before any run (at most MAX_FIXED_STEPS steps for its run at h, and not below
+step-count bound checked before any run (at most MAX_FIXED_STEPS steps for its h/2 run, and not below
 the step floor): a step past it is *capped* there, and the refine line says so (a refusal could only
 come after the first runs were written). The changes are ``refined`` in results.json.
 
@@ -66,12 +66,12 @@ def run(args) -> int:
             merged = check_settings(b, c.settings.get(e) or None, f"case.{c.name}.{e}")
             if e == REFERENCE:   # its least step count (duration / max_step), before any run
                 check_case_work(f"case.{c.name}", c.duration, c.dt_out, len(model.outputs), merged)
-            if e in STEP_SETTING:   # bounded work: the run at h (its companion at 2h takes half the steps)
+            if e in STEP_SETTING:   # bounded work: the h/2 run takes twice the steps, found before any run
                 key = STEP_SETTING[e]
-                steps = c.duration / float(merged[key])
+                steps = 2 * c.duration / float(merged[key])
                 if steps > MAX_FIXED_STEPS:
                     raise ParameterError(f"case.{c.name}.{e}.{key} = {merged[key]!r}: {steps:.3g} steps for "
-                                         f"{c.duration:g} s; at most {MAX_FIXED_STEPS} (a larger step "
+                                         f"{c.duration:g} s and its h/2 run; at most {MAX_FIXED_STEPS} (a larger step "
                                          "or a shorter duration)")
     check_out_dir("--out", args.out, lock=False)   # the cheap checks first: a bad --out never waits for numba
     check_out_file("--junit", args.junit)
@@ -147,7 +147,7 @@ def refine(model, cases, engines: list[str], summary: dict) -> dict:
 
 
 def _bounded(refined: list, cases: list, changes: list[dict]) -> tuple[list, list[dict], list[str]]:
-    """The refined steps held to the bound checked before any run (the run at h at most MAX_FIXED_STEPS
+    """The refined steps held to the bound checked before any run (the h/2 run at most MAX_FIXED_STEPS
     steps, the step not below STEP_FLOOR): a step past it is capped there; one already there is not
     refined. Returns the cases, the changes and the lines to print."""
     import dataclasses
@@ -160,13 +160,13 @@ def _bounded(refined: list, cases: list, changes: list[dict]) -> tuple[list, lis
             kept.append(r)
             lines += refine_text([r])
             continue
-        lowest = max(STEP_FLOOR, c.duration / MAX_FIXED_STEPS)
+        lowest = max(STEP_FLOOR, 2.0 * c.duration / MAX_FIXED_STEPS)
         if r["to"] >= lowest:
             kept.append(r)
             lines += refine_text([r])
             continue
         cap = (f"the step floor {STEP_FLOOR:g} s" if lowest == STEP_FLOOR
-               else f"at most {MAX_FIXED_STEPS} steps")
+               else f"at most {MAX_FIXED_STEPS} steps with its h/2 run")
         if lowest >= r["from"] * (1.0 - 1e-12):   # already at the bound: the original case stands
             original = next(o for o in cases if o.name == c.name).settings.get(r["engine"], {})
             by_name[c.name] = dataclasses.replace(c, settings={**c.settings, r["engine"]: original})
@@ -182,7 +182,7 @@ def _bounded(refined: list, cases: list, changes: list[dict]) -> tuple[list, lis
 
 
 def _rejudge(model, case, engines: list[str], redo: set, summary: dict, rule) -> None:
-    """The refined peers' runs (at h and 2h) on ``case``, then the case judged again with its other
+    """The refined peers' runs (at h and h/2) on ``case``, then the case judged again with its other
     runs as they were (compare_model's judgement of one case, on the runs it kept)."""
     entry = summary["cases"][case.name]
     runs = dict(summary["runs"][case.name])

@@ -50,7 +50,7 @@ def test_refine_reruns_a_coarse_peer_finer_and_the_verdict_becomes_pass(tmp_path
     assert (r["case"], r["engine"], r["setting"], r["from"]) == ("short", "exudyn", "step_size", 0.002)
     assert 0.002 / 8 <= r["to"] < 0.002 and not r["capped"]
     runs = s["cases"]["short"]["runs"]
-    assert runs["exudyn"]["step_size"] == pytest.approx(r["to"]) and runs["exudyn_2h"]["step_size"] == pytest.approx(r["to"] * 2)
+    assert runs["exudyn"]["step_size"] == pytest.approx(r["to"]) and runs["exudyn_h2"]["step_size"] == pytest.approx(r["to"] / 2)
     assert s["passed"] and s["cases"]["short"]["verdicts"]["exudyn"]["pass"]
     assert {row["case"] for row in s["rows"]} == {"short"}
     assert len([row for row in s["rows"] if row["engine"] == "exudyn"]) == len({row["metric"] for row in s["rows"]
@@ -69,27 +69,27 @@ def test_refine_with_nothing_to_refine_says_so_and_records_an_empty_list(tmp_pat
 
 
 def test_a_refined_step_past_the_step_count_bound_is_capped_there():
-    """The bound checked before any run (MAX_FIXED_STEPS for the run at h) holds for a refined step too:
+    """The bound checked before any run (MAX_FIXED_STEPS for the h/2 run) holds for a refined step too:
     a step past it is capped at the bound and said; one already at the bound is not refined."""
     from comparisons.engines.base import MAX_FIXED_STEPS
     from comparisons.model_cases import ModelCase
     from comparisons.refine import refinements
     from nsd_cli.compare_model import _bounded
     duration = 100.0
-    lowest = duration / MAX_FIXED_STEPS   # 5e-6 s
-    cases = [ModelCase("a", duration, 0.1, {"exudyn": {"step_size": 2e-5}}),
+    lowest = 2 * duration / MAX_FIXED_STEPS   # 1e-5 s
+    cases = [ModelCase("a", duration, 0.1, {"exudyn": {"step_size": 4e-5}}),
              ModelCase("b", duration, 0.1, {"exudyn": {"step_size": lowest}})]
     summary = {"verdicts": {n: {"exudyn": {"needs": {"step_size": 1e-6}, "step": s, "setting": "step_size",
                                            "consistent": True, "accurate": False}}
-                            for n, s in (("a", 2e-5), ("b", lowest))}}
+                            for n, s in (("a", 4e-5), ("b", lowest))}}
     refined, changes = refinements(cases, summary)
-    assert [r["to"] for r in changes] == [2.5e-6, 1e-6]   # the 8x cap and the ask: past the step-count bound
+    assert [r["to"] for r in changes] == [5e-6, lowest / 8]   # the 8x cap alone: past the step-count bound
     refined, changes, lines = _bounded(refined, cases, changes)
     (r,) = changes
     assert r["case"] == "a" and r["to"] == pytest.approx(lowest) and r["capped"]
     assert refined[0].settings["exudyn"]["step_size"] == pytest.approx(lowest)
     assert refined[1].settings["exudyn"]["step_size"] == lowest          # b: as it was
-    assert f"capped: at most {MAX_FIXED_STEPS} steps)" in lines[0]
+    assert f"capped: at most {MAX_FIXED_STEPS} steps with its h/2 run" in lines[0]
     assert "b: exudyn not refined" in lines[1]
 
 
