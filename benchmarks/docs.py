@@ -295,6 +295,12 @@ def campaign() -> str:
     return render(load, provenance, table, g, plain)
 
 
+def first_command() -> str:
+    """The README's first command before and after, side by side (benchmarks/docs_first_command.py)."""
+    from benchmarks.docs_first_command import first_command as render
+    return render(load, provenance, table, g, plain)
+
+
 def symbolic_equations() -> str:
     """The symbolic engine's derived equations of one small mechanism (benchmarks/docs_symbolic.py)."""
     from benchmarks.docs_symbolic import equations as render
@@ -709,6 +715,7 @@ RENDER = {"compare-gate": compare_gate, "convergence": convergence, "tables-5-6"
           "gate-times": gate_times, "bench-start": bench_start, "compile-units": compile_units,
           "bench-record-set": bench_record_set, "compare-variant": compare_variant, "power": power,
           "verdict-cost": verdict_cost, "model-benchmarks": model_benchmarks, "campaign": campaign,
+          "first-command": first_command,
           "model-builders": model_builders, "described-gate": described_gate,
           "gate-described": gate_described,
           "work-precision": work_precision, "bench-cold": bench_cold, "bench-peer-seismic": bench_peer_seismic,

@@ -41,6 +41,10 @@ MEASUREMENTS = {
                      "A15mm_f1Hz,A15mm_f10Hz,A25.5mm_f10Hz,seismic_nf1_pulse", "--out", "OUT"], "power.json", "json"),
     "bench_verdict_cost": (PY + ["benchmarks/bench_verdict_cost.py", "--baseline", "cc555d9", "--repeats", "2",
                                  "--out", "OUT"], "bench_verdict_cost.json", "json"),
+    # the README's first command (install, cold compare with its report) and the warm gate: the session's
+    # base revision against this one, in fresh clones, side by side (benchmarks/bench_first_command.py)
+    "bench_first_command": (PY + ["benchmarks/bench_first_command.py", "--revisions", "4fba426,HEAD", "--out", "OUT"],
+                            "bench_first_command.json", "json"),
     "tables": (NSD + ["tables", "--out", "OUT"], "tables.csv", "csv"),
     # issue 32: every mechanism description in models/ through nsd compare --model, in every engine
     "bench_models": (PY + ["benchmarks/bench_models.py", "--out", "OUT"], "bench_models.json", "json"),

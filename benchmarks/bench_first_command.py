@@ -1,0 +1,89 @@
+"""The README's first command as a newcomer meets it, for two revisions side by side on one machine.
+
+    python benchmarks/bench_first_command.py --revisions BEFORE,AFTER --out DIR
+
+For each revision: a fresh clone of this repository at that revision, then the README's first command
+(a new venv, ``pip install -c constraints.txt -e .``, ``nsd compare --convergence --report``) on an
+empty cache (``XDG_CACHE_HOME`` a new folder, ``NUMBA_CACHE_DIR`` unset), each phase timed; then the
+warm gate (``nsd compare`` once more on what the cold run left). The revisions alternate phase by
+phase (cold before, cold after, warm before, warm after), so that both meet the same load; the load
+average is kept beside every row. Writes DIR/bench_first_command.json.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from nsd_core.device.results import atomic_write_json, versions  # noqa: E402
+
+VERDICT = re.compile(r"verdict: (\w+) \(([\d.]+) s\)")
+
+
+def timed(cmd: list[str], cwd: Path, env: dict) -> dict:
+    """Wall and CPU seconds (the command and its children) of one command, with its exit code."""
+    load = os.getloadavg()[0]
+    before = os.times()
+    start = time.perf_counter()
+    p = subprocess.run(cmd, cwd=cwd, env=env, capture_output=True, text=True)
+    wall = time.perf_counter() - start
+    after = os.times()
+    cpu = (after.children_user - before.children_user) + (after.children_system - before.children_system)
+    m = VERDICT.search(p.stdout)
+    return {"cmd": " ".join(cmd), "exit_code": p.returncode, "wall_s": wall, "cpu_s": cpu, "load_before": load,
+            "verdict": m.group(1) if m else None, "compare_s": float(m.group(2)) if m else None,
+            "tail": (p.stdout + p.stderr)[-400:] if p.returncode else ""}
+
+
+def clone(revision: str, where: Path) -> Path:
+    subprocess.run(["git", "clone", "-q", str(ROOT), str(where)], check=True)
+    subprocess.run(["git", "-C", str(where), "checkout", "-q", revision], check=True)
+    return where
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--revisions", required=True, help="BEFORE,AFTER (git revisions)")
+    ap.add_argument("--out", required=True)
+    a = ap.parse_args(argv)
+    revs = a.revisions.split(",")
+    work = Path(tempfile.mkdtemp(prefix="first-command-"))
+    trees, envs, rows = {}, {}, []
+    for r in revs:
+        trees[r] = clone(r, work / f"clone-{r}")
+        env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR", "VIRTUAL_ENV", "PYTHONPATH")}
+        env.update(XDG_CACHE_HOME=str(work / f"cache-{r}"), MPLBACKEND="Agg")
+        envs[r] = env
+    for r in revs:   # cold: the README's first command, phase by phase
+        t = trees[r]
+        venv = timed([sys.executable, "-m", "venv", ".venv"], t, envs[r])
+        pip = timed([".venv/bin/pip", "install", "-q", "-c", "constraints.txt", "-e", "."], t, envs[r])
+        cmp_ = timed([".venv/bin/nsd", "compare", "--convergence", "--report", "--out", "out/compare"], t, envs[r])
+        total = venv["wall_s"] + pip["wall_s"] + cmp_["wall_s"]
+        rows += [{"revision": r, "phase": "venv", **venv}, {"revision": r, "phase": "install", **pip},
+                 {"revision": r, "phase": "first command's nsd compare (cold cache)", **cmp_},
+                 {"revision": r, "phase": "first command in all", "wall_s": total, "load_before": venv["load_before"]}]
+        print(f"{r}: cold total {total:.1f} s (compare {cmp_['wall_s']:.1f} s, {cmp_['verdict']})", flush=True)
+    for r in revs:   # warm: the gate again on what the cold run left
+        w = timed([".venv/bin/nsd", "compare", "--out", "out/warm"], trees[r], envs[r])
+        rows.append({"revision": r, "phase": "warm nsd compare", **w})
+        print(f"{r}: warm {w['wall_s']:.1f} s ({w['verdict']})", flush=True)
+    revisions = {r: subprocess.run(["git", "-C", str(trees[r]), "rev-parse", "HEAD"], capture_output=True,
+                                   text=True).stdout.strip() for r in revs}
+    out = Path(a.out)
+    out.mkdir(parents=True, exist_ok=True)
+    atomic_write_json(out / "bench_first_command.json", {"revisions": revisions, "rows": rows, "cpus": os.cpu_count(),
+                                                         "versions": versions()})
+    return 0 if all(r.get("exit_code", 0) == 0 for r in rows) else 1
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
