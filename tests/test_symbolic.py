@@ -36,8 +36,8 @@ def joint_zoo(general: bool = True) -> dict:
     """Every joint type (a planar and a translational joint on a turning parent), joint laws, a plane
     law with its state, a points law along a direction, and point, velocity, acceleration, energy,
     state and work outputs. ``general``: the universal, revolute and planar joints on general axes
-    (sympy's expressions then grow 15-fold: 45,000 operations, about 20 s to derive), else on the
-    frame's axes (3,000 operations, about 4 s)."""
+    (sympy's expressions then grow 15-fold: 45,000 operations, 5-20 s to derive on 2 shared cores),
+    else on the frame's axes (3,000 operations, 1-4 s)."""
     raw = _zoo()
     if not general:
         for b in raw["bodies"]:
