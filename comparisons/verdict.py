@@ -45,10 +45,10 @@ K, BETA = 3.0, 0.1
 
 
 def merged_settings(engine: str, case) -> dict:
-    """A peer's settings on ``case`` over its defaults (the seismic defaults on a seismic case)."""
-    from comparisons.config import SeismicCase
+    """A peer's settings on ``case`` over its defaults (the seismic defaults on a seismic case: one
+    driven by a ground motion, not a drive)."""
     eng = get_engine(engine)
-    defaults = eng.seismic_default_settings if isinstance(case, SeismicCase) else eng.default_settings
+    defaults = eng.default_settings if hasattr(case, "drive") else eng.seismic_default_settings
     return {**defaults, **(case.settings.get(engine) or {})}
 
 
