@@ -172,6 +172,9 @@ def test_power_cli_end_to_end_under_the_per_run_verdict(tmp_path):
 
 @pytest.mark.slow
 def test_power_cli_on_a_seismic_case(tmp_path):
-    """The same on the gate's near-fault seismic window in Exudyn: measured 27 of 31 seen at 0.1 %."""
+    """The same on the gate's near-fault seismic window in Exudyn: measured 25 of 31 seen at 0.1 % with
+    its estimate's companion at 2h (27 with the h/2 companion: cap_mass +-0.1 % fell from 1.74 / 1.56 to
+    0.46 / 0.41 of its bound on this case; both are still seen by both engines on the drive cases,
+    docs/validation.md)."""
     _, d = _power_cli(tmp_path, SEISMIC_CASE, "exudyn")
-    assert sum(t["seen_at_nominal"] for t in d["table"]) >= 26
+    assert sum(t["seen_at_nominal"] for t in d["table"]) >= 24
