@@ -79,6 +79,17 @@ class Interrupted(BaseException):
 RETRY, DEADLINE = 0.5, 5.0
 COMPILER = (f"{os.sep}numba{os.sep}", f"{os.sep}llvmlite{os.sep}")
 _state: dict = {}   # "signum", "tally", "done": an interrupt in progress
+_SAY = threading.Lock()
+
+
+def _say_once(line: str) -> None:
+    """The interrupt's one line, said once whichever of the main thread and the watchdog comes first."""
+    with _SAY:
+        if _state.get("said"):
+            return
+        _state["said"] = True
+        sys.stderr.write(line + "\n")
+        sys.stderr.flush()
 
 
 def _in_compiler(frame) -> bool:
@@ -103,9 +114,7 @@ def _watchdog(signum: int) -> None:
     t = _state.get("tally") or {}
     where = (f"; {t['kept']} of {t['total']} cases kept in {printable(t['dir'])}" if "total" in t else "; nothing kept")
     try:
-        if not _state.get("said"):
-            sys.stderr.write(f"nsd: interrupted{where}\n")
-            sys.stderr.flush()
+        _say_once(f"nsd: interrupted{where}")
         from nsd_cli.outlock import release_all
         release_all()
     finally:
@@ -180,8 +189,7 @@ def main(argv: list[str] | None = None) -> int:
         t = args.tally
         where = (f"; {t['kept']} of {t['total']} cases kept in {printable(t['dir'])}" if "total" in t
                  else "; nothing kept")
-        print(f"nsd: interrupted{where}", file=sys.stderr, flush=True)
-        _state["said"] = True
+        _say_once(f"nsd: interrupted{where}")
         # an interrupt inside numba's compiler (a run compiling its mechanism's evaluation) leaves
         # llvmlite objects half-built, whose finalizers print "Exception ignored ... Traceback" at exit:
         # the process is ending, and that noise must not follow the one line
