@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import errno
 import importlib
+import importlib.util
 import os
 import signal
 import sys
@@ -76,8 +77,22 @@ class Interrupted(BaseException):
 # on (or hangs): there it is deferred and asked for again every RETRY s until the compiler returns;
 # after DEADLINE s without the run having ended, the process says its one line, releases its lock and
 # exits (its workers end with it: PR_SET_PDEATHSIG).
-RETRY, DEADLINE = 0.5, 5.0
-COMPILER = (f"{os.sep}numba{os.sep}", f"{os.sep}llvmlite{os.sep}")
+RETRY, DEADLINE = 0.05, 5.0
+
+
+def _package_dirs(*names: str) -> tuple[str, ...]:
+    """The installed folders of these packages (found without importing them), each ending in os.sep.
+    Matched by folder, not by a name in the path: the project's generated modules live under a cache
+    folder called ``numba`` too, and an interrupt there must not be deferred."""
+    dirs = []
+    for name in names:
+        spec = importlib.util.find_spec(name)
+        for d in (spec.submodule_search_locations or []) if spec is not None else []:
+            dirs += [os.path.join(d, ""), os.path.join(os.path.realpath(d), "")]
+    return tuple(dirs)
+
+
+COMPILER = _package_dirs("numba", "llvmlite")
 _state: dict = {}   # "signum", "tally", "done": an interrupt in progress
 _SAY = threading.Lock()
 
@@ -94,7 +109,7 @@ def _say_once(line: str) -> None:
 
 def _in_compiler(frame) -> bool:
     while frame is not None:
-        if any(part in frame.f_code.co_filename for part in COMPILER):
+        if frame.f_code.co_filename.startswith(COMPILER):
             return True
         frame = frame.f_back
     return False
