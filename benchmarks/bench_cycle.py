@@ -37,7 +37,7 @@ prefer_generated()  # the in-house engine as the studies run it (the generated e
 from nsd_core.device.drive import Drive  # noqa: E402
 from nsd_core.device.model import DEFAULT_SOLVER, simulate  # noqa: E402
 from nsd_core.device.params import Params
-from nsd_core.device.results import atomic_write_json  # noqa: E402
+from nsd_core.common.files import atomic_write_json  # noqa: E402
 
 CASES = [(0.015, 1.0), (0.015, 10.0), (0.0255, 1.0), (0.0255, 10.0)]
 PATH_CASES = [dict(amplitude=0.015, frequency=10.0, path="circle"), dict(amplitude=0.022, frequency=10.0, path="circle"),

@@ -24,11 +24,12 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from comparisons.engines.opensees_peer import gate_values, judge, run_opensees  # noqa: E402
-from nsd_core.device.ground import fema_record  # noqa: E402
-from nsd_core.device.isolation import designed_structure  # noqa: E402
-from nsd_core.device.isolators import sized  # noqa: E402
+from nsd_core.ground.motions import fema_record  # noqa: E402
+from nsd_core.structure.isolation import designed_structure  # noqa: E402
+from nsd_core.structure.isolators import sized  # noqa: E402
 from nsd_core.device.params import Params  # noqa: E402
-from nsd_core.device.results import atomic_write_json, versions  # noqa: E402
+from nsd_core.device.results import versions
+from nsd_core.common.files import atomic_write_json  # noqa: E402
 
 # (set, id, scale, window in record seconds, used by a test?)
 RECORDS = [("nearfield-pulse", 1, 0.6, (2.0, 5.0), "tests/test_isolators.py, tests/test_opensees.py"),
@@ -59,7 +60,7 @@ def one(set_: str, rid: int, scale: float, window, kind: str, building: bool = F
     st = designed_structure(True)
     st = st.with_isolator(sized(kind, st.mass))
     if building:
-        from nsd_core.device.building import building_from
+        from nsd_core.structure.building import building_from
         st = st.with_building(building_from(st.mass, {"stories": 3}))
     g = fema_record(set_, rid, scale=scale, window=window)
     j = judge(Params(), st, g)

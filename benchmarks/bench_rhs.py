@@ -25,7 +25,7 @@ from nsd_core.device.compiled import compiled_model, device_forces, device_motio
 from nsd_core.device.drive import Drive
 from nsd_core.device.model import device_system, rest_state
 from nsd_core.device.params import Params
-from nsd_core.device.results import atomic_write_json
+from nsd_core.common.files import atomic_write_json
 from nsd_core.engine import compiled as C
 from nsd_core.engine.codegen import generated_evaluator, generic_evaluator
 from nsd_core.engine.compiled_model import make_workspace

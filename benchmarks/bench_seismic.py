@@ -26,17 +26,17 @@ from compile_time import compile_times  # noqa: E402
 
 from nsd_core.engine.codegen import prefer_generated
 prefer_generated()  # the in-house engine as the studies run it (the generated evaluation)
-from nsd_core.device.ground import fema_record
-from nsd_core.device.isolation import default_structure
+from nsd_core.ground.motions import fema_record
+from nsd_core.structure.isolation import default_structure
 from nsd_core.device.params import Params
-from nsd_core.device.results import atomic_write_json
-from nsd_core.device.seismic import seismic_summary, simulate_seismic
+from nsd_core.common.files import atomic_write_json
+from nsd_core.structure.seismic import seismic_summary, simulate_seismic
 
 WHOLE_SCALE = 0.2  # 0.3 reaches the rod (|u| = l_d at 2.78 s): exit 4
 CASES = {"window nearfield-pulse:1 [10, 13] s": dict(window=(10.0, 13.0)),
          f"whole record nearfield-pulse:1, scale {WHOLE_SCALE}": dict(scale=WHOLE_SCALE)}
-FIRST_RUN = ("import time; t0 = time.perf_counter(); from nsd_core.device.seismic import simulate_seismic; "
-             "from nsd_core.device.ground import Harmonic; from nsd_core.device.isolation import default_structure; "
+FIRST_RUN = ("import time; t0 = time.perf_counter(); from nsd_core.structure.seismic import simulate_seismic; "
+             "from nsd_core.ground.motions import Harmonic; from nsd_core.structure.isolation import default_structure; "
              "from nsd_core.device.params import Params; "
              "simulate_seismic(Params(), default_structure(), Harmonic(0.8, 2.0, 30.0, duration=0.05)); "
              "print(time.perf_counter() - t0)")

@@ -750,7 +750,7 @@ def main(argv: list[str] | None = None) -> int:
     if argv:
         print(__doc__.strip(), file=sys.stderr)
         return 2
-    from nsd_core.device.results import atomic_write_text
+    from nsd_core.common.files import atomic_write_text
     for p in DOCS:
         if p.is_file():
             atomic_write_text(p, regenerate(p.read_text()))

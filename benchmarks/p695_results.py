@@ -90,7 +90,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--command", help="the command as a user types it (default: the log's 'command ...' line)")
     ap.add_argument("--variant-command")
     a = ap.parse_args(argv)
-    from nsd_core.device.results import atomic_write_json, versions
+    from nsd_core.device.results import versions
+    from nsd_core.common.files import atomic_write_json
     from benchmarks.docs import loaded
     log = _log(Path(a.log))
     measured = {k: log[k] for k in ("date_utc", "wall_s", "load_average_before", "load_average_after", "git_commit")}

@@ -50,7 +50,7 @@ prefer_generated()  # the in-house engine as the studies run it (the generated e
 from comparisons.config import SeismicCase, load_cases
 from comparisons.engines import get_engine
 from comparisons.engines.base import EngineError
-from nsd_core.device.results import atomic_write_json
+from nsd_core.common.files import atomic_write_json
 
 from refcompare import discrepancy, in_house_reference
 
@@ -193,7 +193,7 @@ def warm_up(cases, ladders: dict) -> float:
     run holds an import or a compilation (the in-house kernels, MuJoCo's and Exudyn's callbacks);
     returns the seconds this took."""
     from nsd_core.device.params import Params
-    from nsd_core.device.warmup import PATHS, tiny_drive
+    from nsd_core.compilation.warmup import PATHS, tiny_drive
     t0 = time.perf_counter()
     paths = sorted({c.drive.path if c.drive.path in PATHS else "line" for c in cases})
     for e, ladder in ladders.items():

@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from nsd_core.device.inputs import MAX_REFERENCE_BYTES, input_stream, printable
+from nsd_core.common.files import MAX_REFERENCE_BYTES, input_stream, printable
 from nsd_core.device.params import ParameterError
 from nsd_core.model.bounds import check_case_count, check_case_work
 from nsd_core.model.description import Model

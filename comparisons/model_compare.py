@@ -21,7 +21,7 @@ import numpy as np
 from comparisons.estimate import (STEP_SETTING, TIGHT_LABEL, TOLERANCE_LADDER, companion_label, nominal_order,
                                   pair_factor, pair_order)
 from comparisons.model_cases import ModelCase
-from comparisons.verdict import Rule, case_verdicts, pass_sentence
+from comparisons.verdict import FLOOR, Rule, case_verdicts, pass_sentence
 from nsd_core.model.description import Model
 from nsd_core.model.run import ModelRun
 
@@ -109,6 +109,18 @@ def differences(a: ModelRun, b: ModelRun, sc: dict) -> dict:
     return {k: float(np.max(np.abs(a.outputs[k] - b.outputs[k]))) / sc[k][0] for k in a.outputs}
 
 
+def roundoff_floors(model: Model, sc: dict) -> dict:
+    """output -> the difference below which it is round-off, as a fraction of its scale: FLOOR of the
+    largest scale among the outputs of its unit. A quantity that is zero in exact arithmetic (the force
+    across a line drive) is computed from terms as large as its siblings (the drive's other force, the
+    springs' tensions), and its round-off is relative to those, not to the scale it is judged in."""
+    largest: dict = {}
+    for o in model.outputs:
+        largest[sc[o.name][1]] = max(largest.get(sc[o.name][1], 0.0), sc[o.name][0])
+    floors = {o.name: FLOOR * largest[sc[o.name][1]] / sc[o.name][0] for o in model.outputs}
+    return {**floors, **{k + SOLUTION: v for k, v in floors.items()}}
+
+
 def solution_differences(run: ModelRun, case: ModelCase, sc: dict) -> dict:
     ref = case.reference
     return {k + SOLUTION: float(np.max(np.abs(run.outputs[k][ref.index] - v))) / sc[k][0]
@@ -125,6 +137,7 @@ def judge(model: Model, case: ModelCase, engines: list[str], runs: dict, rule: R
         if e not in runs:
             continue
         d = differences(runs[e], conv, sc)
+        shares_reference = False
         values[e] = {**d, "closure_max": runs[e].stats.get("closure_max", 0.0)}
         if model.prescribed:
             values[e]["tracking_error"] = runs[e].stats.get("tracking_error", 0.0)
@@ -148,11 +161,16 @@ def judge(model: Model, case: ModelCase, engines: list[str], runs: dict, rule: R
             evidence[e] = {"order": order, "setting": key, "step": float(merged[key]), "ladder": factor}
         else:   # the in-house engine: its estimate is its distance from the converged run
             estimates[e] = dict(d)
+            shares_reference = True
             evidence[e] = {}
         if case.reference is not None:
             sol = solution_differences(runs[e], case, sc)
             values[e].update(sol)
-            estimates[e].update({k: estimates[e][k[: -len(SOLUTION)]] for k in sol})
+            # the in-house engine's estimate is its distance from the converged run, whose own error (ref_error)
+            # it shares when the two coincide: against a solution its error is at most the sum
+            own = 1.0 if shares_reference else 0.0
+            estimates[e].update({k: estimates[e][k[: -len(SOLUTION)]] + own * ref_error[k[: -len(SOLUTION)]]
+                                 for k in sol})
     if case.reference is not None:   # the converged reference against the solution, within its own error
         sol = solution_differences(conv, case, sc)
         values[CONVERGED] = sol
@@ -162,7 +180,7 @@ def judge(model: Model, case: ModelCase, engines: list[str], runs: dict, rule: R
     names = [e for e in engines if e in values] + ([CONVERGED] if CONVERGED in values else [])
     sc_all = {**sc, **{k + SOLUTION: v for k, v in sc.items()}}
     return case_verdicts(case.name, "model", names, values, estimates, ref_error, sc_all, evidence, rule,
-                         reference_rtol=CONVERGED_SETTINGS["rtol"])
+                         floors=roundoff_floors(model, sc), reference_rtol=CONVERGED_SETTINGS["rtol"])
 
 
 def model_rule(model: Model, k: float) -> Rule:

@@ -19,7 +19,7 @@ from typing import Any, Callable
 
 from nsd_core.device.cycle import analyse
 from nsd_core.device.geometry import device_geometry
-from nsd_core.device.results import atomic_write_json
+from nsd_core.common.files import atomic_write_json
 from nsd_core.engine.workers import worker_pool
 
 from comparisons.config import SeismicCase

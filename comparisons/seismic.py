@@ -1,7 +1,7 @@
 """The seismic mode across engines: ground inputs of a case and the metrics on time histories (issue 14).
 
 The engines' seismic runs are in the one registry (``comparisons.engines``: ``run_seismic_engine``,
-``run_seismic_job``); every one returns the columns of ``nsd_core.device.seismic`` it can measure
+``run_seismic_job``); every one returns the columns of ``nsd_core.structure.seismic`` it can measure
 (at least t, x, y, theta, ax_abs, ay_abs, device_Fx, device_Fy, cap_z) on the same output times.
 OpenSees (``comparisons.engines.opensees_peer``) runs the baseline isolators only (no device); its runs
 are judged there by the gate's rule on these metrics, the isolator's force in the device force's place.
@@ -13,19 +13,19 @@ import numpy as np
 from nsd_core.device.params import ParameterError
 
 def _synthetic() -> dict:
-    from nsd_core.device.ground import GROUND_SPECS
+    from nsd_core.ground.motions import GROUND_SPECS
     return {kind: (cls, {k: spec[0] for k, spec in keys.items()}) for kind, (cls, keys, _) in GROUND_SPECS.items()}
 
 
-# kind -> (class name in nsd_core.device.ground, allowed keys -> constructor argument): derived from the
-# one table of the closed-form inputs and their ranges (nsd_core.device.ground.GROUND_SPECS)
+# kind -> (class name in nsd_core.ground.motions, allowed keys -> constructor argument): derived from the
+# one table of the closed-form inputs and their ranges (nsd_core.ground.motions.GROUND_SPECS)
 SYNTHETIC = _synthetic()
 
 
 def parse_ground(text, where: str = "--ground"):
     """A synthetic ground motion from ``KIND:K=V,...`` (nsd seismic --ground, a case's ground = "..."):
-    nsd_core.device.ground.parse_ground_spec, the one parser (keys, ranges, duplicates)."""
-    from nsd_core.device.ground import parse_ground_spec
+    nsd_core.ground.motions.parse_ground_spec, the one parser (keys, ranges, duplicates)."""
+    from nsd_core.ground.motions import parse_ground_spec
     return parse_ground_spec(text, where)
 
 

@@ -1,17 +1,17 @@
 """Warm pool workers for the comparisons' jobs (issue 26): what each worker runs once before its
 first job (``nsd_core.engine.workers.worker_pool``'s ``warm``), so that no job pays for imports,
-numba's cache loading or compilation. The in-house kernels warm through ``nsd_core.device.warmup``;
+numba's cache loading or compilation. The in-house kernels warm through ``nsd_core.compilation.warmup``;
 each peer engine and setting through a tiny job of the same kind (its import, its compiled force
 callbacks and step loop: ``comparisons.engines._warm_peer``)."""
 from __future__ import annotations
 
 from functools import partial
 
-from nsd_core.device.describe_seismic import structure_for
-from nsd_core.device.isolation import default_structure
+from nsd_core.structure.describe_seismic import structure_for
+from nsd_core.structure.isolation import default_structure
 from nsd_core.device.params import Params
-from nsd_core.device.warmup import TINY_DT_OUT, TINY_DURATION, tiny_drive, tiny_ground
-from nsd_core.device.worker_warmup import kind, warm_worker
+from nsd_core.compilation.warmup import TINY_DT_OUT, TINY_DURATION, tiny_drive, tiny_ground
+from nsd_core.compilation.worker_warmup import kind, warm_worker
 
 from comparisons.engines import REFERENCE, run_job, run_seismic_job, tiny_settings
 
@@ -58,7 +58,7 @@ def peer_calls(specs) -> list:
 
 def every_mode_calls() -> list:
     """The peers' tiny jobs of every kind the default cases run (each peer's drive along a line and a
-    circle, MuJoCo's RK4, the seismic mode): what nsd_core.device.warm_all (``nsd warm``) compiles once per version."""
+    circle, MuJoCo's RK4, the seismic mode): what nsd_core.compilation.warm_all (``nsd warm``) compiles once per version."""
     from comparisons.engines import ENGINES
     peers = [e for e in ENGINES if e != REFERENCE]
     specs = [spec(e, False, tiny_drive(p), {}) for e in peers for p in ("line", "circle")]

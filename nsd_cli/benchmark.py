@@ -9,7 +9,7 @@ import argparse
 import sys
 
 from nsd_cli.options import check_out_dir, whole
-from nsd_core.device.results import atomic_write_json
+from nsd_core.common.files import atomic_write_json
 
 
 HELP = "standard multibody benchmarks on the generic engine"

@@ -35,7 +35,7 @@ from comparisons.model_compare import (BUILDERS, CHECK, CONVERGED, REFERENCE, bu
                                        model_rule, run_one, run_plan, table)
 from nsd_cli.options import check_out_dir, check_out_file
 from nsd_core.device.params import ParameterError
-from nsd_core.device.results import atomic_write_json, atomic_write_text
+from nsd_core.common.files import atomic_write_json, atomic_write_text
 from nsd_core.model.bounds import check_case_work
 
 NOT_WITH_MODEL = ("convergence", "power", "power_cases", "power_profiles", "power_size", "tolerances")
@@ -221,7 +221,7 @@ def clear_previous(out: Path) -> None:
     """Remove what an earlier ``nsd compare --model`` wrote into ``out`` (see the module's docstring):
     its report's files and the CSV of each run its results.json lists; a case folder left empty goes
     too. A results.json that is not a --model summary (or not readable) names no CSVs to remove."""
-    from nsd_core.device.inputs import read_regular_text
+    from nsd_core.common.files import read_regular_text
     try:
         prev = json.loads(read_regular_text(out / "results.json", "results.json"))
     except (OSError, ValueError):

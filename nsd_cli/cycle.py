@@ -64,7 +64,8 @@ def run(args) -> int:
     check_drive_work(drive.duration, given.get("max_step", 1e-3), "--cycles / --frequency")  # 1e-3: the default
     from nsd_core.api import cycle
     from nsd_core.device.model import DEFAULT_SOLVER
-    from nsd_core.device.results import atomic_write_json, write_csv
+    from nsd_core.device.results import write_csv
+    from nsd_core.common.files import atomic_write_json
     solver = {**DEFAULT_SOLVER, **given}
     drive.check_followable(params)
     out = check_out_dir("--out", args.out)

@@ -17,7 +17,7 @@ import os
 
 from nsd_cli.options import (add_param_arguments, add_solver_arguments, base_params, check_out_dir,
                              solver_settings)
-from nsd_core.device.inputs import read_regular_text
+from nsd_core.common.files import read_regular_text
 from nsd_core.device.params import ParameterError
 
 HELP = "incremental dynamic analysis and fragility over a record set, with and without the device"
@@ -82,7 +82,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def _options(args):
     """Everything the command line says, checked (ParameterError, one line) before anything runs."""
-    from nsd_core.device.ground import SETS, set_name
+    from nsd_core.ground.motions import SETS, set_name
     from nsd_core.study.hunt import Hunt, parse_levels
     from nsd_core.study.ida import parse_limit
     from nsd_core.study.intensity import MEASURES
@@ -112,7 +112,7 @@ def run(args) -> int:
     from nsd_cli.limits import check_ida_scales, check_ida_work
     from nsd_cli.options import WORKERS_MAX, whole
     from nsd_cli.sweep import check_scheduler
-    from nsd_core.device.ground import SIMILITUDE_TIME_FACTOR, fema_record
+    from nsd_core.ground.motions import SIMILITUDE_TIME_FACTOR, fema_record
     from nsd_cli.seismic_building import with_building
     from nsd_cli.seismic_extras import isolated_structure
     from nsd_core.device.model import DEFAULT_SOLVER
@@ -175,7 +175,7 @@ def run(args) -> int:
         import json
         print("limit states apart (limit_states.json, .csv, .png):")
         print("\n".join(summary_lines(json.loads(read_regular_text(out / "limit_states.json", "limit_states.json")))))
-    from reports.build import draw_study  # the study's PNGs into its own folder (issue 20)
+    from reports.build import draw_study  # the study's PNGs into its own folder
     draw_study(out)
     undetermined = [t["name"] for t in index["traces"] if t["undetermined"]]
     return 3 if undetermined or bad else 0
@@ -187,7 +187,7 @@ def _cross_check(traces, store, engines, workers, args, index, runner, work: dic
     import json
     import sys
     from nsd_cli.ida_check import cost, cross_check, entries
-    from nsd_core.device.results import atomic_write_json
+    from nsd_core.common.files import atomic_write_json
     frag = json.loads(read_regular_text(store.root / "fragility.json", "fragility.json"))
     if work["peer_steps"]:
         print(f"ida cross-check ({work['mode']}): up to {work['records']} record(s) in {', '.join(engines[1:])}, "

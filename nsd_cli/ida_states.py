@@ -23,7 +23,7 @@ def default_capacity(params, structure) -> tuple[float, str]:
     own = getattr(structure, "displacement_capacity", None)
     if own:
         return float(own), "the structure's displacement capacity"
-    from nsd_core.device.restoring_force import NoDefaultError, working_range
+    from nsd_core.structure.restoring_force import NoDefaultError, working_range
     try:
         return working_range(params), "the device's working range X_max"
     except NoDefaultError:

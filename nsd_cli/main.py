@@ -17,8 +17,8 @@ import sys
 import threading
 
 from nsd_core.device.drive import DriveError
-from nsd_core.device.inputs import printable
-from nsd_core.engine.errors import InputError, SolverError
+from nsd_core.common.files import printable
+from nsd_core.common.errors import InputError, SolverError
 
 DESCRIPTION = """Cross-validation harness for a negative-stiffness seismic isolation device: an in-house
 two-step semirecursive multibody model checked against MuJoCo and Exudyn models that call the
@@ -48,7 +48,7 @@ class OneLineParser(argparse.ArgumentParser):
     like every other bad input; ``nsd CMD --help`` shows the usage."""
 
     def error(self, message: str):
-        from nsd_core.device.inputs import printable
+        from nsd_core.common.files import printable
         self.exit(2, f"{self.prog}: error: {printable(message)} (see {self.prog} --help)\n")
 
 

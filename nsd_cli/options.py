@@ -11,7 +11,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from nsd_core.device.inputs import printable
+from nsd_core.common.files import printable
 from nsd_core.device.params import ParameterError, Params, load_params, parse_set
 
 
@@ -165,7 +165,7 @@ def no_special_files(option: str, value: str, folder: Path, rule: str = OUT_RULE
     replace regular files only, nsd_core.device.results.check_output_target); for nsd report --from,
     what it reads (a FIFO would block). Refused before any work, so that nothing is written. Folders
     inside are looked into (not through links), up to SCAN_MAX entries."""
-    from nsd_core.device.inputs import _kind
+    from nsd_core.common.files import _kind
     todo, seen = [folder], 0
     while todo and seen < SCAN_MAX:
         try:
@@ -218,7 +218,7 @@ def check_out_file(option: str, value: str | None) -> Path | None:
         raise ParameterError(f"{option} {printable(value)}: name too long (at most {NAME_MAX - TMP_AFFIX} bytes for "
                              "a file name)")
     _writable_folder(option, value, path.parent)
-    from nsd_core.device.results import check_output_target
+    from nsd_core.common.files import check_output_target
     check_output_target(path, option)  # a FIFO or a device there is refused, never replaced
     return path
 
@@ -227,7 +227,7 @@ def check_finite(data, what: str) -> None:
     """Any NaN or inf in an output is a solver failure (exit 3), never exit 0: raises SolverError
     naming the first field that holds one (nsd_core.device.results.first_nonfinite); nothing is written."""
     from nsd_core.device.results import first_nonfinite
-    from nsd_core.engine.errors import SolverError
+    from nsd_core.common.errors import SolverError
     bad = first_nonfinite(data)
     if bad:
         raise SolverError(f"{what}: a non-finite output, {bad}; nothing written")

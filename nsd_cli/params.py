@@ -47,7 +47,7 @@ def table_text(params_rows: list[dict], structure_rows: list[dict]) -> str:
 
 
 def toml_text(params_rows: list[dict], structure_rows: list[dict]) -> str:
-    from nsd_core.device.listing import toml_value
+    from nsd_core.structure.listing import toml_value
     out = ["# Parameter file written by `nsd params --format toml`: every device parameter with its value.",
            "# Comment: description [unit]; allowed range; provenance. Pass it as --params FILE (nsd cycle,",
            "# compare, seismic, sweep, polar); keep only the lines you change if you like (the rest default).",
@@ -67,9 +67,9 @@ def toml_text(params_rows: list[dict], structure_rows: list[dict]) -> str:
 
 def run(args) -> int:
     from nsd_cli.seismic_extras import isolated_structure
-    from nsd_core.device.listing import param_rows, structure_rows
+    from nsd_core.structure.listing import param_rows, structure_rows
     from nsd_core.device.params import ParameterError
-    from nsd_core.device.results import atomic_write_text
+    from nsd_core.common.files import atomic_write_text
     from nsd_cli.options import check_out_file
     params = base_params(args)
     check_out_file("--out", args.out)

@@ -47,7 +47,7 @@ def run(args) -> int:
     lim.in_range("--amplitude", args.amplitude, (Drive.A_MIN, base.rod_length * (1 - 1e-12)), "m (below rod_length)")
     for n in wires:
         base.replace(n_wires=n, n_ropes=n)  # each design's parameters checked (one line) before any work
-    from nsd_core.device.results import atomic_write_json, atomic_write_text
+    from nsd_core.common.files import atomic_write_json, atomic_write_text
     from nsd_core.study.polar import polar_csv, polar_study  # after the checks: a refusal starts light
     out = check_out_dir("--out", args.out)
     result = polar_study(wires, args.step, args.amplitude, base, args.points_per_cycle, args.workers)
@@ -67,7 +67,7 @@ def _png(result: dict, path: Path) -> None:
     import matplotlib.pyplot as plt
     from reports import style
     from reports.polar import polar_figure
-    from nsd_core.device.results import check_output_target
+    from nsd_core.common.files import check_output_target
     from reports.build import naming
     check_output_target(path)
     tmp = path.parent / f".{path.name}.{os.getpid()}.tmp.png"

@@ -1,5 +1,5 @@
 """``nsd seismic --design-displacement D``: the building codes' restoring-force check of the isolation
-level run (``nsd_core.device.restoring_force``; docs/seismic.md, "The restoring-force check"), computed
+level run (``nsd_core.structure.restoring_force``; docs/seismic.md, "The restoring-force check"), computed
 before the run, in summary.json as ``restoring_force`` and printed in one line per configuration (a
 command that also runs without the device has the baseline's check under ``baseline``)."""
 from __future__ import annotations
@@ -16,7 +16,7 @@ def restoring_force(args, params, structure) -> dict | None:
     """The check for this run's configuration (None on a fixed base: no isolation level), with the
     baseline's under "baseline" where the command also runs without the device; ParameterError, one
     line, for a bad --design-displacement (before anything is written)."""
-    from nsd_core.device.restoring_force import check_design_displacement
+    from nsd_core.structure.restoring_force import check_design_displacement
     given = getattr(args, "design_displacement", None)
     if given is not None:
         check_design_displacement(given, params.rod_length)
@@ -31,7 +31,7 @@ def restoring_force(args, params, structure) -> dict | None:
 
 
 def _one(params, structure, given, device: bool) -> dict:
-    from nsd_core.device.restoring_force import configuration_of, restoring_force_check
+    from nsd_core.structure.restoring_force import configuration_of, restoring_force_check
     try:
         return restoring_force_check(params, structure, given, device=device)
     except (ValueError, RuntimeError, ArithmeticError) as e:   # a variant the quasi-static path cannot follow
@@ -40,7 +40,7 @@ def _one(params, structure, given, device: bool) -> dict:
 
 
 def print_restoring_force(check: dict | None) -> None:
-    from nsd_core.device.restoring_force import describe
+    from nsd_core.structure.restoring_force import describe
     for c in ([] if check is None else [check] + ([check["baseline"]] if check.get("baseline") else [])):
         if "skipped" in c:
             print(f"restoring force ({c.get('configuration')}): not checked ({c['skipped']})")

@@ -72,7 +72,7 @@ def check_scheduler(address: str | None, timeout: float = 10.0) -> None:
     naming the address rather than a run that never answers."""
     if address is None:
         return
-    from nsd_core.device.inputs import printable
+    from nsd_core.common.files import printable
     m = re.fullmatch(r"(?:tcp://)?([A-Za-z0-9.\-]+|\[[0-9a-fA-F:]+\]):([0-9]{1,5})", address.strip())
     if not m or not 0 < int(m.group(2)) < 65536:
         raise ParameterError(f"--scheduler {printable(repr(address))}: must be tcp://HOST:PORT of a running Dask "
@@ -180,6 +180,6 @@ def run(args) -> int:
           f"{index['elapsed_this_run_s']:.1f} s; wrote {out / 'sweep.json'}")
     for study, path in index["studies"].items():
         print(f"  {study}: {out / path}")
-    from reports.build import draw_study  # the study's PNGs into its own folder (issue 20)
+    from reports.build import draw_study  # the study's PNGs into its own folder
     draw_study(out)
     return 3 if index["failed"] or index["missing"] else 0

@@ -28,10 +28,10 @@ from nsd_core.device.model import simulate
 from nsd_core.device.drive import Drive
 from nsd_core.device.params import Params
 from nsd_core.device.results import RunResult, versions
-from nsd_core.device.building import building_from  # noqa: F401 (this module's API)
-from nsd_core.device.ground import GroundMotion, fema_record, parse_ground_spec  # noqa: F401 (this module's API)
-from nsd_core.device.isolation import Structure, default_structure
-from nsd_core.device.seismic_summary import seismic_summary
+from nsd_core.structure.building import building_from  # noqa: F401 (this module's API)
+from nsd_core.ground.motions import GroundMotion, fema_record, parse_ground_spec  # noqa: F401 (this module's API)
+from nsd_core.structure.isolation import Structure, default_structure
+from nsd_core.structure.seismic_summary import seismic_summary
 
 
 def cycle(params: Params, drive: Drive, progress=None, **solver) -> tuple[RunResult, dict[str, Any]]:
@@ -62,7 +62,7 @@ def seismic(params: Params, ground: GroundMotion, structure: Structure | None = 
     outside the laws' validity; ``err.partial`` holds the series up to then) and SolverError, as the
     CLI's exit codes 2, 4, 3.
     """
-    from nsd_core.device.seismic import simulate_seismic
+    from nsd_core.structure.seismic import simulate_seismic
     structure = structure if structure is not None else default_structure(params)
     result = simulate_seismic(params, structure, ground, duration=duration, dt_out=dt_out, device=device,
                               progress=progress, **solver)

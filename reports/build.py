@@ -22,9 +22,10 @@ from typing import Any, Callable
 
 import numpy as np
 
-from nsd_core.device.inputs import input_stream, printable, read_regular_text
+from nsd_core.common.files import input_stream, printable, read_regular_text
 from nsd_core.device.params import ParameterError
-from nsd_core.device.results import RunResult, check_output_target, read_csv
+from nsd_core.device.results import RunResult, read_csv
+from nsd_core.common.files import check_output_target
 
 from reports import render
 from reports import style  # noqa: F401  (selects the Agg backend before pyplot is imported anywhere)

@@ -11,7 +11,7 @@ import json
 from pathlib import Path
 from typing import Callable
 
-from nsd_core.device.inputs import read_regular_text
+from nsd_core.common.files import read_regular_text
 from nsd_core.device.params import ParameterError
 from nsd_core.device.results import last_cycle, read_csv
 

@@ -106,7 +106,7 @@ def load_work_precision(path) -> dict | None:
     """The benchmark's JSON when present and shaped like one; None otherwise (an optional page)."""
     import json
     try:
-        from nsd_core.device.inputs import read_regular_text
+        from nsd_core.common.files import read_regular_text
         wp = json.loads(read_regular_text(path))
     except (OSError, ValueError):
         return None

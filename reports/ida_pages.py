@@ -22,7 +22,7 @@ from typing import Callable
 
 import numpy as np
 
-from nsd_core.device.inputs import read_regular_text
+from nsd_core.common.files import read_regular_text
 from nsd_core.device.params import ParameterError
 from nsd_core.device.results import read_csv
 from reports.style import GREY, LANDSCAPE, distinct, fmt, new_figure, no_data, wrap_width

@@ -25,7 +25,7 @@ import signal
 import threading
 from pathlib import Path
 
-from nsd_core.device.first_compile import usable_cores
+from nsd_core.compilation.first_compile import usable_cores
 
 MIN_PAGES = 6   # below this the fork and the merge cost more than the second process saves
 

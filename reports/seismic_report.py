@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Callable
 
 from nsd_core.device.params import ParameterError
-from nsd_core.device.inputs import read_regular_text
+from nsd_core.common.files import read_regular_text
 from nsd_core.device.results import read_csv
 
 from reports import building_pages as bp

@@ -1,5 +1,5 @@
 """The report's warnings page of a seismic folder: what the runs' summaries warn of (the rules:
-nsd_core.device.seismic_warnings) — stroke exhausted or nearly, a supports-alone run beyond the
+nsd_core.structure.seismic_warnings) — stroke exhausted or nearly, a supports-alone run beyond the
 device's stroke, restrainer impacts, peaks on the last sample — one wrapped item per warning, in
 front of the pages whose numbers they qualify. No warnings, no page."""
 from __future__ import annotations

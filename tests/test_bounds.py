@@ -13,7 +13,7 @@ from nsd_cli.compare import format_table
 from nsd_cli.main import build_parser, main
 from nsd_core.device.drive import Drive
 from nsd_core.device.params import Params
-from nsd_core.device.results import atomic_write_text
+from nsd_core.common.files import atomic_write_text
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -1,4 +1,4 @@
-"""The building above the isolation level (nsd_core.device.building; docs/building.md).
+"""The building above the isolation level (nsd_core.structure.building; docs/building.md).
 
 With the supports alone (no device) the whole structure, slab and floors, is linear: the in-house
 engine's run is checked against an exact state-space solution written here from the equations of
@@ -15,11 +15,11 @@ import numpy as np
 import pytest
 from scipy.linalg import expm
 
-from nsd_core.device.building import building_from, fixed_base_periods
-from nsd_core.device.ground import fema_record
-from nsd_core.device.isolation import default_structure
+from nsd_core.structure.building import building_from, fixed_base_periods
+from nsd_core.ground.motions import fema_record
+from nsd_core.structure.isolation import default_structure
 from nsd_core.device.params import ParameterError, Params
-from nsd_core.device.seismic import seismic_summary, simulate_seismic
+from nsd_core.structure.seismic import seismic_summary, simulate_seismic
 
 TIGHT = dict(rtol=1e-10, atol=1e-13)
 

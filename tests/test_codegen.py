@@ -10,21 +10,21 @@ import sys
 import numpy as np
 import pytest
 
-from nsd_core.device import compiled_seismic as cs
-from nsd_core.device.building import building_from
+from nsd_core.structure import compiled_seismic as cs
+from nsd_core.structure.building import building_from
 from nsd_core.device.compiled import device_forces, device_motion
 from nsd_core.device.drive import Drive
-from nsd_core.device.ground import Harmonic
-from nsd_core.device.isolation import default_structure
+from nsd_core.ground.motions import Harmonic
+from nsd_core.structure.isolation import default_structure
 from nsd_core.device.model import simulate
 from nsd_core.device.params import Params
-from nsd_core.device.restrainer import with_restrainer
-from nsd_core.device.seismic import simulate_seismic
+from nsd_core.structure.restrainer import with_restrainer
+from nsd_core.structure.seismic import simulate_seismic
 from nsd_core.engine import codegen
 from nsd_core.engine.callbacks import linear_springs, no_motion
 from nsd_core.engine.codegen_main import generate_source
 from nsd_core.engine.compiled_model import make_workspace
-from nsd_core.engine.errors import InputError
+from nsd_core.common.errors import InputError
 from tests.test_compiled import andrews_model, device_case
 
 FIELDS = ("z", "zd", "zdd", "lam", "tau", "extra_rate", "Phi", "L", "Ld", "T", "r", "A", "Z", "N", "momentum")

@@ -28,8 +28,8 @@ def _notices(stderr: str) -> list[str]:
 
 
 def test_parts():
-    assert co.notice_part("nsd_core.device.compiled_seismic") == "seismic"
-    assert co.notice_part("nsd_core.device.ground") == "seismic"
+    assert co.notice_part("nsd_core.structure.compiled_seismic") == "seismic"
+    assert co.notice_part("nsd_core.ground.motions") == "seismic"
     for module in ("nsd_core.engine.rk", "nsd_core.device.compiled", "nsd_core.device.forces"):
         assert co.notice_part(module) == "engine", module
 
@@ -39,7 +39,7 @@ def test_a_seismic_kernel_compiled_first_gives_the_seismic_line_once(tmp_path):
         import numpy as np
         from numba import njit
         import nsd_core.engine.compiled  # installs the listener
-        from nsd_core.device import ground
+        from nsd_core.ground import motions as ground
         f = njit(cache=False)(ground.harmonic_at.py_func)   # a fresh dispatcher of a seismic-mode kernel
         f(0.5, 1.0, 6.0, 1.0)
         g = njit(cache=False)(nsd_core.engine.compiled.copy_into.py_func)   # then an engine kernel: no 2nd line
@@ -54,7 +54,7 @@ def test_an_engine_kernel_compiled_first_gives_the_engine_line_once(tmp_path):
         import numpy as np
         from numba import njit
         import nsd_core.engine.compiled as C
-        from nsd_core.device import ground
+        from nsd_core.ground import motions as ground
         njit(cache=False)(C.copy_into.py_func)(np.zeros(3), np.ones(3))
         njit(cache=False)(ground.harmonic_at.py_func)(0.5, 1.0, 6.0, 1.0)
     """, tmp_path)

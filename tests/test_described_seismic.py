@@ -9,10 +9,10 @@ from comparisons.engines import run_seismic_engine
 from comparisons.engines.base import EngineError
 from comparisons.engines.described_seismic import DescribedSeismic, ground_table
 from comparisons.seismic import gate_metrics, own_seismic_metrics
-from nsd_core.device.describe_seismic import structure_for
-from nsd_core.device.ground import fema_record, parse_ground_spec
+from nsd_core.structure.describe_seismic import structure_for
+from nsd_core.ground.motions import fema_record, parse_ground_spec
 from nsd_core.device.params import ParameterError, Params
-from nsd_core.device.seismic import simulate_seismic
+from nsd_core.structure.seismic import simulate_seismic
 
 STEPS = {"mujoco": {"timestep": 2e-5}, "exudyn": {"step_size": 1e-4}}   # the gate's seismic cases' steps
 

@@ -13,7 +13,7 @@ def keys():
     from comparisons.engines import ENGINES, get_engine
     from comparisons.engines.base import SeismicSettings
     from comparisons.seismic import SYNTHETIC
-    from nsd_core.device.listing import structure_fields
+    from nsd_core.structure.listing import structure_fields
     out = {("case", k) for k in config.CASE_KEYS | config.SEISMIC_KEYS | config.DEFAULT_KEYS}
     out |= {("convergence", k) for k in (*config.CONVERGENCE_KEYS, *config.SWEEP_KEYS)}
     out |= {("metric", k) for k in config.METRICS}

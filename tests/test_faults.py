@@ -241,7 +241,7 @@ def test_a_non_finite_output_is_found_and_named():
     import numpy as np
     from nsd_core.device.results import RunResult, first_nonfinite
     from nsd_cli.options import check_finite
-    from nsd_core.engine.errors import SolverError
+    from nsd_core.common.errors import SolverError
     run = RunResult("semirecursive", {"t": np.array([0.0, 1.0]), "F": np.array([1.0, np.nan])}, {"t": "s", "F": "N"})
     assert first_nonfinite({"cycle.csv": run}) == "cycle.csv.F[1] = nan (1 non-finite values)"
     assert first_nonfinite({"designs": {"4": {"k_min": [1.0, -np.inf]}}}) == "designs.4.k_min[1] = -inf"

@@ -1,4 +1,4 @@
-"""A first run's compilation shared with one helper process (nsd_core.device.first_compile): only on
+"""A first run's compilation shared with one helper process (nsd_core.compilation.first_compile): only on
 a cold cache, never in a helper, a pool's worker or ``nsd warm``; the helper names the cache's
 sub-folders as its parent does and is gone when the command ends."""
 from __future__ import annotations
@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from nsd_core.device import first_compile
+from nsd_core.compilation import first_compile
 from nsd_core.engine.compile_once import UNITS
 
 from tests.test_warm_all import NOTICE_START, _nsd
@@ -52,7 +52,7 @@ def test_the_items_are_the_kinds_units_its_callbacks_then_its_tiny_run():
         assert names[-1] == f"warm-kind-{mode}" and f"first-callbacks-{mode}" in names
         units = [n.removeprefix("warm-unit-") for n in names if n.startswith("warm-unit-")]
         assert "step_loop" in units and ("seismic_outputs" in units) == (mode == "seismic")
-        import nsd_core.device.compiled_seismic  # noqa: F401 (registers the seismic outputs' unit)
+        import nsd_core.structure.compiled_seismic  # noqa: F401 (registers the seismic outputs' unit)
         assert all(u in UNITS for u in units), units
 
 

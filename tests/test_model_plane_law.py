@@ -16,7 +16,7 @@ import tomllib
 import numpy as np
 import pytest
 
-from nsd_core.device.describe_isolator import isolator_description
+from nsd_core.structure.describe_isolator import isolator_description
 from nsd_core.model.errors import ModelError
 from nsd_core.model.load import parse_model
 
@@ -24,8 +24,8 @@ GROUND = "harmonic:amplitude=2.5,frequency=1.2,azimuth=30,duration=0.6"
 
 
 def _structure(kind: str):
-    from nsd_core.device.isolation import designed_structure
-    from nsd_core.device.isolators import sized
+    from nsd_core.structure.isolation import designed_structure
+    from nsd_core.structure.isolators import sized
     s = designed_structure(True)
     return s.with_isolator(sized(kind, s.mass))
 
@@ -37,7 +37,7 @@ def _raw(kind="bilinear", duration=0.6) -> dict:
 def _in_house_reference(kind: str):
     from comparisons.seismic import parse_ground
     from nsd_core.device.params import Params
-    from nsd_core.device.seismic import simulate_seismic
+    from nsd_core.structure.seismic import simulate_seismic
     return simulate_seismic(Params(), _structure(kind), parse_ground(GROUND, "--ground"), device=False, rtol=1e-11,
                             atol=1e-14)
 

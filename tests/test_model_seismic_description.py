@@ -75,13 +75,13 @@ def test_a_stop_whose_points_coincide_at_rest_gives_no_force_and_no_nan():
 
 
 def _device_seismic(stories: int, duration: float):
-    from nsd_core.device.building import building_from
-    from nsd_core.device.describe_seismic import seismic_description
-    from nsd_core.device.ground import parse_ground_spec
-    from nsd_core.device.isolation import Structure, structure_with
+    from nsd_core.structure.building import building_from
+    from nsd_core.structure.describe_seismic import seismic_description
+    from nsd_core.ground.motions import parse_ground_spec
+    from nsd_core.structure.isolation import Structure, structure_with
     from nsd_core.device.params import Params
-    from nsd_core.device.restrainer import default_restrainer
-    from nsd_core.device.seismic import simulate_seismic
+    from nsd_core.structure.restrainer import default_restrainer
+    from nsd_core.structure.seismic import simulate_seismic
     params = Params().replace(n_wires=6, rope_stiffness=6e5)   # a variant, not the nominal device
     st = structure_with(params, {})
     if stories:
@@ -97,7 +97,7 @@ def _device_seismic(stories: int, duration: float):
 @pytest.mark.parametrize("stories", [0, 2])
 def test_the_seismic_description_is_the_hand_built_seismic_mode(stories):
     """The device (a variant) in seismic mode, written as data, against the in-house seismic mode
-    built by hand (nsd_core.device.seismic): relative displacement, turn, cap height and, with a
+    built by hand (nsd_core.structure.seismic): relative displacement, turn, cap height and, with a
     building, every floor, to 1e-7 of each peak (both at rtol 1e-10; measured ~1e-8) and, for an output
     whose peak is small against the others (the turn: 1.4e-5 rad), to what the two runs' absolute
     tolerance resolves, 1e-13 a step over their ~300 steps (measured 1.5e-12 rad on the turn)."""
@@ -147,7 +147,7 @@ def test_a_bad_seismic_description_is_one_line_naming_the_field(label, change, e
 def test_the_committed_seismic_descriptions_are_the_generators(name, stories):
     """models/nsd_seismic.toml and nsd_building.toml are what their recorded command writes (the
     nominal device, the default structure; the building with the default restrainer)."""
-    from nsd_core.device.describe_seismic import seismic_description, structure_for
+    from nsd_core.structure.describe_seismic import seismic_description, structure_for
     from nsd_core.device.params import Params
     text = (MODELS / f"{name}.toml").read_text()
     command = next(line[4:] for line in text.splitlines() if line.startswith("#   python -m"))

@@ -1,4 +1,4 @@
-"""numba's cache is keyed by the source version (nsd_core.numba_cache): an edit anywhere in the
+"""numba's cache is keyed by the source version (nsd_core.compilation.numba_cache): an edit anywhere in the
 model or the engines starts a fresh cache folder, so no cached kernel runs a callee's old code."""
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import sys
 import textwrap
 from pathlib import Path
 
-from nsd_core.numba_cache import cache_folder, source_fingerprint, use_versioned_cache
+from nsd_core.compilation.numba_cache import cache_folder, source_fingerprint, use_versioned_cache
 
 
 def _tree(root: Path, law: str) -> None:
@@ -85,7 +85,7 @@ def test_numbas_cannot_cache_warning_never_reaches_stderr(tmp_path):
 
 
 def test_the_cache_sub_folder_is_named_by_the_place_in_the_package_not_the_absolute_path(tmp_path):
-    from nsd_core.numba_cache import ROOT, package_subfolder
+    from nsd_core.compilation.numba_cache import ROOT, package_subfolder
     assert package_subfolder(str(ROOT / "nsd_core" / "engine" / "rk.py")) == "nsd_core_engine"
     assert package_subfolder(str(ROOT / "comparisons" / "engines" / "mujoco_native.py")) == "comparisons_engines"
     assert package_subfolder(str(tmp_path / "elsewhere.py")) is None   # numba's own naming
@@ -93,7 +93,7 @@ def test_the_cache_sub_folder_is_named_by_the_place_in_the_package_not_the_absol
 
 def _copy_of_the_packages(dest: Path) -> None:
     import shutil
-    from nsd_core.numba_cache import ROOT
+    from nsd_core.compilation.numba_cache import ROOT
     for pkg in ("nsd_core", "comparisons"):
         shutil.copytree(ROOT / pkg, dest / pkg, ignore=shutil.ignore_patterns("__pycache__"))
 
@@ -129,7 +129,7 @@ def test_a_child_process_names_the_sub_folders_as_its_parent(tmp_path):
     """A pool's worker or a helper inherits the folder this package chose (NUMBA_CACHE_DIR and the mark
     NSD_VERSIONED_CACHE): it names the sub-folders by the place in the package, as its parent does,
     so each loads what the other compiled. A user's own NUMBA_CACHE_DIR keeps numba's naming."""
-    from nsd_core.numba_cache import CHOSEN
+    from nsd_core.compilation.numba_cache import CHOSEN
     code = ("import nsd_core\nfrom numba.core import caching\n"
             "print(any(getattr(c, 'nsd_relocatable', False) for c in caching.CacheImpl._locator_classes))")
     folder = str(tmp_path / "chosen")

@@ -18,9 +18,9 @@ import pytest
 from comparisons.builders.opensees import bearing_constants, friction_constants, merged_settings, opensees
 from comparisons.engines.opensees_peer import judge
 from nsd_cli.main import main
-from nsd_core.device.ground import fema_record
-from nsd_core.device.isolation import designed_structure
-from nsd_core.device.isolators import sized
+from nsd_core.ground.motions import fema_record
+from nsd_core.structure.isolation import designed_structure
+from nsd_core.structure.isolators import sized
 from nsd_core.device.params import ParameterError, Params
 
 
@@ -28,7 +28,7 @@ def _structure(kind: str, building: bool = False):
     st = designed_structure(True)
     st = st.with_isolator(sized(kind, st.mass))
     if building:
-        from nsd_core.device.building import building_from
+        from nsd_core.structure.building import building_from
         st = st.with_building(building_from(st.mass, {"stories": 3}))
     return st
 

@@ -9,14 +9,14 @@ import re
 import numpy as np
 import pytest
 
-from nsd_core.device.building import building_from
+from nsd_core.structure.building import building_from
 from nsd_core.device.columns import unit_of
-from nsd_core.device.ground import parse_ground_spec
-from nsd_core.device.isolation import default_structure
+from nsd_core.ground.motions import parse_ground_spec
+from nsd_core.structure.isolation import default_structure
 from nsd_core.device.params import Params
-from nsd_core.device.restrainer import with_restrainer
+from nsd_core.structure.restrainer import with_restrainer
 from nsd_core.device.results import column_units, read_csv, write_csv
-from nsd_core.device.seismic import seismic_summary, simulate_seismic
+from nsd_core.structure.seismic import seismic_summary, simulate_seismic
 
 GROUND = "harmonic:amplitude=1.5,frequency=3,azimuth=30,duration=0.1"
 
@@ -93,7 +93,7 @@ def test_building_peaks_on_the_last_sample_are_warned(runs):
     at_end = s["peaks_at_last_sample"]
     assert "building.peak_drift_ratio[story 2]" in at_end and "building.peak_floor_acceleration[floor 1]" in at_end
     s["building"]["peak_drift_ratio"][1]["t"] = 0.05  # a peak inside the window is not listed
-    from nsd_core.device.seismic_summary import peaks_at_last_sample
+    from nsd_core.structure.seismic_summary import peaks_at_last_sample
     assert "building.peak_drift_ratio[story 2]" not in peaks_at_last_sample(s, float(device["t"][-1]))
 
 

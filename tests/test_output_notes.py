@@ -77,7 +77,7 @@ def test_record_set_row_says_it_left_the_working_range():
     row, entry = _row("nearfield-pulse", 1, group, recs, [])
     assert row["status"] == "ok" and row["outside_working_range"] == "yes"
     assert "outside the working range" in row["reason"] and "28.7 mm of the 30 mm rod" in row["reason"]
-    # nsd_core.device.seismic_warnings: the supports' run at 28.7 mm is also past the design stroke (25.46 mm)
+    # nsd_core.structure.seismic_warnings: the supports' run at 28.7 mm is also past the design stroke (25.46 mm)
     assert [w.split(":")[0] for w in entry["warnings"]] == ["device", "nodevice", "nodevice"]
     assert "stroke nearly exhausted: peak |u| = 28.7 mm" in entry["warnings"][0]
     assert entry["warnings"][1].startswith("nodevice: beyond the design stroke") and "25.46 mm" in entry["warnings"][1]

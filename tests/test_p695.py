@@ -46,7 +46,7 @@ def test_ductility_of_a_linear_system_is_one_and_of_a_flat_one_is_the_ratio():
 
 
 def test_device_pushover_mu_t_at_least_one_and_supports_alone_exactly_one():
-    from nsd_core.device.isolation import default_structure
+    from nsd_core.structure.isolation import default_structure
     from nsd_core.device.params import Params
     params = Params()
     s = default_structure(params)
@@ -61,8 +61,8 @@ def test_bilinear_pushover_and_the_design_basis_level_by_hand():
     S_MT of the design basis from its table: 1.5 S_D1 / T (T above T_s) in m/s^2."""
     import tomllib
     from pathlib import Path
-    from nsd_core.device.isolation import default_structure
-    from nsd_core.device.isolators import sized
+    from nsd_core.structure.isolation import default_structure
+    from nsd_core.structure.isolators import sized
     from nsd_core.device.params import Params
     params = Params()
     s = default_structure(params)
@@ -146,7 +146,7 @@ def test_bad_input_is_one_line_exit_2_nothing_written(extra, tmp_path, capsys):
 def test_evaluation_of_traces_reproduced_independently(tmp_path):
     """Synthetic traces (the levels each record ran and whether it collapsed) through the evaluation
     and its page: Ŝ_CT counted here, the verdicts recomputed, the rod's reach counted and warned."""
-    from nsd_core.device.isolation import default_structure
+    from nsd_core.structure.isolation import default_structure
     from nsd_core.device.params import Params
     from nsd_core.study.ida import Trace, parse_limit
     from nsd_core.study.limit_states import LimitStates

@@ -178,7 +178,7 @@ def test_ida_csv_names_each_row_s_configuration():
 def test_evaluation_reads_each_capacity_collapse_from_the_peaks():
     """Synthetic traces of three records (capacity 25 mm): each record's collapse level interpolated
     in ln-ln between its bracket's two peaks, Ŝ_CT the 2nd of 3, its bracket the 2nd lo and hi."""
-    from nsd_core.device.isolation import default_structure
+    from nsd_core.structure.isolation import default_structure
     from nsd_core.device.params import Params
     from nsd_core.study import p695
     from nsd_core.study.ida import Limit, Trace

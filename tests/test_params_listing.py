@@ -5,8 +5,8 @@ import tomllib
 
 import pytest
 
-from nsd_core.device.isolation import Structure, default_structure
-from nsd_core.device.listing import bounds, param_rows, restrainer_fields, structure_fields, structure_rows
+from nsd_core.structure.isolation import Structure, default_structure
+from nsd_core.structure.listing import bounds, param_rows, restrainer_fields, structure_fields, structure_rows
 from nsd_core.device.params import FIELDS, ParameterError, Params, load_params
 
 
@@ -61,8 +61,8 @@ def test_stated_bounds_are_the_ones_validate_enforces(name):
 
 
 def test_structure_fields_listed_with_units_and_bounds():
-    from nsd_core.device.isolation import STRUCTURE_BOUNDS
-    from nsd_core.device.restrainer import with_restrainer
+    from nsd_core.structure.isolation import STRUCTURE_BOUNDS
+    from nsd_core.structure.restrainer import with_restrainer
     # the tables and the baseline isolator (--isolator, sized by the design basis) are no --structure numbers
     names = [f.name for f in dataclasses.fields(Structure)
              if f.name not in ("provenance", "restrainer", "building", "isolator")]

@@ -1,4 +1,4 @@
-"""The building codes' restoring-force check (ASCE/SEI 7-16 Section 17.2.4.4; nsd_core.device.restoring_force,
+"""The building codes' restoring-force check (ASCE/SEI 7-16 Section 17.2.4.4; nsd_core.structure.restoring_force,
 docs/seismic.md "The restoring-force check") of each configuration, against arithmetic of its own here:
 the linear supports exactly (F(D) - F(D/2) = k_b D / 2, W = M g with g = 9.80665), the lead-rubber
 bearing's law integrated apart (scipy's solve_ivp on z' = (1 - z^n) / D_y), the friction pendulum's in
@@ -17,10 +17,10 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from independent_reference import quasi_static_force
-from nsd_core.device.isolation import default_structure, designed_structure
-from nsd_core.device.isolators import sized
+from nsd_core.structure.isolation import default_structure, designed_structure
+from nsd_core.structure.isolators import sized
 from nsd_core.device.params import ParameterError, Params
-from nsd_core.device.restoring_force import XTOL, restoring_force_check
+from nsd_core.structure.restoring_force import XTOL, restoring_force_check
 
 P = Params()
 S = designed_structure(design_level=True)
@@ -125,7 +125,7 @@ def test_the_friction_pendulum_is_checked_with_its_own_law():
 
 
 def test_with_a_building_W_counts_the_floors():
-    from nsd_core.device.building import building_from
+    from nsd_core.structure.building import building_from
     sb = S.with_building(building_from(S.mass, {"stories": 3}))
     c = restoring_force_check(P, sb, 0.02, device=False)
     assert c["W"] == pytest.approx(2 * S.mass * G, rel=1e-12)   # the default floors weigh M together
@@ -237,7 +237,7 @@ def test_p695_json_and_its_first_page_carry_each_configuration_s_check(tmp_path,
 def test_help_gives_the_default_it_uses(capsys):
     """--design-displacement's help quotes D_M; checked against the design basis."""
     from nsd_cli.main import main
-    from nsd_core.device.restoring_force import default_design_displacement
+    from nsd_core.structure.restoring_force import default_design_displacement
     with pytest.raises(SystemExit):
         main(["seismic", "--help"])
     text = " ".join(capsys.readouterr().out.split())

@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 
 from nsd_core.device.forces import restrainer_force_scalar, restrainer_stored_scalar
-from nsd_core.device.ground import Harmonic
-from nsd_core.device.isolation import Structure, default_structure
+from nsd_core.ground.motions import Harmonic
+from nsd_core.structure.isolation import Structure, default_structure
 from nsd_core.device.params import ParameterError, Params
-from nsd_core.device.restrainer import Restrainer, default_restrainer, with_restrainer
-from nsd_core.device.seismic import output_times, seismic_summary, simulate_seismic
+from nsd_core.structure.restrainer import Restrainer, default_restrainer, with_restrainer
+from nsd_core.structure.seismic import output_times, seismic_summary, simulate_seismic
 
 GAP, K, N, ALPHA = 0.024, 8.5e8, 1.5, 2.5
 
@@ -131,7 +131,7 @@ def test_supports_alone_with_the_restrainer_match_a_hand_written_integrator():
 def test_with_the_device_the_restrainer_holds_the_plate_inside_the_rod_and_the_balance_closes():
     """A pulse that sends the plate past the rod's length without the restrainer (exit 4 in
     test_seismic) runs to its end with it; engagement events and energy are reported."""
-    from nsd_core.device.ground import Pulse
+    from nsd_core.ground.motions import Pulse
     p = Params()
     soft = Structure(mass=3743.8, radius_of_gyration=0.40825, stiffness=2.0e5, damping=0.0, support_radius=0.5)
     st = with_restrainer(soft, p, True)
@@ -161,7 +161,7 @@ def test_mujoco_and_exudyn_with_the_restrainer_agree_with_the_in_house_engine():
     6.0e-4 / 2.6e-3; Exudyn 1e-4 s 1.8e-5 / 2.6e-5 / 1.1e-4 / 6.4e-5."""
     from comparisons.engines.peers import ExudynEngine, MujocoEngine
     from comparisons.seismic import gate_metrics
-    from nsd_core.device.ground import Pulse
+    from nsd_core.ground.motions import Pulse
     p = Params()
     st = with_restrainer(default_structure(p), p, True, {"restrainer_gap": 0.012})
     gm = Pulse(0.5, 2.0, 2.0, azimuth_deg=30.0)

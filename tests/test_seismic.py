@@ -6,13 +6,13 @@ import math
 import numpy as np
 import pytest
 
-from nsd_core.device.ground import Harmonic, Pulse
-from nsd_core.device.isolation import Structure
+from nsd_core.ground.motions import Harmonic, Pulse
+from nsd_core.structure.isolation import Structure
 from nsd_core.device.model import BODY
 from nsd_core.device.params import Params
-from nsd_core.device.seismic import RodReachError, seismic_system, simulate_seismic
+from nsd_core.structure.seismic import RodReachError, seismic_system, simulate_seismic
 
-# the default structure's numbers (nsd_core.device.isolation.default_structure, recorded in the README)
+# the default structure's numbers (nsd_core.structure.isolation.default_structure, recorded in the README)
 STRUCTURE = Structure(mass=3743.80, radius_of_gyration=0.40825, stiffness=147799.2, damping=2352.30,
                       support_radius=0.5)
 
@@ -114,7 +114,7 @@ def test_the_device_force_in_the_seismic_run_is_the_quasi_static_force_along_its
 
 
 def test_default_structure_follows_the_model_document_rules():
-    from nsd_core.device.isolation import MARGIN, default_structure
+    from nsd_core.structure.isolation import MARGIN, default_structure
     s = default_structure()
     K = s.provenance["K_dev"]["value"]
     assert s.stiffness + K == pytest.approx(MARGIN * s.stiffness, rel=1e-12)
@@ -125,7 +125,7 @@ def test_default_structure_follows_the_model_document_rules():
 
 @pytest.mark.slow
 def test_the_recorded_device_stiffness_is_what_the_quasi_static_cycles_give():
-    from nsd_core.device.isolation import NOMINAL_K_DEV, device_min_stiffness
+    from nsd_core.structure.isolation import NOMINAL_K_DEV, device_min_stiffness
     k = device_min_stiffness(Params())
     assert k["K_dev"] == pytest.approx(NOMINAL_K_DEV["K_dev"], rel=1e-9) and k["direction_deg"] == 45.0
     # the model document expected about -70 to -90 kN/m; this model gives -99 (psi = 0) and -111 (45 deg)
@@ -237,7 +237,7 @@ def test_exudyn_seismic_agrees_with_the_in_house_engine():
 def test_leaving_the_working_range_is_an_event_and_the_run_goes_on():
     """A ground motion that takes the plate past X_max (25.46 mm): the ropes go slack, the events
     come with their times and the run finishes, its energy balance still closed."""
-    from nsd_core.device.seismic import seismic_summary
+    from nsd_core.structure.seismic import seismic_summary
     from nsd_core.device.working_range import x_max_at_slack
     r = simulate_seismic(Params(), STRUCTURE, Harmonic(1.2, 2.0, 0.0, duration=0.4), dt_out=1e-3)
     s = seismic_summary(r)
@@ -256,7 +256,7 @@ def test_exudyn_seismic_on_a_record_window_that_starts_in_motion():
     the ground already accelerating (Exudyn's initial accelerations need its loads set at t = 0)."""
     from comparisons.engines.peers import ExudynEngine
     from comparisons.seismic import seismic_metrics
-    from nsd_core.device.ground import fema_record
+    from nsd_core.ground.motions import fema_record
     gm = fema_record("nearfield-pulse", 1, window=(2.0, 2.15), rotate_deg=20, scale=0.4)
     assert np.linalg.norm(gm(0.0)[2]) > 0.03
     ref = simulate_seismic(Params(), STRUCTURE, gm, dt_out=2e-3)

@@ -89,10 +89,10 @@ def test_a_peak_on_the_last_sample_warns_in_the_summary_and_on_stderr(tmp_path, 
 @pytest.mark.slow
 def test_a_run_the_rod_ends_keeps_its_series_on_both_in_house_paths():
     """RodReachError carries the samples before the event (compiled and scipy paths alike)."""
-    from nsd_core.device.ground import Pulse
-    from nsd_core.device.isolation import Structure
+    from nsd_core.ground.motions import Pulse
+    from nsd_core.structure.isolation import Structure
     from nsd_core.device.params import Params
-    from nsd_core.device.seismic import RodReachError, simulate_seismic
+    from nsd_core.structure.seismic import RodReachError, simulate_seismic
     soft = Structure(mass=3743.8, radius_of_gyration=0.40825, stiffness=2.0e5, damping=0.0, support_radius=0.5)
     kept = {}
     for backend in ("compiled", "scipy"):

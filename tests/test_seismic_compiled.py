@@ -1,4 +1,4 @@
-"""The seismic mode on the compiled path (nsd_core.device.compiled_seismic) against the scipy-driven
+"""The seismic mode on the compiled path (nsd_core.structure.compiled_seismic) against the scipy-driven
 reference path, and the one ground-motion implementation both read."""
 from __future__ import annotations
 
@@ -7,10 +7,10 @@ import math
 import numpy as np
 import pytest
 
-from nsd_core.device.ground import Harmonic, Pulse, ground_values
-from nsd_core.device.isolation import Structure
+from nsd_core.ground.motions import Harmonic, Pulse, ground_values
+from nsd_core.structure.isolation import Structure
 from nsd_core.device.params import Params
-from nsd_core.device.seismic import RodReachError, simulate_seismic
+from nsd_core.structure.seismic import RodReachError, simulate_seismic
 
 STRUCTURE = Structure(mass=3743.80, radius_of_gyration=0.40825, stiffness=147799.2, damping=2352.30,
                       support_radius=0.5)
@@ -58,7 +58,7 @@ def test_supports_alone_on_the_compiled_path_equal_the_scipy_path():
 
 def test_chunks_do_not_change_the_run_beyond_the_tolerance(monkeypatch):
     """The compiled path restarts its step loop every CHUNK model seconds: compare with one chunk."""
-    from nsd_core.device import compiled_seismic
+    from nsd_core.structure import compiled_seismic
     gm = Harmonic(0.8, 2.0, 0.0, duration=0.4)
     one = simulate_seismic(Params(), STRUCTURE, gm, dt_out=2e-3)
     monkeypatch.setattr(compiled_seismic, "CHUNK", 0.1)

@@ -39,9 +39,9 @@ def test_a_run_stopped_at_the_rods_reach_records_its_series_crossing_not_its_sto
     """Near-field pulse 1, record seconds 2-3 at scale 16 stops at the rod's reach: the IDA's stored
     capacity time is where its series crosses X_max (linear between the two outputs around it, computed
     here from the same run's series), before the stop."""
-    from nsd_core.device.ground import fema_record
-    from nsd_core.device.isolation import designed_structure
-    from nsd_core.device.seismic import RodReachError, simulate_seismic
+    from nsd_core.ground.motions import fema_record
+    from nsd_core.structure.isolation import designed_structure
+    from nsd_core.structure.seismic import RodReachError, simulate_seismic
     from nsd_core.study.ida import IdaRun, run_ida_point
     from nsd_core.study.limit_states import LimitStates, classify
     ground = {"scale": 16.0, "time_factor": math.sqrt(0.1), "window": [2.0, 3.0], "rotate_deg": 0.0, "normalised": True}
@@ -66,9 +66,9 @@ def test_a_run_stopped_at_the_rods_reach_records_its_series_crossing_not_its_sto
 
 
 def test_W_uses_the_design_s_g_everywhere():
-    from nsd_core.device.isolation import designed_structure
-    from nsd_core.device.isolators import sized
-    from nsd_core.device.restoring_force import weight
+    from nsd_core.structure.isolation import designed_structure
+    from nsd_core.structure.isolators import sized
+    from nsd_core.structure.restoring_force import weight
     st = designed_structure()
     assert weight(st) == pytest.approx(M * G, rel=1e-15)
     fps = sized("friction-pendulum", st.mass).provenance["full_scale"]
@@ -79,7 +79,7 @@ def test_the_friction_pendulum_is_sized_to_the_lead_rubber_bearing_s_design_poin
     """T_eff = T_D and beta_eff = 20 % at D_D, as the lead-rubber bearing (ASCE 7-16 17.8.5.2's
     k_eff = k_d + Q / D, beta_eff = 4 Q (D - D_y) / (2 pi k_eff D^2)), recomputed here: mu = Q / W
     = 1.67 %, R = W / k_d = 3.63 m full scale."""
-    from nsd_core.device.isolators import sized
+    from nsd_core.structure.isolators import sized
     T = 2 * math.pi * math.sqrt(M / K_B)
     D = 0.1 * G * 0.25 * (T / math.sqrt(0.1)) / (4 * math.pi ** 2 * 1.5)      # D_D at model scale, 13.09 mm
     for kind in ("bilinear", "friction-pendulum"):
@@ -97,7 +97,7 @@ def test_the_friction_pendulum_is_sized_to_the_lead_rubber_bearing_s_design_poin
 def test_a_baseline_past_the_design_stroke_warns(tmp_path, capsys):
     """The linear supports under a 1 Hz harmonic (0.4 m/s^2, 1 s) reach 27.35 mm: past the design's
     25.46 mm stroke, short of the rod's 30 mm: a warning in summary.json and on stderr."""
-    from nsd_core.device.seismic_warnings import run_warnings
+    from nsd_core.structure.seismic_warnings import run_warnings
     out = tmp_path / "lin"
     assert main(["seismic", "--ground", "harmonic:amplitude=0.4,frequency=1,duration=1", "--no-device",
                  "--out", str(out)]) == 0
@@ -118,11 +118,11 @@ def test_a_baseline_past_the_design_stroke_warns(tmp_path, capsys):
 def test_the_pendulum_period_sizing_went_past_the_stroke_on_far_field_1_and_now_warns():
     """The friction pendulum as it was sized before (pendulum period T_D: W/R = k_b; mu = 0.05) on
     far-field record 1 at the design level reaches 25.81 mm, past the 25.46 mm stroke: warned."""
-    from nsd_core.device.ground import SIMILITUDE_TIME_FACTOR, fema_record
-    from nsd_core.device.isolation import designed_structure
-    from nsd_core.device.isolators import Isolator
-    from nsd_core.device.seismic import seismic_summary, simulate_seismic
-    from nsd_core.device.seismic_warnings import run_warnings
+    from nsd_core.ground.motions import SIMILITUDE_TIME_FACTOR, fema_record
+    from nsd_core.structure.isolation import designed_structure
+    from nsd_core.structure.isolators import Isolator
+    from nsd_core.structure.seismic import seismic_summary, simulate_seismic
+    from nsd_core.structure.seismic_warnings import run_warnings
     from nsd_core.study.intensity import design_level_scale
     st = designed_structure(True)
     W = st.mass * G

@@ -1,4 +1,4 @@
-"""The seismic warnings (nsd_core.device.seismic_warnings, docs/seismic.md "Warnings") on real
+"""The seismic warnings (nsd_core.structure.seismic_warnings, docs/seismic.md "Warnings") on real
 runs: short harmonic inputs on the default structure, in summary.json, on stderr and on the report's
 warnings page."""
 from __future__ import annotations

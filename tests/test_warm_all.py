@@ -1,4 +1,4 @@
-"""Every mode compiled once per version by ``nsd warm`` (nsd_core.device.warm_all): one line on a cold
+"""Every mode compiled once per version by ``nsd warm`` (nsd_core.compilation.warm_all): one line on a cold
 cache, then no compilation by any command of that version (a drive cycle, a seismic run, a building).
 A command's first run does not compile every mode by itself (measured slower: docs/performance.md)."""
 from __future__ import annotations
@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from nsd_core.device import warm_all
+from nsd_core.compilation import warm_all
 from nsd_core.engine import compile_once
 
 NOTICE_START = "nsd: compiling"
@@ -78,7 +78,7 @@ def test_a_run_does_not_compile_every_mode_by_itself():
     """The in-house runs' and the pool workers' warm-ups compile what they use, not every mode: the
     automatic every-mode compilation made the first drive cycle slower (27.9 -> 38.7 s wall, measured)."""
     import inspect
-    from nsd_core.device import warmup, worker_warmup
+    from nsd_core.compilation import warmup, worker_warmup
     for module in (warmup, worker_warmup):
         assert "ensure_all" not in inspect.getsource(module) and "warm_all" not in vars(module), module
 

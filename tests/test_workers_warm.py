@@ -56,10 +56,10 @@ def test_a_failing_warm_up_is_reported_and_the_jobs_still_run():
 
 
 def _seismic_job(settings):
-    from nsd_core.device.ground import fema_record
-    from nsd_core.device.isolation import default_structure
+    from nsd_core.ground.motions import fema_record
+    from nsd_core.structure.isolation import default_structure
     from nsd_core.device.params import Params
-    from nsd_core.device.seismic import simulate_seismic
+    from nsd_core.structure.seismic import simulate_seismic
     motion = fema_record("farfield", 2, window=(0.0, 0.2))
     r = simulate_seismic(Params(), default_structure(Params()), motion, duration=0.05, **settings)
     return r.stats["compile_time"]
@@ -76,7 +76,7 @@ def _peer_job(engine):
 def test_record_set_warm_up_touches_the_kernels_its_runs_use():
     """A record set's warm-up (in-house seismic kernels of the runs' settings, the set's files):
     the worker's first run then compiles nothing and reads no file (its compile_time is 0)."""
-    from nsd_core.device.isolation import default_structure
+    from nsd_core.structure.isolation import default_structure
     from nsd_core.device.params import Params
     from nsd_core.study.seismic_set import RecordRun, set_warmup
     settings = {"method": "RK45"}
@@ -85,7 +85,7 @@ def test_record_set_warm_up_touches_the_kernels_its_runs_use():
     with worker_pool(1, warm=set_warmup([run])) as pool:
         assert pool.submit(_seismic_job, settings).result() == 0.0
         # a setting the warm-up did not name still warms on its own, inside the job, timed apart (the
-        # default DOP853 too: a worker compiles what its warm-up names, not every mode, nsd_core.device.warm_all)
+        # default DOP853 too: a worker compiles what its warm-up names, not every mode, nsd_core.compilation.warm_all)
         assert pool.submit(_seismic_job, {"method": "DOP853"}).result() > 0.0
         startup = pool.startup.summary()
     assert startup["per_worker"][0]["warm_error"] is None and startup["warm_s"] > 0
@@ -102,7 +102,7 @@ def test_compare_warm_up_touches_the_peers_callbacks():
 
 
 def test_warm_kind_matches_the_runs_key():
-    from nsd_core.device.worker_warmup import kind
+    from nsd_core.compilation.worker_warmup import kind
     assert kind("drive", None, "figure8") == ("drive", "DOP853", "auto", "figure8")
     assert kind("drive", {"method": "RK45", "rtol": 1e-3}, "/some/table.csv") == ("drive", "RK45", "auto", "line")
     assert kind("seismic", {"backend": "scipy"}) == ("seismic", "DOP853", "scipy", "line")

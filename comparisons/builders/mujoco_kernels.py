@@ -14,7 +14,7 @@ paths agree to round-off: tests/test_mujoco_codegen.py):
 - ``points_state_along``: the same for an element with a direction e: x = (p_a - p_b) . e, x' its
   rate, and u = -e (the law's -T e on a);
 - ``ground_load``: the excitation's -m a_g(t) at the centre of mass of every body slot that carries
-  a mass, as F and M about the origin (a_g from nsd_core.device.ground.ground_values, called by the
+  a mass, as F and M about the origin (a_g from nsd_core.ground.motions.ground_values, called by the
   generated callback at the stage's time);
 - ``apply_points``: the tension as wrenches on the two bodies, +T u at a, -T u at b, summed per body
   about its origin (F, r x F); ``finish_bodies`` then adds J_o^T F + J_w^T M to qfrc_passive, which
@@ -41,7 +41,7 @@ import numpy as np
 from numba import njit
 
 from comparisons.builders.mujoco_cabi import call_jac, call_md, call_md_int
-from nsd_core.device.ground import ground_values
+from nsd_core.ground.motions import ground_values
 
 # header (EXCITATION_SIZE: the length of the excitation's ground_values block, last in userdata;
 # ADVANCE: 1 where the passive callback advances the laws' states itself (Euler), 0 where MuJoCo

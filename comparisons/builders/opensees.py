@@ -1,6 +1,6 @@
 """The OpenSees builder: the isolated structure on a baseline isolator (a lead-rubber bearing or a friction
-pendulum, nsd_core.device.isolators), and the shear building on its slab when there is one
-(nsd_core.device.building), built in OpenSees (openseespy) with OpenSees's own bearing elements, from
+pendulum, nsd_core.structure.isolators), and the shear building on its slab when there is one
+(nsd_core.structure.building), built in OpenSees (openseespy) with OpenSees's own bearing elements, from
 the structure's own numbers (Structure, Isolator, Building: nothing typed twice).
 
 The model (3-D, 6 dof per node; X, Y horizontal, Z vertical):
@@ -13,7 +13,7 @@ The model (3-D, 6 dof per node; X, Y horizontal, Z vertical):
   * ``bouc-wen``: elastomericBearingBoucWen (ElastomericBearingBoucWen3d, A. Schellenberg): the
     bidirectional Park-Wen-Ang law F = k2 u + qYield z, u_y z' = A u' - |z|^(eta-2) (z.u')(gamma +
     beta sgn(z.u')) z, with A = 1, beta = gamma = 1/2 and eta = the project's n: term for term
-    nsd_core.device.isolator_laws' law (H(z.u') = gamma + beta sgn(z.u')), integrated by OpenSees's
+    nsd_core.structure.isolator_laws' law (H(z.u') = gamma + beta sgn(z.u')), integrated by OpenSees's
     own backward-Euler Newton iteration on each step's displacement increment. k2 = k_d, qYield = Q,
     u_y = D_y: Kinit = Q / D_y + k_d, alpha1 = k_d / Kinit, qd = Q (u_y = qd / ((1 - alpha1) Kinit));
   * ``single-fp``: singleFPBearing (SingleFPSimple3d) with a Coulomb friction model: OpenSees's own

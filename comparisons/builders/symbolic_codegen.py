@@ -13,7 +13,7 @@ on floats and fill numpy arrays, so a call runs no sympy and no Python per expre
 its own straight-line code.
 
 The cache: a folder per key under ``$XDG_CACHE_HOME/nsd-harness/symbolic`` (``~/.cache`` when the
-variable is unset, as nsd_core.numba_cache places numba's), the key a hash of what the derivation
+variable is unset, as nsd_core.compilation.numba_cache places numba's), the key a hash of what the derivation
 reads from the description (bodies, joints, loops, law points, output points: ``derivation_input``),
 sympy's version and the source of the symbolic builder's modules. A law's parameters, the drives,
 the excitation and the cases do not enter the equations (they are applied numerically), so changing

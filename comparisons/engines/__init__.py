@@ -42,7 +42,7 @@ def tiny_settings(name: str, mode: str, settings: dict | None) -> dict | None:
 def _warm_peer(mode: str, name: str, line: bool, settings: dict | None, tiny, shape: tuple = ()) -> float:
     """A peer engine's numba code (MuJoCo's callback and step loop, Exudyn's step) compiles on its first
     call: run ``tiny`` once per process and kind of run first, and return its seconds, so that the real
-    run's wall_time is its integration (the in-house engine does this in nsd_core.device.warmup).
+    run's wall_time is its integration (the in-house engine does this in nsd_core.compilation.warmup).
     ``tiny`` is given the settings' named choices alone (they decide what compiles; a case's own step,
     e.g. Exudyn's 6.25e-6 s, would make the tiny run cost seconds), over the engine's ``warm_settings``.
     ``shape``: what else decides the compiled code (a described model's code is generated per number of
@@ -77,7 +77,7 @@ def run_engine(name: str, params: Params, drive, settings: dict | None = None):
     """Run one engine by name: the runner the study layer is given to sweep any engine. Whatever the
     engine prints (Exudyn's memory-allocation warnings) goes to stderr, never into stdout's table.
     The run's stats carry ``compile_time`` (a first, tiny run of the same kind) apart from its cost."""
-    from nsd_core.device.warmup import tiny_drive
+    from nsd_core.compilation.warmup import tiny_drive
     from nsd_core.engine.workers import stdout_to_stderr
     settings = dict(settings or {})
     _, engine = _chosen(name, settings)
@@ -112,7 +112,7 @@ def parse_engine_list(text: str, option: str = "--engines", extra: tuple = ()) -
 def run_seismic_engine(name: str, params: Params, structure, ground, duration=None, dt_out=1e-3,
                        settings: dict | None = None):
     """One engine's seismic run by name (Exudyn's prints go to stderr, as in ``run_engine``)."""
-    from nsd_core.device.warmup import TINY_DT_OUT, TINY_DURATION, tiny_ground
+    from nsd_core.compilation.warmup import TINY_DT_OUT, TINY_DURATION, tiny_ground
     from nsd_core.engine.workers import stdout_to_stderr
     if name in BASELINE_PEERS:   # the structure on its baseline isolator (the run without the device)
         from comparisons.engines.opensees_peer import run_opensees
@@ -131,13 +131,13 @@ def run_seismic_engine(name: str, params: Params, structure, ground, duration=No
     return _with_ground(_with_times(name, result, warm, time.process_time() - c0), ground)
 
 
-GROUND_COLUMNS = ("x_g", "y_g", "ax_g", "ay_g")  # nsd_core.device.seismic's columns of the input itself
+GROUND_COLUMNS = ("x_g", "y_g", "ax_g", "ay_g")  # nsd_core.structure.seismic's columns of the input itself
 
 
 def _with_ground(result, ground):
     """The ground motion the engine was given, at its output times, as the in-house run's columns
     (x_g, y_g, ax_g, ay_g) where the engine did not write them: a peer's seismic_<engine>.csv then has
-    the in-house columns, and its summary (nsd_core.device.seismic_summary: the peak ground
+    the in-house columns, and its summary (nsd_core.structure.seismic_summary: the peak ground
     acceleration) can be made from it, as a record set does for every run."""
     from nsd_core.device.columns import units_of
     missing = [c for c in GROUND_COLUMNS if c not in result.columns]
@@ -156,7 +156,7 @@ def _finite(result):
     """``result``, or SolverError naming the first NaN or inf in its outputs: a non-finite output is that
     engine's failure on that case (reported for it, exit 3), never a result to measure (issue 22)."""
     from nsd_core.device.results import first_nonfinite
-    from nsd_core.engine.errors import SolverError
+    from nsd_core.common.errors import SolverError
     bad = first_nonfinite(result)
     if bad:
         raise SolverError(f"a non-finite output: {bad}")

@@ -15,7 +15,7 @@ Like scipy's ``solve_ivp`` methods, each engine is one module exposing a class w
 least ``wall_time`` [s], ``steps`` and ``tracking_error`` [m] (max |u_engine - u_prescribed|).
 An engine that fails raises ``EngineError`` with a one-line message.
 
-``run_seismic`` returns the seismic columns of ``nsd_core.device.seismic`` (at least t, x, y, theta,
+``run_seismic`` returns the seismic columns of ``nsd_core.structure.seismic`` (at least t, x, y, theta,
 ax_abs, ay_abs, device_Fx, device_Fy, cap_z, closure and the energy balance E_input ... E_residual,
 computed from the engine's own state with the nominal masses) every ``dt_out`` up to ``duration``.
 """

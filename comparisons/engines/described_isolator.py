@@ -2,7 +2,7 @@
 pendulum), without the device, built from its description: ``nsd seismic --isolator KIND --engines
 semirecursive,mujoco,exudyn``'s cross-check of the in-house ``simulate_seismic(..., device=False)``.
 
-The model is written by ``nsd_core.device.describe_isolator.isolator_description`` (the plate on a
+The model is written by ``nsd_core.structure.describe_isolator.isolator_description`` (the plate on a
 planar joint, the isolator's linear part as joint springs, its hysteresis as the registry's plane law
 ``bidirectional_hysteresis``) and built by the engine's builder (comparisons.builders.mujoco or
 .exudyn) with the case's settings written in the description (each peer's step) over ``settings``.
@@ -20,10 +20,10 @@ import numpy as np
 from comparisons.engines.base import EngineError
 from comparisons.engines.described_seismic import ground_table
 from nsd_core.device.columns import units_of
-from nsd_core.device.describe_isolator import isolator_description
+from nsd_core.structure.describe_isolator import isolator_description
 from nsd_core.device.params import ParameterError
 from nsd_core.device.results import RunResult
-from nsd_core.device.seismic import output_times
+from nsd_core.structure.seismic import output_times
 from nsd_core.model.errors import ModelError
 from nsd_core.model.load import parse_model
 

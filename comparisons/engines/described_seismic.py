@@ -2,7 +2,7 @@
 (``run_seismic(params, structure, ground, duration, dt_out, settings) -> RunResult``) over a builder
 (comparisons/builders), which comparisons/engines/peers.py puts behind each peer's name.
 
-The case is written as a description by ``nsd_core.device.describe_seismic.seismic_description``: the
+The case is written as a description by ``nsd_core.structure.describe_seismic.seismic_description``: the
 case's parameters, its structure (supports, restrainer, building) and its ground motion as the
 ``[excitation]`` (a FEMA P695 record as the ``record`` table, a closed form as ``ground``; the excitation
 parsed from the file must give the case's ground motion's block exactly, else the run is refused), with
@@ -12,8 +12,8 @@ every wire's stress, the spring's zeta, the floors' velocities and absolute acce
 The columns, names and units are the in-house seismic run's: t, x, y, theta, vx, vy, ax_abs,
 ay_abs, support_F, device_F, base_shear, cap_z, wall_z, spring_zeta, spring_push, closure (the run's
 largest loop gap at the output times, as the drive mode's described engine), wire stresses, u, the
-floors' columns (nsd_core.device.building.floor_columns) and the restrainer's (the shared law on the
-sampled motion). device_F has the in-house sign (nsd_core.device.seismic._device_outputs: the force the
+floors' columns (nsd_core.structure.building.floor_columns) and the restrainer's (the shared law on the
+sampled motion). device_F has the in-house sign (nsd_core.structure.seismic._device_outputs: the force the
 plate applies to the device, -(rod + ropes + wires on the cap), horizontal). No output of a builder
 gives the rod's force on the cap (a loop closure's multiplier), so it comes from Newton's law on the
 plate and the cap together: the cap slides along the plate's Z axis with its centre of mass on it
@@ -42,15 +42,15 @@ import numpy as np
 from comparisons.engines.base import EngineError
 from comparisons.engines.described import builder_settings
 from comparisons.engines.perturb import perturbed, perturbed_structure
-from nsd_core.device.building import floor_columns
+from nsd_core.structure.building import floor_columns
 from nsd_core.device.columns import units_of
-from nsd_core.device.describe_seismic import seismic_description
+from nsd_core.structure.describe_seismic import seismic_description
 from nsd_core.device.forces import restrainer_forces, restrainer_stored_scalar, spring_push
 from nsd_core.device.geometry import device_geometry
-from nsd_core.device.ground import Harmonic, Pulse, Record
+from nsd_core.ground.motions import Harmonic, Pulse, Record
 from nsd_core.device.params import ParameterError
 from nsd_core.device.results import RunResult
-from nsd_core.device.seismic import output_times
+from nsd_core.structure.seismic import output_times
 from nsd_core.model.errors import ModelError
 from nsd_core.model.load import parse_model
 

@@ -17,7 +17,7 @@ import numpy as np
 from nsd_core.device.columns import units_of
 from nsd_core.device.params import ParameterError
 from nsd_core.device.results import RunResult
-from nsd_core.device.seismic import output_times
+from nsd_core.structure.seismic import output_times
 
 NAME = "opensees"
 ORDER = 1.0   # the bearing's backward-Euler state: first order in the step (measured: docs/seismic.md)
@@ -102,7 +102,7 @@ def _scales(ref) -> dict:
 def reference_runs(params, structure, ground, duration=None, dt_out=1e-3) -> tuple:
     """The in-house engine's converged run and its check (comparisons.reference's settings)."""
     from comparisons.reference import CHECK_SETTINGS, CONVERGED_SETTINGS
-    from nsd_core.device.seismic import simulate_seismic
+    from nsd_core.structure.seismic import simulate_seismic
     return tuple(simulate_seismic(params, structure, ground, duration=duration, dt_out=dt_out, device=False, **s)
                  for s in (CONVERGED_SETTINGS, CHECK_SETTINGS))
 

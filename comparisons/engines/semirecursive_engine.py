@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from nsd_core.device.model import DEFAULT_SOLVER, simulate
 from nsd_core.device.drive import Drive
-from nsd_core.engine.errors import SolverError
+from nsd_core.common.errors import SolverError
 from nsd_core.device.params import Params
 from nsd_core.device.results import RunResult
 
@@ -30,13 +30,13 @@ class SemirecursiveEngine:
         result.stats["settings"] = s
         return result
 
-    # the seismic mode: nsd_core.device.seismic, with the same solver options (its own backends)
+    # the seismic mode: nsd_core.structure.seismic, with the same solver options (its own backends)
     seismic_default_settings = dict(DEFAULT_SOLVER)
     validate_seismic_settings = validate_settings
 
     def run_seismic(self, params: Params, structure, ground, duration=None, dt_out=1e-3,
                     settings: dict | None = None) -> RunResult:
-        from nsd_core.device.seismic import simulate_seismic
+        from nsd_core.structure.seismic import simulate_seismic
         s = merged_settings(self.seismic_default_settings, settings, self.name)
         try:
             result = simulate_seismic(params, structure, ground, duration=duration, dt_out=dt_out, **s)

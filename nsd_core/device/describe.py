@@ -243,7 +243,7 @@ parameters = {{ kse = {s.kse!r}, ksd = {s.ksd!r}, beta = {s.beta!r}, gamma = {s.
 
 
 def main(argv=None) -> None:
-    from nsd_core.device.results import atomic_write_text
+    from nsd_core.common.files import atomic_write_text
     p = argparse.ArgumentParser(description="write the device in drive mode as a model description (TOML)")
     p.add_argument("--amplitude", type=float, required=True, help="m")
     p.add_argument("--frequency", type=float, required=True, help="Hz")

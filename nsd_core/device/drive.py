@@ -114,7 +114,7 @@ def read_path_table(path: str | Path):
     plate starts from rest, as the rest state the engines start from requires.
     """
     from scipy.interpolate import CubicSpline
-    from nsd_core.device.inputs import printable, read_input_text
+    from nsd_core.common.files import printable, read_input_text
     where = f"path = {printable(repr(str(path)))}"
     if not os.path.lexists(path):
         raise ParameterError(f"{where}: no such file; allowed: {', '.join(PATHS)} or a CSV file of t,x,y")
@@ -122,7 +122,7 @@ def read_path_table(path: str | Path):
         lines = read_input_text(path, "path", MAX_TABLE_BYTES, "a CSV file of t,x,y").splitlines()
     except ParameterError:
         raise
-    except ValueError as e:  # InputError of nsd_core.device.inputs: one line naming the path
+    except ValueError as e:  # InputError of nsd_core.common.files: one line naming the path
         raise ParameterError(f"{e}; allowed: {', '.join(PATHS)} or a CSV file of t,x,y") from None
     rows, seen = [], 0
     for k, line in enumerate(lines, start=1):

@@ -13,11 +13,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
-from nsd_core.engine.errors import InputError
-
-
-class ParameterError(InputError):
-    """Bad input: one line naming the field, the value and what is allowed (exit code 2)."""
+from nsd_core.common.errors import InputError, ParameterError  # noqa: F401 (ParameterError: imported from here by the device's modules)
 
 
 def _p(default, unit: str, source: str, doc: str, kind=float):
@@ -169,7 +165,7 @@ def parse_set(items: list[str], flag: str = "--set") -> dict[str, str]:
 def read_toml(path: str | Path, what: str) -> dict:
     """A TOML input file as a dict; every way it can be unreadable is one ParameterError line. Only a
     regular file is read (a FIFO, a device or a folder is bad input, found before opening)."""
-    from nsd_core.device.inputs import printable, read_input_text
+    from nsd_core.common.files import printable, read_input_text
     try:
         return tomllib.loads(read_input_text(path, what, 1_000_000, "UTF-8 TOML"))
     except InputError as e:

@@ -1,4 +1,4 @@
-"""The time series every engine returns: the same columns, units and signs, and atomic writers.
+"""The time series every engine returns: the same columns, units and signs (written atomically through nsd_core.common.files).
 
 Sign convention (docs/model.md, "Drive and outputs"): F is the horizontal force the drive applies to
 the cap along psi, F = m_c u'' - (rod + ropes + wires on the cap) . e_psi. Each part column is the
@@ -12,17 +12,14 @@ F and its parts stay the projections on e_psi.
 from __future__ import annotations
 
 import importlib.metadata as md
-import json
-import os
 import platform
-import shutil
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from nsd_core.common.files import atomic_write_text
 from nsd_core.device.columns import units_of
 
 BASE_COLUMNS = ("t", "u", "F", "F_device", "F_rod", "F_ropes", "F_wires", "spring_push", "spring_zeta", "cap_z",
@@ -104,79 +101,6 @@ def last_cycle(t: np.ndarray, frequency: float) -> np.ndarray:
     return t >= t[-1] - 1.0 / frequency - 1e-9 / frequency
 
 
-def check_output_target(path: str | Path, what: str = "output") -> None:
-    """An output is written only where nothing is, or over a regular file (or a link to one): a FIFO,
-    a device, a socket or a folder there is bad input (InputError, exit 2), never replaced."""
-    import stat
-    from nsd_core.device.inputs import _kind, printable
-    from nsd_core.engine.errors import InputError
-    try:
-        st = os.stat(path)
-    except (FileNotFoundError, NotADirectoryError):
-        return
-    except OSError:
-        return  # (a link loop, no permission: the write itself says so, naming the file)
-    if not stat.S_ISREG(st.st_mode):
-        raise InputError(f"{what} {printable(path)}: is {_kind(st.st_mode) or 'not a regular file'}; an output is "
-                         "written only where no file is or over a regular file")
-
-
-def atomic_write_text(path: str | Path, text: str) -> None:
-    """Write to a temporary file in the same folder, then rename: readers never see half a file.
-    A failed write (a full disk) removes the temporary file and raises OSError naming ``path``;
-    the file that was there before stays as it was. Only a regular file is replaced
-    (check_output_target: a FIFO or a device there is InputError, nothing written)."""
-    path = Path(path)
-    check_output_target(path)
-    tmp = None
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
-        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; a result file gets the usual mode
-        os.replace(tmp, path)
-    except BaseException as e:
-        if tmp is not None and os.path.exists(tmp):
-            os.unlink(tmp)
-        if isinstance(e, OSError) and e.filename is None:
-            raise OSError(e.errno, e.strerror, str(path)) from None
-        raise
-
-
-def atomic_copy(src: str | Path, dest: str | Path) -> None:
-    """Copy a file atomically (temporary file, then rename); a failed copy leaves ``dest`` as it was."""
-    dest = Path(dest)
-    check_output_target(dest)
-    dest.parent.mkdir(parents=True, exist_ok=True)
-    tmp = dest.with_name(f".{dest.name}.tmp")
-    try:
-        shutil.copyfile(src, tmp)
-        tmp.replace(dest)
-    except BaseException as e:
-        tmp.unlink(missing_ok=True)
-        if isinstance(e, OSError) and e.errno is not None:
-            raise OSError(e.errno, e.strerror, str(dest)) from None
-        raise
-
-
-def _umask() -> int:
-    mask = os.umask(0o022)  # reading the umask means setting it: put it straight back
-    os.umask(mask)
-    return mask
-
-
-def atomic_write_json(path: str | Path, data: Any) -> None:
-    atomic_write_text(path, json.dumps(data, indent=2, default=_json_default) + "\n")
-
-
-def _json_default(o):
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    if isinstance(o, (np.floating, np.integer, np.bool_)):
-        return o.item()
-    raise TypeError(f"not JSON serialisable: {type(o).__name__}")
-
 
 def write_columns(path: str | Path, columns: dict[str, np.ndarray]) -> None:
     """Numeric columns {name: values} as CSV with "name [unit]" headers, every unit from the one table
@@ -198,7 +122,7 @@ def write_csv(path: str | Path, result: RunResult) -> None:
 def read_csv(path: str | Path, engine: str = "") -> RunResult:
     import io
 
-    from nsd_core.device.inputs import read_regular_text
+    from nsd_core.common.files import read_regular_text
     text = read_regular_text(path, "CSV")  # a FIFO or a device in a results folder: one line, never a hang
     header = text.split("\n", 1)[0].strip().split(",")
     names, units = [], {}

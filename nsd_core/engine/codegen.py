@@ -13,7 +13,7 @@ read from the model when the function runs: designs that differ only in their nu
 compiled function. The arithmetic is the generic kernels' in the same order (codegen_sym), so the
 two agree to round-off (tests/test_codegen.py); the generic kernels stay the specification.
 
-The source goes to the numba cache folder (nsd_core.numba_cache), named by the hash of its text, and
+The source goes to the numba cache folder (nsd_core.compilation.numba_cache), named by the hash of its text, and
 is compiled with an explicit signature and cache=True: a second process loads the machine code from
 disk.
 
@@ -39,7 +39,7 @@ import numpy as np
 
 from nsd_core.engine.codegen_main import generate_source
 from nsd_core.engine.compile_once import _locked, compile_once
-from nsd_core.engine.errors import InputError
+from nsd_core.common.errors import InputError
 
 ENV = "NSD_EVALUATOR"  # "auto" (default), "generated" or "generic": see the module's docstring
 KINDS = ("auto", "generated", "generic")

@@ -4,7 +4,7 @@ The engine's kernels are numba functions whose arguments include compiled callba
 the evaluation) typed as function pointers (compiled_model.FORCE_FN, MOTION_FN, EVAL_FN), so one
 machine-code version serves every mechanism. ``compile_once`` compiles a kernel for its signature
 when it is first needed, not at import (an import, or a bad input's one-line error, never waits for
-the compiler), or loads it from numba's on-disk cache (nsd_core.numba_cache), under a lock file per
+the compiler), or loads it from numba's on-disk cache (nsd_core.compilation.numba_cache), under a lock file per
 kernel in the cache folder: processes started together (a pool's workers) never compile the same
 kernel at once; the first takes it, the others compile what is left, or wait and then load it.
 
@@ -32,7 +32,7 @@ NOTICE_SECONDS = 15  # measured, quiet, cold cache: `nsd cycle` 13.1 s wall (thi
 SEISMIC_NOTICE = ("nsd: compiling the seismic mode's kernels once for this version of the source (about {seconds} s "
                   "on 2 cores; the engine itself is loaded from the cache) ...")
 SEISMIC_NOTICE_SECONDS = 10  # measured, cold seismic kernels, warm engine: 6.7 s CPU, 10.9 s wall (`nsd seismic`)
-SEISMIC_MODULES = ("nsd_core.device.compiled_seismic", "nsd_core.device.ground")
+SEISMIC_MODULES = ("nsd_core.structure.compiled_seismic", "nsd_core.ground.motions")
 _announced = False
 
 

@@ -14,7 +14,7 @@ from typing import Callable
 import numpy as np
 from scipy.integrate import DOP853, LSODA, RK23, RK45, Radau
 
-from nsd_core.engine.errors import InputError, SolverError
+from nsd_core.common.errors import InputError, SolverError
 from nsd_core.engine.compiled_model import Workspace
 from nsd_core.engine.semirecursive import SemiRecursiveSystem
 

@@ -24,7 +24,7 @@ from nsd_core.engine.compiled_model import SystemModel, Workspace, build_model, 
 from nsd_core.engine.closure import closure, full_pivot_elimination
 from nsd_core.engine.dynamics import tree_equations
 from nsd_core.engine.kinematics import Kinematics, positions, velocities
-from nsd_core.engine.errors import ConstraintError
+from nsd_core.common.errors import ConstraintError
 from nsd_core.engine.mechanism import Mechanism
 
 # forces(t, kin, z, zd, extra) -> (wrench (n,6) about the origin, joint forces (n,) or None, extra rates)

@@ -113,7 +113,7 @@ def worker_pool(workers: int, warm=None):
     that terminates its workers when the body raises (KeyboardInterrupt, SIGTERM, an error).
 
     ``warm``: a picklable callable (a module-level function or a partial of one) each worker runs once
-    before its first job, e.g. ``nsd_core.device.warmup.warm_worker``; it must not raise (an error is
+    before its first job, e.g. ``nsd_core.compilation.warmup.warm_worker``; it must not raise (an error is
     reported in ``pool.startup`` and left to the jobs). ``pool.startup`` (``Startup``) reports each
     worker's start-up apart from the jobs' times."""
     ctx = get_context("spawn")

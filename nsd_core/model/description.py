@@ -45,9 +45,20 @@ JOINT_DOFS = {"revolute": 1, "prismatic": 1, "universal": 2, "spherical": 3, "pl
 OUTPUT_KINDS = ("coordinate", "point", "point_velocity", "point_acceleration", "force", "drive_force", "energy",
                 "state", "work")
 WORK_SOURCES = ("excitation", "drive")   # a work output's loads other than a force element's
-MOTION_KINDS = {"constant_speed": ("start", "speed"), "harmonic": ("centre", "amplitude", "frequency", "phase"),
-                "device_path": ("path", "amplitude", "minor", "frequency", "direction", "component")}
+MOTION_KINDS = {"constant_speed": ("start", "speed"), "harmonic": ("centre", "amplitude", "frequency", "phase")}
+MOTION_PARSERS: dict = {}   # a registered motion kind's parse(where, table) -> values (register_motion)
 COMPONENTS = {"x": 0, "y": 1, "z": 2}
+
+
+def register_motion(kind: str, fields: tuple, parse) -> None:
+    """Add a prescribed-motion kind (the device registers its plate path, "device_path"): ``fields``
+    are its table's keys; ``parse(where, table)`` checks them (ModelError naming the field) and returns
+    the motion's values, whose ``"motion"`` is q(t) -> (q, q', q'') [the joint's units], with
+    ``table(times)`` -> 3 x len(times) for many times at once."""
+    if kind in MOTION_KINDS:
+        raise ValueError(f"motion {kind!r} is already registered")
+    MOTION_KINDS[kind] = fields
+    MOTION_PARSERS[kind] = parse
 
 
 def unit(v) -> np.ndarray:
@@ -171,9 +182,8 @@ class Prescribed:
 
     def __call__(self, t: float) -> tuple[float, float, float]:
         v = self.values
-        if self.kind == "device_path":   # one component of the device's plate path (nsd_core.device.drive)
-            at, c = v["drive"].plate_at(t), v["component"]
-            return at[c], at[2 + c], at[4 + c]
+        if "motion" in v:   # a registered kind (register_motion)
+            return v["motion"](t)
         if self.kind == "constant_speed":
             return v["start"] + v["speed"] * t, v["speed"], 0.0
         w = 2.0 * math.pi * v["frequency"]

@@ -6,7 +6,7 @@ applies it as one uniform field, the effective gravity g - a_g(t); the described
 then relative to the ground, which is how the device's seismic mode is posed (docs/model.md allows
 this form for a translating base).
 
-a_g(t) comes from the device's own ground motions (nsd_core.device.ground): a closed form in the
+a_g(t) comes from the device's own ground motions (nsd_core.ground.motions): a closed form in the
 syntax of ``nsd seismic --ground`` (harmonic, pulse) or a FEMA P695 record pair (A along x, B along
 y, then turned in plan). Compiled code reads it through ``ground_values(t, block, 0)`` on
 ``Excitation.block``: one implementation of a_g for the in-house engine, MuJoCo and Exudyn.
@@ -17,8 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nsd_core.device.ground import GroundMotion, fema_record, parse_ground_spec
-from nsd_core.device.params import ParameterError
+from nsd_core.ground.motions import GroundMotion, fema_record, parse_ground_spec
+from nsd_core.common.errors import ParameterError
 from nsd_core.model.errors import ModelError
 
 KINDS = ("ground_acceleration",)
@@ -29,7 +29,7 @@ RECORD_KEYS = {"set", "id", "scale", "time_factor", "window", "rotate"}
 class Excitation:
     kind: str
     motion: GroundMotion
-    block: np.ndarray        # ground_values' flat block (nsd_core.device.ground)
+    block: np.ndarray        # ground_values' flat block (nsd_core.ground.motions)
     source: str              # as written: the closed form's text or the record's table
 
     def acceleration(self, t: float) -> np.ndarray:

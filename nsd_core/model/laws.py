@@ -10,8 +10,10 @@ A law maps one scalar coordinate and its rate to one scalar force:
 Each law is a compiled scalar function ``force(x, xd, p)`` of a float64 array p holding its
 parameters in the order of ``Law.parameters``. The in-house builder, MuJoCo's passive callback and
 Exudyn's connector user functions all call exactly this function: a law added here (one function and
-one ``register`` call) reaches all three engines. Where the device already has a law (the rope of
-Eq. 16, the restrainer's Hunt-Crossley contact), the registry calls that one implementation.
+one ``register`` call) reaches all three engines. This module holds the generic laws; the device
+registers its own (rope, SMA wire, push spring, restrainer stop: nsd_core.device.laws) and the
+isolated structure the baseline isolators' (nsd_core.structure.isolator_laws), as a user registers a
+law, when their package is imported.
 
 A law may carry one internal state s (the SMA wire's stress, the Bouc-Wen spring's zeta): then
 ``state`` names it (its unit and the parameter holding its value at t = 0), ``force(x, xd, s, p)``
@@ -33,10 +35,6 @@ from typing import Callable
 
 import numpy as np
 from numba import njit
-
-from nsd_core.device.forces import (bouc_wen_slope_scalar, restrainer_force_scalar, rope_tension_scalar,
-                                    sma_slope_scalar, spring_push_scalar, wire_tension_scalar)
-from nsd_core.device.isolator_laws import hysteretic_force_scalar
 
 POINTS, JOINT, PLANE = "points", "joint", "plane"
 
@@ -126,7 +124,8 @@ def register(law: Law) -> Law:
 def get_law(name: str, where: str) -> Law:
     from nsd_core.model.errors import ModelError
     if name not in LAWS:
-        raise ModelError(f"{where}.law = {name!r}: unknown; allowed: {', '.join(sorted(LAWS))}")
+        hint = "" if "rope" in LAWS else " (the device's and the isolators' laws join when nsd_core.device and nsd_core.structure are imported)"
+        raise ModelError(f"{where}.law = {name!r}: unknown; allowed: {', '.join(sorted(LAWS))}{hint}")
     return LAWS[name]
 
 
@@ -137,20 +136,6 @@ def linear_spring_damper(x, xd, p):
     """T = k (L - L0) + c L' + T0: a linear spring of stiffness k [N/m] and free length L0 [m], a
     dashpot c [N s/m] and a preload T0 [N] (as Andrews' spring c0, l0; any strut)."""
     return p[0] * (x - p[2]) + p[1] * xd + p[3]
-
-
-@njit(cache=True, _nrt=False)
-def rope(x, xd, p):
-    """Eq. 16 of the paper: T = k (L - L0) H(L - L0), tension only (the device's rope law)."""
-    return rope_tension_scalar(x, p[1], p[0])
-
-
-@njit(cache=True, _nrt=False)
-def hunt_crossley_stop(x, xd, p):
-    """A stop that holds the points within a distance gap [m]: past it, delta = L - gap > 0 and
-    T = max(k delta^n (1 + alpha delta'), 0) pulls them together (the device's restrainer law,
-    Hunt and Crossley 1975, evaluated by the restrainer's own function)."""
-    return restrainer_force_scalar(x, 0.0, xd, 0.0, p[0], p[1], p[2], p[3])[2]
 
 
 @njit(cache=True, _nrt=False)
@@ -172,98 +157,9 @@ register(Law("linear_spring_damper", POINTS, (
     LawParameter("stiffness", "N/m", 0.0, doc="k"), LawParameter("damping", "N s/m", 0.0, default=0.0, doc="c"),
     LawParameter("free_length", "m", 0.0, doc="L0"), LawParameter("preload", "N", -INF, default=0.0, doc="T0")),
     linear_spring_damper, linear_spring_damper.py_func.__doc__))
-register(Law("rope", POINTS, (
-    LawParameter("stiffness", "N/m", 0.0, doc="k_r"), LawParameter("free_length", "m", 0.0, doc="l_r0")),
-    rope, rope.py_func.__doc__))
-register(Law("hunt_crossley_stop", POINTS, (
-    LawParameter("gap", "m", 0.0), LawParameter("stiffness", "N/m^n", 0.0),
-    LawParameter("exponent", "-", 1.0, 3.0, default=1.5), LawParameter("damping", "s/m", 0.0, default=0.0, doc="alpha")),
-    hunt_crossley_stop, hunt_crossley_stop.py_func.__doc__))
 register(Law("constant_force", JOINT, (LawParameter("value", "N or N m", -INF, doc="Q0"),),
              constant_force, constant_force.py_func.__doc__))
 register(Law("joint_spring_damper", JOINT, (
     LawParameter("stiffness", "N/m or N m/rad", 0.0), LawParameter("damping", "N s/m or N m s/rad", 0.0, default=0.0),
     LawParameter("neutral", "m or rad", -INF, default=0.0)),
     joint_spring_damper, joint_spring_damper.py_func.__doc__))
-
-
-# ---- laws with a hysteretic state: the device's SMA wire (Eq. 17) and push spring (Eq. 18) --------------
-# p: area, natural_length, E, Y, alpha, n, fT, a, Em, eps_t, c, initial_stress
-
-@njit(cache=True, _nrt=False)
-def sma_wire_tension(x, xd, s, p):
-    """Eq. 17a: T = sigma A_w H(sigma), sigma the wire's stress (its state); a wire never pushes."""
-    return wire_tension_scalar(s, p[0])
-
-
-@njit(cache=True, _nrt=False)
-def sma_wire_rate(x, xd, s, p):
-    """Eq. 17b-d: d sigma/dt = (d sigma/d eps)(eps, sgn eps', sigma) eps', eps = (L - L0)/L0; the stress
-    evolves as Eq. 17 says even while the wire is slack (only the force is clipped)."""
-    eps, eps_rate = (x - p[1]) / p[1], xd / p[1]
-    return sma_slope_scalar(eps, eps_rate, s, p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10]) * eps_rate
-
-
-# p: kse, ksd, beta, gamma, n, free_length, initial_zeta
-
-@njit(cache=True, _nrt=False)
-def push_spring_tension(x, xd, s, p):
-    """Eq. 18a: the spring pushes with P = max(k_se x_s + zeta, 0), x_s = L_s0 - L: T = -P."""
-    return -spring_push_scalar(x, s, p[0], p[5])
-
-
-@njit(cache=True, _nrt=False)
-def push_spring_rate(x, xd, s, p):
-    """Eq. 18b: d zeta/dt = (k_sd - (gamma + beta sgn(zeta x_s')) |zeta|^n) x_s', x_s' = -L'."""
-    return bouc_wen_slope_scalar(s, -xd, p[1], p[2], p[3], p[4]) * (-xd)
-
-
-register(Law("sma_wire", POINTS, (
-    LawParameter("area", "m^2", 0.0, doc="A_w"), LawParameter("natural_length", "m", 0.0, doc="l_w0"),
-    LawParameter("E", "Pa", 0.0), LawParameter("Y", "Pa", 0.0), LawParameter("alpha", "-", 0.0),
-    LawParameter("n", "-", 0.0), LawParameter("fT", "-", -INF), LawParameter("a", "-", -INF),
-    LawParameter("Em", "Pa", 0.0), LawParameter("eps_t", "-", 0.0), LawParameter("c", "-", 0.0),
-    LawParameter("initial_stress", "Pa", -INF, default=0.0)),
-    sma_wire_tension, "SMA wire, Eq. 17 of the paper (Bouc-Wen-type stress-strain law with pinching)",
-    StateSpec("stress", "Pa", "initial_stress"), sma_wire_rate))
-register(Law("push_spring", POINTS, (
-    LawParameter("kse", "N/m", 0.0), LawParameter("ksd", "N/m", 0.0), LawParameter("beta", "1/N^n", -INF),
-    LawParameter("gamma", "1/N^n", -INF), LawParameter("n", "-", 0.0), LawParameter("free_length", "m", 0.0),
-    LawParameter("initial_zeta", "N", -INF, default=0.0)),
-    push_spring_tension, "Push-only Bouc-Wen spring, Eq. 18 of the paper",
-    StateSpec("zeta", "N", "initial_zeta"), push_spring_rate))
-
-
-# ---- a plane law: the baseline isolators' bidirectional hysteresis (nsd_core.device.isolator_laws) -----
-# p: strength, strength_at_rest, rate, yield_displacement, exponent, initial_zx, initial_zy
-
-@njit(cache=True, _nrt=False)
-def bidirectional_hysteresis_force(x, y, xd, yd, sx, sy, p):
-    """(Q_x, Q_y) = -Q(|u'|) z [N]: the hysteretic part of a lead-rubber bearing or a friction pendulum
-    on the displacement u = (x, y), z = (s_x, s_y) its state (isolator_laws.hysteretic_force_scalar)."""
-    fx, fy, _, _, _ = hysteretic_force_scalar(xd, yd, sx, sy, p[0], p[1], p[2], p[3], p[4])
-    return -fx, -fy
-
-
-@njit(cache=True, _nrt=False)
-def bidirectional_hysteresis_rate(x, y, xd, yd, sx, sy, p):
-    """z' = (u' - H(z . u') |z|^(n - 2) (z . u') z) / D_y [1/s] (Park, Wen and Ang 1986)."""
-    _, _, dzx, dzy, _ = hysteretic_force_scalar(xd, yd, sx, sy, p[0], p[1], p[2], p[3], p[4])
-    return dzx, dzy
-
-
-register(Law("bidirectional_hysteresis", PLANE, (
-    LawParameter("strength", "N", 0.0, doc="Q at high velocity (Q_d; mu_fast W)"),
-    LawParameter("strength_at_rest", "N", 0.0, doc="Q at rest (= strength for a bilinear bearing; mu_slow W)"),
-    LawParameter("rate", "s/m", 0.0, default=0.0, doc="a of mu(v) = mu_fast - (mu_fast - mu_slow) exp(-a |v|)"),
-    LawParameter("yield_displacement", "m", 1e-12, doc="D_y"),
-    LawParameter("exponent", "-", 2.0, 50.0, doc="n"),
-    LawParameter("initial_zx", "-", -1.0, 1.0, default=0.0), LawParameter("initial_zy", "-", -1.0, 1.0, default=0.0)),
-    bidirectional_hysteresis_force,
-    "The baseline isolators' hysteretic part (a lead-rubber bearing: Q = Q_d; a friction pendulum: Q = mu W; "
-    "Park, Wen and Ang 1986, evaluated by nsd_core.device.isolator_laws.hysteretic_force_scalar): on the "
-    "planar displacement u = (x, y) [m], (Q_x, Q_y) = -Q(|u'|) z [N], D_y z' = u' - H(z . u') |z|^(n-2) "
-    "(z . u') z [1/s], Q(v) = Q_fast - (Q_fast - Q_rest) exp(-a v) [N] (a [s/m]; a = 0: Q = Q_rest). A plane "
-    "law because z couples the two directions (z_x' depends on z_y and y'): two scalar joint laws cannot "
-    "express it",
-    StateSpec("z", "-", "initial_zx,initial_zy"), bidirectional_hysteresis_rate))

@@ -12,9 +12,10 @@ from pathlib import Path
 
 import numpy as np
 
-from nsd_core.model.description import (COMPONENTS, GROUND, JOINT_DOFS, MOTION_KINDS, OUTPUT_KINDS, WORK_SOURCES,
+from nsd_core.model.description import (COMPONENTS, GROUND, JOINT_DOFS, MOTION_KINDS, MOTION_PARSERS, OUTPUT_KINDS,
+                                        WORK_SOURCES,
                                         Body, ForceElement, Joint, Loop, Model, Output, Prescribed)
-from nsd_core.device.params import ParameterError
+from nsd_core.common.errors import ParameterError
 from nsd_core.model.bounds import check_sizes
 from nsd_core.model.errors import ModelError
 from nsd_core.model.excitation import parse_excitation
@@ -37,7 +38,7 @@ def load_model(path) -> Model:
 
 def read_toml(path, flag: str) -> dict:
     """A TOML file as a dict; unreadable or not TOML is one ModelError line naming ``flag``."""
-    from nsd_core.device.inputs import MAX_DESCRIPTION_BYTES, printable, read_input_text
+    from nsd_core.common.files import MAX_DESCRIPTION_BYTES, printable, read_input_text
     try:   # a regular file only, at most MAX_DESCRIPTION_BYTES, read within a time bound
         text = read_input_text(path, flag, MAX_DESCRIPTION_BYTES, "UTF-8 TOML")
     except ModelError:
@@ -64,7 +65,8 @@ def _fields(where: str, table, allowed: set, required: tuple = ()) -> dict:
     return table
 
 
-def _num(where: str, v, low=-math.inf, high=math.inf, strict_low=False) -> float:
+def number(where: str, v, low=-math.inf, high=math.inf, strict_low=False) -> float:
+    """``v`` as a float when it is a finite number in range, else ModelError naming ``where``."""
     ok = not isinstance(v, bool) and isinstance(v, (int, float)) and math.isfinite(v)
     if ok and (v > low if strict_low else v >= low) and v <= high:
         return float(v)
@@ -75,7 +77,7 @@ def _num(where: str, v, low=-math.inf, high=math.inf, strict_low=False) -> float
 def _vec(where: str, v, nonzero=False) -> tuple:
     if not isinstance(v, list) or len(v) != 3:
         raise ModelError(f"{where} = {v!r}: must be a list of 3 numbers")
-    out = tuple(_num(where, x) for x in v)
+    out = tuple(number(where, x) for x in v)
     if nonzero and math.hypot(*out) < 1e-12:
         raise ModelError(f"{where} = {v!r}: must be a non-zero vector")
     return out
@@ -91,7 +93,7 @@ def _inertia(where: str, v) -> np.ndarray:
     if not isinstance(v, list) or len(v) not in (3, 6):
         raise ModelError(f"{where} = {v!r}: must be 3 principal values [Ixx, Iyy, Izz] or 6 "
                          "[Ixx, Iyy, Izz, Ixy, Ixz, Iyz] [kg m^2]")
-    x = [_num(where, e) for e in v]
+    x = [number(where, e) for e in v]
     J = np.diag(x[:3])
     if len(x) == 6:
         J[0, 1] = J[1, 0] = x[3]
@@ -180,7 +182,7 @@ def _bodies(items) -> tuple[Body, ...]:
                       _vec(f"{where}.joint.axis2", jt.get("axis2", [0.0, 1.0, 0.0]), nonzero=True))
         if jt["type"] == "universal" and np.linalg.norm(np.cross(joint.axis, joint.axis2)) < 1e-9 * np.linalg.norm(joint.axis) * np.linalg.norm(joint.axis2):
             raise ModelError(f"{where}.joint.axis2 = {list(joint.axis2)}: must not be parallel to axis")
-        mass = _num(f"{where}.mass", t["mass"], 0.0, strict_low=True) if _is_num(t["mass"]) and t["mass"] > 0 else None
+        mass = number(f"{where}.mass", t["mass"], 0.0, strict_low=True) if _isnumber(t["mass"]) and t["mass"] > 0 else None
         if mass is None:
             raise ModelError(f"{where}.mass = {t['mass']!r}: must be a number > 0 [kg] (every described body moves)")
         out.append(Body(name, parent, joint, mass, _vec(f"{where}.com", t.get("com", [0.0, 0.0, 0.0])),
@@ -193,7 +195,7 @@ def _is_name(v) -> bool:
     return isinstance(v, str) and bool(v) and all(c.isalnum() or c in "_-." for c in v) and v != GROUND
 
 
-def _is_num(v) -> bool:
+def _isnumber(v) -> bool:
     return not isinstance(v, bool) and isinstance(v, (int, float)) and math.isfinite(v)
 
 
@@ -293,44 +295,19 @@ def _prescribed(i: int, t: dict, bodies) -> Prescribed:
     kind = t["motion"]
     if kind not in MOTION_KINDS:
         raise ModelError(f"{where}.motion = {kind!r}: allowed: {', '.join(MOTION_KINDS)}")
-    if kind == "device_path":
-        return Prescribed(name, body, dof, kind, _device_path(where, t))
+    if kind in MOTION_PARSERS:
+        return Prescribed(name, body, dof, kind, MOTION_PARSERS[kind](where, t))
     values = {}
     for k in MOTION_KINDS[kind]:
         default = 0.0 if k in ("start", "centre", "phase") else None
         v = t.get(k, default)
         if v is None:
             raise ModelError(f"{where}.{k}: missing (motion {kind!r} needs {', '.join(MOTION_KINDS[kind])})")
-        values[k] = _num(f"{where}.{k}", v, 0.0, strict_low=True) if k == "frequency" else _num(f"{where}.{k}", v)
+        values[k] = number(f"{where}.{k}", v, 0.0, strict_low=True) if k == "frequency" else number(f"{where}.{k}", v)
     for k in t:
         if k in {x for v in MOTION_KINDS.values() for x in v} and k not in MOTION_KINDS[kind]:
             raise ModelError(f"{where}.{k}: not a value of motion {kind!r}; allowed: {', '.join(MOTION_KINDS[kind])}")
     return Prescribed(name, body, dof, kind, values)
-
-
-def _device_path(where: str, t: dict) -> dict:
-    """A component of the device's plate path (``nsd cycle --path``'s named paths, their ramps and
-    bounds): {"drive": Drive, "component": 0 or 1}."""
-    from nsd_core.device.drive import Drive
-    from nsd_core.device.params import ParameterError
-    path, comp = t.get("path"), t.get("component")
-    named = ("line", "circle", "ellipse", "figure8")
-    if path not in named and not (isinstance(path, str) and path.lower().endswith(".csv")):
-        raise ModelError(f"{where}.path = {path!r}: allowed: {', '.join(named)} or a CSV file of t,x,y")
-    if comp not in ("x", "y"):
-        raise ModelError(f"{where}.component = {comp!r}: allowed: x, y (the plate path's coordinate)")
-    for k in ("amplitude", "frequency"):
-        if k not in t:
-            raise ModelError(f"{where}.{k}: missing (motion 'device_path' needs it)")
-    minor = t.get("minor")
-    values = dict(amplitude=_num(f"{where}.amplitude", t["amplitude"]), frequency=_num(f"{where}.frequency", t["frequency"]),
-                  direction_deg=_num(f"{where}.direction", t.get("direction", 0.0)), path=path,
-                  minor=None if minor is None else _num(f"{where}.minor", minor))
-    try:   # the device's own bounds on a path (ModelError above is one already: checked first)
-        drive = Drive(**values)
-    except ParameterError as e:
-        raise ModelError(f"{where}: {e}") from None
-    return {"drive": drive, "component": COMPONENTS[comp]}
 
 
 def _output(i: int, t: dict, model: Model) -> Output:
@@ -342,8 +319,8 @@ def _output(i: int, t: dict, model: Model) -> Output:
     kind = t["kind"]
     if kind not in OUTPUT_KINDS:
         raise ModelError(f"{where}.kind = {kind!r}: allowed: {', '.join(OUTPUT_KINDS)}")
-    common = dict(tolerance=_num(f"{where}.tolerance", t.get("tolerance", 1e-3), 0.0, strict_low=True),
-                  scale=_num(f"{where}.scale", t.get("scale", 0.0), 0.0))
+    common = dict(tolerance=number(f"{where}.tolerance", t.get("tolerance", 1e-3), 0.0, strict_low=True),
+                  scale=number(f"{where}.scale", t.get("scale", 0.0), 0.0))
     names = {b.name for b in model.bodies}
     if kind == "coordinate":
         body, dof = _dof(where, t, model.bodies)
@@ -422,7 +399,7 @@ def _initial(t, bodies, prescribed) -> dict:
                 raise ModelError(f"[initial].{key}.{body} = {v!r}: must give {n} value(s), one per coordinate "
                                  f"of its {by[body].joint.type} joint")
             for k, x in enumerate(vals):
-                x = _num(f"[initial].{key}.{body}", x)
+                x = number(f"[initial].{key}.{body}", x)
                 if key == "coordinates" and abs(x) > MAX_COORDINATE:
                     raise ModelError(f"[initial].{key}.{body} = {v!r}: coordinate {k} must be within "
                                      f"+-{MAX_COORDINATE:g} (m or rad; beyond, a double cannot resolve its motion)")
@@ -455,7 +432,7 @@ def angles_in_degrees(model: Model) -> list[str]:
             out.append(f"[initial].coordinates.{body}{at} = {x:g}: looks like degrees; angles are in rad "
                        f"({x:g} deg = {math.radians(x):.6g} rad)")
     for p in model.prescribed:
-        if p.kind == "device_path" or model.coordinate_unit(p.joint, p.dof) != "rad":
+        if "motion" in p.values or model.coordinate_unit(p.joint, p.dof) != "rad":
             continue
         for k in ("start", "amplitude", "centre"):
             x = p.values.get(k)

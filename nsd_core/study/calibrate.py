@@ -29,7 +29,7 @@ from scipy.optimize import least_squares
 
 from nsd_core import __version__
 from nsd_core.device.params import FIELDS, ParameterError, Params
-from nsd_core.device.results import atomic_write_json, atomic_write_text
+from nsd_core.common.files import atomic_write_json, atomic_write_text
 from nsd_core.device.working_range import x_max_at_slack
 from nsd_core.study.tables import TABLE5, TABLE6
 

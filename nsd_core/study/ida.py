@@ -10,9 +10,9 @@ ask for them (a trace waits for its own last run only, so every worker stays bus
 
 Limit states (``Limit``): ``stroke=VALUE`` peak |u| >= VALUE [m] (|u| the plate's displacement
 relative to the base); ``restrainer`` the displacement restrainer engages (its force is positive at
-some output time: |u| > u_gap; nsd_core.device.restrainer, the runs carry it); ``drift=VALUE`` the
+some output time: |u| > u_gap; nsd_core.structure.restrainer, the runs carry it); ``drift=VALUE`` the
 peak story drift ratio of a building on the slab (any story, |drift| / story height, -) >= VALUE
-(the runs carry the building: nsd_core.device.building); ``impact=VALUE`` the restrainer's force
+(the runs carry the building: nsd_core.structure.building); ``impact=VALUE`` the restrainer's force
 >= VALUE [N]. A run that stops because the rod cannot reach (|u| >= l_d) or a wire leaves the SMA
 law's validity ends the trace (the device is spent); the rod's reach counts as reaching ``stroke``
 and ``restrainer`` (|u| passed them on its way to l_d), and for drift and impact the trace is
@@ -31,7 +31,7 @@ from functools import partial
 from typing import Callable
 
 from nsd_core.device.params import ParameterError
-from nsd_core.device.ground import SCALE_RANGE
+from nsd_core.ground.motions import SCALE_RANGE
 from nsd_core.study.hunt import Hunt, next_hunt_level, next_stripe_level
 from nsd_core.study.seismic_set import RecordRun, peak_drift_ratio, run_record, set_warmup
 from nsd_core.study.store import Store

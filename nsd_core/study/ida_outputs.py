@@ -15,7 +15,7 @@ from __future__ import annotations
 import csv
 import io
 
-from nsd_core.device.results import atomic_write_json, atomic_write_text
+from nsd_core.common.files import atomic_write_json, atomic_write_text
 from nsd_core.study.fragility import fit_lognormal
 from nsd_core.study.ida import SPENT, Trace, trace_result
 from nsd_core.study.seismic_set import peak_drift_ratio, worst_building_peak

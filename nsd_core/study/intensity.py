@@ -11,7 +11,7 @@
 Time scale: the records run in model time, t_model = time_factor t_record (sqrt(0.1), Froude 1:10
 similitude; accelerations unchanged), so Sa(1.0 s) here is the full-scale record's Sa at
 1.0 / sqrt(0.1) = 3.16 s. Each component is sampled at its own interval (DT time_factor), the ramp to
-zero after its last sample included (nsd_core.device.ground). Both measures are linear in the
+zero after its last sample included (nsd_core.ground.motions). Both measures are linear in the
 record's scale factor: a record at IM = x runs with scale x / IM(scale 1).
 """
 from __future__ import annotations
@@ -38,7 +38,7 @@ def component_sa(t: np.ndarray, a: np.ndarray, period: float, damping: float = D
 
 def record_intensity(motion, measure: str, period: float) -> dict:
     """{"value": IM at the motion's own scale [m/s^2], "components": [A, B], ...} of a Record
-    (nsd_core.device.ground.fema_record)."""
+    (nsd_core.ground.motions.fema_record)."""
     if measure not in MEASURES:
         raise ParameterError(f"--measure {measure!r}: unknown; allowed: {', '.join(MEASURES)}")
     comps = []
@@ -58,8 +58,8 @@ def record_intensity(motion, measure: str, period: float) -> dict:
 def design_level_scale(motion_at_scale_1) -> dict:
     """The record's scale factor at the design level: Sa(T_D) of the design spectrum over the record's
     (5 %-damped, geometric mean of the two components, at the model's T_D), scaled by the similitude
-    of nsd_core.device.design (here, in the study layer, because the intensity measure lives here)."""
-    from nsd_core.device.design import design
+    of nsd_core.structure.design (here, in the study layer, because the intensity measure lives here)."""
+    from nsd_core.structure.design import design
     d = design()
     own = record_intensity(motion_at_scale_1, "sa", d["T_D_model_s"])["value"]
     target = d["Sa_TD_model_m_s2"]

@@ -15,7 +15,7 @@ import io
 
 import numpy as np
 
-from nsd_core.device.results import atomic_write_json, atomic_write_text
+from nsd_core.common.files import atomic_write_json, atomic_write_text
 from nsd_core.study.fragility import fit_lognormal, fragility_curve
 from nsd_core.study.limit_states import STATES, LimitStates, classify, trace_states
 from nsd_core.study.store import Store

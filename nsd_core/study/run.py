@@ -10,7 +10,7 @@ import numpy as np
 
 from nsd_core.device.params import ParameterError, Params
 from nsd_core.device.results import RunResult, first_nonfinite
-from nsd_core.engine.errors import SolverError
+from nsd_core.common.errors import SolverError
 from nsd_core.study.designs import Design
 
 EngineRunner = Callable[..., RunResult]

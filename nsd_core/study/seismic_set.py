@@ -33,8 +33,8 @@ from pathlib import Path
 from typing import Callable
 
 from nsd_core.device.params import ParameterError
-from nsd_core.device.results import (RunResult, atomic_copy, atomic_write_json, atomic_write_text, first_nonfinite,
-                                     read_csv)
+from nsd_core.device.results import RunResult, first_nonfinite, read_csv
+from nsd_core.common.files import atomic_copy, atomic_write_json, atomic_write_text
 from nsd_core.study.store import Store
 from nsd_core.study.sweep import run_stored
 
@@ -84,7 +84,7 @@ class RecordRun:
 
 def parse_records(text: str | None, set_: str) -> list[int]:
     """'1,3,5-7' -> [1, 3, 5, 6, 7] within the set's IDs (None: all of them); ParameterError otherwise."""
-    from nsd_core.device.ground import SETS, set_name
+    from nsd_core.ground.motions import SETS, set_name
     ids = SETS[set_name(set_)][1]
     if text is None:
         return list(ids)
@@ -107,7 +107,7 @@ def record_runs(set_: str, records: list[int], ground: dict, params: dict, struc
     """Per record: the device run, the supports-alone run, and a device run per peer engine.
     Every record's ground motion is built here once, so a window outside a record is bad input
     (ParameterError) before anything runs."""
-    from nsd_core.device.ground import fema_record, set_name
+    from nsd_core.ground.motions import fema_record, set_name
     set_ = set_name(set_)
     runs = []
     for rid in records:
@@ -137,8 +137,8 @@ def peak_drift_ratio(summary: dict) -> float | None:
 def _failure(err: Exception) -> tuple[str, float | None]:
     """(reason, time) of a failed run: the engine's errors name the time as 't = ... s'."""
     from nsd_core.device.drive import DriveError
-    from nsd_core.device.seismic import RodReachError
-    from nsd_core.engine.errors import SolverError
+    from nsd_core.structure.seismic import RodReachError
+    from nsd_core.common.errors import SolverError
     m = re.search(r"t = ([-+0-9.eE]+) s", str(err))
     t = float(m.group(1)) if m else None
     if isinstance(err, RodReachError):
@@ -158,11 +158,11 @@ def run_record(r: RecordRun, run_engine: Callable | None = None, keep_partial: b
     a peer engine (comparisons.engines.run_seismic_engine: the study layer knows only the in-house engine)."""
     start = time.perf_counter()
     try:
-        from nsd_core.device.ground import fema_record
-        from nsd_core.device.isolation import Structure
+        from nsd_core.ground.motions import fema_record
+        from nsd_core.structure.isolation import Structure
         from nsd_core.device.params import Params
         from nsd_core.device.results import versions
-        from nsd_core.device.seismic import seismic_summary, simulate_seismic
+        from nsd_core.structure.seismic import seismic_summary, simulate_seismic
         params, structure = Params(**r.params), Structure(**r.structure)
         motion = fema_record(r.set, r.record, **r.ground)
         if r.engine == "semirecursive":
@@ -175,7 +175,7 @@ def run_record(r: RecordRun, run_engine: Callable | None = None, keep_partial: b
                                 settings=r.settings or None)
         bad = first_nonfinite(result.columns)
         if bad:
-            from nsd_core.engine.errors import SolverError
+            from nsd_core.common.errors import SolverError
             raise SolverError(f"a non-finite output: {bad}")
         summary = {"ground": motion.describe(), "structure": structure.to_dict(), "device": r.device,
                    **seismic_summary(result), "solver": result.stats, "wall_time": result.stats.get("wall_time"),
@@ -212,12 +212,12 @@ def run_set(runs: list[RecordRun], out: str | Path, workers: int = 1, scheduler=
 
 
 def set_warmup(runs: list[RecordRun], run_engine: Callable | None = None):
-    """A worker's warm-up for these runs (nsd_core.device.worker_warmup.warm_worker): the in-house seismic
+    """A worker's warm-up for these runs (nsd_core.compilation.worker_warmup.warm_worker): the in-house seismic
     kernels of each solver setting, the record sets' files, and a tiny run of each peer engine."""
-    from nsd_core.device.isolation import default_structure
+    from nsd_core.structure.isolation import default_structure
     from nsd_core.device.params import Params
-    from nsd_core.device.warmup import TINY_DT_OUT, TINY_DURATION, tiny_ground
-    from nsd_core.device.worker_warmup import kind, warm_worker
+    from nsd_core.compilation.warmup import TINY_DT_OUT, TINY_DURATION, tiny_ground
+    from nsd_core.compilation.worker_warmup import kind, warm_worker
     kinds = sorted({kind("seismic", r.settings) for r in runs if r.engine == "semirecursive"})
     peers = {(r.engine, repr(sorted(r.settings.items()))): (r.engine, r.settings) for r in runs
              if r.engine != "semirecursive" and run_engine is not None}
@@ -259,7 +259,7 @@ def write_set(runs: list[RecordRun], store: Store, compare=None) -> dict:
                                 "wall_time": prec["metrics"].get("wall_time")}
                     elif prec:
                         summary.setdefault("engines", {})[peer] = {"status": "failed", "error": prec["error"]}
-                from nsd_core.device.seismic_warnings import apply_warnings
+                from nsd_core.structure.seismic_warnings import apply_warnings
                 apply_warnings(summary)   # as nsd seismic's summary.json has them
             else:
                 summary = {"status": "failed", "error": rec["error"], **rec["metrics"]}
@@ -300,7 +300,7 @@ def _cell(v) -> str:
 
 def _row(set_: str, rid: int, group: dict, recs: dict, peers: list[str]) -> tuple[dict, dict]:
     """One row of set.csv and the record's entry in set.json (folders, statuses, errors)."""
-    from nsd_core.device.ground import record_metadata
+    from nsd_core.ground.motions import record_metadata
     meta = record_metadata(set_, rid)
     row = {"set": set_, "id": rid, "earthquake": f"{meta.get('EarthquakeName', '')} ({meta.get('EarthquakeYear', '')})",
            "station": meta.get("RecordingStationName", ""), "magnitude": float(meta.get("EarthquakeMagnitude")),
@@ -355,7 +355,7 @@ def _row(set_: str, rid: int, group: dict, recs: dict, peers: list[str]) -> tupl
         reasons.append(f"device: outside the working range (the ropes went slack; peak |u| "
                        f"{s_dev['peak_displacement']['value'] * 1e3:.3g} mm"
                        + (f" of the {rod * 1e3:.3g} mm rod)" if rod else ")"))
-    from nsd_core.device.seismic_warnings import run_warnings  # set.json: the runs' warnings (one home of the rules)
+    from nsd_core.structure.seismic_warnings import run_warnings  # set.json: the runs' warnings (one home of the rules)
     rod = {p["name"]: p["value"] for p in (s_dev or s_nod or {}).get("params") or []}.get("rod_length")
     if dev and dev["status"] != "ok" and (dev["metrics"] or {}).get("reason") in ("rod_reach", "outside_validity"):
         stop = {"kind": dev["metrics"]["reason"], "t": dev["metrics"].get("t", float("nan"))}

@@ -20,8 +20,9 @@ from pathlib import Path
 
 
 from nsd_core import __version__
-from nsd_core.device.inputs import read_input_bytes
-from nsd_core.device.results import RunResult, atomic_write_json, write_columns, write_csv
+from nsd_core.common.files import read_input_bytes
+from nsd_core.device.results import RunResult, write_columns, write_csv
+from nsd_core.common.files import atomic_write_json
 from nsd_core.study.designs import Design
 
 

@@ -15,7 +15,7 @@ from typing import Any, Callable, Iterator
 
 from nsd_core import __version__
 from nsd_core.device.params import ParameterError, Params
-from nsd_core.device.results import atomic_copy, atomic_write_json
+from nsd_core.common.files import atomic_copy, atomic_write_json
 from nsd_core.engine.workers import worker_pool
 from nsd_core.study.designs import PAPER_STUDIES, Design
 from nsd_core.study.run import EngineRunner, run_design
@@ -94,9 +94,9 @@ def run_sweep(designs: list[Design], out: str | Path, workers: int = 1, schedule
 
 def sweep_warmup(designs: list[Design], run_engine: EngineRunner | None = None):
     """A worker's warm-up for these designs: the in-house kernels of each solver setting, and a tiny
-    run of each other engine and setting through ``run_engine`` (nsd_core.device.worker_warmup)."""
-    from nsd_core.device.warmup import tiny_drive
-    from nsd_core.device.worker_warmup import kind, warm_worker
+    run of each other engine and setting through ``run_engine`` (nsd_core.compilation.worker_warmup)."""
+    from nsd_core.compilation.warmup import tiny_drive
+    from nsd_core.compilation.worker_warmup import kind, warm_worker
     kinds = sorted({kind("drive", d.settings) for d in designs if d.engine == "semirecursive"})
     peers = {(d.engine, repr(sorted(d.settings.items()))): (d.engine, d.settings) for d in designs
              if d.engine != "semirecursive" and run_engine is not None}

@@ -11,7 +11,7 @@ import math
 
 
 from nsd_core.device.params import Params
-from nsd_core.device.results import atomic_write_text
+from nsd_core.common.files import atomic_write_text
 from nsd_core.device.working_range import model_x_max
 
 # Transcribed from the paper (paper-data.toml [table5], [table6]); tests compare with that file.

@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 
 from nsd_core.device.drive import DriveError
-from nsd_core.device.seismic import seismic_summary, simulate_seismic
+from nsd_core.structure.seismic import seismic_summary, simulate_seismic
 
 # ratio name -> (what it divides, how it is read from a seismic_summary)
 RATIOS = {
@@ -35,7 +35,7 @@ def run_one(params, structure, ground, device: bool, duration=None, dt_out=1e-3,
                                   progress=progress, **(solver or {}))
         return {"result": result, "summary": seismic_summary(result), "complete": True, "stopped": None}
     except DriveError as err:
-        from nsd_core.device.seismic import RodReachError
+        from nsd_core.structure.seismic import RodReachError
         partial = getattr(err, "partial", None)
         stopped = {"kind": "rod_reach" if isinstance(err, RodReachError) else "outside_validity",
                    "reason": str(err), "t": getattr(err, "t_event", None)}

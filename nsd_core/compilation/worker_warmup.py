@@ -1,7 +1,7 @@
 """A pool worker's warm-up (issue 26, item 1): what ``nsd_core.engine.workers.worker_pool(n, warm=...)``
 runs once in each worker before its first job, so that the first job costs what the later ones do.
 
-Unpickling ``warm_worker`` in a worker imports the in-house model (the worker's first ~1-2 s); it runs the tiny problem (``nsd_core.device.warmup``) of every
+Unpickling ``warm_worker`` in a worker imports the in-house model (the worker's first ~1-2 s); it runs the tiny problem (``nsd_core.compilation.warmup``) of every
 kind the pool's jobs will run (``kind``: mode, method, backend, path kind, as ``warm_and_time`` keys
 its runs), reads the FEMA P695 sets' files the jobs will read, and calls the peers' tiny runs it is
 given (the study and comparison layers build those: this layer knows only the in-house engine).
@@ -10,10 +10,11 @@ from __future__ import annotations
 
 from functools import partial
 
-from nsd_core.device import first_compile, ground
+from nsd_core.compilation import first_compile
+from nsd_core.ground import motions as ground
 from nsd_core.device.model import DEFAULT_SOLVER, simulate
-from nsd_core.device.seismic import simulate_seismic
-from nsd_core.device.warmup import PATHS, warm
+from nsd_core.structure.seismic import simulate_seismic
+from nsd_core.compilation.warmup import PATHS, warm
 from nsd_core.engine.compile_once import share_work
 
 

@@ -9,7 +9,7 @@ with a hysteretic force of strength Q acting along a dimensionless vector z (|z|
 with H the unit step. Why this form: unloading (z . u' < 0) is exactly elastic (z' = u'/D_y, the
 initial stiffness Q/D_y), loading saturates |z| -> 1 smoothly, so an adaptive step-size controller
 sees a force with a continuous slope; as n grows the loop tends to the ideal bilinear one (n = 2 is
-Park-Wen's beta = gamma = 1/2; the default n is in nsd_core.device.isolators). In one direction the
+Park-Wen's beta = gamma = 1/2; the default n is in nsd_core.structure.isolators). In one direction the
 loading branch is z' = u'(1 - |z|^n) / D_y.
 
 * bilinear (lead-rubber): Q = Q_d, D_y the yield displacement, k_d the post-yield stiffness;
@@ -26,6 +26,8 @@ from __future__ import annotations
 import math
 
 from numba import njit
+
+from nsd_core.model.laws import PLANE, Law, LawParameter, StateSpec, register
 
 
 @njit(cache=True, _nrt=False)
@@ -56,3 +58,38 @@ def advance_hysteresis(dux, duy, zx, zy, yield_disp, exponent, substeps):
         _, _, bx, by, _ = hysteretic_force_scalar(hx, hy, mx, my, 0.0, 0.0, 0.0, yield_disp, exponent)
         zx, zy = zx + bx, zy + by
     return zx, zy
+
+
+# ---- the registry's plane law (nsd_core.model.laws): the hysteresis above on two slide coordinates -------
+# p: strength, strength_at_rest, rate, yield_displacement, exponent, initial_zx, initial_zy
+
+@njit(cache=True, _nrt=False)
+def bidirectional_hysteresis_force(x, y, xd, yd, sx, sy, p):
+    """(Q_x, Q_y) = -Q(|u'|) z [N]: the hysteretic part of a lead-rubber bearing or a friction pendulum
+    on the displacement u = (x, y), z = (s_x, s_y) its state (hysteretic_force_scalar)."""
+    fx, fy, _, _, _ = hysteretic_force_scalar(xd, yd, sx, sy, p[0], p[1], p[2], p[3], p[4])
+    return -fx, -fy
+
+
+@njit(cache=True, _nrt=False)
+def bidirectional_hysteresis_rate(x, y, xd, yd, sx, sy, p):
+    """z' = (u' - H(z . u') |z|^(n - 2) (z . u') z) / D_y [1/s] (Park, Wen and Ang 1986)."""
+    _, _, dzx, dzy, _ = hysteretic_force_scalar(xd, yd, sx, sy, p[0], p[1], p[2], p[3], p[4])
+    return dzx, dzy
+
+
+register(Law("bidirectional_hysteresis", PLANE, (
+    LawParameter("strength", "N", 0.0, doc="Q at high velocity (Q_d; mu_fast W)"),
+    LawParameter("strength_at_rest", "N", 0.0, doc="Q at rest (= strength for a bilinear bearing; mu_slow W)"),
+    LawParameter("rate", "s/m", 0.0, default=0.0, doc="a of mu(v) = mu_fast - (mu_fast - mu_slow) exp(-a |v|)"),
+    LawParameter("yield_displacement", "m", 1e-12, doc="D_y"),
+    LawParameter("exponent", "-", 2.0, 50.0, doc="n"),
+    LawParameter("initial_zx", "-", -1.0, 1.0, default=0.0), LawParameter("initial_zy", "-", -1.0, 1.0, default=0.0)),
+    bidirectional_hysteresis_force,
+    "The baseline isolators' hysteretic part (a lead-rubber bearing: Q = Q_d; a friction pendulum: Q = mu W; "
+    "Park, Wen and Ang 1986, evaluated by hysteretic_force_scalar of this module): on the "
+    "planar displacement u = (x, y) [m], (Q_x, Q_y) = -Q(|u'|) z [N], D_y z' = u' - H(z . u') |z|^(n-2) "
+    "(z . u') z [1/s], Q(v) = Q_fast - (Q_fast - Q_rest) exp(-a v) [N] (a [s/m]; a = 0: Q = Q_rest). A plane "
+    "law because z couples the two directions (z_x' depends on z_y and y'): two scalar joint laws cannot "
+    "express it",
+    StateSpec("z", "-", "initial_zx,initial_zy"), bidirectional_hysteresis_rate))

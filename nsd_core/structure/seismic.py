@@ -17,7 +17,7 @@ Energy balance in the frame that translates with the ground, where every body fe
 with P_rel the bodies' horizontal momentum relative to the base and E_device = int sum T dL/dt the
 work absorbed by ropes, wires and spring (stored and dissipated). E_input, E_device,
 E_supports_dissipated and E_restrainer (the work the displacement restrainer absorbs, stored +
-dissipated; nsd_core.device.restrainer) are integrated with the motion (four extra states), so the
+dissipated; nsd_core.structure.restrainer) are integrated with the motion (four extra states), so the
 residual measures the mechanics, not an output quadrature.
 
 Output times: ``output_times`` (every engine's): n = ceil(duration / dt_out) equal intervals, so the
@@ -38,18 +38,18 @@ from nsd_core.device.drive import DriveError
 from nsd_core.device.forces import (restrainer_force_scalar, restrainer_forces, restrainer_stored_scalar, rope_tension,
                                     wire_tension)
 from nsd_core.device.geometry import device_geometry
-from nsd_core.device.building import building_columns, building_dissipation_rate
+from nsd_core.structure.building import building_columns, building_dissipation_rate
 from nsd_core.device.columns import units_of
-from nsd_core.device.building_tree import BuildingIndex, floor_names, with_floors
-from nsd_core.device.ground import GroundMotion
-from nsd_core.device.isolation import Structure
-from nsd_core.device.isolator_laws import hysteretic_force_scalar
+from nsd_core.structure.building_tree import BuildingIndex, floor_names, with_floors
+from nsd_core.ground.motions import GroundMotion
+from nsd_core.structure.isolation import Structure
+from nsd_core.structure.isolator_laws import hysteretic_force_scalar
 from nsd_core.device.model import (BODY, COMPILED_METHODS, DEFAULT_SOLVER, DeviceForces, _check_lengths,
                                    check_validity, device_mechanism, rest_coordinates)
 from nsd_core.device.params import ParameterError, Params
 from nsd_core.device.results import RunResult
-from nsd_core.device.warmup import warm_and_time
-from nsd_core.device.seismic_summary import peaks_at_last_sample, seismic_summary  # noqa: F401 (this module's API)
+from nsd_core.compilation.warmup import warm_and_time
+from nsd_core.structure.seismic_summary import peaks_at_last_sample, seismic_summary  # noqa: F401 (this module's API)
 from nsd_core.engine.integrate import SolverError, check_tolerances, integrate
 from nsd_core.engine.kinematics import cross_rows
 from nsd_core.engine.mechanism import mechanism
@@ -79,7 +79,7 @@ def _plate_body(structure: Structure) -> dict:
 
 def seismic_mechanism(params: Params, structure: Structure, device: bool = True):
     """The Figure 4 tree with the isolated mass on the plate (device=False: plate and base alone),
-    and the structure's building's floors (nsd_core.device.building_tree) when it has one."""
+    and the structure's building's floors (nsd_core.structure.building_tree) when it has one."""
     mech, g = _slab_mechanism(params, structure, device)
     if structure.building is not None:
         mech = with_floors(mech, structure.building)
@@ -150,7 +150,7 @@ class SeismicForces:
         gen[i["plate"]] = -kt * th - ct * thd
         e_sup = s.damping * float(ud @ ud) + ct * thd * thd
         iso_rates = np.zeros(self.n_iso)
-        if self.iso is not None:  # the baseline isolator's hysteretic part (nsd_core.device.isolator_laws)
+        if self.iso is not None:  # the baseline isolator's hysteretic part (nsd_core.structure.isolator_laws)
             zx, zy = extra[self.n_dev], extra[self.n_dev + 1]
             fx, fy, iso_rates[0], iso_rates[1], power = hysteretic_force_scalar(ud[0], ud[1], zx, zy,
                                                                                 *self.iso.block())
@@ -264,12 +264,12 @@ def simulate_seismic(params: Params, structure: Structure, ground: GroundMotion,
     """The seismic response from relative rest at t = 0, sampled every ``dt_out`` up to ``duration``
     (default: the ground motion's; longer: free vibration after it). Raises RodReachError (exit 4),
     DriveError (outside the laws' validity), SolverError (exit 3). backend: "compiled" the compiled
-    right-hand side and step loop (nsd_core.device.compiled_seismic; methods RK45, DOP853); "auto"
+    right-hand side and step loop (nsd_core.structure.compiled_seismic; methods RK45, DOP853); "auto"
     (default) that for the methods it offers, else "scipy": SemiRecursiveSystem under scipy's
     solvers; "numpy" the same on the numpy specification. The compiled path restarts its step loop
     every compiled_seismic.CHUNK model seconds (progress, Ctrl-C), so it follows scipy's path step for
     step over the first chunk and within the tolerance after. fixed_base (device=False): the slab
-    follows the ground (the building's fixed-base reference; nsd_core.device.building)."""
+    follows the ground (the building's fixed-base reference; nsd_core.structure.building)."""
     if backend not in ("auto", "compiled", "scipy", "numpy"):
         raise ParameterError(f"backend = {backend!r}: the seismic mode offers auto, compiled, scipy, numpy")
     if backend == "auto":
@@ -282,7 +282,7 @@ def simulate_seismic(params: Params, structure: Structure, ground: GroundMotion,
     if not (math.isfinite(dt_out) and 0 < dt_out <= duration):
         raise ParameterError(f"dt_out = {dt_out!r}: must be in (0, duration]")
     start = time.perf_counter()
-    if not device:  # a baseline isolator's linear part takes the supports' place (nsd_core.device.isolators)
+    if not device:  # a baseline isolator's linear part takes the supports' place (nsd_core.structure.isolators)
         structure = structure.on_isolator()
     system, g, forces = seismic_system(params, structure, ground, device, fixed_base)
     system.fast = backend != "numpy"
@@ -392,8 +392,8 @@ def _with_partial(err: DriveError, partial: RunResult | None, t_event: float) ->
 
 def _simulate_compiled(system, g, structure, ground, device, y0, t_eval, method, rtol, atol, max_step, first_step,
                        progress, start, fixed_base=False):
-    """The seismic run on the compiled path (nsd_core.device.compiled_seismic): the same columns."""
-    from nsd_core.device import compiled_seismic as cs
+    """The seismic run on the compiled path (nsd_core.structure.compiled_seismic): the same columns."""
+    from nsd_core.structure import compiled_seismic as cs
     from nsd_core.engine.codegen import evaluation_used, evaluator_for
     from nsd_core.engine.rk import TOO_MANY_STEPS
     check_tolerances(rtol, atol, max_step)  # the bounds of the scipy path, the same way
@@ -432,8 +432,8 @@ def _simulate_compiled(system, g, structure, ground, device, y0, t_eval, method,
 
 
 def _compiled_result(res, keep, t_eval, system, g, structure, device, stats) -> RunResult:
-    """The seismic columns of the first ``keep`` samples of a compiled run (nsd_core.device.compiled_seismic)."""
-    from nsd_core.device import compiled_seismic as cs
+    """The seismic columns of the first ``keep`` samples of a compiled run (nsd_core.structure.compiled_seismic)."""
+    from nsd_core.structure import compiled_seismic as cs
     res = {k: (v[:keep] if isinstance(v, np.ndarray) and v.ndim >= 1 and len(v) == len(t_eval) else v)
            for k, v in res.items()}
     t_eval = t_eval[:keep]

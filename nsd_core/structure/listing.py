@@ -70,7 +70,7 @@ STRUCTURE_DOCS = {"mass": "M, the isolated mass on the plate", "radius_of_gyrati
                   "restrainer_gap": "u_gap, |u| at which the restrainer engages (Hunt-Crossley contact)",
                   "restrainer_stiffness": "k, contact stiffness of F = k delta^n (1 + alpha delta')",
                   "restrainer_exponent": "n, contact exponent", "restrainer_damping": "alpha, Hunt-Crossley damping"}
-# the ranges nsd_core.device.restrainer.Restrainer enforces (the gap also below the rod's length)
+# the ranges nsd_core.structure.restrainer.Restrainer enforces (the gap also below the rod's length)
 _RESTRAINER_BOUNDS = {"restrainer_gap": "(0, rod_length)", "restrainer_stiffness": "(0, inf)",
                       "restrainer_exponent": "[1, inf)", "restrainer_damping": "[0, inf)"}
 
@@ -79,20 +79,20 @@ def structure_fields() -> list[str]:
     """The isolated structure's own fields (``--structure NAME=VALUE``, a case's ``structure``); the building
     has its own table (``--building``, docs/building.md), the baseline isolator is chosen by ``--isolator``
     and sized by the design basis (docs/design.md), neither a number ``--structure`` sets."""
-    from nsd_core.device.isolation import Structure
+    from nsd_core.structure.isolation import Structure
     return [f.name for f in dataclasses.fields(Structure)
             if f.name not in ("provenance", "restrainer", "building", "isolator")]
 
 
 def restrainer_fields() -> list[str]:
     """The restrainer's switch and its constants (``--restrainer``, ``--structure restrainer_*=VALUE``)."""
-    from nsd_core.device.restrainer import KEYS
+    from nsd_core.structure.restrainer import KEYS
     return ["restrainer", *KEYS]
 
 
 def _structure_bounds(name: str) -> str:
     """The range ``isolation.Structure`` enforces for one field (issue 22's bounds where it has them)."""
-    from nsd_core.device.isolation import STRUCTURE_BOUNDS, SUPPORT_FREQUENCY_MAX
+    from nsd_core.structure.isolation import STRUCTURE_BOUNDS, SUPPORT_FREQUENCY_MAX
     if name == "restrainer":
         return "true or false"
     if name in _RESTRAINER_BOUNDS:
@@ -107,8 +107,8 @@ def _structure_bounds(name: str) -> str:
 def structure_rows(structure=None, params: Params | None = None) -> list[dict[str, Any]]:
     """One row per field of the isolated structure (default: the nominal device's), then the
     restrainer's switch and constants (their values: the default restrainer's, used when it is on)."""
-    from nsd_core.device.isolation import default_structure
-    from nsd_core.device.restrainer import default_restrainer
+    from nsd_core.structure.isolation import default_structure
+    from nsd_core.structure.restrainer import default_restrainer
     params = params or Params()
     st = structure or default_structure(params)
     rest = st.restrainer or default_restrainer(params, st)

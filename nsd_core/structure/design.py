@@ -101,7 +101,7 @@ def design() -> dict:
 
 def designed_structure_args(design_level: bool = False) -> tuple:
     """The isolated structure of the design basis at model scale, as the arguments of
-    nsd_core.device.isolation.Structure (``isolation.designed_structure`` builds it: this module does
+    nsd_core.structure.isolation.Structure (``isolation.designed_structure`` builds it: this module does
     not import isolation, which imports it): the same for every device. design_level: the isolation
     level's damping is the design's supplemental damping (``design_damping_ratio``), else the
     supports' own ``damping_ratio``."""

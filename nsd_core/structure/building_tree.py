@@ -6,7 +6,7 @@ height of the slab plus the stories below. The coordinates are absolute (in the 
 the plate's and the base's), so a floor's displacement relative to the ground is z - x_g. The stories
 are linear spring-dampers between floor i and floor i-1 (floor 0 the slab), the Rayleigh mass part
 dampers between floor i and the slab; both enter as joint forces on the floors' and the slab's
-coordinates (``nsd_core.device.building.building_forces``, the one law every engine's columns use).
+coordinates (``nsd_core.structure.building.building_forces``, the one law every engine's columns use).
 
 The compiled path reads the building as a block of its force parameters (``building_block``).
 """
@@ -16,7 +16,7 @@ import dataclasses
 
 import numpy as np
 
-from nsd_core.device.building import Building, building_forces
+from nsd_core.structure.building import Building, building_forces
 from nsd_core.engine.mechanism import GROUND, Mechanism
 
 X_AXIS, Y_AXIS = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0)

@@ -1,7 +1,7 @@
 """The baseline isolators a designer would choose instead of the device (issue 33 item 2;
 docs/design.md): a lead-rubber (bilinear) bearing and a friction pendulum, sized for the same design
-displacement D_D as the device system (nsd_core.device.design). Their force law is
-nsd_core.device.isolator_laws (one implementation, every engine).
+displacement D_D as the device system (nsd_core.structure.design). Their force law is
+nsd_core.structure.isolator_laws (one implementation, every engine).
 
 Sizing rules (full scale, then the similitude; W = M g, k_eff = M (2 pi / T_D)^2):
 * bilinear: effective period T_D and effective damping beta_D at D_D (ASCE 7-16 17.8.5.2:
@@ -54,7 +54,7 @@ class Isolator:
             raise ParameterError(f"isolator exponent = {self.exponent!r}: must be in [2, 50]")
 
     def block(self) -> list[float]:
-        """The hysteretic law's constants in nsd_core.device.isolator_laws' argument order."""
+        """The hysteretic law's constants in nsd_core.structure.isolator_laws' argument order."""
         return [self.q_fast, self.q_slow, self.rate, self.yield_displacement, self.exponent]
 
     def to_dict(self) -> dict:
@@ -73,7 +73,7 @@ def isolator_from(value) -> Isolator | None:
 def sized(kind: str, mass: float) -> Isolator:
     """The ``kind`` isolator sized for the design displacement (the rules above) for an isolated mass
     ``mass`` [kg, model scale]."""
-    from nsd_core.device import design as ds
+    from nsd_core.structure import design as ds
     if kind not in KINDS:
         raise ParameterError(f"--isolator {kind!r}: allowed {', '.join(CHOICES)}")
     s, d = ds.scale(), ds.design()

@@ -12,15 +12,15 @@ step, ``.ci/run``), after which no command of this version compiles anything.
 It is not run automatically at a command's first run. That was tried (issue 35) and measured
 (docs/performance.md, "A newcomer's first commands"): the first ``nsd cycle`` on a cold cache went
 from 27.9 to 38.7 s wall (28 to 65 s CPU) and the README's first compare from 79 to 139 s. Most of
-that doubled CPU was the child processes' cache naming, fixed since (nsd_core.numba_cache: the helpers'
+that doubled CPU was the child processes' cache naming, fixed since (nsd_core.compilation.numba_cache: the helpers'
 machine code went where the first process never looked); a first run now shares only its own kind's
-items with one helper (nsd_core.device.first_compile).
+items with one helper (nsd_core.compilation.first_compile).
 
 The work runs in this process and one helper per further core it may use (its affinity), sharing the
 items out (``compile_once.share_work``: no two processes compile the same item at once), prints one line, and
 leaves a mark in the cache folder: a later ``nsd warm`` of the same version, or of a new install of it
 (the folder is keyed by the source's content and named independently of where it is installed,
-nsd_core.numba_cache), finds the mark and compiles nothing. A second ``nsd warm`` started while one
+nsd_core.compilation.numba_cache), finds the mark and compiles nothing. A second ``nsd warm`` started while one
 compiles waits for it, then loads.
 
 This module sits in the device layer (it runs the device's tiny problems); the generic engine
@@ -36,7 +36,7 @@ import time
 from functools import partial
 from pathlib import Path
 
-from nsd_core.device import first_compile
+from nsd_core.compilation import first_compile
 from nsd_core.engine import compile_once as co
 
 # the in-house engine's modes and the peers' callbacks (``nsd warm``); the in-house modes alone
@@ -99,7 +99,7 @@ def _warm_here(peers: bool, stream) -> None:
     print(NOTICE.format(peers=PEERS if peers else "", processes=n + 1, seconds=NOTICE_SECONDS[peers]), end="",
           file=stream, flush=True)
     env = {**os.environ, HELPER: "1"}
-    code = f"from nsd_core.device.warm_all import helper; helper({peers})"
+    code = f"from nsd_core.compilation.warm_all import helper; helper({peers})"
     helpers = [subprocess.Popen([sys.executable, "-c", code], env=env, stdout=subprocess.DEVNULL,
                                 stderr=subprocess.DEVNULL) for _ in range(n)]
     try:
@@ -123,17 +123,17 @@ def helper(peers: bool = False) -> None:
 
 def _tiny_structure_run(structure: str) -> None:
     """A tiny seismic run with the restrainer or a 3-story building (their own force kernels)."""
-    from nsd_core.device.isolation import default_structure
+    from nsd_core.structure.isolation import default_structure
     from nsd_core.device.params import Params
-    from nsd_core.device.seismic import simulate_seismic
-    from nsd_core.device.warmup import TINY_DT_OUT, TINY_DURATION, tiny_ground
+    from nsd_core.structure.seismic import simulate_seismic
+    from nsd_core.compilation.warmup import TINY_DT_OUT, TINY_DURATION, tiny_ground
     p = Params()
     st = default_structure(p)
     if structure == "restrainer":
-        from nsd_core.device.restrainer import with_restrainer
+        from nsd_core.structure.restrainer import with_restrainer
         st = with_restrainer(st, p, True, {})
     else:
-        from nsd_core.device.building import building_from
+        from nsd_core.structure.building import building_from
         st = st.with_building(building_from(st.mass, {"stories": 3}))
     simulate_seismic(p, st, tiny_ground(), duration=TINY_DURATION, dt_out=TINY_DT_OUT)
 
@@ -149,8 +149,8 @@ def items(peers: bool = True) -> list:
     """``share_work`` items: the engine's units, then a tiny run of every mode, then (``peers``) the
     peers' tiny runs (``peers=False``: the in-house modes alone)."""
     from nsd_core.device.model import DEFAULT_SOLVER, simulate
-    from nsd_core.device.seismic import simulate_seismic
-    from nsd_core.device.warmup import PATHS, warm
+    from nsd_core.structure.seismic import simulate_seismic
+    from nsd_core.compilation.warmup import PATHS, warm
     out = first_compile.unit_items()
     m, b = DEFAULT_SOLVER["method"], DEFAULT_SOLVER["backend"]
     # one lock per mode and per peer: the runs under one lock compile the same kernels (every drive
@@ -158,7 +158,7 @@ def items(peers: bool = True) -> list:
     out += [("warm-all-drive", partial(_quietly, partial(warm, "drive", simulate, m, b, p))) for p in PATHS]
     out.append(("warm-all-seismic", partial(_quietly, partial(warm, "seismic", simulate_seismic, m, b, "line"))))
     out += [("warm-all-seismic", partial(_quietly, partial(_tiny_structure_run, s))) for s in ("restrainer", "building")]
-    from nsd_core.device.worker_warmup import _name
+    from nsd_core.compilation.worker_warmup import _name
     for name in PROVIDERS if peers else ():
         module, fn = name.split(":")
         try:

@@ -1,9 +1,9 @@
 """The seismic mode on the compiled path: its force and motion callbacks, and the per-sample outputs.
 
-The same mechanism and partition as nsd_core.device.seismic (``seismic_mechanism``, Table 1 second
+The same mechanism and partition as nsd_core.structure.seismic (``seismic_mechanism``, Table 1 second
 row); the generic compiled engine (nsd_core.engine.compiled, rk) integrates it with these callbacks:
     seismic_motion: the base's planar joint follows the ground, (x_g, y_g, 0), from the ground's
-        one implementation (nsd_core.device.ground.ground_values) on the model's motion_params;
+        one implementation (nsd_core.ground.motions.ground_values) on the model's motion_params;
     seismic_forces: the device's elements (nsd_core.device.compiled.device_forces: the shared laws),
         the supports as generalised forces on the plate's X, Y and rotation, and the rates of the
         three energy states: E_input' = -a_g . P_rel with P_rel = P - m_total v_g (P: the
@@ -17,7 +17,7 @@ force_params = [header (HEADER fields), device block (nsd_core.device.compiled.f
 header: has_device, n_device_params, n_device_extra, ground offset, plate_x, plate_y, plate, base_x,
         base_y, base, cap, wall (indices; -1 without the device), k_b, c_b, k_b r_b^2, c_b r_b^2,
         rod_length, total mass, has_restrainer, u_gap, k_c, n_c, alpha_c, building offset
-        (the building's block, nsd_core.device.building_tree.building_block, after the ground's; its
+        (the building's block, nsd_core.structure.building_tree.building_block, after the ground's; its
         story and floor-slab dampers' power is the fifth energy state, E_building_dissipated'),
         isolator offset (-1: none; else a baseline isolator's law constants, Isolator.block(), after the
         building's: its state z is extra[0:2] of a run without the device, its work joins the supports')
@@ -31,11 +31,11 @@ import math
 import numpy as np
 from numba import njit, types
 
-from nsd_core.device.building_tree import building_block
+from nsd_core.structure.building_tree import building_block
 from nsd_core.device.compiled import device_forces, force_params as device_force_params
 from nsd_core.device.forces import restrainer_force_scalar
-from nsd_core.device.ground import ground_values
-from nsd_core.device.isolator_laws import hysteretic_force_scalar
+from nsd_core.ground.motions import ground_values
+from nsd_core.structure.isolator_laws import hysteretic_force_scalar
 from nsd_core.engine.codegen import evaluator_for
 from nsd_core.engine.compiled import EVALUATE, copy_into, derivatives, generic_evaluator
 from nsd_core.engine.compiled_model import (EVAL_FN, FORCE_FN, FORCE_SIG, MODEL_TYPE, MOTION_FN, MOTION_SIG,
@@ -54,7 +54,7 @@ COLUMNS = ("x_g", "y_g", "vx_g", "vy_g", "ax_g", "ay_g", "x", "y", "theta", "vx"
 
 @njit(cache=True, _nrt=False)
 def building_forces(z, zd, p, o, gen):
-    """The building's joint forces on floors and slab (nsd_core.device.building, per direction:
+    """The building's joint forces on floors and slab (nsd_core.structure.building, per direction:
     story S_i = k_i drift_i + c_i drift_i' on floor i, -S_i on floor i-1; b_i (d_i' - d_0') between
     floor i and the slab); returns the power they dissipate."""
     n = int(p[o])
@@ -108,7 +108,7 @@ def seismic_forces(t, z, zd, P, L, Ld, extra, p, T, gen, rate):
     rate[nx_dev + 3] = 0.0
     rate[nx_dev + 4] = building_forces(z, zd, p, int(p[23]), gen)
     oi = int(p[24])
-    if oi >= 0:  # a baseline isolator (nsd_core.device.isolator_laws, the shared law)
+    if oi >= 0:  # a baseline isolator (nsd_core.structure.isolator_laws, the shared law)
         fx, fy, rate[0], rate[1], power = hysteretic_force_scalar(vx, vy, extra[0], extra[1], p[oi], p[oi + 1],
                                                                   p[oi + 2], p[oi + 3], p[oi + 4])
         gen[px] -= fx
@@ -154,7 +154,7 @@ def seismic_force_params(mech, g, structure, ground_block, device: bool) -> np.n
 
 
 def seismic_model(system, g, structure, ground, device: bool):
-    """The immutable compiled model of a system built by nsd_core.device.seismic.seismic_system."""
+    """The immutable compiled model of a system built by nsd_core.structure.seismic.seismic_system."""
     elements = None
     if device:
         el = system.forces.device.elements

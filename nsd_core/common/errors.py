@@ -1,4 +1,4 @@
-"""The generic engine's errors. The layers above subclass them, so one ``except`` at the command
+"""The errors every layer raises. The layers above subclass them, so one ``except`` at the command
 line maps each kind to its exit code whatever layer raised it."""
 
 
@@ -12,3 +12,7 @@ class SolverError(RuntimeError):
 
 class ConstraintError(RuntimeError):
     """The loop equations could not be solved (the mechanism cannot follow, or a singular position)."""
+
+
+class ParameterError(InputError):
+    """Bad input: one line naming the field, the value and what is allowed (exit code 2)."""

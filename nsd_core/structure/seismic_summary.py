@@ -36,8 +36,8 @@ def seismic_summary(result: RunResult) -> dict:
                    "max_residual": float(np.max(np.abs(c["E_residual"]))),
                    "relative_residual": float(np.max(np.abs(c["E_residual"])) / max(np.max(np.abs(E_in)), 1e-300))},
     }
-    if "floor1_x" in c:  # a building on the slab (nsd_core.device.building)
-        from nsd_core.device.building import building_dict_from, building_summary
+    if "floor1_x" in c:  # a building on the slab (nsd_core.structure.building)
+        from nsd_core.structure.building import building_dict_from, building_summary
         building = building_dict_from((result.stats.get("structure") or {}).get("building"))
         out["energy"]["building_stored"] = float(c["E_building_stored"][-1])
         out["energy"]["building_dissipated"] = float(c["E_building_dissipated"][-1])
@@ -55,7 +55,7 @@ def seismic_summary(result: RunResult) -> dict:
     else:
         out.update({"events": [], "outside_working_range": False})
     if "restrainer_F" in c:
-        from nsd_core.device.restrainer import engagement_events
+        from nsd_core.structure.restrainer import engagement_events
         mass = (result.stats.get("structure") or {}).get("mass", float("nan"))
         rate = _radial_rate(c)
         engaged = engagement_events(t, c["u"], c["restrainer_F"], rate, mass,

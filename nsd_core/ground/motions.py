@@ -32,7 +32,7 @@ from functools import lru_cache
 import numpy as np
 from numba import njit
 
-from nsd_core.device.params import ParameterError
+from nsd_core.common.errors import ParameterError
 
 STANDARD_GRAVITY = 9.80665  # m/s^2: the records' unit g
 SIMILITUDE_TIME_FACTOR = math.sqrt(0.1)  # Froude 1:10: time x sqrt(length scale)
@@ -84,7 +84,7 @@ def _unit(azimuth_deg: float) -> np.ndarray:
 # ---- the one implementation of every ground motion: compiled scalar functions on a flat block ----
 # A motion is a block of floats (``GroundMotion.block()``); ``ground_values`` evaluates it at one time.
 # The Python classes call the same functions (``ground_series``), and so does the compiled seismic
-# path's motion and force callbacks (nsd_core.device.compiled_seismic), from the model's parameters.
+# path's motion and force callbacks (nsd_core.structure.compiled_seismic), from the model's parameters.
 #   record:   [0, R00, R01, R10, R11, n_a, n_b, component a (5 n_a), component b (5 n_b)]
 #             a component: its sample times, a, slope, v, d (PiecewiseLinear), n values each
 #   harmonic: [1, A, omega, duration, e_x, e_y]
@@ -451,7 +451,7 @@ def parse_ground_spec(text, where: str = "--ground") -> GroundMotion:
     """A closed-form ground motion from ``KIND:KEY=VALUE,...``: an unknown kind or key, a key given
     twice, a missing required key, a value that is not a finite number in its range (gamma > 1),
     or an input longer than GROUND_DURATION_MAX is a ParameterError naming it."""
-    from nsd_core.device.inputs import printable
+    from nsd_core.common.files import printable
     if not isinstance(text, str):
         raise ParameterError(f"{where} = {printable(repr(text))}: must be a string KIND:KEY=VALUE,... "
                              f"(kinds: {', '.join(GROUND_SPECS)})")

@@ -1,5 +1,5 @@
 """The isolated structure on a baseline isolator (a lead-rubber bearing or a friction pendulum,
-nsd_core.device.isolators), without the device, as a model description (docs/models.md): what
+nsd_core.structure.isolators), without the device, as a model description (docs/models.md): what
 ``simulate_seismic(..., device=False)`` runs for a structure whose ``isolator`` is set, in the file
 format every builder reads.
 
@@ -8,18 +8,18 @@ The frame translates with the ground ([excitation]: every body feels -m a_g(t)):
 - the isolator's linear part is three joint springs and dashpots on the plate's coordinates: k_d, c
   along x and y, k_d r_b^2, c r_b^2 about Z (the torsional pair of Structure.on_isolator);
 - its hysteretic part is one ``bidirectional_hysteresis`` element on the plate's (x, y): the registry's
-  plane law, whose state z = (z_x, z_y) couples the two directions (nsd_core.device.isolator_laws).
+  plane law, whose state z = (z_x, z_y) couples the two directions (nsd_core.structure.isolator_laws).
 No building, no restrainer: a structure with either is refused (the in-house engine runs those).
 
-    python -m nsd_core.device.describe_isolator --isolator bilinear --ground "harmonic:amplitude=2,frequency=1.5" \\
+    python -m nsd_core.structure.describe_isolator --isolator bilinear --ground "harmonic:amplitude=2,frequency=1.5" \\
         --duration 1 --out out/isolator.toml
 """
 from __future__ import annotations
 
 import argparse
 
-from nsd_core.device.describe_seismic import _inline, plate_body
-from nsd_core.device.isolation import Structure
+from nsd_core.structure.describe_seismic import _inline, plate_body
+from nsd_core.structure.isolation import Structure
 from nsd_core.device.params import ParameterError
 
 # Each peer's step on this model: MuJoCo's Euler at 2e-5 s (1e-4 s changes the peak displacement of a
@@ -60,13 +60,13 @@ parameters = {{ stiffness = {k!r}, damping = {c!r} }}
     outputs += [_output(f"hysteresis_{c}", "force", element='"isolator"', component=f'"{c}"') for c in "xy"]
     outputs += [_output(f"z_{c}", "state", element='"isolator"', component=f'"{c}"', scale="1.0") for c in "xy"]
     return f'''# The isolated structure on a {iso.kind} isolator, without the device, as a model description.
-# Written by nsd_core.device.describe_isolator from the structure (nsd_core.device.isolation) and its
-# isolator (nsd_core.device.isolators: {iso.provenance.get("source", "given constants")}).
+# Written by nsd_core.structure.describe_isolator from the structure (nsd_core.structure.isolation) and its
+# isolator (nsd_core.structure.isolators: {iso.provenance.get("source", "given constants")}).
 # Coordinates are relative to the ground: the frame moves with it ([excitation]).
 
 [model]
 name = "{name}"
-source = "nsd_core.device.isolators ({iso.kind}); structure: nsd_core.device.isolation (assumed rules)"
+source = "nsd_core.structure.isolators ({iso.kind}); structure: nsd_core.structure.isolation (assumed rules)"
 gravity = [0.0, 0.0, -9.81]
 
 [excitation]   # every body feels -m a_g(t)
@@ -91,9 +91,9 @@ exudyn = {{ step_size = {EXUDYN_STEP!r} }}
 
 
 def main(argv=None) -> None:
-    from nsd_core.device.isolation import designed_structure
-    from nsd_core.device.isolators import KINDS, sized
-    from nsd_core.device.results import atomic_write_text
+    from nsd_core.structure.isolation import designed_structure
+    from nsd_core.structure.isolators import KINDS, sized
+    from nsd_core.common.files import atomic_write_text
     p = argparse.ArgumentParser(description="write the structure on a baseline isolator as a model description (TOML)")
     p.add_argument("--isolator", required=True, choices=KINDS)
     p.add_argument("--ground", required=True, help="a closed form, nsd seismic --ground's syntax")

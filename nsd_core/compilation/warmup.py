@@ -9,7 +9,7 @@ motion) and records its duration as ``stats["compile_time"]`` (0 once warm); ``s
 is the run's own CPU time (time.process_time), beside its ``wall_time``. Neither start-up nor the
 warm-up run is ever part of ``wall_time``/``cpu_time``: those are the integration.
 
-A pool worker does all of this before its first job (issue 26): nsd_core.device.worker_warmup.
+A pool worker does all of this before its first job (issue 26): nsd_core.compilation.worker_warmup.
 """
 from __future__ import annotations
 
@@ -40,7 +40,7 @@ def tiny_drive(path: str = "line"):
 
 def tiny_ground():
     """The warm-up's ground motion: 4 ms of a 2 Hz, 0.1 m/s^2 harmonic."""
-    from nsd_core.device.ground import Harmonic
+    from nsd_core.ground.motions import Harmonic
     return Harmonic(0.1, 2.0, duration=TINY_DURATION)
 
 
@@ -50,7 +50,7 @@ def _tiny_drive_run(fn, method: str, backend: str, path: str) -> None:
 
 
 def _tiny_seismic_run(fn, method: str, backend: str, path: str) -> None:
-    from nsd_core.device.isolation import default_structure
+    from nsd_core.structure.isolation import default_structure
     from nsd_core.device.params import Params
     fn(Params(), default_structure(Params()), tiny_ground(), duration=TINY_DURATION, dt_out=TINY_DT_OUT, method=method,
        backend=backend)
@@ -66,7 +66,7 @@ def warm(mode: str, fn, method: str, backend: str, path: str = "line") -> float:
     if key in _WARM or backend == "numpy":
         return 0.0
     _WARM.add(key)   # before the call: the tiny run goes through the same wrapper
-    from nsd_core.device import first_compile
+    from nsd_core.compilation import first_compile
     from nsd_core.engine.rk import METHODS
     start = time.perf_counter()
     tiny = functools.partial(TINY[mode], fn, method, backend, path)
@@ -94,7 +94,7 @@ def warm_and_time(mode: str):
             drive = bound.arguments.get("drive")
             path = drive.path if drive is not None and drive.path in PATHS else "line"   # a table: a line
             # what this run uses, at its first use (every mode at once is `nsd warm`'s: an explicit
-            # step, nsd_core.device.warm_all; automatic, it made a first drive cycle slower, measured)
+            # step, nsd_core.compilation.warm_all; automatic, it made a first drive cycle slower, measured)
             compile_time = warm(mode, fn, bound.arguments["method"], bound.arguments["backend"], path)
             c0, (cw0, cc0) = time.process_time(), compile_seconds()
             result = fn(*args, **kwargs)

@@ -61,7 +61,7 @@ def use_versioned_cache(environ=os.environ) -> str | None:
         relocatable_cache()
         return given
     try:
-        folder = cache_folder(Path(__file__).resolve().parents[1], environ)
+        folder = cache_folder(Path(__file__).resolve().parents[2], environ)
         folder.mkdir(parents=True, exist_ok=True)
     except OSError:  # no writable home: numba's default (beside the source) still works
         return None
@@ -74,7 +74,7 @@ def use_versioned_cache(environ=os.environ) -> str | None:
     return str(folder)
 
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def package_subfolder(py_file: str, root: Path = ROOT) -> str | None:

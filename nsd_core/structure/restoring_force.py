@@ -16,14 +16,14 @@ F(u) along the direction psi, on first loading from rest to D, by the configurat
   carried along the path);
 * linear: k_b u (the supports alone);
 * bilinear (lead-rubber) and friction pendulum: k_d u + Q z(u), the baseline isolator's own law
-  (``nsd_core.device.isolator_laws``: z advanced along the path, Q at rest, the law's q_slow).
+  (``nsd_core.structure.isolator_laws``: z advanced along the path, Q at rest, the law's q_slow).
 
-W = (M + the building's floor masses) g, g the design's (``nsd_core.device.design.G``). Each
+W = (M + the building's floor masses) g, g the design's (``nsd_core.structure.design.G``). Each
 direction of ``DIRECTIONS_DEG`` is checked (the device is not isotropic; the baselines are, and give
 the same numbers in both); the smallest margin governs.
 
 D: given by the caller, or by default the design basis's maximum displacement D_M at model scale
-(``nsd_core.device.design``: ASCE 7-16 Eq. 17.5-1 at S_M1 = 1.5 S_D1; 19.64 mm). The least passing D
+(``nsd_core.structure.design``: ASCE 7-16 Eq. 17.5-1 at S_M1 = 1.5 S_D1; 19.64 mm). The least passing D
 (the least D from which every D up to the scan's end passes) is bracketed on a grid and then solved
 by Brent's method to ``XTOL``.
 """
@@ -43,13 +43,13 @@ ISOLATOR_SUBSTEPS = 16   # midpoint substeps of the isolator's z per path step
 D_MIN = 1e-6             # m, the least design displacement (as a drive's least amplitude)
 XTOL = 1e-8              # m, Brent's tolerance on the least passing D
 DEFAULT_D = ("the design basis's maximum displacement D_M at model scale (ASCE 7-16 Eq. 17.5-1 at "
-             "S_M1 = 1.5 S_D1; nsd_core.device.design)")
+             "S_M1 = 1.5 S_D1; nsd_core.structure.design)")
 CONFIGURATIONS = ("device", "linear", "bilinear", "friction-pendulum")
 
 
 def weight(structure, gravity: float | None = None) -> float:
     """W [N]: the isolated mass M and the building's floors, times g (the design's, by default)."""
-    from nsd_core.device.design import G
+    from nsd_core.structure.design import G
     floors = sum(structure.building.masses) if structure.building is not None else 0.0
     return (structure.mass + floors) * (G if gravity is None else gravity)
 
@@ -70,7 +70,7 @@ def working_range(params: Params, directions_deg=DIRECTIONS_DEG) -> float:
 
 def default_design_displacement() -> float:
     """D_M [m] at model scale: the design basis's maximum displacement."""
-    from nsd_core.device.design import design
+    from nsd_core.structure.design import design
     return float(design()["D_M_model_m"])
 
 
@@ -105,7 +105,7 @@ def force_path(params: Params, structure, configuration: str, u: np.ndarray, psi
             return structure.stiffness * u + quasi_static_path(params, u, psi, substeps=4)["F_device"]
     if configuration == "linear":
         return structure.stiffness * u
-    from nsd_core.device.isolator_laws import advance_hysteresis
+    from nsd_core.structure.isolator_laws import advance_hysteresis
     iso = structure.isolator
     if iso is None or iso.kind != configuration:
         raise ParameterError(f"restoring force: configuration {configuration!r} needs the structure's "
@@ -177,8 +177,8 @@ def least_passing(params: Params, structure, configuration: str, upto: float, ps
 
 LAWS = {"device": "k_b u + the device's quasi-static force along the direction (nsd_core.device.quasistatic)",
         "linear": "k_b u (the supports alone)",
-        "bilinear": "k_d u + Q_d z(u): the lead-rubber bearing's law (nsd_core.device.isolator_laws)",
-        "friction-pendulum": "(W/R) u + mu W z(u): the friction pendulum's law (nsd_core.device.isolator_laws)"}
+        "bilinear": "k_d u + Q_d z(u): the lead-rubber bearing's law (nsd_core.structure.isolator_laws)",
+        "friction-pendulum": "(W/R) u + mu W z(u): the friction pendulum's law (nsd_core.structure.isolator_laws)"}
 
 
 def restoring_force_check(params: Params, structure, design_displacement: float | None = None,
@@ -191,7 +191,7 @@ def restoring_force_check(params: Params, structure, design_displacement: float 
     "pass", "margin", "governing_direction_deg", "least_passing_D", "directions": {direction: {F_D,
     F_half_D, difference, required, margin, difference_over_W, pass, least_passing_D, scan}},
     "with_device" (the directions for the device, else None), "how"}; forces in N, lengths in m."""
-    from nsd_core.device.design import G, design, scale
+    from nsd_core.structure.design import G, design, scale
     config = configuration or configuration_of(structure, device)
     if config not in CONFIGURATIONS:
         raise ParameterError(f"restoring force: configuration {config!r}; allowed {', '.join(CONFIGURATIONS)}")

@@ -1,4 +1,4 @@
-"""Reading input files safely, and naming paths on one line. Every file the program reads (a
+"""Reading input files safely, writing output files atomically, and naming paths on one line. Every file the program reads (a
 description, a cases, tolerance or parameter file, a reference CSV, a path table, a results folder
 given to ``nsd report --from``) is read through this module: tests/test_input_guard.py looks for any
 other read in the code.
@@ -20,7 +20,14 @@ import stat
 import time
 from pathlib import Path
 
-from nsd_core.engine.errors import InputError as ParameterError  # params.py reads through this module
+import json
+import shutil
+import tempfile
+from typing import Any
+
+import numpy as np
+
+from nsd_core.common.errors import InputError
 
 # What every input file may weigh (bytes): far beyond any real one, small enough to read in seconds.
 # A description or a cases file: the largest shipped is 26 kB (81 bodies); 4 MB holds ~20 000 bodies'
@@ -56,42 +63,42 @@ def _kind(mode: int) -> str | None:
 
 
 def check_regular(path: str | Path, what: str) -> os.stat_result:
-    """``os.stat`` of an input file that must be a regular file (ParameterError otherwise)."""
+    """``os.stat`` of an input file that must be a regular file (InputError otherwise)."""
     where = f"{what} {printable(path)}"
     if not str(path).strip():
-        raise ParameterError(f"{what} '': name a file")
+        raise InputError(f"{what} '': name a file")
     try:
         st = os.stat(path)
     except FileNotFoundError:
-        raise ParameterError(f"{where}: file not found") from None
+        raise InputError(f"{where}: file not found") from None
     except PermissionError:
-        raise ParameterError(f"{where}: not readable (permission denied)") from None
+        raise InputError(f"{where}: not readable (permission denied)") from None
     except OSError as e:
-        raise ParameterError(f"{where}: cannot be read ({e.strerror or e})") from None
+        raise InputError(f"{where}: cannot be read ({e.strerror or e})") from None
     kind = _kind(st.st_mode)
     if kind is not None or not stat.S_ISREG(st.st_mode):
-        raise ParameterError(f"{where}: is {kind or 'not a regular file'}; a regular file is expected")
+        raise InputError(f"{where}: is {kind or 'not a regular file'}; a regular file is expected")
     return st
 
 
 def read_input_bytes(path: str | Path, what: str, max_bytes: int, seconds: float = READ_SECONDS) -> bytes:
     """The bytes of a regular input file of at most ``max_bytes``, read within ``seconds``
-    (ParameterError otherwise); never blocks on a FIFO."""
+    (InputError otherwise); never blocks on a FIFO."""
     where = f"{what} {printable(path)}"
     deadline = time.monotonic() + seconds
     st = check_regular(path, what)
     if st.st_size > max_bytes:
-        raise ParameterError(f"{where}: {st.st_size} bytes; at most {max_bytes} bytes expected")
+        raise InputError(f"{where}: {st.st_size} bytes; at most {max_bytes} bytes expected")
     try:
         fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_NOCTTY", 0))
     except PermissionError:
-        raise ParameterError(f"{where}: not readable (permission denied)") from None
+        raise InputError(f"{where}: not readable (permission denied)") from None
     except OSError as e:
-        raise ParameterError(f"{where}: cannot be read ({e.strerror or e})") from None
+        raise InputError(f"{where}: cannot be read ({e.strerror or e})") from None
     try:
         st = os.fstat(fd)
         if not stat.S_ISREG(st.st_mode):  # replaced between the stat and the open
-            raise ParameterError(f"{where}: is {_kind(st.st_mode) or 'not a regular file'}; a regular file is expected")
+            raise InputError(f"{where}: is {_kind(st.st_mode) or 'not a regular file'}; a regular file is expected")
         chunks, size = [], 0
         while True:
             chunk = os.read(fd, 1 << 20)
@@ -99,24 +106,24 @@ def read_input_bytes(path: str | Path, what: str, max_bytes: int, seconds: float
                 break
             size += len(chunk)
             if size > max_bytes:
-                raise ParameterError(f"{where}: more than {max_bytes} bytes; at most {max_bytes} bytes expected")
+                raise InputError(f"{where}: more than {max_bytes} bytes; at most {max_bytes} bytes expected")
             chunks.append(chunk)
             if time.monotonic() > deadline:
-                raise ParameterError(f"{where}: not read within {seconds:g} s; a local regular file is expected")
+                raise InputError(f"{where}: not read within {seconds:g} s; a local regular file is expected")
         return b"".join(chunks)
     except OSError as e:
-        raise ParameterError(f"{where}: cannot be read ({e.strerror or e})") from None
+        raise InputError(f"{where}: cannot be read ({e.strerror or e})") from None
     finally:
         os.close(fd)
 
 
 def read_input_text(path: str | Path, what: str, max_bytes: int, expected: str = "UTF-8 text") -> str:
-    """A regular input file as UTF-8 text (ParameterError naming the path otherwise)."""
+    """A regular input file as UTF-8 text (InputError naming the path otherwise)."""
     data = read_input_bytes(path, what, max_bytes)
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError:
-        raise ParameterError(f"{what} {printable(path)}: not a text file ({expected} expected)") from None
+        raise InputError(f"{what} {printable(path)}: not a text file ({expected} expected)") from None
 
 
 def input_stream(path: str | Path, what: str, max_bytes: int, expected: str = "UTF-8 text") -> io.StringIO:
@@ -129,3 +136,74 @@ def read_regular_text(path: str | Path, what: str = "file") -> str:
     """Path.read_text for a file the program wrote itself (results, a store): only a regular file is
     read, so a FIFO or a device planted in a results folder is one line (InputError), never a hang."""
     return read_input_text(path, what, 1 << 32)
+
+
+def check_output_target(path: str | Path, what: str = "output") -> None:
+    """An output is written only where nothing is, or over a regular file (or a link to one): a FIFO,
+    a device, a socket or a folder there is bad input (InputError, exit 2), never replaced."""
+    try:
+        st = os.stat(path)
+    except (FileNotFoundError, NotADirectoryError):
+        return
+    except OSError:
+        return  # (a link loop, no permission: the write itself says so, naming the file)
+    if not stat.S_ISREG(st.st_mode):
+        raise InputError(f"{what} {printable(path)}: is {_kind(st.st_mode) or 'not a regular file'}; an output is "
+                         "written only where no file is or over a regular file")
+
+
+def atomic_write_text(path: str | Path, text: str) -> None:
+    """Write to a temporary file in the same folder, then rename: readers never see half a file.
+    A failed write (a full disk) removes the temporary file and raises OSError naming ``path``;
+    the file that was there before stays as it was. Only a regular file is replaced
+    (check_output_target: a FIFO or a device there is InputError, nothing written)."""
+    path = Path(path)
+    check_output_target(path)
+    tmp = None
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+        with os.fdopen(fd, "w") as f:
+            f.write(text)
+        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; a result file gets the usual mode
+        os.replace(tmp, path)
+    except BaseException as e:
+        if tmp is not None and os.path.exists(tmp):
+            os.unlink(tmp)
+        if isinstance(e, OSError) and e.filename is None:
+            raise OSError(e.errno, e.strerror, str(path)) from None
+        raise
+
+
+def atomic_copy(src: str | Path, dest: str | Path) -> None:
+    """Copy a file atomically (temporary file, then rename); a failed copy leaves ``dest`` as it was."""
+    dest = Path(dest)
+    check_output_target(dest)
+    dest.parent.mkdir(parents=True, exist_ok=True)
+    tmp = dest.with_name(f".{dest.name}.tmp")
+    try:
+        shutil.copyfile(src, tmp)
+        tmp.replace(dest)
+    except BaseException as e:
+        tmp.unlink(missing_ok=True)
+        if isinstance(e, OSError) and e.errno is not None:
+            raise OSError(e.errno, e.strerror, str(dest)) from None
+        raise
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)  # reading the umask means setting it: put it straight back
+    os.umask(mask)
+    return mask
+
+
+def atomic_write_json(path: str | Path, data: Any) -> None:
+    atomic_write_text(path, json.dumps(data, indent=2, default=_json_default) + "\n")
+
+
+def _json_default(o):
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, (np.floating, np.integer, np.bool_)):
+        return o.item()
+    raise TypeError(f"not JSON serialisable: {type(o).__name__}")

@@ -1,4 +1,4 @@
-"""The helper process of a first run's compilation (nsd_core.device.first_compile): a module of its own,
+"""The helper process of a first run's compilation (nsd_core.compilation.first_compile): a module of its own,
 as it needs the runs themselves (device.model, device.seismic), which import device.warmup, which
 imports first_compile."""
 from __future__ import annotations
@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 from functools import partial
 
-from nsd_core.device import first_compile, warmup
+from nsd_core.compilation import first_compile, warmup
 from nsd_core.engine.compile_once import quiet_notices, share_work
 
 
@@ -16,7 +16,7 @@ def run_function(mode: str):
     if mode == "drive":
         from nsd_core.device.model import simulate
         return simulate
-    from nsd_core.device.seismic import simulate_seismic
+    from nsd_core.structure.seismic import simulate_seismic
     return simulate_seismic
 
 

@@ -23,10 +23,10 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from nsd_core.device.building import Building, building_dict_from
-from nsd_core.device.isolators import Isolator, isolator_from
+from nsd_core.structure.building import Building, building_dict_from
+from nsd_core.structure.isolators import Isolator, isolator_from
 from nsd_core.device.params import ParameterError, Params
-from nsd_core.device.restrainer import Restrainer, restrainer_from
+from nsd_core.structure.restrainer import Restrainer, restrainer_from
 
 PERIOD = 1.0          # s, supports alone (full scale ~3.2 s under the 1:10 similitude)
 DAMPING_RATIO = 0.05  # of critical
@@ -59,9 +59,9 @@ class Structure:
     damping: float              # c_b [N s/m]
     support_radius: float       # r_b [m]
     provenance: dict = field(default_factory=dict, compare=False)
-    restrainer: Restrainer | None = None  # the displacement restrainer (nsd_core.device.restrainer), off by default
-    building: Building | None = None      # a shear building on the slab (nsd_core.device.building), none by default
-    # the baseline isolator that replaces the supports in a run without the device (nsd_core.device.isolators)
+    restrainer: Restrainer | None = None  # the displacement restrainer (nsd_core.structure.restrainer), off by default
+    building: Building | None = None      # a shear building on the slab (nsd_core.structure.building), none by default
+    # the baseline isolator that replaces the supports in a run without the device (nsd_core.structure.isolators)
     isolator: Isolator | None = None
 
     def __post_init__(self):
@@ -84,7 +84,7 @@ class Structure:
                                  f"{SUPPORT_FREQUENCY_MAX:g} Hz (a stiffer or lighter structure needs a step count "
                                  "no run here can afford)")
         if self.building is not None:
-            from nsd_core.device.building import check_dynamics
+            from nsd_core.structure.building import check_dynamics
             check_dynamics(self.mass, self.stiffness, self.damping, self.building)
 
     def replace(self, **changes) -> "Structure":
@@ -144,10 +144,10 @@ class Structure:
     def first_period(self) -> float:
         """The first period of the structure on the supports alone [s]: 2 pi sqrt(M / k_b) without a
         building; with one, the first mode of the chain ground - k_b - slab M - story 1 - floor 1 ...
-        (nsd_core.device.building.fixed_base_modes with the supports as a story below the slab)."""
+        (nsd_core.structure.building.fixed_base_modes with the supports as a story below the slab)."""
         if self.building is None:
             return self.period
-        from nsd_core.device.building import fixed_base_modes
+        from nsd_core.structure.building import fixed_base_modes
         omega, _ = fixed_base_modes((self.mass, *self.building.masses), (self.stiffness, *self.building.stiffnesses))
         return 2.0 * math.pi / float(omega[0])
 
@@ -273,14 +273,14 @@ def default_structure(params: Params | None = None, k_dev: dict | None = None) -
 
 
 def designed_structure(design_level: bool = False) -> Structure:
-    """The isolated structure of the design basis at model scale (nsd_core.device.design): the same for
+    """The isolated structure of the design basis at model scale (nsd_core.structure.design): the same for
     every device. design_level: the isolation level's damping is the design's supplemental damping."""
-    from nsd_core.device.design import designed_structure_args
+    from nsd_core.structure.design import designed_structure_args
     return Structure(*designed_structure_args(design_level))
 
 
 def designed_structure_with(params: Params, own: dict, resize: bool = False, design_level: bool = False) -> Structure:
-    """The structure of the design basis (nsd_core.device.design: the same for every device) with the
+    """The structure of the design basis (nsd_core.structure.design: the same for every device) with the
     overrides ``own``; resize: derived from the device instead (``structure_with``, the model
     document's rule), as before issue 33."""
     if resize:

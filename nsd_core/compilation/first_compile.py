@@ -9,7 +9,7 @@ compiled twice). The helper leaves what it compiles in the cache folder and this
 once this process has every item, the helper has nothing left that it needs and is stopped.
 
 Only the kind's own items: compiling every mode at a first run was measured slower
-(nsd_core.device.warm_all). Not in a pool's worker (the pool's workers share the work already:
+(nsd_core.compilation.warm_all). Not in a pool's worker (the pool's workers share the work already:
 ``disable``), not in ``nsd warm`` (it has its own helpers), not in a helper, not on one core, and not
 once the kind is marked ready in this version's cache folder (a mark written after its first
 successful warm-up; ``nsd warm``'s marks cover every kind), so a warm command starts no process.
@@ -25,7 +25,7 @@ from pathlib import Path
 
 HELPER = "NSD_FIRST_COMPILE_HELPER"   # set in the helper: it never starts one itself
 # the modules whose import compiles a mode's callbacks (njit with their signature: at import)
-CALLBACKS = {"drive": "nsd_core.device.compiled", "seismic": "nsd_core.device.compiled_seismic"}
+CALLBACKS = {"drive": "nsd_core.device.compiled", "seismic": "nsd_core.structure.compiled_seismic"}
 EVERY_MODE_MARKS = (".compiled-every-mode", ".compiled-in-house")   # nsd warm's (warm_all.MARK, MARK_IN_HOUSE)
 _enabled = [True]
 
@@ -120,7 +120,7 @@ def run_shared(key: tuple, tiny) -> None:
     """Run the kind's items here while one helper process runs them too (share_work), then stop it."""
     from nsd_core.engine.compile_once import share_work
     env = {**os.environ, HELPER: "1"}
-    code = f"from nsd_core.device.first_compile_helper import helper; helper({json.dumps(json.dumps(list(key)))})"
+    code = f"from nsd_core.compilation.first_compile_helper import helper; helper({json.dumps(json.dumps(list(key)))})"
     helper_process = subprocess.Popen([sys.executable, "-c", code], env=env, stdout=subprocess.DEVNULL,
                                       stderr=subprocess.DEVNULL)
     try:

@@ -10,14 +10,14 @@ coordinates are the seismic mode's relative ones (docs/model.md, "Seismic mode")
 - the supports are joint springs and dashpots on the plate's coordinates: k_b, c_b along x and y,
   k_b r_b^2, c_b r_b^2 about Z;
 - the restrainer (when the structure has one) is a Hunt-Crossley stop between the plate's centre and
-  the base's: the distance is |u|, the force radial, as nsd_core.device.restrainer says;
+  the base's: the distance is |u|, the force radial, as nsd_core.structure.restrainer says;
 - a building's floors slide in the plane (planar_translation, relative to the ground); each story is
   two per-direction spring-dashpots (k_i, c_i, along x and along y) between floor i and the floor
   below (the slab is the plate), and the Rayleigh mass-proportional part is a dashpot b_i between
-  floor i and the slab in each direction (nsd_core.device.building's forces).
+  floor i and the slab in each direction (nsd_core.structure.building's forces).
 The device's elements are the drive description's (describe.device_forces).
 
-    python -m nsd_core.device.describe_seismic --ground "harmonic:amplitude=2,frequency=1.5,azimuth=30" \
+    python -m nsd_core.structure.describe_seismic --ground "harmonic:amplitude=2,frequency=1.5,azimuth=30" \
         --duration 1 --out models/nsd_seismic.toml [--stories 3] [--restrainer]
 """
 from __future__ import annotations
@@ -27,7 +27,7 @@ import sys
 
 from nsd_core.device.describe import ELEMENT_OUTPUTS, _changed, _inertia, _v, device_forces, rod_loop, wall_and_rod
 from nsd_core.device.geometry import device_geometry
-from nsd_core.device.isolation import Structure
+from nsd_core.structure.isolation import Structure
 from nsd_core.device.params import Params
 
 
@@ -58,7 +58,7 @@ parameters = {{ stiffness = {k!r}, damping = {c!r} }}
     r = st.restrainer
     if r is not None:
         forces += f'''
-[[forces]]   # the displacement restrainer: radial, past the gap u_gap (Hunt-Crossley; nsd_core.device.restrainer)
+[[forces]]   # the displacement restrainer: radial, past the gap u_gap (Hunt-Crossley; nsd_core.structure.restrainer)
 name = "restrainer"
 law = "hunt_crossley_stop"
 body_a = "plate"
@@ -135,14 +135,14 @@ def seismic_description(params: Params, st: Structure, ground: str | dict, durat
     plate, supports = _structure_lines(st)
     floors, stories, floor_outputs = _building_lines(st) if st.building is not None else ("", "", "")
     head = f'''# The negative-stiffness device (Dai et al. 2024) in seismic mode{" under a " + str(st.building.stories) + "-story building" if st.building else ""}, as a model description.
-# Written by `python -m nsd_core.device.describe_seismic` from the device's parameters and the isolated
+# Written by `python -m nsd_core.structure.describe_seismic` from the device's parameters and the isolated
 # structure (docs/seismic.md; every value with its provenance in `nsd params`). Device parameters that
 # differ from the nominal ones: {", ".join(f"{k} = {v!r}" for k, v in _changed(params).items()) or "none"}.
 # Coordinates are relative to the ground: the frame moves with it ([excitation]).{chr(10) + "#   " + command if command else ""}
 
 [model]
 name = "{name}"
-source = "Dai et al. 2024 (doi:10.1002/msd2.12118); structure: nsd_core.device.isolation (assumed rules)"
+source = "Dai et al. 2024 (doi:10.1002/msd2.12118); structure: nsd_core.structure.isolation (assumed rules)"
 gravity = {_v(g.gravity_vector)}
 
 [excitation]   # every body feels -m a_g(t): a_g from the ground motion below
@@ -238,11 +238,11 @@ exudyn = {{ step_size = {exudyn_step!r} }}
 
 
 def structure_for(params: Params, stories: int = 0, restrainer: bool = False) -> Structure:
-    """The default isolated structure of ``params`` (nsd_core.device.isolation), with the default
+    """The default isolated structure of ``params`` (nsd_core.structure.isolation), with the default
     restrainer and a default building of ``stories`` stories when asked."""
-    from nsd_core.device.building import building_from
-    from nsd_core.device.isolation import structure_with
-    from nsd_core.device.restrainer import default_restrainer
+    from nsd_core.structure.building import building_from
+    from nsd_core.structure.isolation import structure_with
+    from nsd_core.structure.restrainer import default_restrainer
     st = structure_with(params, {})
     if restrainer:
         st = Structure(**{**st.__dict__, "restrainer": default_restrainer(params, st)})
@@ -253,7 +253,7 @@ def structure_for(params: Params, stories: int = 0, restrainer: bool = False) ->
 
 def main(argv=None) -> None:
     from nsd_core.device.params import parse_set, with_overrides
-    from nsd_core.device.results import atomic_write_text
+    from nsd_core.common.files import atomic_write_text
     p = argparse.ArgumentParser(description="write the device in seismic mode as a model description (TOML)")
     p.add_argument("--ground", required=True, help="a closed form, nsd seismic --ground's syntax")
     p.add_argument("--duration", type=float, required=True, help="s")
@@ -266,7 +266,7 @@ def main(argv=None) -> None:
     a = p.parse_args(argv)
     params = with_overrides(Params(), parse_set(a.set))
     st = structure_for(params, a.stories, a.restrainer)
-    command = "python -m nsd_core.device.describe_seismic " + " ".join(
+    command = "python -m nsd_core.structure.describe_seismic " + " ".join(
         f"'{x}'" if any(c in x for c in " :,") else x for x in (argv if argv is not None else sys.argv[1:]))
     atomic_write_text(a.out, seismic_description(params, st, a.ground, a.duration, a.dt_out, a.name, command))
 

@@ -13,14 +13,14 @@ A run's warnings, each {"kind", "text"}:
   at equal displacement capacity;
 * ``beyond_design_stroke``: a run without the device (a baseline isolator or the linear supports)
   whose peak |u| passes the design basis's stroke (the displacement capacity the design allows,
-  ``nsd_core.device.design``: 25.46 mm at model scale) but not the rod's length;
+  ``nsd_core.structure.design``: 25.46 mm at model scale) but not the rod's length;
 * ``restrainer_impacts``: the restrainer was touched (any contact): how many, the largest impact
   energy and velocity, the peak contact force;
 * ``peaks_at_last_sample``: a response peak falls on the run's last sample (a complete run only: a
   stopped run's end is its event), so the true peak may lie beyond the window;
 * ``restoring_force_fails``: the isolation level of this run (with the device, or the supports alone)
   fails the building codes' restoring-force check at its design displacement
-  (``nsd_core.device.restoring_force``).
+  (``nsd_core.structure.restoring_force``).
 """
 from __future__ import annotations
 
@@ -68,7 +68,7 @@ def _stroke(summary: dict, rod: float | None) -> list[dict]:
                          "have no stroke limit): a comparison with the device is not one at equal displacement "
                          "capacity"}]
     if not summary.get("device", True):
-        from nsd_core.device.design import design, scale
+        from nsd_core.structure.design import design, scale
         stroke = float(design()["stroke_m"]) * scale()
         if u["value"] > stroke:
             iso = (summary.get("structure") or {}).get("isolator") or {}
