@@ -37,10 +37,8 @@ REPLAYED = ("point", "point_velocity", "point_acceleration", "energy")
 
 def motion_table(p, times: np.ndarray) -> np.ndarray:
     """(q, q', q'') of prescribed motion ``p`` at ``times`` (3 x len(times))."""
-    if p.kind == "device_path":   # the drive's own compiled path over every time at once, not a call each
-        x, v, a = p.values["drive"].plate(times)
-        c = p.values["component"]
-        return np.array([x[:, c], v[:, c], a[:, c]])
+    if "motion" in p.values:   # a registered motion's own table over every time at once, not a call each
+        return p.values["motion"].table(times)
     call = type(p).__call__
     arrays = types.FunctionType(call.__code__, {**call.__globals__, "math": np})
     at = np.linspace(0, len(times) - 1, min(len(times), 7)).astype(int)
