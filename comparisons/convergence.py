@@ -55,7 +55,7 @@ def convergence_study(spec: dict, engines: list[str], workers: int) -> dict:
                          drive.frequency)
         entry["points"].append({"value": v, "max_dF_rel": m["max_dF_rel"], "loop_area_rel": m["loop_area_rel"],
                                 "wall_time": r.stats.get("wall_time", out["wall_time"]) / drive.cycles,
-                                # warm: the engines record compilation apart (compile_time), issue 20
+                                # warm: the engines record compilation apart (compile_time)
                                 "cpu_time": (r.stats["cpu_time"] / drive.cycles if r.stats.get("cpu_time") is not None
                                              else None), "compile_time": r.stats.get("compile_time")})
     return result

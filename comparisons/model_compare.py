@@ -1,4 +1,4 @@
-"""``nsd compare --model FILE``: a described mechanism cross-validated in every engine (issue 32).
+"""``nsd compare --model FILE``: a described mechanism cross-validated in every engine (docs/models.md).
 
 Every engine builds the mechanism from the same description (nsd_core.model) through its builder
 (``BUILDERS``: one module each, ``simulate(model, duration, dt_out, settings) -> ModelRun``); no line

@@ -33,7 +33,7 @@ from comparisons.verdict import merged_settings
 from comparisons.warmup import job_warmup, spec as warm_spec
 from nsd_core.device.params import ParameterError
 
-# the issue's list: each body's mass +-1 %, each kind of attachment point moved 0.2 mm (up and
+# the injected errors (docs/validation.md): each body's mass +-1 %, each kind of attachment point moved 0.2 mm (up and
 # radially), the rod +-0.2 mm, gravity off, one rope's stiffness +-1 %, the spring's constants
 # +-1 %, the wires' area +-1 %, two mis-set rest states
 INJECTIONS: list[dict] = (
@@ -132,7 +132,7 @@ def power_study(cases: list, engines: list[str], tolerances, out_dir: str | Path
                        for c in cases]
                       + [warm_spec(e, isinstance(c, SeismicCase), getattr(c, "drive", None), c.settings.get(e, {}))
                          for c in cases for e in engines])
-    with worker_pool(workers, warm=warm) as pool:  # spawn; workers end with their parent, warm (issue 26)
+    with worker_pool(workers, warm=warm) as pool:  # spawn; workers end with their parent, warm
         ref_jobs = {(c.name, lab): _submit(pool, c, *run_spec(c, lab)) for c in cases for lab in ref_labels}
 
         expected: dict[tuple[str, float], int] = {}

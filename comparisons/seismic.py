@@ -1,4 +1,4 @@
-"""The seismic mode across engines: ground inputs of a case and the metrics on time histories (issue 14).
+"""The seismic mode across engines: ground inputs of a case and the metrics on time histories (docs/seismic.md).
 
 The engines' seismic runs are in the one registry (``comparisons.engines``: ``run_seismic_engine``,
 ``run_seismic_job``); every one returns the columns of ``nsd_core.structure.seismic`` it can measure

@@ -1,4 +1,4 @@
-"""Warm pool workers for the comparisons' jobs (issue 26): what each worker runs once before its
+"""Warm pool workers for the comparisons' jobs (docs/performance.md, start-up): what each worker runs once before its
 first job (``nsd_core.engine.workers.worker_pool``'s ``warm``), so that no job pays for imports,
 numba's cache loading or compilation. The in-house kernels warm through ``nsd_core.compilation.warmup``;
 each peer engine and setting through a tiny job of the same kind (its import, its compiled force

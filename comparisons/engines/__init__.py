@@ -154,7 +154,7 @@ def _with_ground(result, ground):
 
 def _finite(result):
     """``result``, or SolverError naming the first NaN or inf in its outputs: a non-finite output is that
-    engine's failure on that case (reported for it, exit 3), never a result to measure (issue 22)."""
+    engine's failure on that case (reported for it, exit 3), never a result to measure."""
     from nsd_core.device.results import first_nonfinite
     from nsd_core.common.errors import SolverError
     bad = first_nonfinite(result)
@@ -165,7 +165,7 @@ def _finite(result):
 
 def run_seismic_job(engine: str, params: Params, structure, ground, duration, dt_out, settings: dict) -> dict[str, Any]:
     """One engine on one seismic case, in a worker process. Never raises: failures come back as data."""
-    start, started = time.perf_counter(), time.time()  # started: the pool's start-up ends here (issue 20)
+    start, started = time.perf_counter(), time.time()  # started: the pool's start-up ends here
     try:
         result = _finite(run_seismic_engine(engine, params, structure, ground, duration, dt_out, settings))
         return {"status": "ok", "result": result, "wall_time": time.perf_counter() - start, "started": started}
@@ -176,7 +176,7 @@ def run_seismic_job(engine: str, params: Params, structure, ground, duration, dt
 
 def run_job(engine: str, params: Params, drive, settings: dict) -> dict[str, Any]:
     """One engine on one case, in a worker process. Never raises: failures come back as data."""
-    start, started = time.perf_counter(), time.time()  # started: the pool's start-up ends here (issue 20)
+    start, started = time.perf_counter(), time.time()  # started: the pool's start-up ends here
     try:
         result = _finite(run_engine(engine, params, drive, settings))
         return {"status": "ok", "result": result, "wall_time": time.perf_counter() - start, "started": started}

@@ -6,7 +6,7 @@ Like scipy's ``solve_ivp`` methods, each engine is one module exposing a class w
         name: str                       # "semirecursive", "mujoco", "exudyn"
         default_settings: dict          # solver settings, overridable per case
         def run(self, params, drive, settings=None) -> RunResult
-        # the seismic mode (Table 1, second row; issue 14): the same engine, base driven by the ground
+        # the seismic mode (Table 1, second row; docs/seismic.md): the same engine, base driven by the ground
         seismic_default_settings: dict
         def run_seismic(self, params, structure, ground, duration=None, dt_out=1e-3, settings=None) -> RunResult
 
@@ -68,7 +68,7 @@ def merged_settings(defaults: dict[str, Any], settings: dict[str, Any] | None, e
     return out
 
 
-# Floors that keep one run's work bounded (issue 12): no step below STEP_FLOOR seconds, tolerances
+# Floors that keep one run's work bounded (docs/limits.md): no step below STEP_FLOOR seconds, tolerances
 # a double can honour, and at most MAX_FIXED_STEPS steps for an engine with a fixed step.
 STEP_FLOOR = 1e-8
 STEP_SETTINGS = ("step_size", "timestep", "max_step")

@@ -1,4 +1,4 @@
-"""A peer's drive-mode run built from the device's description (issue 32): the gate's engine interface
+"""A peer's drive-mode run built from the device's description (docs/models.md): the gate's engine interface
 (``run(params, drive, settings) -> RunResult``) over a builder (comparisons/builders), which
 comparisons/engines/peers.py puts behind each peer's name.
 
