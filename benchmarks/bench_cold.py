@@ -1,4 +1,4 @@
-"""A newcomer's first commands on an empty cache (issue 35, item 1): what each costs, and how many
+"""A newcomer's first commands on an empty cache (docs/performance.md): what each costs, and how many
 times the engine is compiled along the way.
 
     python benchmarks/bench_cold.py --out DIR [--repeats N] [--only cycle,sweep,...] [--label before]
@@ -27,7 +27,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from nsd_core.device.results import atomic_write_json, versions  # noqa: E402
+from nsd_core.device.results import versions
+from nsd_core.common.files import atomic_write_json  # noqa: E402
 
 CYCLE = ["cycle", "--amplitude", "0.015", "--frequency", "1"]
 SWEEP = ["sweep", "--paper"]

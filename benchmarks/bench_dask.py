@@ -1,5 +1,5 @@
 """A record set's IDA on a Dask cluster of local worker processes: the parallel efficiency from 1 to 2
-workers and the scheduler's overhead per task, beside the local pool (issue 35, item 3):
+workers and the scheduler's overhead per task, beside the local pool (docs/performance.md):
 
     python benchmarks/bench_dask.py [--records 1-6] [--workers 1,2] [--tasks 400] [--out FILE]
 
@@ -18,7 +18,7 @@ empty tasks (a function that returns its argument) mapped onto the cluster and g
 over ``tasks``: what the scheduler, the client and the transport cost a task, without the task.
 
 On a machine with 2 CPUs only 1 and 2 workers can be measured honestly (4 worker processes would share
-2 cores); the issue's 2-to-4 aim needs a machine with 4 cores: run ``--workers 1,2,4`` there.
+2 cores); the 2-to-4 aim needs a machine with 4 cores: run ``--workers 1,2,4`` there.
 """
 from __future__ import annotations
 
@@ -44,10 +44,10 @@ def _children_cpu() -> float:
 
 def _warm_worker() -> str:
     """On each Dask worker, untimed: the engine imported, its kernels loaded (a tiny seismic run)."""
-    from nsd_core.device.ground import Harmonic
-    from nsd_core.device.isolation import default_structure
+    from nsd_core.ground.motions import Harmonic
+    from nsd_core.structure.isolation import default_structure
     from nsd_core.device.params import Params
-    from nsd_core.device.seismic import simulate_seismic
+    from nsd_core.structure.seismic import simulate_seismic
     for device in (True, False):
         simulate_seismic(Params(), default_structure(), Harmonic(0.8, 2.0, 30.0, duration=0.05), device=device)
     return "warm"
@@ -111,7 +111,8 @@ def main() -> None:
     for r in rows:
         if r["where"] == "dask" and t1:
             r["efficiency_from_1"] = t1 / (r["workers"] * r["ida_elapsed_s"])
-    from nsd_core.device.results import atomic_write_json, versions
+    from nsd_core.device.results import versions
+    from nsd_core.common.files import atomic_write_json
     cpus = os.cpu_count() or 1
     load1 = os.getloadavg()
     report = {

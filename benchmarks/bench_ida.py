@@ -1,5 +1,5 @@
 """Wall and CPU seconds of an incremental dynamic analysis over the 14 near-field pulse records, with
-and without the device, on 2 local workers (issue 23, item 6):
+and without the device, on 2 local workers (docs/performance.md):
 
     python benchmarks/bench_ida.py [--limit stroke=0.025] [--workers 2] [--records 1-14]
                                    [--out benchmarks/results/bench_ida.json]
@@ -27,8 +27,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))  # benchmarks.measure, when run as a script
-WARM = ("from nsd_core.device.seismic import simulate_seismic; from nsd_core.device.ground import Harmonic; "
-        "from nsd_core.device.isolation import default_structure; from nsd_core.device.params import Params; "
+WARM = ("from nsd_core.structure.seismic import simulate_seismic; from nsd_core.ground.motions import Harmonic; "
+        "from nsd_core.structure.isolation import default_structure; from nsd_core.device.params import Params; "
         "[simulate_seismic(Params(), default_structure(), Harmonic(0.8, 2.0, 30.0, duration=0.05), device=d) "
         "for d in (True, False)]")
 
@@ -43,9 +43,9 @@ def main() -> None:
     ap.add_argument("--limit", default="stroke=0.025")
     ap.add_argument("--workers", default="2")
     ap.add_argument("--records", default="1-14")
-    ap.add_argument("--record-set", default="nearfield-pulse", help="farfield: issue 35's 22 pairs")
+    ap.add_argument("--record-set", default="nearfield-pulse", help="farfield: its 22 pairs")
     ap.add_argument("--engines", default="semirecursive", help="semirecursive,mujoco,exudyn with --extra "
-                    "'--cross-check median': the peers re-run the median record (issue 35's aim includes it)")
+                    "'--cross-check median': the peers re-run the median record")
     ap.add_argument("--extra", default="", help="more nsd ida options, space-separated")
     ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results" / "bench_ida.json"))
     args = ap.parse_args()

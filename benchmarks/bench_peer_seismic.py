@@ -1,4 +1,4 @@
-"""The peers on the gate's seismic cases (issue 35, item 2): wall and CPU seconds per model second of
+"""The peers on the gate's seismic cases: wall and CPU seconds per model second of
 each peer at the case's own settings, MuJoCo with its compiled passive forces and step loop (the default)
 and with its Python ones (the check), Exudyn, and the in-house engine beside them; the aim is <= 1 wall s per model
 second for each peer on a quiet machine.
@@ -34,7 +34,8 @@ os.environ.setdefault("NSD_EVALUATOR", "generated")   # the in-house row: see th
 
 from comparisons.config import SeismicCase, load_cases  # noqa: E402
 from comparisons.engines import REFERENCE, run_seismic_engine  # noqa: E402
-from nsd_core.device.results import atomic_write_json, versions  # noqa: E402
+from nsd_core.device.results import versions
+from nsd_core.common.files import atomic_write_json  # noqa: E402
 
 VARIANTS = {"mujoco": ("mujoco", {"passive": "compiled"}), "mujoco (python loop)": ("mujoco", {"passive": "python"}),
             "exudyn": ("exudyn", {}), REFERENCE: (REFERENCE, {})}

@@ -1,4 +1,4 @@
-"""A record set's per-record time on warm pool workers against a single warm run (issue 26, item 1).
+"""A record set's per-record time on warm pool workers against a single warm run (docs/performance.md).
 
     python benchmarks/bench_record_set.py --repeats 3 --out DIR      (farfield records 1-4, window 0-3 s)
     python benchmarks/bench_record_set.py --short --out DIR          (records 1-2, window 0-2 s, 1 repeat)
@@ -31,9 +31,10 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from nsd_core.device.isolation import default_structure  # noqa: E402
+from nsd_core.structure.isolation import default_structure  # noqa: E402
 from nsd_core.device.params import Params  # noqa: E402
-from nsd_core.device.results import atomic_write_json, versions  # noqa: E402
+from nsd_core.device.results import versions
+from nsd_core.common.files import atomic_write_json  # noqa: E402
 from nsd_core.study.seismic_set import parse_records, record_runs, run_record, run_set  # noqa: E402
 from nsd_core.study.store import Store  # noqa: E402
 

@@ -1,4 +1,4 @@
-"""The gate on a cold cache and on a warm one (issue 26, items 1 and 4): what a newcomer's first
+"""The gate on a cold cache and on a warm one (docs/compilation.md): what a newcomer's first
 ``nsd compare`` costs, compilation included, and what the same command costs after.
 
     python benchmarks/bench_start.py --repeats 1 --out DIR       (nsd compare, every default case)
@@ -34,7 +34,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from nsd_core.device.results import atomic_write_json, versions  # noqa: E402
+from nsd_core.device.results import versions
+from nsd_core.common.files import atomic_write_json  # noqa: E402
 
 FULL = ["compare"]
 SHORT = ["compare", "--engines", "semirecursive"]

@@ -1,4 +1,4 @@
-"""Where the cold gate's compilation goes (issue 26, item 1): each item of the gate's worker warm-up
+"""Where the cold gate's compilation goes (docs/performance.md): each item of the gate's worker warm-up
 timed alone, one after another in one process, on an empty cache folder and then on the cache it left.
 
     python benchmarks/compile_units.py --out DIR
@@ -29,7 +29,7 @@ from functools import partial
 from comparisons.config import DEFAULT_CASES, SeismicCase, load_cases
 from comparisons.reference import CONVERGED, run_spec
 from comparisons.warmup import job_warmup, spec
-import nsd_core.device.worker_warmup as ww
+import nsd_core.compilation.worker_warmup as ww
 
 specs = []
 for c in load_cases(DEFAULT_CASES):
@@ -82,7 +82,7 @@ def main() -> None:
     report = {"rows": rows, "cold_cpu_s": sum(r["cold_cpu_s"] for r in rows),
               "warm_cpu_s": sum(r["warm_cpu_s"] for r in rows)}
     print(f"sum: cold {report['cold_cpu_s']:.1f} s CPU, warm {report['warm_cpu_s']:.1f} s CPU")
-    from nsd_core.device.results import atomic_write_json
+    from nsd_core.common.files import atomic_write_json
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
     atomic_write_json(out / "compile_units.json", report)

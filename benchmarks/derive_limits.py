@@ -16,7 +16,7 @@ engine and case,
             (1e-12 m for closure and tracking);
 
 per engine (any case not listed) ENGINE_FACTOR x the largest of the bracket over the run's cases,
-rounded up to two digits (1.5: near 1e-4 of the peak force, the aim of issue 11).
+rounded up to two digits (1.5: near 1e-4 of the peak force, the accuracy aim, docs/validation.md).
 
 The in-house engine's "engine error" is the largest over a small ensemble of realizations: its run
 at the case settings and the same run with rtol x each factor of REALIZATIONS. Its step-size
@@ -193,7 +193,7 @@ def to_toml(limits: dict[str, dict], info: dict, ref_errors: dict[str, dict], sp
 
 def write(path: Path, text: str) -> None:
     """Replace what follows MARK in the tolerance file (the hand-written [limits] defaults stay)."""
-    from nsd_core.device.results import atomic_write_text
+    from nsd_core.common.files import atomic_write_text
     head = path.read_text().split(MARK)[0].rstrip("\n")
     atomic_write_text(path, f"{head}\n\n{MARK}\n{text}")
 

@@ -46,7 +46,7 @@ MEASUREMENTS = {
     "bench_first_command": (PY + ["benchmarks/bench_first_command.py", "--revisions", "4fba426,HEAD", "--out", "OUT"],
                             "bench_first_command.json", "json"),
     "tables": (NSD + ["tables", "--out", "OUT"], "tables.csv", "csv"),
-    # issue 32: every mechanism description in models/ through nsd compare --model, in every engine
+    # every mechanism description in models/ through nsd compare --model, in every engine
     "bench_models": (PY + ["benchmarks/bench_models.py", "--out", "OUT"], "bench_models.json", "json"),
     # 300 generated mechanisms through every engine, each non-PASS refined and classified (docs/validation.md)
     "campaign": (PY + ["benchmarks/campaign.py", "--seeds", "0-299", "--out", "OUT"], "campaign.json", "json"),
@@ -59,7 +59,7 @@ MEASUREMENTS = {
                     "bench_cycle.json", "json"),
     "bench_seismic": (PY + ["benchmarks/bench_seismic.py", "--no-compile", "--repeats", "3", "--out", "OUT"],
                       "bench_seismic.json", "json"),
-    # issue 26: one evaluation (generated and generic) and its parts; the cold and the warm gate, a record set on warm workers, the ratios at the 1e-4 aim
+    # one evaluation (generated and generic) and its parts; the cold and the warm gate, a record set on warm workers, the ratios at the 1e-4 aim
     "bench_rhs": (PY + ["benchmarks/bench_rhs.py", "--out", "OUT"], "bench_rhs.json", "json"),
     "bench_start": (PY + ["benchmarks/bench_start.py", "--repeats", "3", "--out", "OUT"], "bench_start.json", "json"),
     "compile_units": (PY + ["benchmarks/compile_units.py", "--out", "OUT"], "compile_units.json", "json"),
@@ -67,7 +67,7 @@ MEASUREMENTS = {
                          "bench_record_set.json", "json"),
     "work_precision": (PY + ["benchmarks/work_precision.py", "--to-aim", "--no-compile", "--repeats", "3", "--out",
                              "OUT"], "work_precision.json", "json"),
-    # issue 35: a newcomer's first commands on an empty cache (and how often each compiles); the peers per
+    # a newcomer's first commands on an empty cache (and how often each compiles); the peers per
     # model second on the gate's seismic cases
     "bench_cold": (PY + ["benchmarks/bench_cold.py", "--out", "OUT"], "bench_cold.json", "json"),
     "bench_peer_seismic": (PY + ["benchmarks/bench_peer_seismic.py", "--repeats", "3", "--out", "OUT"],
@@ -176,7 +176,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"measure: --short {n}: no short mode; those with one: {', '.join(SHORT)}", file=sys.stderr)
             return 2
     RESULTS.mkdir(parents=True, exist_ok=True)
-    from nsd_core.device.results import atomic_write_json
+    from nsd_core.common.files import atomic_write_json
     for n in names:
         print(f"measuring {n} ...", file=sys.stderr, flush=True)
         rec = measure(n, short)

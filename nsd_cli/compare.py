@@ -11,7 +11,7 @@ from comparisons.engines import REFERENCE
 from nsd_cli.options import (WORKERS_MAX, add_param_arguments, base_params, check_out_dir, check_out_file,
                              parse_engines, whole)
 from nsd_core.device.params import ParameterError
-from nsd_core.device.results import atomic_write_text
+from nsd_core.common.files import atomic_write_text
 
 HELP = "run engines side by side against tolerances"
 
@@ -131,7 +131,7 @@ def _refine(cases, engines, tolerances, out, args, conv, order, summary) -> dict
     """--refine: the not-converged peers once more at the step their estimates ask for."""
     from comparisons.harness import compare
     from comparisons.refine import refine_text, refinements
-    from nsd_core.device.results import atomic_write_json
+    from nsd_core.common.files import atomic_write_json
     refined, changes = refinements(cases, summary)
     if not changes:
         print("--refine: no peer is 'not converged at these settings' or has an uncertain estimate; nothing to re-run")
@@ -264,8 +264,8 @@ def pin_model(cases, tolerances) -> list:
 
 
 def _power_cases(text: str, cases, profile: str) -> list:
-    """--power-cases A,B: names of the profile's cases, each once, none empty (issue 22)."""
-    from nsd_core.device.inputs import printable
+    """--power-cases A,B: names of the profile's cases, each once, none empty (docs/limits.md)."""
+    from nsd_core.common.files import printable
     known = {c.name: c for c in cases}
     names = [n.strip() for n in text.split(",")]
     for n in names:
@@ -305,7 +305,7 @@ def _power_profiles(args, base, own_files) -> dict[str, tuple]:
 
 def _run_power(args, base, own_files) -> int:
     from comparisons.power import INJECTIONS, combine, format_power, format_profiles, power_study, scaled
-    from nsd_core.device.results import atomic_write_json
+    from nsd_core.common.files import atomic_write_json
     engines = parse_engines(args.power_engines)
     if REFERENCE in engines:
         raise ParameterError(f"--power-engines {args.power_engines!r}: the reference {REFERENCE} cannot be perturbed")

@@ -1,4 +1,4 @@
-"""An IDA cross-checked where it counts (issue 23, item 5): per configuration, the record whose limit
+"""An IDA cross-checked where it counts (docs/ida.md): per configuration, the record whose limit
 intensity lies closest to the fitted median (in ln IM) is run again at that intensity with its time
 series kept, and checked against other models on the same output times:
 
@@ -33,7 +33,7 @@ from functools import partial
 from pathlib import Path
 
 from comparisons.seismic import building_metrics, seismic_metrics
-from nsd_core.device.isolation import Structure
+from nsd_core.structure.isolation import Structure
 from nsd_core.device.params import ParameterError
 from nsd_core.device.results import RunResult, read_csv, write_columns
 from nsd_core.study.ida import Trace, run_ida_point
@@ -121,11 +121,11 @@ def pick_for(best: dict, traces: list[Trace], device: bool, store: Store, median
 
 def run_peer(r, run_engine) -> dict:
     """One peer engine's run of an IDA point (in a worker), its series kept; never raises for the run's
-    own failure. The in-house summary (nsd_core.device.seismic.seismic_summary) needs columns that
+    own failure. The in-house summary (nsd_core.structure.seismic.seismic_summary) needs columns that
     peers do not write (the ground's), so a peer's run keeps its solver statistics only."""
     start = time.perf_counter()
     try:
-        from nsd_core.device.ground import fema_record
+        from nsd_core.ground.motions import fema_record
         from nsd_core.device.params import Params
         motion = fema_record(r.set, r.record, **r.ground)
         result = run_engine(r.engine, Params(**r.params), Structure(**r.structure), motion, duration=r.duration,

@@ -1,4 +1,4 @@
-"""The bounds of the newer flags and fields, in one table (issue 22), and the work a request implies,
+"""The bounds of the newer flags and fields, in one table, and the work a request implies,
 estimated before it starts: a request over a cap is refused in well under a second with the number
 it would take (exit 2), instead of running for hours. ``--help`` and docs/limits.md quote these.
 
@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 
-from nsd_core.device.ground import ROTATE_RANGE, SCALE_RANGE
+from nsd_core.ground.motions import ROTATE_RANGE, SCALE_RANGE
 from nsd_core.device.params import ParameterError
 
 # ---- nsd seismic (and --set): the request's own flags

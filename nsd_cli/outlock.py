@@ -1,4 +1,4 @@
-"""One run at a time per output folder (issue 22): ``DIR/.nsd.lock``, held with ``flock`` for the
+"""One run at a time per output folder (docs/limits.md): ``DIR/.nsd.lock``, held with ``flock`` for the
 whole command, names the holder's pid. A second run into the same --out finds it held and exits 2
 at once naming that pid; the kernel drops the lock when its process ends in any way (SIGKILL
 included), so a lock left by a killed run is stale by construction: the next run takes it over
@@ -12,7 +12,7 @@ import os
 import sys
 from pathlib import Path
 
-from nsd_core.device.inputs import printable
+from nsd_core.common.files import printable
 from nsd_core.device.params import ParameterError
 
 LOCK_NAME = ".nsd.lock"

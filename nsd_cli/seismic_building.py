@@ -1,4 +1,4 @@
-"""``nsd seismic --building NAME=VALUE`` (issue 24): a shear building on the slab (docs/building.md),
+"""``nsd seismic --building NAME=VALUE``: a shear building on the slab (docs/building.md),
 ``--fixed-base`` (the building with its slab held to the ground) and ``--compare-building`` (the three
 configurations under the same record, and their ratios).
 
@@ -46,7 +46,7 @@ def building_overrides(args) -> dict | None:
 def with_building(args, structure):
     """``structure`` with the building the options describe (and the checks of --fixed-base and
     --compare-building against the other options)."""
-    from nsd_core.device.building import building_from
+    from nsd_core.structure.building import building_from
     overrides = building_overrides(args)
     if overrides is None:
         for flag in ("fixed_base", "compare_building"):
@@ -67,7 +67,8 @@ def run_compare(args, params, structure, motion, solver, out, head: dict) -> int
     from nsd_cli.options import Progress
     from nsd_cli.seismic_checks import for_run
     from nsd_cli.seismic_extras import warn
-    from nsd_core.device.results import atomic_write_json, versions, write_csv
+    from nsd_core.device.results import versions, write_csv
+    from nsd_core.common.files import atomic_write_json
     from nsd_core.study.building_compare import CONFIGURATIONS, run_three
     runs = run_three(params, structure, motion, duration=args.duration, dt_out=args.dt_out, solver=solver,
                      progress=Progress("nsd seismic"))
@@ -110,7 +111,7 @@ def _fmt(v) -> str:
 def _write_rows(path, rows) -> None:
     import csv
     import io
-    from nsd_core.device.results import atomic_write_text
+    from nsd_core.common.files import atomic_write_text
     fields = ["quantity", "index", "fixed_base", "supports", "device", "supports_over_fixed", "device_over_fixed",
               "device_over_supports", "what"]
     buf = io.StringIO()

@@ -1,5 +1,5 @@
-"""``nsd seismic`` (issue 23): the displacement restrainer's options, a run the device's failure ends
-(exit 4) still written, the run's warnings (nsd_core.device.seismic_warnings), and ``--compare-supports``
+"""``nsd seismic``: the displacement restrainer's options, a run the device's failure ends
+(exit 4) still written, the run's warnings (nsd_core.structure.seismic_warnings), and ``--compare-supports``
 (with the device and on the supports alone, both written, with their ratios). See docs/seismic.md.
 
 Layout of ``--compare-supports --out DIR``:
@@ -16,7 +16,7 @@ from nsd_core.device.params import ParameterError
 
 
 def add_design_arguments(p) -> None:
-    """--isolator, --resize, --design-level (issue 33; docs/design.md): every seismic command's."""
+    """--isolator, --resize, --design-level (docs/design.md): every seismic command's."""
     p.add_argument("--isolator", default="device", metavar="device|linear|bilinear|friction-pendulum",
                    help="what isolates the structure: the device (on the supports; default), or a baseline without "
                         "it: linear (the supports alone), bilinear (lead-rubber), friction-pendulum, sized for the "
@@ -44,9 +44,9 @@ def isolated_structure(args, params):
     """The default structure with --structure overrides and the restrainer (--restrainer or any
     restrainer_* override): ParameterError, one line, on anything wrong."""
     from nsd_core.device.params import parse_set
-    from nsd_core.device.restrainer import split_overrides, with_restrainer
-    from nsd_core.device.isolation import designed_structure_with
-    from nsd_core.device.isolators import CHOICES, KINDS, sized
+    from nsd_core.structure.restrainer import split_overrides, with_restrainer
+    from nsd_core.structure.isolation import designed_structure_with
+    from nsd_core.structure.isolators import CHOICES, KINDS, sized
     kind = isolator_choice(args)
     own, restrainer = split_overrides(parse_set(getattr(args, "structure", None) or []))
     structure = designed_structure_with(params, own, resize=bool(getattr(args, "resize", False)),
@@ -59,7 +59,7 @@ def isolated_structure(args, params):
 
 def isolator_choice(args) -> str:
     """--isolator's value, checked (one line on anything else)."""
-    from nsd_core.device.isolators import CHOICES
+    from nsd_core.structure.isolators import CHOICES
     kind = getattr(args, "isolator", None)
     kind = "device" if kind is None else kind
     if kind not in CHOICES:
@@ -75,7 +75,7 @@ def design_scale(set_: str, rid, args, window=None) -> float:
     (nsd_core.study.intensity.design_level_scale), on the whole record (a window is a part of the same
     scaled record, so its Sa does not set the scale); --scale must be left at 1."""
     from nsd_core.study.intensity import design_level_scale
-    from nsd_core.device.ground import SIMILITUDE_TIME_FACTOR, fema_record
+    from nsd_core.ground.motions import SIMILITUDE_TIME_FACTOR, fema_record
     if float(args.scale) != 1.0:
         raise ParameterError(f"--scale {args.scale!r}: --design-level sets each record's scale; leave --scale out")
     tf = SIMILITUDE_TIME_FACTOR if args.time_factor is None else args.time_factor
@@ -94,10 +94,10 @@ def check_compare(args, engines) -> None:
 
 
 def warn(summary: dict, which: str = "") -> None:
-    """summary["warnings"] (and "warning_kinds") by the warning rules of nsd_core.device.seismic_warnings
+    """summary["warnings"] (and "warning_kinds") by the warning rules of nsd_core.structure.seismic_warnings
     (stroke exhausted or nearly, beyond the device's stroke, restrainer impacts, peaks on the last
     sample), and one stderr line per warning."""
-    from nsd_core.device.seismic_warnings import apply_warnings
+    from nsd_core.structure.seismic_warnings import apply_warnings
     for text in apply_warnings(summary):
         print(f"nsd seismic: warning: {which}{text}", file=sys.stderr)
 
@@ -113,7 +113,7 @@ def print_restrainer(summary: dict) -> None:
 
 def stopped_summary(err, head: dict) -> dict | None:
     """The summary of a run the device's failure ended, from its partial series (None: no samples)."""
-    from nsd_core.device.seismic import RodReachError, seismic_summary
+    from nsd_core.structure.seismic import RodReachError, seismic_summary
     partial = getattr(err, "partial", None)
     if partial is None or len(partial["t"]) < 2:
         return None
@@ -127,7 +127,8 @@ def stopped_summary(err, head: dict) -> dict | None:
 
 def write_stopped(err, out, head: dict) -> None:
     """Exit 4 keeps its series: seismic.csv up to the event and summary.json with the event."""
-    from nsd_core.device.results import atomic_write_json, write_csv
+    from nsd_core.device.results import write_csv
+    from nsd_core.common.files import atomic_write_json
     summary = stopped_summary(err, head)
     if summary is None:
         return
@@ -143,7 +144,8 @@ def run_compare(args, params, structure, motion, solver, out, head: dict) -> int
     the device's failure (both runs are still written), 0 otherwise."""
     from nsd_cli.options import Progress
     from nsd_cli.seismic_checks import for_run
-    from nsd_core.device.results import atomic_write_json, versions, write_csv
+    from nsd_core.device.results import versions, write_csv
+    from nsd_core.common.files import atomic_write_json
     from nsd_core.study.with_without import ratio_rows, run_with_and_without
     both = run_with_and_without(params, structure, motion, duration=args.duration, dt_out=args.dt_out,
                                 solver=solver, progress=Progress("nsd seismic"))
@@ -179,7 +181,7 @@ def run_compare(args, params, structure, motion, solver, out, head: dict) -> int
 def _write_ratios(path, rows) -> None:
     import csv
     import io
-    from nsd_core.device.results import atomic_write_text
+    from nsd_core.common.files import atomic_write_text
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=["quantity", "with_device", "supports_alone", "ratio", "what"],
                        lineterminator="\n")

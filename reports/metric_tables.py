@@ -1,4 +1,4 @@
-"""The gate's numbers on the page (issue 20, item 1): the case x engine matrix of the worst
+"""The gate's numbers on the page: the case x engine matrix of the worst
 value / limit ratio, and the complete metric table, one row per (case, engine, compared with, metric)
 with the value in full, the limit that was applied to it and where that limit came from.
 

@@ -2,7 +2,7 @@
 worst value / limit, the run's software and cost), what was run (every case with its path and every
 seismic case with its record, window, scale and structure), the metrics' definitions and limits, the
 complete metric tables (reports.metric_tables) and the parameter set. No cell is ever shortened:
-columns are sized to their content and long cells wrap (issue 20)."""
+columns are sized to their content and long cells wrap (docs/report.md)."""
 from __future__ import annotations
 
 import json

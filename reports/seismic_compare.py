@@ -1,4 +1,4 @@
-"""Report pages of ``nsd seismic --compare-supports`` (issue 23): the run with the device and the one
+"""Report pages of ``nsd seismic --compare-supports``: the run with the device and the one
 on the supports alone overlaid (orbit, |u|, |a_abs|, base shear, the restrainer's force), the ratio
 table, and, on any seismic page, the time at which a run the device's failure ended (exit 4).
 
@@ -26,7 +26,7 @@ def is_compare(folder) -> bool:
 
 def read_table(path: Path) -> dict:
     """A JSON object from a regular file; anything else is one line, exit 2."""
-    from nsd_core.device.inputs import read_regular_text
+    from nsd_core.common.files import read_regular_text
     try:
         s = json.loads(read_regular_text(path))
         if not isinstance(s, dict):
@@ -93,7 +93,7 @@ def overlay_figure(label: str, runs: dict, ratios: dict | None, stops: dict, war
     lines = [ln for w in warnings for ln in wrap_width(f"warning: {w}", 0.9 * LANDSCAPE[0] * 72, 7.5, indent="   ")]
     if len(lines) > 4:   # the room above the footer: the rest on the warnings page
         lines = lines[:3] + [f"   ... {len(warnings)} warnings in all: the warnings page lists every one"]
-    for k, line in enumerate(lines):   # wrapped, never cut (issue 20)
+    for k, line in enumerate(lines):   # wrapped, never cut
         fig.text(0.06, 0.10 - 0.018 * k, line, color=RED, fontsize=7.5)
     return fig
 

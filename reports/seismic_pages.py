@@ -1,9 +1,9 @@
-"""Report pages of the seismic mode (issue 14, item 7; issue 20): the ground acceleration (model time,
+"""Report pages of the seismic mode: the ground acceleration (model time,
 record seconds on a second axis) and the plate's orbit per engine, time histories overlaid with their
 differences to the in-house run, the device's force-displacement loops with their differences, the
 energy balance over time with the residual on the gate's relative scale, and the record-set table.
 
-``runs`` is {engine: RunResult} in the columns of ``nsd seismic`` (nsd_core.device.seismic), the
+``runs`` is {engine: RunResult} in the columns of ``nsd seismic`` (nsd_core.structure.seismic), the
 in-house engine first; ``nodevice`` the in-house run on the supports alone where one exists; ``ground``
 the ground motion's description (window in record seconds, time factor). The same pages serve an
 ``nsd seismic`` folder (single run or ``--record-set``) and the seismic cases of an ``nsd compare``
@@ -154,7 +154,7 @@ def energy_figure(title: str, runs: dict):
         parts = {"E_input": r["E_input"], "E_kinetic": r["E_kinetic"],
                  "stored": r["E_supports_stored"] + r["E_gravity"],
                  "dissipated": r["E_device"] + r["E_supports_dissipated"]}
-        if "E_restrainer_stored" in r.columns:  # the displacement restrainer (issue 23)
+        if "E_restrainer_stored" in r.columns:  # the displacement restrainer
             parts["stored"] = parts["stored"] + r["E_restrainer_stored"]
             parts["dissipated"] = parts["dissipated"] + r["E_restrainer_dissipated"]
         ls = style(eng)["linestyle"]
@@ -201,8 +201,8 @@ def _ground_text(g: dict) -> str:
 
 
 def _restoring_lines(fig, check) -> None:
-    """The restoring-force verdict of each configuration (nsd_core.device.restoring_force), a FAIL in red."""
-    from nsd_core.device.restoring_force import verdict_line
+    """The restoring-force verdict of each configuration (nsd_core.structure.restoring_force), a FAIL in red."""
+    from nsd_core.structure.restoring_force import verdict_line
     if not isinstance(check, dict):
         return
     for k, c in enumerate([check] + ([check["baseline"]] if isinstance(check.get("baseline"), dict) else [])):

@@ -201,7 +201,7 @@ def table(fig, top: float, columns: list[tuple[str, float, str]], rows: list[lis
     """Draw rows of strings as a table in figure coordinates; returns the y below the last row.
 
     ``columns``: (header, relative width, alignment 'l'/'r'/'c'); a header may hold a line break.
-    Cells are drawn whole, never shortened (issue 20): size the columns with ``natural`` and wrap
+    Cells are drawn whole, never shortened: size the columns with ``natural`` and wrap
     long cells with ``wrap_rows`` first (tests/test_report.py checks that no two texts overlap).
     """
     h_in = fig.get_size_inches()[1]
