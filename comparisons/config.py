@@ -84,13 +84,13 @@ class SeismicCase:
     def isolated_structure(self):
         """The default structure of the case's (nominal) parameters with the case's overrides: the
         same structure for every engine (engine_params change the device, not the structure)."""
-        from nsd_core.device.isolation import structure_with
-        from nsd_core.device.restrainer import split_overrides, with_restrainer
+        from nsd_core.structure.isolation import structure_with
+        from nsd_core.structure.restrainer import split_overrides, with_restrainer
         own, restrainer = split_overrides({k: v for k, v in self.structure.items() if k != "restrainer"})
         st = structure_with(self.params, own)   # (a device without a default: the case's mass and stiffness)
         st = with_restrainer(st, self.params, self.structure.get("restrainer") is True, restrainer)
         if self.building is not None:
-            from nsd_core.device.building import building_from
+            from nsd_core.structure.building import building_from
             st = st.with_building(building_from(st.mass, self.building))
         return st
 
@@ -319,44 +319,13 @@ def load_cases(path: str | Path | None = None, base_params: Params | None = None
 def _seismic_case(i: int, raw: dict, d_params: dict, base_params: Params | None) -> SeismicCase:
     """A [[case]] with mode = "seismic": every key typed and in range here (one line, exit 2). Of
     [defaults] only params apply ([defaults] drive keys and drive settings do not)."""
-    from comparisons.seismic import parse_ground
-    from nsd_core.device import ground as gm
     bad = set(raw) - SEISMIC_KEYS
     if bad:
         raise ParameterError(f"case[{i}].{sorted(bad)[0]}: unknown key for a seismic case; allowed: "
                              f"{', '.join(sorted(SEISMIC_KEYS))}")
     name = _case_name(f"case[{i}].name", raw.get("name", f"case{i}"))
     w = f"case {name}"
-    if ("record" in raw) == ("ground" in raw):
-        raise ParameterError(f"{w}: give exactly one of record = \"SET:ID\" or ground = \"pulse:...\"/\"harmonic:...\"")
-    spec: dict[str, Any] = {}
-    if "record" in raw:
-        rec = raw["record"]
-        set_, sep, rid = rec.partition(":") if isinstance(rec, str) else ("", "", "")
-        if not sep or not rid.strip():
-            raise ParameterError(f"{w}.record = {rec!r}: expected \"SET:ID\", e.g. \"nearfield-pulse:1\"")
-        scale = _number(f"{w}.scale", raw.get("scale", 1.0))
-        rotate = _number(f"{w}.rotate_deg", raw.get("rotate_deg", 0.0), positive=False)
-        for key, value, (lo, hi), unit in (("scale", scale, gm.SCALE_RANGE, ""), ("rotate_deg", rotate, gm.ROTATE_RANGE,
-                                                                                 " deg")):
-            if not lo <= value <= hi:   # nsd seismic --scale / --rotate's bounds (docs/limits.md)
-                raise ParameterError(f"{w}.{key} = {value!r}: must be in [{lo:g}, {hi:g}]{unit}")
-        window = raw.get("window")
-        if window is not None:
-            if not isinstance(window, list) or len(window) != 2:
-                raise ParameterError(f"{w}.window = {window!r}: must be [t0, t1] in the record's seconds")
-            window = [_number(f"{w}.window[{j}]", v, positive=False) for j, v in enumerate(window)]
-        try:
-            motion = gm.fema_record(set_, rid.strip(), scale=scale, window=window, rotate_deg=rotate)
-        except ParameterError as e:
-            raise ParameterError(f"{w}: {e}") from None
-        spec = {"record": rec, "scale": scale, "window": window, "rotate_deg": rotate}
-    else:
-        for k in ("scale", "window", "rotate_deg"):
-            if k in raw:
-                raise ParameterError(f"{w}.{k}: applies to record = \"SET:ID\" only")
-        motion = parse_ground(raw["ground"], f"{w}.ground")
-        spec = {"ground": raw["ground"]}
+    motion, spec = _seismic_ground(w, raw)
     duration = None if "duration" not in raw else _number(f"{w}.duration", raw["duration"])
     total = motion.duration if duration is None else duration
     if not total <= SEISMIC_DURATION_MAX:
@@ -387,14 +356,54 @@ def _seismic_case(i: int, raw: dict, d_params: dict, base_params: Params | None)
             raise ParameterError(f"{w}.building.{k} = {v!r}: must be a number or an array of numbers, not a string")
     case = SeismicCase(name, motion, spec, params, duration, dt_out, device, dict(structure), settings, engine_params,
                        building)
+    _check_structure(w, case, structure, building)
+    return case
+
+
+def _seismic_ground(w: str, raw: dict) -> tuple[Any, dict]:
+    """A seismic case's ground motion and its spec as given: a record of a set (record = "SET:ID", with
+    its scale, window and rotation, each in range) or a synthetic motion (ground = "pulse:..."/"harmonic:...")."""
+    from comparisons.seismic import parse_ground
+    from nsd_core.ground import motions as gm
+    if ("record" in raw) == ("ground" in raw):
+        raise ParameterError(f"{w}: give exactly one of record = \"SET:ID\" or ground = \"pulse:...\"/\"harmonic:...\"")
+    if "ground" in raw:
+        for k in ("scale", "window", "rotate_deg"):
+            if k in raw:
+                raise ParameterError(f"{w}.{k}: applies to record = \"SET:ID\" only")
+        return parse_ground(raw["ground"], f"{w}.ground"), {"ground": raw["ground"]}
+    rec = raw["record"]
+    set_, sep, rid = rec.partition(":") if isinstance(rec, str) else ("", "", "")
+    if not sep or not rid.strip():
+        raise ParameterError(f"{w}.record = {rec!r}: expected \"SET:ID\", e.g. \"nearfield-pulse:1\"")
+    scale = _number(f"{w}.scale", raw.get("scale", 1.0))
+    rotate = _number(f"{w}.rotate_deg", raw.get("rotate_deg", 0.0), positive=False)
+    for key, value, (lo, hi), unit in (("scale", scale, gm.SCALE_RANGE, ""), ("rotate_deg", rotate, gm.ROTATE_RANGE,
+                                                                             " deg")):
+        if not lo <= value <= hi:   # nsd seismic --scale / --rotate's bounds (docs/limits.md)
+            raise ParameterError(f"{w}.{key} = {value!r}: must be in [{lo:g}, {hi:g}]{unit}")
+    window = raw.get("window")
+    if window is not None:
+        if not isinstance(window, list) or len(window) != 2:
+            raise ParameterError(f"{w}.window = {window!r}: must be [t0, t1] in the record's seconds")
+        window = [_number(f"{w}.window[{j}]", v, positive=False) for j, v in enumerate(window)]
+    try:
+        motion = gm.fema_record(set_, rid.strip(), scale=scale, window=window, rotate_deg=rotate)
+    except ParameterError as e:
+        raise ParameterError(f"{w}: {e}") from None
+    return motion, {"record": rec, "scale": scale, "window": window, "rotate_deg": rotate}
+
+
+def _check_structure(w: str, case: SeismicCase, structure: dict, building: dict | None) -> None:
+    """The case's building and structure overrides known and in range: its structure derived here, once."""
     if building is not None:
         try:
             case.isolated_structure()
         except ParameterError as e:
             raise ParameterError(f"{w}: {e}") from None
     if structure:
-        from nsd_core.device.isolation import Structure
-        from nsd_core.device.restrainer import KEYS
+        from nsd_core.structure.isolation import Structure
+        from nsd_core.structure.restrainer import KEYS
         names_ = (Structure.__dataclass_fields__.keys() - {"provenance"}) | set(KEYS)
         for k in structure:
             if k not in names_:
@@ -403,7 +412,6 @@ def _seismic_case(i: int, raw: dict, d_params: dict, base_params: Params | None)
             case.isolated_structure()  # every value in range (restrainer_gap < rod_length ...)
         except ParameterError as e:
             raise ParameterError(f"{w}: {e}") from None
-    return case
 
 
 class Limits(dict):

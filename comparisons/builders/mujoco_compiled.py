@@ -86,12 +86,7 @@ def run(model, s: dict, m, d, drives: list, pairs: list, t_out: np.ndarray, n_su
     pack(ud, model, m, drives, lay)
     module = callbacks(model, lay, m.nbody)
     nd, n_out = len(drives), len(t_out)
-    half = 0.5 * h * np.arange(2 * n_steps + 3)
-    tables = [motion_table(p, half) for p, *_ in drives]
-    acc_half = np.array([tb[2] for tb in tables]).reshape(nd, len(half))
-    q_at = np.array([tb[0, ::2] for tb in tables]).reshape(nd, n_steps + 2)
-    qd_at = np.array([tb[1, ::2] for tb in tables]).reshape(nd, n_steps + 2)
-    drive_qa = np.array([[qa, da] for _, qa, da, _ in drives], dtype=np.int64).reshape(nd, 2)
+    acc_half, q_at, qd_at, drive_qa = _drive_tables(drives, h, n_steps)
     uses_ptr, uses_k, uses_w = _uses_arrays(uses, n_steps)
     site_pairs = np.array(pairs, dtype=np.int64).reshape(-1, 2)
     rec_qpos, rec_qvel = np.zeros((n_out, m.nq)), np.zeros((n_out, m.nv))
@@ -100,13 +95,7 @@ def run(model, s: dict, m, d, drives: list, pairs: list, t_out: np.ndarray, n_su
     gaps, drive_at = np.zeros(n_out), np.zeros((n_out, nd))
     clock = np.ctypeslib.as_array((ctypes.c_double * 1).from_address(d._address + 8 * data_offsets()["time"]))
     rk4 = s["integrator"] == "RK4"
-    work_of, sign, mass = plan
-    # the work outputs on value columns: an element's power column (a plane law's: its power, sign +1)
-    sign_of = np.ones(len(lay.values))
-    for e, c in enumerate(lay.columns):
-        sign_of[lay.power[e]] = sign[e] if len(c) == 1 else 1.0
-    sign = sign_of
-    work_of = np.array([lay.power[e] if e >= 0 else e for e in work_of], dtype=np.int64)
+    work_of, sign, mass = _work_columns(plan, lay)
     rec_work = np.zeros((n_out, len(work_of)))
     fn_forward = function_address("mj_forward")
     fn_advance = function_address("mj_RungeKutta" if rk4 else "mj_Euler")
@@ -116,22 +105,7 @@ def run(model, s: dict, m, d, drives: list, pairs: list, t_out: np.ndarray, n_su
         mujoco.set_mjcb_act_dyn(module.act_dyn.ctypes)
         ud[K.STEP], ud[K.T_STEP] = h, clock[0]
         ud[K.ADVANCE] = 0.0 if rk4 else 1.0   # Euler: the callback advances the laws' states (Passive)
-        if nd:
-            K.set_stage_accelerations(ud, acc_half, 0)
-        for _ in range(3 if nd else 0):   # the drive force at t = 0, refined by its own measurement
-            ud[K.COUNT] = 0.0
-            mujoco.mj_forward(m, d)
-            for i, (_, _, da, A) in enumerate(drives):
-                b = lay.drives_at + K.DRIVE_SIZE * i
-                ud[b + K.D_TAU] = ud[b + K.D_FEED + int(ud[K.COUNT]) - 1] - A * d.qacc[da]
-        start = None
-        if len(pairs):   # the loops' soft constraints start with a transient: t = 0 taken as rigid (mujoco_start)
-            if not nd:   # (with drives, the refinement above left d evaluated at t = 0)
-                advance, ud[K.ADVANCE] = ud[K.ADVANCE], 0.0
-                mujoco.mj_forward(m, d)
-                ud[K.ADVANCE] = advance
-            feeds = [ud[lay.drives_at + K.DRIVE_SIZE * i + K.D_FEED + int(ud[K.COUNT]) - 1] for i in range(nd)]
-            start = rigid_start(m, d, drives, np.array(feeds), pairs, acc_half[:, 0] if nd else np.zeros(0))
+        start = _start(m, d, ud, lay, drives, pairs, acc_half)
         args = (fn_forward, fn_advance, rk4, m._address, d._address, clock, d.qpos, d.qvel, d.act, d.qacc,
                 d.site_xpos, ud, n_sub, n_steps, h, weights, acc_half, q_at, qd_at, drive_qa, uses_ptr, uses_k,
                 uses_w, site_pairs, float(s["closure_limit"]), lay.values, rec_qpos, rec_qvel, rec_act, rec_val,
@@ -148,28 +122,78 @@ def run(model, s: dict, m, d, drives: list, pairs: list, t_out: np.ndarray, n_su
                               "try a smaller timestep")
         if start is not None:
             rec_qacc[0], drive_at[0] = start
-        data = np.full((n_out, len(model.outputs)), np.nan)
-        names, acts = [f.name for f in model.forces], state_activations(model, m)
-        for c, o in enumerate(model.outputs):
-            if o.kind == "coordinate":
-                data[:, c] = rec_qpos[:, m.joint(joint_name(o.body, o.dof)).qposadr[0]]
-            elif o.kind == "force":
-                data[:, c] = rec_val[:, lay.columns[names.index(o.element)][o.component]]
-            elif o.kind == "state":
-                data[:, c] = rec_act[:, acts[o.element] + o.component]
-        replayed = [c for c, o in enumerate(model.outputs) if o.kind in REPLAYED]
-        ud[K.ADVANCE] = 0.0   # the replay below reads the recorded states: nothing is advanced
-        if replayed:
-            recorded = _Recorded(model, rec_val, lay.columns)
-            sample = sampler(recorded)
-            for k in range(n_out):   # the recorded state again: its kinematics, mass matrix, energies
-                d.qpos[:], d.qvel[:], d.act[:], d.time = rec_qpos[k], rec_qvel[k], rec_act[k], t_out[k]
-                mujoco.mj_forward(m, d)
-                d.qacc[:] = rec_qacc[k]
-                recorded.k = k
-                data[k, replayed] = np.asarray(sample(), dtype=float)[replayed]
+        data = _outputs(model, m, d, ud, sampler, t_out, lay, rec_qpos, rec_qvel, rec_act, rec_qacc, rec_val)
         wall = time.perf_counter() - begin
     finally:
         mujoco.set_mjcb_passive(previous[0])
         mujoco.set_mjcb_act_dyn(previous[1])
     return data, drive_at, wall, float(gaps.max()), float(tracking), rec_work
+
+
+def _drive_tables(drives: list, h: float, n_steps: int) -> tuple:
+    """The drives tabulated: (q'' at every half step (RK4's stages), q and q' at every step, (qposadr, dofadr))."""
+    nd = len(drives)
+    half = 0.5 * h * np.arange(2 * n_steps + 3)
+    tables = [motion_table(p, half) for p, *_ in drives]
+    acc_half = np.array([tb[2] for tb in tables]).reshape(nd, len(half))
+    q_at = np.array([tb[0, ::2] for tb in tables]).reshape(nd, n_steps + 2)
+    qd_at = np.array([tb[1, ::2] for tb in tables]).reshape(nd, n_steps + 2)
+    drive_qa = np.array([[qa, da] for _, qa, da, _ in drives], dtype=np.int64).reshape(nd, 2)
+    return acc_half, q_at, qd_at, drive_qa
+
+
+def _work_columns(plan, lay) -> tuple:
+    """work_plan on value columns: an element's power column (a plane law's: its power, sign +1)."""
+    work_of, sign, mass = plan
+    sign_of = np.ones(len(lay.values))
+    for e, c in enumerate(lay.columns):
+        sign_of[lay.power[e]] = sign[e] if len(c) == 1 else 1.0
+    return np.array([lay.power[e] if e >= 0 else e for e in work_of], dtype=np.int64), sign_of, mass
+
+
+def _start(m, d, ud, lay, drives: list, pairs: list, acc_half: np.ndarray):
+    """t = 0: the drive forces refined; with loops, the rigid start's (accelerations, drive forces), else None."""
+    nd = len(drives)
+    if nd:
+        K.set_stage_accelerations(ud, acc_half, 0)
+    for _ in range(3 if nd else 0):   # the drive force at t = 0, refined by its own measurement
+        ud[K.COUNT] = 0.0
+        mujoco.mj_forward(m, d)
+        for i, (_, _, da, A) in enumerate(drives):
+            b = lay.drives_at + K.DRIVE_SIZE * i
+            ud[b + K.D_TAU] = ud[b + K.D_FEED + int(ud[K.COUNT]) - 1] - A * d.qacc[da]
+    if not len(pairs):
+        return None
+    # the loops' soft constraints start with a transient: t = 0 taken as rigid (mujoco_start)
+    if not nd:   # (with drives, the refinement above left d evaluated at t = 0)
+        advance, ud[K.ADVANCE] = ud[K.ADVANCE], 0.0
+        mujoco.mj_forward(m, d)
+        ud[K.ADVANCE] = advance
+    feeds = [ud[lay.drives_at + K.DRIVE_SIZE * i + K.D_FEED + int(ud[K.COUNT]) - 1] for i in range(nd)]
+    return rigid_start(m, d, drives, np.array(feeds), pairs, acc_half[:, 0] if nd else np.zeros(0))
+
+
+def _outputs(model, m, d, ud, sampler, t_out, lay, rec_qpos, rec_qvel, rec_act, rec_qacc, rec_val) -> np.ndarray:
+    """The outputs at t_out: coordinates, law values and states from the loop's records, the others (points,
+    their velocities and accelerations, energies) from the Python sampler on each recorded state."""
+    data = np.full((len(t_out), len(model.outputs)), np.nan)
+    names, acts = [f.name for f in model.forces], state_activations(model, m)
+    for c, o in enumerate(model.outputs):
+        if o.kind == "coordinate":
+            data[:, c] = rec_qpos[:, m.joint(joint_name(o.body, o.dof)).qposadr[0]]
+        elif o.kind == "force":
+            data[:, c] = rec_val[:, lay.columns[names.index(o.element)][o.component]]
+        elif o.kind == "state":
+            data[:, c] = rec_act[:, acts[o.element] + o.component]
+    replayed = [c for c, o in enumerate(model.outputs) if o.kind in REPLAYED]
+    ud[K.ADVANCE] = 0.0   # the replay below reads the recorded states: nothing is advanced
+    if replayed:
+        recorded = _Recorded(model, rec_val, lay.columns)
+        sample = sampler(recorded)
+        for k in range(len(t_out)):   # the recorded state again: its kinematics, mass matrix, energies
+            d.qpos[:], d.qvel[:], d.act[:], d.time = rec_qpos[k], rec_qvel[k], rec_act[k], t_out[k]
+            mujoco.mj_forward(m, d)
+            d.qacc[:] = rec_qacc[k]
+            recorded.k = k
+            data[k, replayed] = np.asarray(sample(), dtype=float)[replayed]
+    return data
