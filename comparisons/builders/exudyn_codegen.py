@@ -41,21 +41,12 @@ HELPERS = (exudyn_kernels,)
 EPS_REL, EPS_MIN = 1e-7, 1e-2   # forward-difference step: EPS_REL max(EPS_MIN, |q_i|) (Exudyn's defaults)
 
 
-def _law_functions(elements) -> list:
-    out = []
-    for f in elements:
-        for fn in (f.law.force, f.law.rate):
-            if fn is not None and all(fn is not g for g in out):
-                out.append(fn)
-    return out
-
-
 def source(elements, nb: int, npts: int, nj: int, params: list[tuple[int, int]], ns: int,
            sizes: dict) -> tuple[str, dict]:
     """The generated module's text (elements in CompiledForces' order: points, then joints) and the
     law functions it expects bound by name. ``params``: each element's [start, end) in F; ``sizes``
     the offsets of F's, I's and W's blocks (CompiledForces.pack)."""
-    fns = _law_functions(elements)
+    fns = generated.law_functions(elements)
     names = {id(fn): f"law_{k}" for k, fn in enumerate(fns)}
     ne = npts + nj
     scratch = (f"    R, G = np.empty(({nb}, 3, 3)), np.empty(({nb}, 3, 4))\n"

@@ -21,6 +21,16 @@ import numba
 _LOADED: dict[str, object] = {}
 
 
+def law_functions(elements) -> list:
+    """The distinct law functions (force, rate) of force elements, in order of first use."""
+    out = []
+    for f in elements:
+        for fn in (f.law.force, f.law.rate):
+            if fn is not None and all(fn is not g for g in out):
+                out.append(fn)
+    return out
+
+
 def identity(fn) -> str:
     py = getattr(fn, "py_func", fn)
     return f"{py.__module__}.{py.__qualname__}"

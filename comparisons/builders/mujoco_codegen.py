@@ -163,19 +163,9 @@ def pack(ud: np.ndarray, model: Model, m: mujoco.MjModel, drives: list, lay: Lay
         ud[p0:p1] = f.parameters
 
 
-def _law_functions(model: Model) -> list:
-    """The distinct law functions of the description, in order of first use."""
-    out = []
-    for f in model.forces:
-        for fn in (f.law.force, f.law.rate):
-            if fn is not None and all(fn is not g for g in out):
-                out.append(fn)
-    return out
-
-
 def source(model: Model, lay: Layout, nbody: int) -> tuple[str, dict]:
     """The generated module's text and the law functions it expects bound by name."""
-    fns = _law_functions(model)
+    fns = generated.law_functions(model.forces)
     names = {id(fn): f"law_{k}" for k, fn in enumerate(fns)}
     o = data_offsets()
     words = max(o.values()) + 1
