@@ -78,25 +78,22 @@ def _bound_names(code_lines):
     return names
 
 
-def _newton(code, M, model, s, z, A, r, B, pos0):
-    """The assembly: predictor, Newton, branch check; leaves d0.. (dependent coordinates), kin_ok."""
+def _predictor(code, M, model, s, z, A, r, B):
+    """The assembly's locals and its start: d0.. from the warm start, or from the first-order predictor
+    along the manifold when the last evaluation left its S; returns the coordinates' names (d0.. dependent)."""
     nd = len(s.dep)
     zsym = dict(z)
     for j, i in enumerate(s.dep):
         zsym[i] = f"d{j}"
     probe = Code(counter=[0])
-    Phi, J = _kin_block(probe, M, model, s, zsym, dict(A), dict(r), dict(B))
+    _kin_block(probe, M, model, s, zsym, dict(A), dict(r), dict(B))
     for name in _bound_names(probe.lines):
         code.emit(f"{name} = 0.0")
     for j in range(nd):
         code.emit(f"d{j} = zw{j}")
-    code.emit("kin_ok = False")
-    code.emit("w.counters[0] += 1")
-    code.emit("move = 0.0")
-    code.emit("dev = math.inf")
+    code.emit("kin_ok = False", "w.counters[0] += 1", "move = 0.0", "dev = math.inf")
     for j in range(nd):
-        code.emit(f"pred{j} = 0.0")
-        code.emit(f"first{j} = 0.0")
+        code.emit(f"pred{j} = 0.0", f"first{j} = 0.0")
     code.emit("if w.has_lin[0] == 0:")
     with code.indent():
         code.emit("phase = 2")
@@ -107,82 +104,82 @@ def _newton(code, M, model, s, z, A, r, B, pos0):
             acc = f"w.z_lin[{dj}]"
             for k in s.S_cols[j]:
                 acc = add(acc, mul(f"w.S[{j}, {k}]", sub(z[k], f"w.z_lin[{k}]")))
-            code.emit(f"pred{j} = {acc}")
-            code.emit(f"d{j} = pred{j}")
-            code.emit(f"move = max(move, abs(pred{j} - w.z_lin[{dj}]))")
-    code.emit("status = 0")
-    code.emit("while True:")
+            code.emit(f"pred{j} = {acc}", f"d{j} = pred{j}", f"move = max(move, abs(pred{j} - w.z_lin[{dj}]))")
+    return zsym
+
+
+def _newton_iteration(code, M, model, s, zsym, A, r, B, pos0):
+    """One Newton iteration on the dependent coordinates (inside the loop over maxit): the residual
+    test against the positions' size, then the LU step and its convergence test; returns (Phi, J)."""
+    code.emit("w.counters[1] += 1")
+    Phi, J = _kin_block(code, M, model, s, zsym, A, r, B)
+    code.emit("res = 0.0")
+    for i in s.rows:
+        code.emit(f"res = max(res, abs({Phi[i]}))")
+    code.emit(f"pos = {pos0}")
+    for i in s.moving:
+        for a in range(3):
+            code.emit(f"pos = max(pos, abs({r[i][a]}))")
+    code.emit("if res <= 4e-16 * pos:")
     with code.indent():
-        code.emit("ncode = 1")
-        code.emit("kin_ok = False")
-        code.emit("for it in range(maxit):")
+        code.emit("kin_ok = True", "ncode = 0", "break")
+    lu, piv = lu_factor(code, [[J.get((ri, dj), 0.0) for dj in s.dep] for ri in s.rows], "nj", "ncode = 2; break")
+    step = lu_solve(code, lu, piv, [Phi[ri] for ri in s.rows], "st")
+    code.emit("smax = 0.0", "zmax = 0.0")
+    for j in range(len(s.dep)):
+        code.emit(f"d{j} = d{j} - {step[j]}", f"smax = max(smax, abs({step[j]}))", f"zmax = max(zmax, abs(d{j}))")
+    code.emit("if smax < tol * (1.0 + zmax):")
+    with code.indent():
+        code.emit("ncode = 0", "break")
+    return Phi, J
+
+
+def _branch_check(code, nd):
+    """After a Newton solve: from the predictor (phase 0), a solution far from the prediction is solved
+    again from the warm start (phase 1), which is kept when it lies nearer the prediction."""
+    code.emit("if phase == 0:")
+    with code.indent():
+        code.emit("status = ncode", "dev = math.inf", "if ncode == 0:")
         with code.indent():
-            code.emit("w.counters[1] += 1")
-            Phi, J = _kin_block(code, M, model, s, zsym, A, r, B)
-            code.emit("res = 0.0")
-            for i in s.rows:
-                code.emit(f"res = max(res, abs({Phi[i]}))")
-            code.emit(f"pos = {pos0}")
-            for i in s.moving:
-                for a in range(3):
-                    code.emit(f"pos = max(pos, abs({r[i][a]}))")
-            code.emit("if res <= 4e-16 * pos:")
-            with code.indent():
-                code.emit("kin_ok = True")
-                code.emit("ncode = 0")
-                code.emit("break")
-            lu, piv = lu_factor(code, [[J.get((ri, dj), 0.0) for dj in s.dep] for ri in s.rows], "nj", "ncode = 2; break")
-            step = lu_solve(code, lu, piv, [Phi[ri] for ri in s.rows], "st")
-            code.emit("smax = 0.0")
-            code.emit("zmax = 0.0")
+            code.emit("dev = 0.0")
             for j in range(nd):
-                code.emit(f"d{j} = d{j} - {step[j]}")
-                code.emit(f"smax = max(smax, abs({step[j]}))")
-                code.emit(f"zmax = max(zmax, abs(d{j}))")
-            code.emit("if smax < tol * (1.0 + zmax):")
-            with code.indent():
-                code.emit("ncode = 0")
-                code.emit("break")
-        code.emit("if phase == 0:")
+                code.emit(f"dev = max(dev, abs(d{j} - pred{j}))")
+        code.emit("if dev > 0.02 * move + 1e-10:  # maybe another branch: solve from the warm start too")
         with code.indent():
-            code.emit("status = ncode")
-            code.emit("dev = math.inf")
-            code.emit("if ncode == 0:")
-            with code.indent():
-                code.emit("dev = 0.0")
-                for j in range(nd):
-                    code.emit(f"dev = max(dev, abs(d{j} - pred{j}))")
-            code.emit("if dev > 0.02 * move + 1e-10:  # maybe another branch: solve from the warm start too")
-            with code.indent():
-                code.emit("w.counters[2] += 1")
-                for j in range(nd):
-                    code.emit(f"first{j} = d{j}")
-                    code.emit(f"d{j} = zw{j}")
-                code.emit("phase = 1")
-                code.emit("continue")
-            code.emit("break")
-        code.emit("if phase == 1:")
-        with code.indent():
-            code.emit("keep = False")
-            code.emit("if ncode == 0:")
-            with code.indent():
-                code.emit("dev_alt = 0.0")
-                code.emit("diff = 0.0")
-                for j in range(nd):
-                    code.emit(f"dev_alt = max(dev_alt, abs(d{j} - pred{j}))")
-                    code.emit(f"diff = max(diff, abs(d{j} - first{j}))")
-                code.emit("keep = status != 0 or (diff > 1e-8 and dev_alt < dev)")
-            code.emit("if keep:")
-            with code.indent():
-                code.emit("status = 0")
-            code.emit("else:")
-            with code.indent():
-                for j in range(nd):
-                    code.emit(f"d{j} = first{j}")
-                code.emit("kin_ok = False")
-            code.emit("break")
-        code.emit("status = ncode")
+            code.emit("w.counters[2] += 1")
+            for j in range(nd):
+                code.emit(f"first{j} = d{j}", f"d{j} = zw{j}")
+            code.emit("phase = 1", "continue")
         code.emit("break")
+    code.emit("if phase == 1:")
+    with code.indent():
+        code.emit("keep = False", "if ncode == 0:")
+        with code.indent():
+            code.emit("dev_alt = 0.0", "diff = 0.0")
+            for j in range(nd):
+                code.emit(f"dev_alt = max(dev_alt, abs(d{j} - pred{j}))", f"diff = max(diff, abs(d{j} - first{j}))")
+            code.emit("keep = status != 0 or (diff > 1e-8 and dev_alt < dev)")
+        code.emit("if keep:")
+        with code.indent():
+            code.emit("status = 0")
+        code.emit("else:")
+        with code.indent():
+            for j in range(nd):
+                code.emit(f"d{j} = first{j}")
+            code.emit("kin_ok = False")
+        code.emit("break")
+
+
+def _newton(code, M, model, s, z, A, r, B, pos0):
+    """The assembly: predictor, Newton, branch check; leaves d0.. (dependent coordinates), kin_ok."""
+    zsym = _predictor(code, M, model, s, z, A, r, B)
+    code.emit("status = 0", "while True:")
+    with code.indent():
+        code.emit("ncode = 1", "kin_ok = False", "for it in range(maxit):")
+        with code.indent():
+            Phi, J = _newton_iteration(code, M, model, s, zsym, A, r, B, pos0)
+        _branch_check(code, len(s.dep))
+        code.emit("status = ncode", "break")
     code.emit("if status != 0:")
     with code.indent():
         for j, dj in enumerate(s.dep):

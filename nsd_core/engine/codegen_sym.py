@@ -98,8 +98,8 @@ class Code:
         self.ind = indent
         self.counter = counter if counter is not None else [0]
 
-    def emit(self, line: str) -> None:
-        self.lines.append("    " * self.ind + line)
+    def emit(self, *lines: str) -> None:
+        self.lines.extend("    " * self.ind + line for line in lines)
 
     def let(self, v, prefix: str = "t"):
         """v itself when a constant or a plain name, else a fresh name assigned to it."""

@@ -141,140 +141,170 @@ def _dense(tab, K, F, t_old, h, y_old, y_new, f_new, tq, out):
 
 
 @njit(cache=True, _nrt=False)
+def _done(stats, steps, nfev, code, k):
+    """The loop's counts (accepted steps, evaluations, status, samples done) into stats; returns the status."""
+    stats[0], stats[1], stats[2], stats[3] = steps, nfev, code, k
+    return code
+
+
+@njit(cache=True, _nrt=False)
+def _first_step(m, w, forces, motion, evaluator, tab, t0, t1, y, f, settings, vectors):
+    """scipy's select_initial_step from (t0, y) and f = f(t0, y): returns (status, first step size)."""
+    f_new, ys, scale, err, err3 = vectors[3], vectors[4], vectors[5], vectors[6], vectors[7]
+    rtol, atol, max_step = settings[0], settings[1], settings[2]
+    for i in range(y.shape[0]):
+        scale[i] = atol + abs(y[i]) * rtol
+        err[i] = y[i] / scale[i]
+        err3[i] = f[i] / scale[i]
+    d0, d1 = _rms(err), _rms(err3)
+    h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
+    h0 = min(h0, t1 - t0)
+    for i in range(y.shape[0]):
+        ys[i] = y[i] + h0 * f[i]
+    code = derivatives(evaluator, t0 + h0, ys, m, w, forces, motion, f_new, bool(False))
+    if code != OK:
+        return code, 0.0
+    for i in range(y.shape[0]):
+        err[i] = (f_new[i] - f[i]) / scale[i]
+    d2 = _rms(err) / h0
+    if d1 <= 1e-15 and d2 <= 1e-15:
+        h1 = max(1e-6, h0 * 1e-3)
+    else:
+        h1 = (0.01 / max(d1, d2)) ** (1.0 / (tab.info[1] + 1.0))
+    return OK, min(100.0 * h0, h1, t1 - t0, max_step)
+
+
+@njit(cache=True, _nrt=False)
+def _advance(m, w, forces, motion, evaluator, tab, t, t1, h_abs, min_step, y, f, K, settings, vectors):
+    """Trial steps from (t, y) until one passes the error test (scipy's step-size control): returns
+    (status, t_new, h, the next step size, evaluations made); the accepted step's stages in K, y_new, f_new."""
+    y_new, f_new, ys, scale, err, err3 = vectors[1], vectors[3], vectors[4], vectors[5], vectors[6], vectors[7]
+    rtol, atol, ns = settings[0], settings[1], int(tab.info[0])
+    err_exp = -1.0 / (tab.info[1] + 1.0)
+    nfev, rejected = 0, False
+    while True:
+        if not h_abs >= min_step:   # (NaN too: a NaN step size would loop here for ever)
+            return TOO_SMALL_STEP, t, 0.0, h_abs, nfev
+        t_new = t + h_abs
+        if t_new - t1 > 0:
+            t_new = t1
+        h = t_new - t
+        h_abs = abs(h)
+        copy_into(K[0], f)
+        for s in range(1, ns):  # the stages, then the new state and its derivative
+            _stage_state(K, tab.A[s], s, h, y, ys)
+            code = derivatives(evaluator, t + tab.C[s] * h, ys, m, w, forces, motion, K[s], bool(False))
+            nfev += 1
+            if code != OK:
+                return code, t_new, h, h_abs, nfev
+        _stage_state(K, tab.B, ns, h, y, y_new)
+        code = derivatives(evaluator, t + h, y_new, m, w, forces, motion, f_new, bool(False))
+        nfev += 1
+        if code != OK:
+            return code, t_new, h, h_abs, nfev
+        copy_into(K[ns], f_new)
+        for i in range(y.shape[0]):
+            scale[i] = atol + max(abs(y[i]), abs(y_new[i])) * rtol
+        en = _error_norm(tab, K, h, scale, err, err3)
+        if en < 1.0:
+            factor = 10.0 if en == 0.0 else min(10.0, 0.9 * en ** err_exp)
+            if rejected:
+                factor = min(1.0, factor)
+            return OK, t_new, h, h_abs * factor, nfev
+        h_abs *= max(0.2, 0.9 * en ** err_exp)
+        rejected = True
+
+
+@njit(cache=True, _nrt=False)
+def _prepare_dense(m, w, forces, motion, evaluator, tab, t, h, y, y_new, f_new, K, F, ys):
+    """DOP853's three extra stages and its interpolant's coefficients F for the step (t, h): (status, evaluations)."""
+    ns, nk = int(tab.info[0]), K.shape[0]
+    for s in range(ns + 1, nk):
+        _stage_state(K, tab.A_extra[s - ns - 1], s, h, y, ys)
+        code = derivatives(evaluator, t + tab.C_extra[s - ns - 1] * h, ys, m, w, forces, motion, K[s], bool(False))
+        if code != OK:
+            return code, s - ns
+    for i in range(y.shape[0]):
+        dy = y_new[i] - y[i]
+        F[0, i] = dy
+        F[1, i] = h * K[0, i] - dy
+        F[2, i] = 2.0 * dy - h * (f_new[i] + K[0, i])
+        for j in range(tab.D.shape[0]):
+            acc = 0.0
+            for s in range(nk):
+                acc += tab.D[j, s] * K[s, i]
+            F[3 + j, i] = h * acc
+    return OK, nk - ns - 1
+
+
+@njit(cache=True, _nrt=False)
+def _record_step(k, t, h, t_new, t_eval, tab, K, F, y, y_new, f_new, yq, m, w, forces, motion, evaluator, out):
+    """The requested times from sample k up to t_new recorded from the step's dense output: (status, next k)."""
+    while k < t_eval.shape[0] and t_eval[k] <= t_new:
+        if t_eval[k] == t_new:
+            copy_into(yq, y_new)
+        else:
+            _dense(tab, K, F, t, h, y, y_new, f_new, t_eval[k], yq)
+        code = _record(k, t_eval[k], yq, m, w, forces, motion, evaluator, out)
+        if code != OK:
+            return code, k
+        k += 1
+    return OK, k
+
+
+@njit(cache=True, _nrt=False)
 def _step_loop(m, w, forces, motion, evaluator, tab, t_eval, settings, out, stats, K, F, vectors):
     """The step loop of integrate_kernel on preallocated arrays; compiled without reference counting
     (the workspace's arrays are read through namedtuples in the inner loops, where NRT's atomic counts
     cost more than the arithmetic)."""
-    y, y_new, f, f_new, ys = vectors[0], vectors[1], vectors[2], vectors[3], vectors[4]
-    scale, err, err3, yq = vectors[5], vectors[6], vectors[7], vectors[8]
-    rtol, atol, max_step = settings[0], settings[1], settings[2]
-    ny, ns = y.shape[0], int(tab.info[0])
-    dop = tab.info[2] == 1.0
-    err_exp = -1.0 / (tab.info[1] + 1.0)
-    nk = K.shape[0]
+    y, y_new, f, f_new, yq = vectors[0], vectors[1], vectors[2], vectors[3], vectors[8]
+    dop, max_step = tab.info[2] == 1.0, settings[2]
     t0, t1 = t_eval[0], t_eval[t_eval.shape[0] - 1]
-    nfev, steps, k = 0, 0, int(0)  # int(): _record for an int64 k, not also for a Literal 0
-    t = t0
-    while k < t_eval.shape[0] and t_eval[k] <= t:
-        code = _record(k, t_eval[k], y, m, w, forces, motion, evaluator, out)
-        if code != OK:
-            stats[2], stats[3] = code, k
-            return code
-        k += 1
-    code = derivatives(evaluator, t, y, m, w, forces, motion, f, bool(False))
-    nfev += 1
+    nfev, steps, t = 0, 0, t0
+    # the samples at t0 (t_eval[0]: the state y itself); int(): _record for an int64 k, not a Literal 0
+    code, k = _record_step(int(0), t, 0.0, t, t_eval, tab, K, F, y, y, f, yq, m, w, forces, motion, evaluator, out)
+    if code == OK:
+        code = derivatives(evaluator, t, y, m, w, forces, motion, f, bool(False))
+        nfev += 1
+    h_abs = settings[3]
+    if code == OK and h_abs <= 0.0:
+        code, h_abs = _first_step(m, w, forces, motion, evaluator, tab, t0, t1, y, f, settings, vectors)
+        nfev += 1
     if code != OK:
         stats[2], stats[3] = code, k
         return code
-    h_abs = settings[3]
-    if h_abs <= 0.0:  # scipy's select_initial_step
-        for i in range(ny):
-            scale[i] = atol + abs(y[i]) * rtol
-            err[i] = y[i] / scale[i]
-            err3[i] = f[i] / scale[i]
-        d0, d1 = _rms(err), _rms(err3)
-        h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
-        h0 = min(h0, t1 - t0)
-        for i in range(ny):
-            ys[i] = y[i] + h0 * f[i]
-        code = derivatives(evaluator, t0 + h0, ys, m, w, forces, motion, f_new, bool(False))
-        nfev += 1
-        if code != OK:
-            stats[2], stats[3] = code, k
-            return code
-        for i in range(ny):
-            err[i] = (f_new[i] - f[i]) / scale[i]
-        d2 = _rms(err) / h0
-        if d1 <= 1e-15 and d2 <= 1e-15:
-            h1 = max(1e-6, h0 * 1e-3)
-        else:
-            h1 = (0.01 / max(d1, d2)) ** (1.0 / (tab.info[1] + 1.0))
-        h_abs = min(100.0 * h0, h1, t1 - t0, max_step)
     while t < t1:
         min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
         if h_abs > max_step:
             h_abs = max_step
         elif h_abs < min_step:
             h_abs = min_step
-        rejected = False
-        while True:
-            if not h_abs >= min_step:   # (NaN too: a NaN step size would loop here for ever)
-                stats[0], stats[1], stats[2], stats[3] = steps, nfev, TOO_SMALL_STEP, k
-                return TOO_SMALL_STEP
-            t_new = t + h_abs
-            if t_new - t1 > 0:
-                t_new = t1
-            h = t_new - t
-            h_abs = abs(h)
-            copy_into(K[0], f)
-            for s in range(1, ns):
-                _stage_state(K, tab.A[s], s, h, y, ys)
-                code = derivatives(evaluator, t + tab.C[s] * h, ys, m, w, forces, motion, K[s], bool(False))
-                nfev += 1
-                if code != OK:
-                    stats[0], stats[1], stats[2], stats[3] = steps, nfev, code, k
-                    return code
-            _stage_state(K, tab.B, ns, h, y, y_new)
-            code = derivatives(evaluator, t + h, y_new, m, w, forces, motion, f_new, bool(False))
-            nfev += 1
-            if code != OK:
-                stats[0], stats[1], stats[2], stats[3] = steps, nfev, code, k
-                return code
-            copy_into(K[ns], f_new)
-            for i in range(ny):
-                scale[i] = atol + max(abs(y[i]), abs(y_new[i])) * rtol
-            en = _error_norm(tab, K, h, scale, err, err3)
-            if en < 1.0:
-                factor = 10.0 if en == 0.0 else min(10.0, 0.9 * en ** err_exp)
-                if rejected:
-                    factor = min(1.0, factor)
-                h_abs *= factor
-                break
-            h_abs *= max(0.2, 0.9 * en ** err_exp)
-            rejected = True
+        code, t_new, h, h_abs, n = _advance(m, w, forces, motion, evaluator, tab, t, t1, h_abs, min_step, y, f, K,
+                                            settings, vectors)
+        nfev += n
+        if code != OK:
+            return _done(stats, steps, nfev, code, k)
         if steps < out.step_t.shape[0]:
             out.step_t[steps] = t_new
         steps += 1
         if steps > settings[4]:
-            stats[0], stats[1], stats[2], stats[3] = steps, nfev, TOO_MANY_STEPS, k
-            return TOO_MANY_STEPS
+            return _done(stats, steps, nfev, TOO_MANY_STEPS, k)
         if k < t_eval.shape[0] and t_eval[k] <= t_new and t_eval[k] != t_new and dop:
-            for s in range(ns + 1, nk):  # the three extra stages of DOP853's interpolant
-                _stage_state(K, tab.A_extra[s - ns - 1], s, h, y, ys)
-                code = derivatives(evaluator, t + tab.C_extra[s - ns - 1] * h, ys, m, w, forces, motion, K[s], bool(False))
-                nfev += 1
-                if code != OK:
-                    stats[0], stats[1], stats[2], stats[3] = steps, nfev, code, k
-                    return code
-            for i in range(ny):
-                dy = y_new[i] - y[i]
-                F[0, i] = dy
-                F[1, i] = h * K[0, i] - dy
-                F[2, i] = 2.0 * dy - h * (f_new[i] + K[0, i])
-                for j in range(tab.D.shape[0]):
-                    acc = 0.0
-                    for s in range(nk):
-                        acc += tab.D[j, s] * K[s, i]
-                    F[3 + j, i] = h * acc
-        while k < t_eval.shape[0] and t_eval[k] <= t_new:
-            if t_eval[k] == t_new:
-                copy_into(yq, y_new)
-            else:
-                _dense(tab, K, F, t, h, y, y_new, f_new, t_eval[k], yq)
-            code = _record(k, t_eval[k], yq, m, w, forces, motion, evaluator, out)
+            code, n = _prepare_dense(m, w, forces, motion, evaluator, tab, t, h, y, y_new, f_new, K, F, vectors[4])
+            nfev += n
             if code != OK:
-                stats[0], stats[1], stats[2], stats[3] = steps, nfev, code, k
-                return code
-            k += 1
-        for i in range(ny):
+                return _done(stats, steps, nfev, code, k)
+        code, k = _record_step(k, t, h, t_new, t_eval, tab, K, F, y, y_new, f_new, yq, m, w, forces, motion,
+                               evaluator, out)
+        if code != OK:
+            return _done(stats, steps, nfev, code, k)
+        for i in range(y.shape[0]):
             if not math.isfinite(y_new[i]):
-                stats[0], stats[1], stats[2], stats[3] = steps, nfev, NOT_FINITE, k
-                return NOT_FINITE
+                return _done(stats, steps, nfev, NOT_FINITE, k)
         t = t_new
         copy_into(y, y_new)
         copy_into(f, f_new)
-    stats[0], stats[1], stats[2], stats[3] = steps, nfev, OK, k
-    return OK
+    return _done(stats, steps, nfev, OK, k)
 
 
 TABLEAU_TYPE = typeof(tableau("DOP853"))
