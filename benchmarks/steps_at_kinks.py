@@ -1,11 +1,11 @@
-"""Where the in-house step-size controller spends its steps: at the force laws' kinks? (issue 26, item 3)
+"""Where the in-house step-size controller spends its steps: at the force laws' kinks? (docs/performance.md)
 
     .venv/bin/python benchmarks/steps_at_kinks.py --out out/steps_at_kinks
     .venv/bin/python benchmarks/steps_at_kinks.py --out /tmp/kinks --cases A15mm_f10Hz --no-scan
 
 The in-house right-hand side has kinks (a derivative jumps) where a rope goes slack or taut
 (Eq. 16: T = k_r (l_r - l_r0) H(l_r - l_r0)) and where the spring lifts off its seat or lands (Eq. 18:
-push-only): the two the issue names (``STATE_KINKS``); and also where a wire's stress crosses zero
+push-only): the two asked about first (``STATE_KINKS``); and also where a wire's stress crosses zero
 (Eq. 17a: T = sigma A_w H(sigma)), where a wire's strain crosses zero or its strain rate changes sign
 (|eps|, sgn(deps) and H(-eps deps) in Eq. 17b-d), where the spring's zeta or compression rate changes
 sign (sgn(zeta dx_s) in Eq. 18b), and, in the seismic mode, at every sample of the record (the ground
@@ -59,7 +59,7 @@ from numba import njit, types
 from nsd_core.engine.codegen import prefer_generated
 prefer_generated()  # the in-house engine as the studies run it (the generated evaluation)
 from comparisons.config import SeismicCase, load_cases
-from nsd_core.device.results import atomic_write_json, atomic_write_text
+from nsd_core.common.files import atomic_write_json, atomic_write_text
 from nsd_core.engine import rk
 from nsd_core.engine.codegen import evaluator_for
 from nsd_core.engine.compiled import OK, derivatives
@@ -126,8 +126,8 @@ def drive_setup(case, rtol=1e-7, atol=1e-12, max_step=1e-3) -> Setup:
 
 
 def seismic_setup(case: SeismicCase, rtol=1e-7, atol=1e-12, max_step=1e-3) -> Setup:
-    from nsd_core.device import compiled_seismic as cs
-    from nsd_core.device.seismic import N_ENERGY, _rest, output_times, seismic_system
+    from nsd_core.structure import compiled_seismic as cs
+    from nsd_core.structure.seismic import N_ENERGY, _rest, output_times, seismic_system
     structure, ground = case.isolated_structure(), case.ground
     system, g, _ = seismic_system(case.params, structure, ground, True)
     mech = system.m
@@ -185,7 +185,7 @@ def kinds(s: Setup) -> list[str]:
 
 KINDS = ("rope", "spring_lift", "wire_slack", "wire_strain_zero", "wire_reversal", "spring_zeta_zero",
          "spring_reversal")
-STATE_KINKS = ("rope", "spring_lift")  # the kinks the issue names: rope slack/taut and lift-off
+STATE_KINKS = ("rope", "spring_lift")  # the kinks asked about first: rope slack/taut and lift-off
 
 
 def components(s: Setup) -> list[str]:
@@ -204,7 +204,7 @@ def traced_run(s: Setup, keep_states: bool = False) -> dict:
     tab = rk.tableau("DOP853")
     m, forces, motion, ev = s.model, s.forces, s.motion, s.evaluator
     w, w2 = make_workspace(m, s.z0), make_workspace(m, s.z0)  # the run's, the switching functions'
-    rtol, atol, max_step = s.settings[0], s.settings[1], s.settings[2]
+    max_step = s.settings[2]
     t_eval = np.ascontiguousarray(s.t_eval)
     out = _outputs(s)
     ny, ns = len(s.y0), int(tab.info[0])
@@ -220,21 +220,8 @@ def traced_run(s: Setup, keep_states: bool = False) -> dict:
         k += 1
     assert stage_rhs(t, y, m, w, forces, motion, ev, f) == OK
     nfev += 1
-    h_abs = s.settings[3]
-    if h_abs <= 0.0:  # scipy's select_initial_step, as the kernel
-        scale[:] = atol + np.abs(y) * rtol
-        d0, d1 = rk._rms(y / scale), rk._rms(f / scale)
-        h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
-        h0 = min(h0, t1 - t0)
-        ys[:] = y + h0 * f
-        assert stage_rhs(t0 + h0, ys, m, w, forces, motion, ev, f_new) == OK
-        nfev += 1
-        d2 = rk._rms((f_new - f) / scale) / h0
-        if d1 <= 1e-15 and d2 <= 1e-15:
-            h1 = max(1e-6, h0 * 1e-3)
-        else:
-            h1 = (0.01 / max(d1, d2)) ** (1.0 / (tab.info[1] + 1.0))
-        h_abs = min(100.0 * h0, h1, t1 - t0, max_step)
+    h_abs, n = _first_step(s, tab, w, y, f, ys, f_new, scale, t0, t1)
+    nfev += n
     trials = {"t": [], "h": [], "err": [], "accepted": [], "crossed": [], "knot": [], "worst": []}
     step_ends, states = [], []
     sw = switching(s, w2, t, y)
@@ -247,28 +234,8 @@ def traced_run(s: Setup, keep_states: bool = False) -> dict:
             t_new = min(t + h_abs, t1)
             h = t_new - t
             h_abs = abs(h)
-            K[0] = f
-            for st in range(1, ns):
-                rk._stage_state(K, tab.A[st], st, h, y, ys)
-                assert stage_rhs(t + tab.C[st] * h, ys, m, w, forces, motion, ev, K[st]) == OK
-                nfev += 1
-            rk._stage_state(K, tab.B, ns, h, y, y_new)
-            assert stage_rhs(t + h, y_new, m, w, forces, motion, ev, f_new) == OK
-            nfev += 1
-            K[ns] = f_new
-            scale[:] = atol + np.maximum(np.abs(y), np.abs(y_new)) * rtol
-            en = rk._error_norm(tab, K, h, scale, err, err3)
-            a5 = (tab.E5 @ K[:ns + 1]) / scale  # DOP853's 5th-order estimate per entry (the norm's main part)
-            trials["worst"].append(int(np.argmax(np.abs(a5))))
-            sw_new = switching(s, w2, t_new, y_new)
-            crossed = sorted({kinds(s)[i] for i in np.flatnonzero(np.sign(sw_new) != np.sign(sw))}) \
-                if sw is not None and sw_new is not None else ["unknown"]
-            trials["t"].append(t)
-            trials["h"].append(h)
-            trials["err"].append(en)
-            trials["accepted"].append(en < 1.0)
-            trials["crossed"].append(crossed)
-            trials["knot"].append(bool(np.any((s.knots > t) & (s.knots < t_new))))
+            en, sw_new = _trial(s, tab, w, w2, K, t, t_new, h, y, y_new, f, f_new, ys, scale, err, err3, sw, trials)
+            nfev += ns
             if en < 1.0:
                 factor = 10.0 if en == 0.0 else min(10.0, 0.9 * en ** err_exp)
                 if rejected:
@@ -281,22 +248,8 @@ def traced_run(s: Setup, keep_states: bool = False) -> dict:
         if keep_states:
             states.append(y_new.copy())
         steps += 1
-        if k < len(t_eval) and t_eval[k] <= t_new and t_eval[k] != t_new:  # DOP853's three extra stages
-            for st in range(ns + 1, nk):
-                rk._stage_state(K, tab.A_extra[st - ns - 1], st, h, y, ys)
-                assert stage_rhs(t + tab.C_extra[st - ns - 1] * h, ys, m, w, forces, motion, ev, K[st]) == OK
-                nfev += 1
-            dy = y_new - y
-            F[0], F[1], F[2] = dy, h * K[0] - dy, 2.0 * dy - h * (f_new + K[0])
-            for j in range(tab.D.shape[0]):
-                F[3 + j] = h * _dot_rows(tab.D[j], K)
-        while k < len(t_eval) and t_eval[k] <= t_new:
-            if t_eval[k] == t_new:
-                yq[:] = y_new
-            else:
-                rk._dense(tab, K, F, t, h, y, y_new, f_new, t_eval[k], yq)
-            assert record_sample(k, t_eval[k], yq, m, w, forces, motion, ev, out) == OK
-            k += 1
+        k, n = _samples_in_step(s, tab, w, K, F, k, t_eval, t, h, t_new, y, y_new, f_new, ys, yq, out)
+        nfev += n
         t = t_new
         y[:] = y_new
         f[:] = f_new
@@ -304,6 +257,77 @@ def traced_run(s: Setup, keep_states: bool = False) -> dict:
     res = {key: np.array(v) if key != "crossed" else v for key, v in trials.items()}
     res.update(step_ends=np.array(step_ends), steps=steps, nfev=nfev, outputs=out, states=np.array(states))
     return res
+
+
+def _first_step(s: Setup, tab, w, y, f, ys, f_new, scale, t0, t1) -> tuple[float, int]:
+    """The first step size and its evaluations: the settings' own (> 0), else select_initial_step as the kernel."""
+    rtol, atol, max_step = s.settings[0], s.settings[1], s.settings[2]
+    h_abs = s.settings[3]
+    if not h_abs <= 0.0:
+        return h_abs, 0
+    scale[:] = atol + np.abs(y) * rtol
+    d0, d1 = rk._rms(y / scale), rk._rms(f / scale)
+    h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
+    h0 = min(h0, t1 - t0)
+    ys[:] = y + h0 * f
+    assert stage_rhs(t0 + h0, ys, s.model, w, s.forces, s.motion, s.evaluator, f_new) == OK
+    d2 = rk._rms((f_new - f) / scale) / h0
+    if d1 <= 1e-15 and d2 <= 1e-15:
+        h1 = max(1e-6, h0 * 1e-3)
+    else:
+        h1 = (0.01 / max(d1, d2)) ** (1.0 / (tab.info[1] + 1.0))
+    return min(100.0 * h0, h1, t1 - t0, max_step), 1
+
+
+def _trial(s: Setup, tab, w, w2, K, t, t_new, h, y, y_new, f, f_new, ys, scale, err, err3, sw, trials):
+    """One trial step from (t, y) to t_new = t + h: its stages (ns evaluations), y_new and f_new, its error
+    norm and the switching signs at its end, returned; the trial logged in ``trials``."""
+    m, forces, motion, ev = s.model, s.forces, s.motion, s.evaluator
+    rtol, atol, ns = s.settings[0], s.settings[1], int(tab.info[0])
+    K[0] = f
+    for st in range(1, ns):
+        rk._stage_state(K, tab.A[st], st, h, y, ys)
+        assert stage_rhs(t + tab.C[st] * h, ys, m, w, forces, motion, ev, K[st]) == OK
+    rk._stage_state(K, tab.B, ns, h, y, y_new)
+    assert stage_rhs(t + h, y_new, m, w, forces, motion, ev, f_new) == OK
+    K[ns] = f_new
+    scale[:] = atol + np.maximum(np.abs(y), np.abs(y_new)) * rtol
+    en = rk._error_norm(tab, K, h, scale, err, err3)
+    a5 = (tab.E5 @ K[:ns + 1]) / scale  # DOP853's 5th-order estimate per entry (the norm's main part)
+    trials["worst"].append(int(np.argmax(np.abs(a5))))
+    sw_new = switching(s, w2, t_new, y_new)
+    crossed = sorted({kinds(s)[i] for i in np.flatnonzero(np.sign(sw_new) != np.sign(sw))}) \
+        if sw is not None and sw_new is not None else ["unknown"]
+    trials["t"].append(t)
+    trials["h"].append(h)
+    trials["err"].append(en)
+    trials["accepted"].append(en < 1.0)
+    trials["crossed"].append(crossed)
+    trials["knot"].append(bool(np.any((s.knots > t) & (s.knots < t_new))))
+    return en, sw_new
+
+
+def _samples_in_step(s: Setup, tab, w, K, F, k, t_eval, t, h, t_new, y, y_new, f_new, ys, yq, out):
+    """The samples in the accepted step (t, t_new], dense ones after DOP853's extra stages: next index, evaluations."""
+    m, forces, motion, ev = s.model, s.forces, s.motion, s.evaluator
+    ns, nk, nfev = int(tab.info[0]), K.shape[0], 0
+    if k < len(t_eval) and t_eval[k] <= t_new and t_eval[k] != t_new:  # DOP853's three extra stages
+        for st in range(ns + 1, nk):
+            rk._stage_state(K, tab.A_extra[st - ns - 1], st, h, y, ys)
+            assert stage_rhs(t + tab.C_extra[st - ns - 1] * h, ys, m, w, forces, motion, ev, K[st]) == OK
+            nfev += 1
+        dy = y_new - y
+        F[0], F[1], F[2] = dy, h * K[0] - dy, 2.0 * dy - h * (f_new + K[0])
+        for j in range(tab.D.shape[0]):
+            F[3 + j] = h * _dot_rows(tab.D[j], K)
+    while k < len(t_eval) and t_eval[k] <= t_new:
+        if t_eval[k] == t_new:
+            yq[:] = y_new
+        else:
+            rk._dense(tab, K, F, t, h, y, y_new, f_new, t_eval[k], yq)
+        assert record_sample(k, t_eval[k], yq, m, w, forces, motion, ev, out) == OK
+        k += 1
+    return k, nfev
 
 
 def _dot_rows(d, K):

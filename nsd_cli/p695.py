@@ -89,7 +89,7 @@ def _no_repeat(option: str, text: str | None) -> None:
 
 
 def _isolators(text: str) -> list[str]:
-    from nsd_core.device.isolators import CHOICES
+    from nsd_core.structure.isolators import CHOICES
     names = [n.strip() for n in str(text).split(",") if n.strip()]
     bad = [n for n in names if n not in CHOICES]
     if not names or bad or len(set(names)) != len(names):
@@ -121,27 +121,12 @@ def _what_passes(traces, store, params, structures, states, limit, level, rating
                                      params.rod_length)
 
 
-def run(args) -> int:
-    from comparisons.engines import run_seismic_engine
-    from comparisons.harness import code_fingerprint
-    from nsd_cli.ida_states import parse_limit_states
-    from nsd_cli.limits import check_ida_work
-    from nsd_cli.options import WORKERS_MAX, whole
-    from nsd_cli.seismic_building import with_building
-    from nsd_cli.seismic_extras import isolated_structure
-    from nsd_core.device.ground import SIMILITUDE_TIME_FACTOR, fema_record
-    from nsd_core.device.model import DEFAULT_SOLVER
+def _request(args):
+    """The records, design category, quality ratings, local workers, configurations and hunt, checked in turn."""
+    from nsd_cli.options import WORKERS_MAX, reject_record_set_in_set, whole
     from nsd_core.study import p695
     from nsd_core.study.hunt import Hunt
-    from nsd_core.device.isolators import sized
-    from nsd_core.study.ida import Trace, trace_all
-    from nsd_core.study.ida_outputs import write_ida
-    from nsd_core.study.intensity import component_sa
-    import numpy as np
-    from nsd_core.study.p695_outputs import evaluation, print_lines, write_p695
     from nsd_core.study.seismic_set import parse_records
-    from nsd_core.study.store import Store
-    from nsd_cli.options import reject_record_set_in_set
     reject_record_set_in_set(args.set)
     records = parse_records(args.records, "farfield")
     sdc = p695.check_sdc(args.sdc)
@@ -157,6 +142,14 @@ def run(args) -> int:
     configs = _isolators(args.isolators)
     hunt_given = {n: getattr(args, n) for n in ("start", "step", "max_runs", "resolution") if getattr(args, n) is not None}
     hunt = Hunt(**{**P695_HUNT, **hunt_given, "fill": bool(args.fill)})
+    return records, sdc, ratings, workers, configs, hunt
+
+
+def _structure_and_collapse(args):
+    """The parameters, the structure at its design level, the collapse surrogate and its limit states."""
+    from nsd_cli.ida_states import parse_limit_states
+    from nsd_cli.seismic_building import with_building
+    from nsd_cli.seismic_extras import isolated_structure
     params = base_params(args)
     args.restrainer = args.restrainer or args.collapse.strip().startswith("impact")
     # the isolation level as designed: its supplemental damping (docs/design.md), every device alike
@@ -168,9 +161,15 @@ def run(args) -> int:
     limit = _collapse_limit(args.collapse, states.capacity)
     if limit.kind == "drift" and structure.building is None:
         raise ParameterError(f"--collapse {args.collapse!r}: drift needs a building on the slab (--building stories=N)")
-    solver = {**DEFAULT_SOLVER, **solver_settings(args)}
-    period = structure.first_period
-    level = p695.design_level(sdc, period, SIMILITUDE_TIME_FACTOR, G_RECORDS)
+    return params, structure, cap, states, limit
+
+
+def _set_sa(args, records, structure, hunt, period):
+    """The set's common ground settings and S_NRT (median Sa(T) of the records' components); the work checked."""
+    import numpy as np
+    from nsd_cli.limits import check_ida_work
+    from nsd_core.ground.motions import SIMILITUDE_TIME_FACTOR, fema_record
+    from nsd_core.study.intensity import component_sa
     ground = {"scale": 1.0, "time_factor": SIMILITUDE_TIME_FACTOR, "window": None, "rotate_deg": 0.0,
               "normalised": True}
     motions = {rid: fema_record("farfield", rid, **ground) for rid in records}
@@ -178,6 +177,27 @@ def run(args) -> int:
     check_ida_work(durations, hunt.max_runs, "--max-runs", structure.building.stories if structure.building else 0)
     # the set's median Sa at T (every component of the chosen records): a level is this x the common scale
     s_nrt = float(np.median([component_sa(c.t, c.a, period) for m in motions.values() for c in m.comp]))
+    return ground, s_nrt
+
+
+def run(args) -> int:
+    """The evaluation: the request checked, every trace run (resumable, parallel), p695.json and its lines said."""
+    from comparisons.engines import run_seismic_engine
+    from comparisons.harness import code_fingerprint
+    from nsd_core.ground.motions import SIMILITUDE_TIME_FACTOR
+    from nsd_core.device.model import DEFAULT_SOLVER
+    from nsd_core.study import p695
+    from nsd_core.structure.isolators import sized
+    from nsd_core.study.ida import Trace, trace_all
+    from nsd_core.study.ida_outputs import write_ida
+    from nsd_core.study.p695_outputs import evaluation, print_lines, write_p695
+    from nsd_core.study.store import Store
+    records, sdc, ratings, workers, configs, hunt = _request(args)
+    params, structure, cap, states, limit = _structure_and_collapse(args)
+    solver = {**DEFAULT_SOLVER, **solver_settings(args)}
+    period = structure.first_period
+    level = p695.design_level(sdc, period, SIMILITUDE_TIME_FACTOR, G_RECORDS)
+    ground, s_nrt = _set_sa(args, records, structure, hunt, period)
     out = check_out_dir("--out", args.out)
     if cap is None:   # a device without a working range: the capacity falls back to the rod's length, said
         from nsd_cli.ida_states import default_capacity

@@ -79,13 +79,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _ground_bounds() -> str:
-    from nsd_core.device.ground import ground_spec_bounds
+    from nsd_core.ground.motions import ground_spec_bounds
     return ground_spec_bounds()
 
 
 def check_record_flags(args) -> None:
-    """--scale, --rotate, --time-factor: finite numbers in their ranges (issue 22), before any record is read."""
-    from nsd_core.device.ground import _number, _positive  # the record's own checks first (their wording)
+    """--scale, --rotate, --time-factor: finite numbers in their ranges (docs/limits.md), before any record is read."""
+    from nsd_core.ground.motions import _number, _positive  # the record's own checks first (their wording)
     lim.in_range("--scale", _positive("scale", args.scale), lim.SCALE)
     lim.in_range("--rotate", _number("rotate_deg", args.rotate), lim.ROTATE, "deg")
     if args.time_factor is not None:
@@ -98,7 +98,7 @@ def check_record_flags(args) -> None:
 
 def ground_motion(args):
     """The GroundMotion the options describe (ParameterError on anything wrong)."""
-    from nsd_core.device import ground
+    from nsd_core.ground import motions as ground
     if args.record is not None:
         set_, sep, rid = args.record.partition(":")
         if not sep or not rid.strip():
@@ -135,6 +135,7 @@ def check_source(args) -> None:
 
 
 def run(args) -> int:
+    """A single run (--record or --ground): seismic.csv, summary.json and the run's PNGs; a set: run_set."""
     check_source(args)
     if args.record_set is not None:
         return run_set(args)
@@ -146,13 +147,32 @@ def run(args) -> int:
     if args.scheduler_timeout is not None:
         raise ParameterError("--scheduler-timeout: applies to --record-set --scheduler only")
     check_record_flags(args)
-    from nsd_core.device.drive import DriveError
+    params, engines, baseline, motion, structure, solver = _single_request(args)
+    restoring = seismic_checks.restoring_force(args, params, structure)
+    out = check_out_dir("--out", args.out)
+    head = {"ground": motion.describe(), "structure": structure.to_dict(), "device": not args.no_device}
+    if restoring is not None:
+        head["restoring_force"] = restoring
+    seismic_checks.print_restoring_force(restoring)
+    if args.compare_building:
+        if len(engines) > 1:
+            raise ParameterError(f"--engines {args.engines!r}: --compare-building runs the in-house engine only")
+        return seismic_building.run_compare(args, params, structure, motion, solver, out, head)
+    if args.fixed_base:
+        solver["fixed_base"] = head["fixed_base"] = True
+    if args.compare_supports:
+        code = seismic_extras.run_compare(args, params, structure, motion, solver, out, head)
+    else:
+        code = _single_run(args, params, structure, motion, solver, out, head, engines, baseline)
+    from reports.build import draw_study  # the run's (or the pair's) PNGs into its own folder
+    draw_study(out)
+    return code
+
+
+def _single_request(args):
+    """A single run's parameters, engines, baseline flag, motion, structure and solver settings, checked in order."""
     from nsd_core.device.model import DEFAULT_SOLVER
-    from nsd_core.device.results import atomic_write_json, versions, write_csv
-    from nsd_core.device.seismic import seismic_summary, simulate_seismic
-    from comparisons.engines import parse_engine_list, run_seismic_engine
-    from comparisons.seismic import seismic_metrics
-    from comparisons.engines import BASELINE_PEERS
+    from comparisons.engines import BASELINE_PEERS, parse_engine_list
     params = base_params(args)
     engines = parse_engine_list(args.engines, extra=BASELINE_PEERS)
     if engines[0] != "semirecursive":
@@ -176,24 +196,17 @@ def run(args) -> int:
             raise ParameterError(f"--{name.replace('_', '-')} = {v}: must be a finite number > 0 (s)")
     if args.fixed_base and len(engines) > 1:
         raise ParameterError("--engines: the fixed base runs on the in-house engine only")
-    restoring = seismic_checks.restoring_force(args, params, structure)
-    out = check_out_dir("--out", args.out)
-    head = {"ground": motion.describe(), "structure": structure.to_dict(), "device": not args.no_device}
-    if restoring is not None:
-        head["restoring_force"] = restoring
-    seismic_checks.print_restoring_force(restoring)
-    if args.compare_building:
-        if len(engines) > 1:
-            raise ParameterError(f"--engines {args.engines!r}: --compare-building runs the in-house engine only")
-        return seismic_building.run_compare(args, params, structure, motion, solver, out, head)
-    if args.fixed_base:
-        solver["fixed_base"] = True
-        head["fixed_base"] = True
-    if args.compare_supports:
-        code = seismic_extras.run_compare(args, params, structure, motion, solver, out, head)
-        from reports.build import draw_study  # the pair's PNGs into its own folder (issue 20)
-        draw_study(out)
-        return code
+    return params, engines, baseline, motion, structure, solver
+
+
+def _single_run(args, params, structure, motion, solver, out, head, engines, baseline) -> int:
+    """The in-house run and each peer's, checked, written (seismic*.csv, summary.json) and said; exit 4: DriveError."""
+    from nsd_core.device.drive import DriveError
+    from nsd_core.device.results import versions, write_csv
+    from nsd_core.common.files import atomic_write_json
+    from nsd_core.structure.seismic import seismic_summary, simulate_seismic
+    from comparisons.engines import BASELINE_PEERS, run_seismic_engine
+    from comparisons.seismic import seismic_metrics
     try:
         result = simulate_seismic(params, structure, motion, duration=args.duration, dt_out=args.dt_out,
                                   device=not args.no_device, progress=Progress("nsd seismic"), **solver)
@@ -212,17 +225,13 @@ def run(args) -> int:
             summary.setdefault("engines", {})[name] = entry
             continue
         if baseline:  # the baseline isolator's peers: its description built by each (comparisons/engines/described_isolator.py)
-            from comparisons.engines.described_isolator import run_isolator
+            from comparisons.engines.described_isolator import isolator_metrics as metrics, run_isolator
             other = run_isolator(name, structure, motion, duration=args.duration, dt_out=args.dt_out)
         else:
+            metrics = seismic_metrics
             other = run_seismic_engine(name, params, structure, motion, duration=args.duration, dt_out=args.dt_out)
         others[name] = other
-        if baseline:
-            from comparisons.engines.described_isolator import isolator_metrics as metrics
-        else:
-            metrics = seismic_metrics
-        summary.setdefault("engines", {})[name] = {**metrics(result, other),
-                                                   "wall_time": other.stats["wall_time"]}
+        summary.setdefault("engines", {})[name] = {**metrics(result, other), "wall_time": other.stats["wall_time"]}
         if "floor1_x" in result.columns:  # the building's floors and stories (docs/building.md)
             from comparisons.seismic import building_metrics
             summary["engines"][name]["building"] = building_metrics(result, other)
@@ -232,6 +241,12 @@ def run(args) -> int:
         write_csv(out / f"seismic_{name}.csv", other)
     write_csv(out / "seismic.csv", result)
     atomic_write_json(out / "summary.json", summary)
+    _print_single(out, result, summary)
+    return 0
+
+
+def _print_single(out, result, summary) -> None:
+    """A single run's lines on stdout: peaks, residual, energy, events, each peer's differences, warnings."""
     pd, pa = summary["peak_displacement"], summary["peak_absolute_acceleration"]
     e = summary["energy"]
     print(f"peak |u| = {pd['value'] * 1e3:.3f} mm at t = {pd['t']:.3f} s, peak |a_abs| = {pa['value']:.3f} m/s^2 "
@@ -254,9 +269,6 @@ def run(args) -> int:
     if summary["outside_working_range"]:
         print("  WARNING: the ropes went slack: part of this run lies outside the device's working range")
     print(f"wrote {out / 'seismic.csv'} and {out / 'summary.json'}")
-    from reports.build import draw_study  # the run's PNGs into its own folder (issue 20)
-    draw_study(out)
-    return 0
 
 
 def _baseline(args, engines) -> bool:
@@ -264,7 +276,7 @@ def _baseline(args, engines) -> bool:
     --compare-building: their run without the device). True for a bilinear or friction-pendulum single
     run, whose cross-check builds the isolator's description in MuJoCo and Exudyn (comparisons/engines/
     described_isolator.py)."""
-    from nsd_core.device.isolators import KINDS
+    from nsd_core.structure.isolators import KINDS
     kind = seismic_extras.isolator_choice(args)
     if "opensees" in engines and (kind not in KINDS or args.compare_supports or args.compare_building):
         raise ParameterError(f"--engines {args.engines!r}: opensees builds a single run on --isolator bilinear or "
@@ -303,15 +315,52 @@ def _window(text: str | None) -> list[float] | None:
 
 def run_set(args) -> int:
     """--record-set: the record set, with and without the device (see the module docstring for exit codes)."""
-    import os
-    from comparisons.harness import code_fingerprint
-    from comparisons.engines import parse_engine_list, run_seismic_engine
+    from comparisons.engines import run_seismic_engine
     from comparisons.seismic import seismic_metrics
-    from nsd_cli.options import WORKERS_MAX, whole
     from nsd_cli.sweep import check_scheduler, scheduler_timeout
-    from nsd_core.device.ground import SIMILITUDE_TIME_FACTOR, fema_record, set_name
-    from nsd_core.device.model import DEFAULT_SOLVER
-    from nsd_core.study.seismic_set import parse_records, record_runs, run_set as run_record_set
+    from nsd_core.study.seismic_set import run_set as run_record_set
+    set_, records, engines, workers = _set_request(args)
+    runs, params, structure = _set_runs(args, set_, records, engines)
+    timeout = scheduler_timeout(args)
+    check_scheduler(args.scheduler, timeout)
+    restoring = seismic_checks.restoring_force(args, params, structure)
+    out = check_out_dir("--out", args.out)
+    seismic_checks.print_restoring_force(restoring)
+    index = run_record_set(runs, out, workers=workers, scheduler=args.scheduler, scheduler_timeout=timeout,
+                           retry_failed=args.retry_failed, run_engine=run_seismic_engine,
+                           compare=seismic_metrics, tally=args.tally)
+    if restoring is not None:   # the set's isolation level, as a single run's summary.json has it
+        import json
+        from nsd_core.common.files import atomic_write_json, read_regular_text
+        atomic_write_json(out / "set.json", {**json.loads(read_regular_text(out / "set.json", "set.json")),
+                                             "restoring_force": restoring})
+    c = index["counts"]
+    for row in index["rows"]:
+        ratio = ("" if row.get("peak_u_ratio") is None else
+                 f", peak |u| {row['peak_u'] * 1e3:.2f} / {row['peak_u_nodevice'] * 1e3:.2f} mm (ratio "
+                 f"{row['peak_u_ratio']:.3f}), peak |a_abs| ratio {row['peak_a_abs_ratio']:.3f}")
+        status = row["status"] + (" (outside the working range)" if row.get("outside_working_range") == "yes" else "")
+        print(f"  {row['set']}:{row['id']} {row['earthquake']}: {status}{ratio}"
+              + (f" [{row['reason']}]" if row["reason"] else ""))
+    for e in index.get("entries", []):   # each run's warnings (nsd_core.structure.seismic_warnings), as a single run's
+        for w in e.get("warnings", []):
+            print(f"nsd seismic: warning: {e['set']}:{e['id']} {w}", file=sys.stderr)
+    print(f"{len(index['rows'])} records: " + ", ".join(f"{c[k]} {k}" for k in c if k == "ok" or c[k])
+          + f"; {index['elapsed_this_run_s']:.1f} s; wrote {out / 'set.csv'} and {out / 'set.json'}")
+    from reports.build import draw_study  # the set's PNGs into its own folder
+    draw_study(out)
+    if c["solver_failure"] or c["error"] or c["missing"]:
+        return 3
+    return 4 if c["rod_reach"] or c["outside_validity"] else 0
+
+
+def _set_request(args):
+    """A record set's name, records, engines and local workers, checked; the flags a set cannot take refused."""
+    import os
+    from comparisons.engines import BASELINE_PEERS, parse_engine_list
+    from nsd_cli.options import WORKERS_MAX, whole
+    from nsd_core.ground.motions import set_name
+    from nsd_core.study.seismic_set import parse_records
     set_ = set_name(args.record_set)
     records = parse_records(args.records, set_)
     check_record_flags(args)
@@ -324,7 +373,6 @@ def run_set(args) -> int:
         flag = "--fixed-base" if args.fixed_base else "--compare-building"
         raise ParameterError(f"{flag}: --record-set runs every record with and without the device (a building: "
                              "--building)")
-    from comparisons.engines import BASELINE_PEERS
     engines = parse_engine_list(args.engines, extra=BASELINE_PEERS)
     if set(engines) & set(BASELINE_PEERS):
         raise ParameterError(f"--engines {args.engines!r}: a record set's cross-check runs mujoco and exudyn; opensees "
@@ -334,6 +382,15 @@ def run_set(args) -> int:
         raise ParameterError(f"--engines {args.engines!r}: semirecursive (the reference) must come first")
     workers = os.cpu_count() or 1 if args.workers is None else args.workers
     whole("--workers", workers, 1, WORKERS_MAX)
+    return set_, records, engines, workers
+
+
+def _set_runs(args, set_, records, engines):
+    """The set's runs (each record with and without the device), each one's work checked; their params and structure."""
+    from comparisons.harness import code_fingerprint
+    from nsd_core.ground.motions import SIMILITUDE_TIME_FACTOR, fema_record
+    from nsd_core.device.model import DEFAULT_SOLVER
+    from nsd_core.study.seismic_set import record_runs
     tf = SIMILITUDE_TIME_FACTOR if args.time_factor is None else args.time_factor
     window = _window(args.window)
     fema_record(set_, records[0], scale=args.scale, time_factor=tf, window=window, rotate_deg=args.rotate,
@@ -367,35 +424,4 @@ def run_set(args) -> int:
         if args.duration is None:
             lim.check_seismic_request(own, args.dt_out, f"record {r.set}:{r.record}'s own duration")
         lim.check_building_work(own, stories, f"record {r.set}:{r.record}")
-    timeout = scheduler_timeout(args)
-    check_scheduler(args.scheduler, timeout)
-    restoring = seismic_checks.restoring_force(args, params, structure)
-    out = check_out_dir("--out", args.out)
-    seismic_checks.print_restoring_force(restoring)
-    index = run_record_set(runs, out, workers=workers, scheduler=args.scheduler, scheduler_timeout=timeout,
-                           retry_failed=args.retry_failed,
-                           run_engine=run_seismic_engine, compare=seismic_metrics, tally=args.tally)
-    if restoring is not None:   # the set's isolation level, as a single run's summary.json has it
-        import json
-        from nsd_core.device.results import atomic_write_json
-        from nsd_core.device.inputs import read_regular_text
-        atomic_write_json(out / "set.json", {**json.loads(read_regular_text(out / "set.json", "set.json")),
-                                             "restoring_force": restoring})
-    c = index["counts"]
-    for row in index["rows"]:
-        ratio = ("" if row.get("peak_u_ratio") is None else
-                 f", peak |u| {row['peak_u'] * 1e3:.2f} / {row['peak_u_nodevice'] * 1e3:.2f} mm (ratio "
-                 f"{row['peak_u_ratio']:.3f}), peak |a_abs| ratio {row['peak_a_abs_ratio']:.3f}")
-        status = row["status"] + (" (outside the working range)" if row.get("outside_working_range") == "yes" else "")
-        print(f"  {row['set']}:{row['id']} {row['earthquake']}: {status}{ratio}"
-              + (f" [{row['reason']}]" if row["reason"] else ""))
-    for e in index.get("entries", []):   # each run's warnings (nsd_core.device.seismic_warnings), as a single run's
-        for w in e.get("warnings", []):
-            print(f"nsd seismic: warning: {e['set']}:{e['id']} {w}", file=sys.stderr)
-    print(f"{len(index['rows'])} records: " + ", ".join(f"{c[k]} {k}" for k in c if k == "ok" or c[k])
-          + f"; {index['elapsed_this_run_s']:.1f} s; wrote {out / 'set.csv'} and {out / 'set.json'}")
-    from reports.build import draw_study  # the set's PNGs into its own folder (issue 20)
-    draw_study(out)
-    if c["solver_failure"] or c["error"] or c["missing"]:
-        return 3
-    return 4 if c["rod_reach"] or c["outside_validity"] else 0
+    return runs, params, structure
