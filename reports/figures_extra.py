@@ -165,6 +165,22 @@ def cost_figure(data):
                           width_ratios=[1.15, 1])
     ax = fig.add_subplot(gs[0])
     names = [c["name"] for c in data.cases]
+    _cost_bars(ax, data, names)
+    rows = cost_rows(data)
+    cols = [("case", 16, "l"), ("cost", 7, "l")] + [(f"{e}: wall / CPU [s]", 25, "l") for e in data.engines]
+    table(fig, 0.33 if many else 0.27, cols, rows, None, fontsize=7)
+    sp = fig.add_subplot(gs[1])
+    if not names:   # seismic cases only: their costs are in the table
+        for a in (ax, sp):
+            a.clear()
+            no_data(a, "no drive case in this run: the seismic cases' costs per model second are in the table")
+        return fig
+    _speed_accuracy(sp, data, names)
+    return fig
+
+
+def _cost_bars(ax, data, names) -> None:
+    """The cost panel: warm wall time per cycle (bars, "failed" where none) and CPU time (black ticks)."""
     ne = len(data.engines)
     width = 0.8 / max(ne, 1)
     x = np.arange(len(names))
@@ -196,17 +212,11 @@ def cost_figure(data):
     ax.set_title("warm wall time per cycle (bars) and CPU time (black ticks)", fontsize=9)
     ax.legend(fontsize=7, loc="upper left", ncol=2)
     ax.grid(axis="x", visible=False)
-    rows = cost_rows(data)
-    cols = [("case", 16, "l"), ("cost", 7, "l")] + [(f"{e}: wall / CPU [s]", 25, "l") for e in data.engines]
-    table(fig, 0.33 if many else 0.27, cols, rows, None, fontsize=7)
 
-    sp = fig.add_subplot(gs[1])
+
+def _speed_accuracy(sp, data, names) -> None:
+    """The speed-accuracy panel: max_dF_rel over warm wall time per cycle, the convergence study, the limits."""
     ref = data.reference
-    if not names:   # seismic cases only: their costs are in the table
-        for a in (ax, sp):
-            a.clear()
-            no_data(a, "no drive case in this run: the seismic cases' costs per model second are in the table")
-        return fig
     marks = {n: MARKERS[i] if len(names) <= len(MARKERS) else "o" for i, n in enumerate(names)}
     for m in data.summary["metrics"]:
         if m.get("metric") == "max_dF_rel" and m.get("reference") == ref and m["case"] in names:
@@ -241,7 +251,6 @@ def cost_figure(data):
         handles.append(Line2D([], [], color=GREY, ls=":", marker=".", label="convergence study"))
     # below the panel, clear of the points and the limit lines
     sp.legend(handles=handles, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.15), ncol=4, frameon=False)
-    return fig
 
 
 def _log_axis_125(axis, set_lim, lo: float, hi: float) -> None:
