@@ -123,47 +123,7 @@ dof = {0 if axis == "x" else 1}
     return "".join(bodies), "".join(forces), "".join(outputs)
 
 
-def seismic_description(params: Params, st: Structure, ground: str | dict, duration: float, dt_out: float = 1e-3,
-                        name: str = "nsd_seismic", command: str = "", geometry=None) -> str:
-    """The seismic-mode device on the structure ``st`` (its building, its restrainer) under the closed
-    form ``ground`` (``nsd seismic --ground``'s syntax) or a FEMA P695 record table ({set, id, scale,
-    time_factor, window, rotate}: [excitation].record), as TOML with one case of ``duration`` s.
-    geometry: the device's DeviceGeometry when it is not ``device_geometry(params)`` (an injected
-    modelling error, comparisons.engines.perturb)."""
-    g = device_geometry(params) if geometry is None else geometry
-    excitation = f"record = {_inline(ground)}" if isinstance(ground, dict) else f'ground = "{ground}"'
-    plate, supports = _structure_lines(st)
-    floors, stories, floor_outputs = _building_lines(st) if st.building is not None else ("", "", "")
-    head = f'''# The negative-stiffness device (Dai et al. 2024) in seismic mode{" under a " + str(st.building.stories) + "-story building" if st.building else ""}, as a model description.
-# Written by `python -m nsd_core.structure.describe_seismic` from the device's parameters and the isolated
-# structure (docs/seismic.md; every value with its provenance in `nsd params`). Device parameters that
-# differ from the nominal ones: {", ".join(f"{k} = {v!r}" for k, v in _changed(params).items()) or "none"}.
-# Coordinates are relative to the ground: the frame moves with it ([excitation]).{chr(10) + "#   " + command if command else ""}
-
-[model]
-name = "{name}"
-source = "Dai et al. 2024 (doi:10.1002/msd2.12118); structure: nsd_core.structure.isolation (assumed rules)"
-gravity = {_v(g.gravity_vector)}
-
-[excitation]   # every body feels -m a_g(t): a_g from the ground motion below
-type = "ground_acceleration"
-{excitation}
-{plate}
-[[bodies]]   # the cap: rides on the plate (turns with it), its height free
-name = "cap"
-parent = "plate"
-joint = {{ type = "prismatic", position = [0.0, 0.0, 0.0], axis = [0.0, 0.0, 1.0] }}
-mass = {g.cap.mass!r}
-com = {_v(g.cap.com)}
-inertia = {_inertia(g.cap.inertia)}
-
-{wall_and_rod(g)}{floors}
-{rod_loop(g.params)}
-[initial]    # relative rest, the device precompressed
-coordinates = {{ cap = {g.cap_rest_z!r}, wall = {g.wall_rest_z!r} }}
-free = ["plate", "cap"]
-'''
-    outputs = '''
+PLATE_OUTPUTS = '''
 [[outputs]]
 name = "u_x"
 kind = "coordinate"
@@ -207,15 +167,11 @@ name = "support_x"
 kind = "force"
 element = "support_x"
 
-''' + ELEMENT_OUTPUTS + floor_outputs
-    if st.restrainer is not None:   # judged against the supports' force at the gap, k_b u_gap
-        outputs += f'''
-[[outputs]]
-name = "restrainer_force"
-kind = "force"
-element = "restrainer"
-scale = {st.stiffness * st.restrainer.gap!r}   # N: k_b u_gap, the supports' force when the stop engages
 '''
+
+
+def _case(st: Structure, name: str, duration: float, dt_out: float) -> str:
+    """The one [[case]]: ``duration`` s sampled every ``dt_out``, with MuJoCo's and Exudyn's steps for ``st``."""
     # Exudyn's step: the largest dividing dt_out whose own (Richardson) error estimate meets 1e-3 of every
     # output's scale: 1e-3 s on the device alone; 2e-4 s with the building and its restrainer (at 5e-4 s
     # the restrainer's force estimate is 4.0e-3 of k_b u_gap; the compare asked for <= 2.23e-4 s)
@@ -226,7 +182,7 @@ scale = {st.stiffness * st.restrainer.gap!r}   # N: k_b u_gap, the supports' for
     # below 1e-6 m: 1e-4 s on the device (estimate 2.9e-4 of u_y's peak, gap 7.6e-7 m); with the
     # restrainer's impacts 2.5e-5 s (its force's estimate 8.4e-4 of k_b u_gap)
     mujoco_step = 2.5e-5 if st.restrainer is not None else 1e-4
-    case = f'''
+    return f'''
 [[case]]
 name = "{name}_{duration:g}s"
 duration = {duration!r}
@@ -234,7 +190,58 @@ dt_out = {dt_out!r}
 mujoco = {{ timestep = {mujoco_step!r}, solref_factor = 2.0 }}
 exudyn = {{ step_size = {exudyn_step!r} }}
 '''
-    return head + device_forces(g) + supports + stories + outputs + case
+
+
+def seismic_description(params: Params, st: Structure, ground: str | dict, duration: float, dt_out: float = 1e-3,
+                        name: str = "nsd_seismic", command: str = "", geometry=None) -> str:
+    """The seismic-mode device on the structure ``st`` (its building, its restrainer) under the closed
+    form ``ground`` (``nsd seismic --ground``'s syntax) or a FEMA P695 record table ({set, id, scale,
+    time_factor, window, rotate}: [excitation].record), as TOML with one case of ``duration`` s.
+    geometry: the device's DeviceGeometry when it is not ``device_geometry(params)`` (an injected
+    modelling error, comparisons.engines.perturb)."""
+    g = device_geometry(params) if geometry is None else geometry
+    excitation = f"record = {_inline(ground)}" if isinstance(ground, dict) else f'ground = "{ground}"'
+    plate, supports = _structure_lines(st)
+    floors, stories, floor_outputs = _building_lines(st) if st.building is not None else ("", "", "")
+    head = f'''# The negative-stiffness device (Dai et al. 2024) in seismic mode{" under a " + str(st.building.stories) + "-story building" if st.building else ""}, as a model description.
+# Written by `python -m nsd_core.structure.describe_seismic` from the device's parameters and the isolated
+# structure (docs/seismic.md; every value with its provenance in `nsd params`). Device parameters that
+# differ from the nominal ones: {", ".join(f"{k} = {v!r}" for k, v in _changed(params).items()) or "none"}.
+# Coordinates are relative to the ground: the frame moves with it ([excitation]).{chr(10) + "#   " + command if command else ""}
+
+[model]
+name = "{name}"
+source = "Dai et al. 2024 (doi:10.1002/msd2.12118); structure: nsd_core.structure.isolation (assumed rules)"
+gravity = {_v(g.gravity_vector)}
+
+[excitation]   # every body feels -m a_g(t): a_g from the ground motion below
+type = "ground_acceleration"
+{excitation}
+{plate}
+[[bodies]]   # the cap: rides on the plate (turns with it), its height free
+name = "cap"
+parent = "plate"
+joint = {{ type = "prismatic", position = [0.0, 0.0, 0.0], axis = [0.0, 0.0, 1.0] }}
+mass = {g.cap.mass!r}
+com = {_v(g.cap.com)}
+inertia = {_inertia(g.cap.inertia)}
+
+{wall_and_rod(g)}{floors}
+{rod_loop(g.params)}
+[initial]    # relative rest, the device precompressed
+coordinates = {{ cap = {g.cap_rest_z!r}, wall = {g.wall_rest_z!r} }}
+free = ["plate", "cap"]
+'''
+    outputs = PLATE_OUTPUTS + ELEMENT_OUTPUTS + floor_outputs
+    if st.restrainer is not None:   # judged against the supports' force at the gap, k_b u_gap
+        outputs += f'''
+[[outputs]]
+name = "restrainer_force"
+kind = "force"
+element = "restrainer"
+scale = {st.stiffness * st.restrainer.gap!r}   # N: k_b u_gap, the supports' force when the stop engages
+'''
+    return head + device_forces(g) + supports + stories + outputs + _case(st, name, duration, dt_out)
 
 
 def structure_for(params: Params, stories: int = 0, restrainer: bool = False) -> Structure:

@@ -255,7 +255,62 @@ def _kinetic_and_height(mech, kin, v_g):
     return kinetic, float(np.sum(mech.mass[b] * com[:, 2])) * -mech.gravity[2]
 
 
-@warm_and_time("seismic")  # compilation recorded apart, never in wall_time (issue 20)
+def _sample_row(system, ws, forces, structure, g, device, fixed_base, height0, t, y) -> dict:
+    """One output sample of the scipy path: the ground, the plate's relative motion, the forces and the energy
+    balance (height0: the first sample's potential energy, set by the first call)."""
+    ev = system.evaluate(ws, t, y)
+    d_g, v_g, a_g = forces.ground["now"]
+    u, ud, th, thd = forces.relative(ev.z, ev.zd)
+    s, ix = structure, forces.ix
+    row = {"t": t, "x_g": d_g[0], "y_g": d_g[1], "ax_g": a_g[0], "ay_g": a_g[1], "x": u[0], "y": u[1],
+           "theta": th, "vx": ud[0], "vy": ud[1], "ax_abs": ev.zdd[ix["plate_x"]], "ay_abs": ev.zdd[ix["plate_y"]],
+           "support_Fx": s.stiffness * u[0] + s.damping * ud[0], "support_Fy": s.stiffness * u[1] + s.damping * ud[1],
+           "support_torque": s.support_radius ** 2 * (s.stiffness * th + s.damping * thd)}
+    if forces.iso is not None:
+        fx, fy, _, _, _ = hysteretic_force_scalar(ud[0], ud[1], y[-N_ENERGY - 2], y[-N_ENERGY - 1], *forces.iso.block())
+        row["support_Fx"] += fx
+        row["support_Fy"] += fy
+        row["isolator_zx"], row["isolator_zy"] = y[-N_ENERGY - 2], y[-N_ENERGY - 1]
+    E_in, E_dev, E_sup_diss, E_res, E_bld = y[-N_ENERGY:]
+    kinetic, height = _kinetic_and_height(system.m, ev.kin, v_g)
+    if not height0:
+        height0.append(height)
+    if device:
+        try:
+            _device_outputs(row, ev, y, g, forces, system)
+        except DriveError as err:
+            err.t_event = float(t)
+            raise
+    else:
+        row["device_Fx"] = row["device_Fy"] = 0.0
+    row["base_shear_x"] = row["support_Fx"] + row["device_Fx"]
+    row["base_shear_y"] = row["support_Fy"] + row["device_Fy"]
+    stored = 0.5 * s.stiffness * float(u @ u) + 0.5 * s.stiffness * s.support_radius ** 2 * th * th
+    row.update({"E_input": E_in, "E_kinetic": kinetic, "E_gravity": height - height0[0],
+                "E_supports_stored": stored, "E_supports_dissipated": E_sup_diss, "E_device": E_dev})
+    res_stored = 0.0
+    if s.restrainer is not None:
+        r = s.restrainer
+        fx, fy, F, delta, _ = restrainer_force_scalar(u[0], u[1], ud[0], ud[1], r.gap, r.stiffness, r.exponent,
+                                                      r.damping)
+        res_stored = restrainer_stored_scalar(delta, r.stiffness, r.exponent)
+        row.update({"restrainer_Fx": fx, "restrainer_Fy": fy, "restrainer_F": F, "restrainer_indentation": delta,
+                    "E_restrainer_stored": res_stored, "E_restrainer_dissipated": E_res - res_stored})
+        row["base_shear_x"] += fx
+        row["base_shear_y"] += fy
+    if forces.building is not None:
+        d, v, d0, v0 = forces.building.motion(ev.z, ev.zd)
+        cols = building_columns(structure.building, d[:, :, None], v[:, :, None], d0[:, None], v0[:, None])
+        row.update({k: float(val[0]) for k, val in cols.items()})
+        row["E_building_dissipated"] = E_bld
+        stored += row["E_building_stored"] + E_bld
+        if fixed_base:  # the slab is the ground: the base shear is story 1's (docs/building.md)
+            row["base_shear_x"], row["base_shear_y"] = row["story_shear1_x"], row["story_shear1_y"]
+    row["E_residual"] = E_in - (kinetic + row["E_gravity"] + stored + E_sup_diss + E_dev + E_res)
+    return row
+
+
+@warm_and_time("seismic")  # compilation recorded apart, never in wall_time (docs/report.md, compile_time)
 def simulate_seismic(params: Params, structure: Structure, ground: GroundMotion, duration: float | None = None,
                      dt_out: float = 1e-3, device: bool = True, method: str = DEFAULT_SOLVER["method"],
                      rtol: float = DEFAULT_SOLVER["rtol"], atol: float = DEFAULT_SOLVER["atol"],
@@ -286,7 +341,7 @@ def simulate_seismic(params: Params, structure: Structure, ground: GroundMotion,
         structure = structure.on_isolator()
     system, g, forces = seismic_system(params, structure, ground, device, fixed_base)
     system.fast = backend != "numpy"
-    mech, ix = system.m, forces.ix
+    mech = system.m
     z0 = _rest(g, mech, device)
     extra0 = np.concatenate([g.initial_wire_stress(), [g.spring_zeta0]]) if device else np.zeros(0)
     ws = system.workspace()
@@ -297,64 +352,17 @@ def simulate_seismic(params: Params, structure: Structure, ground: GroundMotion,
     if backend == "compiled":
         return _simulate_compiled(system, g, structure, ground, device, y0, t_eval, method, rtol, atol, max_step,
                                   first_step, progress, start, fixed_base)
-    rows = []
-    height0 = []
+    return _simulate_scipy(system, ws, backend, g, structure, ground, device, y0, t_eval, method, rtol, atol, max_step,
+                           first_step, progress, start, fixed_base)
+
+
+def _simulate_scipy(system, ws, backend, g, structure, ground, device, y0, t_eval, method, rtol, atol, max_step,
+                    first_step, progress, start, fixed_base) -> RunResult:
+    """The seismic run under scipy's solvers (backend "scipy" or "numpy"): one row per output time."""
+    rows, height0 = [], []
 
     def record(t, y):
-        ev = system.evaluate(ws, t, y)
-        d_g, v_g, a_g = forces.ground["now"]
-        u, ud, th, thd = forces.relative(ev.z, ev.zd)
-        s = structure
-        row = {"t": t, "x_g": d_g[0], "y_g": d_g[1], "ax_g": a_g[0], "ay_g": a_g[1], "x": u[0], "y": u[1],
-               "theta": th, "vx": ud[0], "vy": ud[1],
-               "ax_abs": ev.zdd[ix["plate_x"]], "ay_abs": ev.zdd[ix["plate_y"]],
-               "support_Fx": s.stiffness * u[0] + s.damping * ud[0],
-               "support_Fy": s.stiffness * u[1] + s.damping * ud[1],
-               "support_torque": s.support_radius ** 2 * (s.stiffness * th + s.damping * thd)}
-        if forces.iso is not None:
-            fx, fy, _, _, _ = hysteretic_force_scalar(ud[0], ud[1], y[-N_ENERGY - 2], y[-N_ENERGY - 1],
-                                                      *forces.iso.block())
-            row["support_Fx"] += fx
-            row["support_Fy"] += fy
-            row["isolator_zx"], row["isolator_zy"] = y[-N_ENERGY - 2], y[-N_ENERGY - 1]
-        E_in, E_dev, E_sup_diss, E_res, E_bld = y[-N_ENERGY:]
-        kinetic, height = _kinetic_and_height(mech, ev.kin, v_g)
-        if not height0:
-            height0.append(height)
-        if device:
-            try:
-                _device_outputs(row, ev, y, g, forces, system)
-            except DriveError as err:
-                err.t_event = float(t)
-                raise
-        else:
-            row["device_Fx"] = row["device_Fy"] = 0.0
-        row["base_shear_x"] = row["support_Fx"] + row["device_Fx"]
-        row["base_shear_y"] = row["support_Fy"] + row["device_Fy"]
-        stored = 0.5 * s.stiffness * float(u @ u) + 0.5 * s.stiffness * s.support_radius ** 2 * th * th
-        row.update({"E_input": E_in, "E_kinetic": kinetic, "E_gravity": height - height0[0],
-                    "E_supports_stored": stored, "E_supports_dissipated": E_sup_diss, "E_device": E_dev})
-        res_stored = 0.0
-        if s.restrainer is not None:
-            r = s.restrainer
-            fx, fy, F, delta, _ = restrainer_force_scalar(u[0], u[1], ud[0], ud[1], r.gap, r.stiffness, r.exponent,
-                                                          r.damping)
-            res_stored = restrainer_stored_scalar(delta, r.stiffness, r.exponent)
-            row.update({"restrainer_Fx": fx, "restrainer_Fy": fy, "restrainer_F": F, "restrainer_indentation": delta,
-                        "E_restrainer_stored": res_stored, "E_restrainer_dissipated": E_res - res_stored})
-            row["base_shear_x"] += fx
-            row["base_shear_y"] += fy
-        if forces.building is not None:
-            d, v, d0, v0 = forces.building.motion(ev.z, ev.zd)
-            cols = building_columns(structure.building, d[:, :, None], v[:, :, None], d0[:, None], v0[:, None],
-                                    )
-            row.update({k: float(val[0]) for k, val in cols.items()})
-            row["E_building_dissipated"] = E_bld
-            stored += row["E_building_stored"] + E_bld
-            if fixed_base:  # the slab is the ground: the base shear is story 1's (docs/building.md)
-                row["base_shear_x"], row["base_shear_y"] = row["story_shear1_x"], row["story_shear1_y"]
-        row["E_residual"] = E_in - (kinetic + row["E_gravity"] + stored + E_sup_diss + E_dev + E_res)
-        rows.append(row)
+        rows.append(_sample_row(system, ws, system.forces, structure, g, device, fixed_base, height0, t, y))
 
     def stats(steps, nfev):
         return {"engine": "semirecursive", "mode": "seismic", "device": device, "fixed_base": fixed_base,
@@ -371,8 +379,7 @@ def simulate_seismic(params: Params, structure: Structure, ground: GroundMotion,
     try:
         try:
             traj = integrate(system, ws, y0, t_eval, method=method, rtol=rtol, atol=atol, max_step=max_step,
-                             min_pivot_ratio=0.0, progress=progress, outputs=record,
-                             first_step=first_step)
+                             min_pivot_ratio=0.0, progress=progress, outputs=record, first_step=first_step)
         except ConstraintError as err:
             if system.last[1] > 0.95 * system.reach:
                 raise system.reach_error() from None
