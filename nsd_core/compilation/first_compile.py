@@ -1,4 +1,4 @@
-"""A first run's compilation shared with one helper process (a cold cache: issue 35, item 1).
+"""A first run's compilation shared with one helper process (a cold cache; docs/compilation.md).
 
 A command's first in-house run of a kind (mode, method, backend, path kind) on a cold cache compiles
 the engine's units and the mode's callbacks: ~25 s CPU for a drive cycle, one kernel after another

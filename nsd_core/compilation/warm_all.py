@@ -1,5 +1,5 @@
 """``nsd warm``: every mode compiled once per version of the source, on every core, with one line
-(issue 35, item 1).
+(docs/compilation.md).
 
 Without it each command compiles what it uses at its first use (nsd_core.engine.compile_once: the
 first ``nsd cycle`` the drive mode, a first seismic run the seismic kernels with a line of its own, the
@@ -9,7 +9,7 @@ building; with ``peers`` (``nsd warm``) the peers' tiny runs too (``PROVIDERS``:
 the peers names them). It is an explicit step (``nsd warm``: an install step, or a CI runner's first
 step, ``.ci/run``), after which no command of this version compiles anything.
 
-It is not run automatically at a command's first run. That was tried (issue 35) and measured
+It is not run automatically at a command's first run. That was tried and measured
 (docs/performance.md, "A newcomer's first commands"): the first ``nsd cycle`` on a cold cache went
 from 27.9 to 38.7 s wall (28 to 65 s CPU) and the README's first compare from 79 to 139 s. Most of
 that doubled CPU was the child processes' cache naming, fixed since (nsd_core.compilation.numba_cache: the helpers'

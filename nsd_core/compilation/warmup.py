@@ -1,4 +1,4 @@
-"""Compilation kept out of a run's recorded cost (issue 20, item 3).
+"""Compilation kept out of a run's recorded cost (docs/report.md, compile_time).
 
 The in-house engine's kernels are numba functions: the first call in a process compiles them (or
 loads them from the on-disk cache), which on a cold cache takes tens of seconds, against ~0.04 s for
@@ -9,7 +9,7 @@ motion) and records its duration as ``stats["compile_time"]`` (0 once warm); ``s
 is the run's own CPU time (time.process_time), beside its ``wall_time``. Neither start-up nor the
 warm-up run is ever part of ``wall_time``/``cpu_time``: those are the integration.
 
-A pool worker does all of this before its first job (issue 26): nsd_core.compilation.worker_warmup.
+A pool worker does all of this before its first job: nsd_core.compilation.worker_warmup.
 """
 from __future__ import annotations
 

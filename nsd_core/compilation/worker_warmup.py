@@ -1,4 +1,4 @@
-"""A pool worker's warm-up (issue 26, item 1): what ``nsd_core.engine.workers.worker_pool(n, warm=...)``
+"""A pool worker's warm-up: what ``nsd_core.engine.workers.worker_pool(n, warm=...)``
 runs once in each worker before its first job, so that the first job costs what the later ones do.
 
 Unpickling ``warm_worker`` in a worker imports the in-house model (the worker's first ~1-2 s); it runs the tiny problem (``nsd_core.compilation.warmup``) of every

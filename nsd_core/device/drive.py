@@ -180,7 +180,7 @@ class Drive:
     _table: object = field(default=None, init=False, repr=False, compare=False)
     _packed: object = field(default=None, init=False, repr=False, compare=False)
 
-    # Bounds that keep one run's work finite (issue 12): below F_MIN a cycle is so long that the
+    # Bounds that keep one run's work finite (docs/limits.md): below F_MIN a cycle is so long that the
     # 250 Hz vertical mode must be resolved over minutes of simulated time; above F_MAX the drive's
     # inertia force m_c A (2 pi f)^2 leaves the range any force law here was written for.
     F_MIN, F_MAX = 0.05, 100.0   # Hz

@@ -146,7 +146,7 @@ def device_system(params: Params, drive: Drive) -> tuple[SemiRecursiveSystem, De
     return system, g
 
 
-@warm_and_time("drive")  # compilation recorded apart, never in wall_time (issue 20)
+@warm_and_time("drive")  # compilation recorded apart, never in wall_time (docs/report.md, compile_time)
 def simulate(params: Params, drive: Drive, method: str = DEFAULT_SOLVER["method"],
              rtol: float = DEFAULT_SOLVER["rtol"], atol: float = DEFAULT_SOLVER["atol"],
              max_step: float | None = DEFAULT_SOLVER["max_step"], progress=None,

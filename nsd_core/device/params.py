@@ -214,7 +214,7 @@ _POSITIVE = [n for n, f in FIELDS.items() if f.metadata["kind"] is float
 
 # Magnitude bounds per unit: generous (orders of magnitude beyond the device's values) but finite, so
 # that an input like rope_stiffness = 1e15 or rod_length = 1e308 is bad input, not a run that
-# overflows or never ends (issue 12).
+# overflows or never ends (docs/limits.md).
 MAGNITUDE_MAX = {"m": 10.0, "kg": 1e4, "N/m": 1e10, "Pa": 1e13, "N": 1e8, "1/m": 1e8, "deg": 360.0,
                  "kg/m^3": 1e5, "m/s^2": 100.0, "-": 1e6}
 # and the smallest value of a parameter that must be > 0: orders of magnitude below the device's values,

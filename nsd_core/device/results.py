@@ -71,7 +71,7 @@ class RunResult:
 def first_nonfinite(data, where: str = "") -> str | None:
     """Where the first NaN or inf in ``data`` (dicts, lists, numbers, arrays, RunResults) lies, as
     'field[index] = value (N non-finite values)'; None when every number is finite. Any non-finite
-    output is a solver failure (exit 3), never a result (issue 22)."""
+    output is a solver failure (exit 3), never a result."""
     if isinstance(data, RunResult):
         data = data.columns
     if isinstance(data, dict):

@@ -1,4 +1,4 @@
-"""A per-mechanism evaluation generated from the mechanism's data (issue 26, item 2).
+"""A per-mechanism evaluation generated from the mechanism's data (docs/engine-codegen.md).
 
 ``generated_evaluator(model)`` writes the Python source of one numba function with the evaluator
 contract of nsd_core.engine.compiled.evaluate, ``evaluate(t, y, m, w, forces, motion, reactions)``,

@@ -18,7 +18,7 @@ from nsd_core.common.errors import InputError, SolverError
 from nsd_core.engine.compiled_model import Workspace
 from nsd_core.engine.semirecursive import SemiRecursiveSystem
 
-STEP_FLOOR = 1e-8  # s: the smallest max_step accepted (issue 12: bounded work)
+STEP_FLOOR = 1e-8  # s: the smallest max_step accepted (bounded work; docs/limits.md)
 METHODS = {"RK45": RK45, "DOP853": DOP853, "RK23": RK23, "Radau": Radau, "LSODA": LSODA}
 
 

@@ -2,12 +2,12 @@
 send anything they print to stderr, and are terminated (not waited for) when the parent is
 interrupted, so that Ctrl-C or SIGTERM stops a run within seconds and leaves no process behind.
 
-A parent that cannot tidy up (SIGKILL, a crash) takes its workers with it too (issue 22): on Linux
+A parent that cannot tidy up (SIGKILL, a crash) takes its workers with it too: on Linux
 each worker asks the kernel for SIGKILL when its parent ends (``prctl(PR_SET_PDEATHSIG)`` through
 ctypes), and everywhere a watchdog thread in each worker ends it within ``WATCH_INTERVAL`` seconds
 once its parent's pid is gone (it was re-parented). A later run resumes from what was stored.
 
-Warm workers (issue 26): ``worker_pool(n, warm=...)`` runs ``warm`` (a picklable callable: the
+Warm workers: ``worker_pool(n, warm=...)`` runs ``warm`` (a picklable callable: the
 imports and tiny runs that load or compile every kernel the pool's jobs will use) once in each worker
 before its first job, so that no job pays for start-up. What each worker's start cost, the spawn and
 imports up to the initializer and the warm-up itself, is reported apart (``pool.startup``): it is

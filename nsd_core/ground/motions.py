@@ -422,7 +422,7 @@ class Pulse(GroundMotion):
 
 # ---- closed-form inputs from text (nsd seismic --ground, a seismic case's ground = "...") ----
 # kind -> (class, {key: (constructor argument, low, high, unit)}, required keys); every value is
-# named, finite and in its range, every key given once (issue 22): the bounds users read in --help
+# named, finite and in its range, every key given once: the bounds users read in --help
 # and docs/limits.md. Each closed-form input lasts at most GROUND_DURATION_MAX model seconds.
 GROUND_DURATION_MAX = 60.0  # s
 GROUND_SPECS = {

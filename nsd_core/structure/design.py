@@ -1,4 +1,4 @@
-"""The isolated structure designed for its records (issue 33 item 1; docs/design.md).
+"""The isolated structure designed for its records (docs/design.md).
 
 Reads ``design_basis.toml`` (full scale, every value with unit and source) and gives, at model
 scale under its similitude:

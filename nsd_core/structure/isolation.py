@@ -74,7 +74,7 @@ class Structure:
                 raise ParameterError(f"structure {name} = {v!r}: must be a finite number > 0")
         if not (isinstance(self.damping, (int, float)) and math.isfinite(self.damping) and self.damping >= 0):
             raise ParameterError(f"structure damping = {self.damping!r}: must be a finite number >= 0")
-        for name, (low, high, unit) in STRUCTURE_BOUNDS.items():  # issue 22: bounded work, finite outputs
+        for name, (low, high, unit) in STRUCTURE_BOUNDS.items():  # bounded work, finite outputs (docs/limits.md)
             v = getattr(self, name)
             if not low <= v <= high:
                 raise ParameterError(f"structure {name} = {v!r}: must be in [{low:g}, {high:g}] {unit}")
@@ -282,7 +282,7 @@ def designed_structure(design_level: bool = False) -> Structure:
 def designed_structure_with(params: Params, own: dict, resize: bool = False, design_level: bool = False) -> Structure:
     """The structure of the design basis (nsd_core.structure.design: the same for every device) with the
     overrides ``own``; resize: derived from the device instead (``structure_with``, the model
-    document's rule), as before issue 33."""
+    document's rule), as before the design basis (docs/design.md)."""
     if resize:
         return structure_with(params, own)
     structure = designed_structure(design_level)

@@ -1,5 +1,5 @@
-"""The baseline isolators a designer would choose instead of the device (issue 33 item 2;
-docs/design.md): a lead-rubber (bilinear) bearing and a friction pendulum, sized for the same design
+"""The baseline isolators a designer would choose instead of the device (docs/design.md): a lead-rubber
+(bilinear) bearing and a friction pendulum, sized for the same design
 displacement D_D as the device system (nsd_core.structure.design). Their force law is
 nsd_core.structure.isolator_laws (one implementation, every engine).
 

@@ -91,7 +91,7 @@ def restrainer_fields() -> list[str]:
 
 
 def _structure_bounds(name: str) -> str:
-    """The range ``isolation.Structure`` enforces for one field (issue 22's bounds where it has them)."""
+    """The range ``isolation.Structure`` enforces for one field (its bounds where it has them; docs/limits.md)."""
     from nsd_core.structure.isolation import STRUCTURE_BOUNDS, SUPPORT_FREQUENCY_MAX
     if name == "restrainer":
         return "true or false"

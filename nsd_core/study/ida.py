@@ -1,4 +1,4 @@
-"""Incremental dynamic analysis (IDA) over a FEMA P695 record set (issue 23, item 4).
+"""Incremental dynamic analysis (IDA) over a FEMA P695 record set (docs/ida.md).
 
 Every record is traced twice, with the device and on the supports alone: scaled to intensity levels
 chosen by hunt and fill (``nsd_core.study.hunt``) or given, until it reaches the limit state. Each
@@ -46,7 +46,7 @@ VALUES = {  # the limits with a threshold: its upper bound (the lower is 0, excl
 }
 # Limits a run stopped by the rod's reach is known to have reached: |u| rose continuously to l_d
 # through every displacement below it. Drift and impact force were not observed in it: the trace
-# ends there ("stroke exhausted") but is not counted as having reached them (issue 33, item 3).
+# ends there ("stroke exhausted") but is not counted as having reached them (nsd_core.study.limit_states).
 PASSED_ON_THE_WAY = ("stroke", "restrainer")
 
 
@@ -214,7 +214,7 @@ def _readable(limit: Limit, rec: dict) -> bool:
 class _Local:
     def __init__(self, workers, warm=None):
         from nsd_core.engine.workers import worker_pool
-        self.cm = worker_pool(workers, warm=warm)   # warm workers (issue 26)
+        self.cm = worker_pool(workers, warm=warm)   # warm workers (nsd_core.engine.workers)
 
     def __enter__(self):
         self.pool = self.cm.__enter__()

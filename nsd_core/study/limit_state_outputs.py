@@ -1,4 +1,4 @@
-"""The limit states of an IDA reported together (issue 33, item 3), written next to ida.json:
+"""The limit states of an IDA reported together (docs/ida.md), written next to ida.json:
 
     limit_states.json   per configuration and state: the lognormal fit (nsd_core.study.fragility),
                         each record's limit intensity and first time, the censored and never

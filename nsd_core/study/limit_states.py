@@ -1,4 +1,4 @@
-"""Limit states kept apart (issue 33, item 3): every run of an IDA says which of five limit states it
+"""Limit states kept apart (docs/ida.md): every run of an IDA says which of five limit states it
 reached and when, and each state gets its own fragility per configuration.
 
 States (``STATES``), each with its threshold (``LimitStates``):

@@ -1,4 +1,4 @@
-"""A FEMA P695 evaluation of the isolated structure (issue 33, item 4; docs/p695.md).
+"""A FEMA P695 evaluation of the isolated structure (docs/p695.md).
 
 FEMA P695 (2009), "Quantification of Building Seismic Performance Factors":
 

@@ -84,7 +84,7 @@ def evaluation(traces, params, structures: dict, states, limit, level: dict, s_n
             if r["mode"]:
                 modes[r["mode"]] = modes.get(r["mode"], 0) + 1
         spent = sum(n for m, n in modes.items() if "rod's reach" in m)
-        if spent and spent * 2 >= sum(modes.values()):   # issue 33 item 6: a result dominated by the rod's reach
+        if spent and spent * 2 >= sum(modes.values()):   # a result dominated by the rod's reach
             warnings.append(f"{name}: {spent} of {sum(modes.values())} collapse runs stopped at the rod's reach "
                             "(stroke exhausted)" + ("" if "surrogate passed, then the rod's reach" in modes
                                                     else ", not at the stated surrogate"))

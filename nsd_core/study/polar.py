@@ -1,4 +1,4 @@
-"""The direction study (issue 13): how the device responds versus the drive's azimuth psi, for
+"""The direction study: how the device responds versus the drive's azimuth psi, for
 n_w = n_r = n wires and ropes, to test the paper's guideline on the number of wires ("multiples of
 4 wires ensure axial symmetry relative to both X- and Y-axes").
 
@@ -63,7 +63,7 @@ def polar_study(wires=(3, 4, 6, 8), step_deg: float = 15.0, amplitude: float = 0
     jobs = [(designs[n], psi, amplitude, points_per_cycle) for n in wires for psi in psis]
     if workers > 1:
         from nsd_core.engine.workers import worker_pool  # workers that end with their parent
-        warm = partial(_job, jobs[0])  # its kernels loaded before the first job (issue 26; ~0.1 s warm)
+        warm = partial(_job, jobs[0])  # its kernels loaded before the first job (~0.1 s warm)
         with worker_pool(min(workers, len(jobs)), warm=warm) as pool:
             points = list(pool.map(_job, jobs))
     else:

@@ -1,4 +1,4 @@
-"""Record-set runs of the seismic mode (issue 14, item 6): the isolation effect over a FEMA P695 set.
+"""Record-set runs of the seismic mode (docs/seismic.md): the isolation effect over a FEMA P695 set.
 
 Every record of a set runs twice on the in-house engine, on the device (plate, mass, supports and
 device) and on the supports alone (``device=False``): the ratio of the two peaks is what the device

@@ -31,7 +31,7 @@ def _local(designs: list[Design], job, workers: int, warm=None, startup: dict | 
            ) -> Iterator[tuple[Design, dict]]:
     # spawn, not fork: the parent may hold threads (a Dask client, numba) that fork would copy badly;
     # on Ctrl-C or SIGTERM the workers are terminated, not waited for (nsd_core.engine.workers);
-    # ``warm`` runs once per worker before its first job, its cost reported into ``startup`` (issue 26)
+    # ``warm`` runs once per worker before its first job, its cost reported into ``startup``
     with worker_pool(workers, warm=warm) as ex:
         futures = {ex.submit(job, d): d for d in designs}
         for f in as_completed(futures):

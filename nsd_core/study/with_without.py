@@ -1,4 +1,4 @@
-"""With and without the device, side by side (issue 23, item 3): one ground motion run on the
+"""With and without the device, side by side (docs/seismic.md): one ground motion run on the
 isolated structure with the device and on the supports alone (the isolation effect's reference),
 and the ratios an isolation engineer acts on.
 
