@@ -73,7 +73,7 @@ def test_bilinear_pushover_and_the_design_basis_level_by_hand():
     delta_y = v_max / (s.mass * (2 * math.pi / s.period) ** 2)
     assert push["V_max"] == pytest.approx(v_max, rel=1e-12)
     assert push["mu_T"] == pytest.approx(max(1.0, du / delta_y), rel=1e-9)
-    table = tomllib.loads((Path(p695.__file__).parents[1] / "device" / "design_basis.toml").read_text())
+    table = tomllib.loads((Path(p695.__file__).parents[1] / "structure" / "design_basis.toml").read_text())
     s_d1 = table["site"]["S_D1"]["value"]
     lv = p695.design_level("basis", 1.0, math.sqrt(0.1), 9.80665)
     assert lv["S_MT"] == pytest.approx(1.5 * s_d1 / (1.0 / math.sqrt(0.1)) * 9.80665, rel=1e-12)

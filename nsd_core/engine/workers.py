@@ -75,6 +75,10 @@ def _worker_init(parent: int | None = None, warm=None, report=None) -> None:
     if report is not None:
         report.put({"pid": os.getpid(), "entered": entered, "warm_s": time.perf_counter() - start,
                     "warm_error": failed})
+        # a queue's put returns before its feeder thread writes the pipe: flushed now, before the first
+        # job, or the parent could read every result and still find no report (seen on a loaded machine)
+        report.close()
+        report.join_thread()
 
 
 class Startup:
