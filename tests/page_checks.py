@@ -1,4 +1,4 @@
-"""What a reader of a report page would see wrong (issue 20, item 6): a text that leaves the page
+"""What a reader of a report page would see wrong: a text that leaves the page
 or lies on another text. Measured on the figure itself: every text artist the renderer draws (tick
 labels of ticks outside the view excluded), its window extent after a draw."""
 from __future__ import annotations

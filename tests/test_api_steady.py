@@ -1,4 +1,4 @@
-"""The API's steady cycle and the one default of output samples per cycle (issue 25)."""
+"""The API's steady cycle and the one default of output samples per cycle."""
 import numpy as np
 import pytest
 

@@ -1,4 +1,4 @@
-"""Bounded work and honest output (issue 12): step caps give "exceeded N steps" (exit 3), a gate that
+"""Bounded work and honest output: step caps give "exceeded N steps" (exit 3), a gate that
 measured nothing is not a PASS, a partial tolerance file takes the default limits and says so,
 files respect the umask, engine chatter stays off stdout, and `nsd --help` agrees with the README."""
 import os

@@ -156,7 +156,7 @@ def test_auto_uses_the_generated_evaluation_only_once_it_is_compiled(monkeypatch
 def test_a_study_command_asks_for_the_generated_evaluation(monkeypatch):
     """Many runs of one structure (an IDA) ask for the generated evaluation; a single run does not, nor
     a sweep, whose designs change the structure (14 structures in --paper, ~0.1 s a run): compiling one
-    generated evaluation per structure cost its cold run ~100 s wall (issue 35: 77.8 -> 31.0 s without)."""
+    generated evaluation per structure cost its cold run ~100 s wall (77.8 -> 31.0 s without)."""
     from nsd_cli.main import main
     monkeypatch.delenv(codegen.ENV, raising=False)
     assert main(["cycle", "--amplitude", "-1", "--frequency", "1", "--out", "x"]) == 2

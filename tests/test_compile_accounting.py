@@ -1,5 +1,5 @@
 """A run that compiles inside itself (a structure its warm-up did not have) records those seconds as
-compilation, not as its cost (issue 20's honest cost, kept with issue 26's generated evaluations)."""
+compilation, not as its cost (its honest cost, kept with the generated evaluations)."""
 from __future__ import annotations
 
 import time

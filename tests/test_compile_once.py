@@ -185,7 +185,7 @@ def test_a_unit_is_put_off_while_another_process_compiles_what_it_needs(tmp_path
 
 
 def test_a_unit_whose_needs_another_process_holds_is_waited_for_not_recursed_into(tmp_path, monkeypatch):
-    """compile_once of a unit whose needed unit another process is compiling (issue 34: a RecursionError
+    """compile_once of a unit whose needed unit another process is compiling (a RecursionError
     in 1.4 s, the loop over the shared units came back to the same unit through its needs): the free
     unit is done meanwhile, then the needed one is waited for and loaded, then the unit itself."""
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))

@@ -1,4 +1,4 @@
-"""docs/cases.md lists every key the case and tolerance parsers accept (issue 25)."""
+"""docs/cases.md lists every key the case and tolerance parsers accept."""
 import re
 from pathlib import Path
 

@@ -1,5 +1,5 @@
 """The tables of docs/validation.md and docs/performance.md are what benchmarks/results/*.json give,
-byte for byte (issue 25): no hand-typed figure."""
+byte for byte: no hand-typed figure."""
 import json
 import re
 import shutil

@@ -1,4 +1,4 @@
-"""Faults (issue 22): a parent killed with SIGKILL takes its workers with it and a re-run finishes with
+"""Faults: a parent killed with SIGKILL takes its workers with it and a re-run finishes with
 the same bytes as an uninterrupted run; two runs into one --out never mix (the second exits 2 at
 once naming the first's pid; a stale lock is taken over); a full disk is exit 1 with one line naming
 the file, and what was kept stays valid. Real processes, real signals, a real full filesystem (a
@@ -113,7 +113,7 @@ def test_sigkill_of_a_record_set_leaves_no_worker_and_the_rerun_gives_the_same_b
 def test_a_second_run_into_the_same_folder_exits_2_at_once_naming_the_first(tmp_path):
     cases_a, cases_b = tmp_path / "a.toml", tmp_path / "b.toml"
     case = '[[case]]\nname = "{n}"\namplitude = {a}\nfrequency = 1.0\ncycles = {c}\n'
-    # long enough to still hold the folder when the second starts (~30 ms a cycle warm since issue 26)
+    # long enough to still hold the folder when the second starts (~30 ms a cycle warm with warm workers)
     cases_a.write_text("".join(case.format(n=f"a{i}", a=0.01 + 0.001 * i, c=40) for i in range(10)))
     cases_b.write_text("".join(case.format(n=f"b{i}", a=0.012, c=1) for i in range(2)))
     out = tmp_path / "out"

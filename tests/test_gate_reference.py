@@ -1,4 +1,4 @@
-"""The gate against the converged reference (issue 21): a more accurate in-house run passes, a
+"""The gate against the converged reference: a more accurate in-house run passes, a
 modelling error in one peer's own model fails (by its limits and by the plateau of its observed
 order), the limits carry the versions they were derived on, and the power study's sizes."""
 from __future__ import annotations

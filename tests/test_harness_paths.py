@@ -1,4 +1,4 @@
-"""The gate on a path off the axis (issue 13): it passes on agreeing engines and catches an error
+"""The gate on a path off the axis: it passes on agreeing engines and catches an error
 that only shows as a direction, the wire pattern turned by 5 deg in one engine."""
 import json
 import subprocess

@@ -1,4 +1,4 @@
-"""nsd compare on seismic cases (issue 14): real MuJoCo and Exudyn against the in-house engine on a
+"""nsd compare on seismic cases: real MuJoCo and Exudyn against the in-house engine on a
 ground motion, the per-case time series in nsd seismic's format, kept-run reuse, and the gate failing
 when one engine's own model is wrong."""
 import json

@@ -1,4 +1,4 @@
-"""Help texts say what the commands do (issue 25): checked against the files and code they describe."""
+"""Help texts say what the commands do: checked against the files and code they describe."""
 import re
 
 import pytest

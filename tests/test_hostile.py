@@ -1,4 +1,4 @@
-"""Hostile input (issue 12): every malformed flag or file of every subcommand gets exit code 2, exactly
+"""Hostile input: every malformed flag or file of every subcommand gets exit code 2, exactly
 one line on stderr naming the field/value/what is allowed, no traceback, nothing written, in seconds.
 
 Table-driven and run in-process through ``nsd_cli.main.main(argv)`` (fast); a few go through a real
@@ -247,7 +247,7 @@ CONVS = {
 }
 for name, (extra, frag) in CONVS.items():
     add(f"convergence-{name}", COMPARE + ["--cases", "{d}/c.toml", "--convergence"], case_file(extra), frag)
-# ---- seismic cases of nsd compare (mode = "seismic"; issue 14)
+# ---- seismic cases of nsd compare (mode = "seismic")
 SEIS = '[[case]]\nname = "s"\nmode = "seismic"\nrecord = "nearfield-pulse:1"\nwindow = [4.8, 4.9]\n'
 SEISMIC = {
     "mode-bogus": (SEIS.replace('"seismic"', '"quake"'), "mode"),
@@ -358,7 +358,7 @@ for v, frag in (("0", "repeats"), ("-1", "repeats"), ("x", "repeats"), ("21", "r
 add("benchmark-out-file", ["benchmark", "--out", "{d}/f.txt"], {"f.txt": "x"}, "not a folder")
 add("benchmark-out-empty", ["benchmark", "--out", ""], fragment="--out")
 
-# ---- round two (issue 22): the newer commands, odd files and output paths
+# ---- round two: the newer commands, odd files and output paths
 SEIS_G = ["seismic", "--ground", "harmonic:amplitude=1,frequency=2,duration=1", "--out", "{out}"]
 SEIS_R = ["seismic", "--record", "farfield:1", "--window", "5,6", "--out", "{out}"]
 SET_R = ["seismic", "--record-set", "farfield", "--records", "1", "--window", "5,6", "--out", "{out}"]

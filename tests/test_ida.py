@@ -1,4 +1,4 @@
-"""Incremental dynamic analysis (issue 23, items 4-5): hunt and fill on a synthetic monotone response,
+"""Incremental dynamic analysis: hunt and fill on a synthetic monotone response,
 the fragility fit against closed forms and lognormal samples, the intensity measure against closed
 forms and the package's records, bad input to every new flag, and one small real IDA."""
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Clean interrupts (issue 12): Ctrl-C (SIGINT to the process group, as a terminal sends it) or SIGTERM
+"""Clean interrupts: Ctrl-C (SIGINT to the process group, as a terminal sends it) or SIGTERM
 (to the parent alone, as `kill` sends it) stops nsd compare and nsd sweep within seconds with one line
 "interrupted; N of M cases kept in DIR", exit 130 / 143, no traceback, no worker left behind, no
 half-written file; a re-run resumes what was kept and completes."""

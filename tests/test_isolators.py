@@ -1,4 +1,4 @@
-"""The baseline isolators and the design basis (issue 33 items 1-2; docs/design.md).
+"""The baseline isolators and the design basis (docs/design.md).
 
 Every expected number here is computed in the test from closed forms or by an independent method
 (quadrature and root finding, scipy's integrator), never by the code under test: the bilinear loop's

@@ -1,4 +1,4 @@
-"""Limit states kept apart (issue 33, item 3): each run's states from its stored record, each trace's
+"""Limit states kept apart: each run's states from its stored record, each trace's
 outcome per state (a trace the rod's reach ends is stroke exhausted, never drift), the first
 crossing times from a series, the thresholds' bad input, and one small real IDA reporting them."""
 from __future__ import annotations

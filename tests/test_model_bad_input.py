@@ -1,4 +1,4 @@
-"""``nsd compare --model``: bad input found before any engine runs (issue 45, item 5): exit 2, one line on
+"""``nsd compare --model``: bad input found before any engine runs: exit 2, one line on
 stderr naming the field, nothing written into --out. A loop that cannot close, a rate the loops forbid
 or a position that opens a loop is found once, by the shared initial state, not once per engine; a
 dt_out that does not divide the duration is refused, not silently changed; a joint direction the joint

@@ -1,4 +1,4 @@
-"""``nsd compare --model FILE --refine`` (issue 45, item 4): a peer that is 'not converged at these
+"""``nsd compare --model FILE --refine``: a peer that is 'not converged at these
 settings' runs again at the step its own estimate asks for (comparisons.refine's rule and cap), only its
 runs are new, the case is judged again, and results.json records the change under "refined"."""
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The FEMA P695 evaluation (issue 33, item 4): the median collapse intensity and its bootstrap, mu_T
+"""The FEMA P695 evaluation: the median collapse intensity and its bootstrap, mu_T
 of a pushover, the package's SSF / beta_TOT / acceptable ACMR against the methodology's own numbers,
 bad input, and a small real evaluation whose ACMR and verdicts are recomputed here from the
 intermediate numbers it writes (CMR = S_CT / S_MT, ACMR = SSF CMR, ACMR_p from scipy's normal

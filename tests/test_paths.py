@@ -1,4 +1,4 @@
-"""Drive paths in the plane (issue 13): the Drive, the quasi-static check of lines off the axis and a
+"""Drive paths in the plane: the Drive, the quasi-static check of lines off the axis and a
 slow circle, the vector outputs, and the device's symmetries on the in-house model."""
 import math
 

@@ -1,4 +1,4 @@
-"""nsd cycle with paths in the plane, and the direction study nsd polar (issue 13)."""
+"""nsd cycle with paths in the plane, and the direction study nsd polar."""
 import json
 import subprocess
 import sys

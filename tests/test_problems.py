@@ -98,7 +98,7 @@ def test_digits_and_library_error_helpers():
 
 @pytest.mark.slow
 def test_n_four_bar_40_holds_past_the_reported_failing_point():
-    """Issue 12: on one install A02 (N = 40) held for 5 s and then left the parallelogram branch
+    """On one install A02 (N = 40) held for 5 s and then left the parallelogram branch
     (error 0.56, 613 J drift). The full 20 s, 30 singular crossings, must stay on the branch."""
     r = iftomm.a02(N=40, duration=20.0, outputs=400, rtol=1e-10, atol=1e-12)
     assert r["singular_crossings"] >= 30

@@ -1,6 +1,6 @@
-"""Every command in README.md runs as written (issue 25): the quick start is the CI's own, every
+"""Every command in README.md runs as written: the quick start is the CI's own, every
 ``nsd`` command parses, the short ones run to exit 0 in a fresh folder, the long ones end to end in a
-short form that keeps every option the README shows (issue 34: SHORT), the commands the docs show too
+short form that keeps every option the README shows (SHORT), the commands the docs show too
 (DOCS), and the Python example runs."""
 from __future__ import annotations
 
@@ -178,7 +178,7 @@ def test_readme_counts_the_default_cases_right():
     assert f"{words[n_seismic]} seismic window" in text
 
 
-# --- issue 34: the long commands end to end, in a short form; the commands the docs show -------------
+# --- the long commands end to end, in a short form; the commands the docs show -------------
 
 # (doc, the command as it shows it, options replaced or added, main output under --out, exit codes)
 DOCS = [

@@ -3,7 +3,7 @@
 One run (a line case and a circle, 1 cycle at 10 Hz, and 0.1 s of a harmonic ground motion;
 semirecursive and MuJoCo) is made once per session; a failing run is made from it by tightening a
 limit in a copy of its results.json (what a failed gate writes), and a malformed folder by damaging
-a copy. The page tests read the PDF's text layer (pypdf) and every figure's text extents (issue 20).
+a copy. The page tests read the PDF's text layer (pypdf) and every figure's text extents.
 """
 from __future__ import annotations
 
@@ -269,7 +269,7 @@ def test_work_precision_page_when_the_folder_has_it(run_dir, tmp_path):
     assert build_report(dst, tmp_path / "r2")["pages"] == EXPECTED
 
 
-# ---- issue 20: the pages say everything in full, nothing overlaps, costs are warm ----------------
+# ---- the pages say everything in full, nothing overlaps, costs are warm ----------------
 
 def _all_text(pdf) -> str:
     from pypdf import PdfReader
@@ -373,7 +373,7 @@ def test_cold_compile_cache_records_integration_not_compilation(tmp_path):
     assert p.returncode in (0, 1), p.stderr[-2000:]
     res = json.loads((tmp_path / "out" / "results.json").read_text())
     run = res["runs"]["A15mm_f1Hz"]["semirecursive"]
-    # the compilation: in the workers' warm-up before their first job (issue 26), or in the run's compile_time
+    # the compilation: in the workers' warm-up before their first job, or in the run's compile_time
     compiled = run["compile_time"] + (res["worker_warmup"] or {}).get("warm_s", 0.0)
     assert run["cpu_time"] <= 0.1 * compiled and compiled > run["wall_time"], (run, res["worker_warmup"])
 

@@ -1,4 +1,4 @@
-"""The displacement restrainer (issue 23, item 1): its law, an independent check against a
+"""The displacement restrainer: its law, an independent check against a
 hand-written integrator of the equations of motion that shares no code with the harness, the
 energy balance and events with the device, and its options on the command line."""
 from __future__ import annotations

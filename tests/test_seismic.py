@@ -189,7 +189,7 @@ def test_nsd_seismic_exit_4_with_the_time_when_the_rod_cannot_reach(tmp_path):
     p = nsd("seismic", "--ground", "pulse:velocity=1.2,frequency=2,gamma=2", "--structure", "stiffness=2e5",
             "--structure", "damping=0", "--duration", "0.6", "--out", str(out))
     assert p.returncode == 4 and "the rod cannot reach" in p.stderr and "t = 0." in p.stderr, p.stderr
-    # a run that ends is still a result (issue 23): the series up to the event, the event in the summary
+    # a run that ends is still a result: the series up to the event, the event in the summary
     import json
     from nsd_core.device.results import read_csv
     s = json.loads((out / "summary.json").read_text())

@@ -1,5 +1,4 @@
-"""nsd seismic --compare-supports, the restrainer's options and the last-sample warning (issue 23,
-items 2 and 3): both runs written with their ratios, the supports-alone run checked against the
+"""nsd seismic --compare-supports, the restrainer's options and the last-sample warning: both runs written with their ratios, the supports-alone run checked against the
 closed-form single-degree-of-freedom solution, bad input to every new option exit 2."""
 from __future__ import annotations
 

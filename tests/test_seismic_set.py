@@ -1,4 +1,4 @@
-"""``nsd seismic --record-set``: record-set runs with and without the device (issue 14, item 6)."""
+"""``nsd seismic --record-set``: record-set runs with and without the device."""
 from __future__ import annotations
 
 import csv
@@ -181,7 +181,7 @@ def test_report_pages_of_a_set_run_exist_and_are_not_blank(set_run, tmp_path):
         for kind in ("response", "loops", "energy"):
             assert any(n.endswith(f"{kind}_nearfield-pulse_{rid}.png") for n in names), (kind, rid, names)
     assert all(_not_blank(png) for png in pngs)
-    # nsd seismic --set drew the same pages into its own folder (issue 20), every text on its page and apart
+    # nsd seismic --set drew the same pages into its own folder, every text on its page and apart
     assert sorted(png.name for png in out.glob("[0-9][0-9]_*.png")) == names
     from page_checks import figure_problems
     assert not figure_problems(out, ("set_table", "response_nearfield-pulse_2", "loops_nearfield-pulse_2",

@@ -1,4 +1,4 @@
-"""The device's symmetries in the plane (issue 13, nsd-model.md "Two-dimensional drive paths"):
+"""The device's symmetries in the plane (nsd-model.md "Two-dimensional drive paths"):
 with n_w = n_r = 4 (a square) a drive along 90 deg repeats the one along 0 deg and 180 deg mirrors
 it; with 8, 45 deg repeats 0 deg; on a circle at constant speed the force's magnitude is constant
 up to the pattern's residual anisotropy (only harmonics of order n over a turn). In-house, then a cheap check in MuJoCo and Exudyn."""

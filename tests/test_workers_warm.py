@@ -1,4 +1,4 @@
-"""Warm pool workers (issue 26, item 1): ``worker_pool(n, warm=...)`` runs the warm-up once in each
+"""Warm pool workers: ``worker_pool(n, warm=...)`` runs the warm-up once in each
 worker before its first job, reports its cost apart (``pool.startup``), and the warm-ups the
 commands build touch exactly the kernels their jobs then use (a job's ``compile_time`` is 0)."""
 from __future__ import annotations
