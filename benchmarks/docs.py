@@ -18,7 +18,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results"
 DOCS = (ROOT / "docs" / "validation.md", ROOT / "docs" / "performance.md", ROOT / "docs" / "engine-codegen.md",
-        ROOT / "docs" / "models.md", ROOT / "docs" / "p695.md")
+        ROOT / "docs" / "models.md", ROOT / "docs" / "p695.md", ROOT / "docs" / "architecture.md")
 BLOCK = re.compile(r"(<!-- generated: (?P<name>[a-z0-9_-]+) -->\n)(?P<body>.*?)(<!-- end generated: (?P=name) -->)", re.S)
 
 
@@ -455,6 +455,19 @@ def bench_cycle() -> str:
                      "max\\|ΔF\\|/max\\|F\\| vs rtol 1e-10"], rows))
 
 
+def device_models() -> str:
+    """The hand-built device model against the description-built one (benchmarks/bench_device_models.py)."""
+    rec = load("bench_device_models")
+    d = rec["data"]
+    rows = [[r["case"], plain(1e3 * r["hand_built_s"]), plain(1e3 * r["description_built_s"]), g(r["ratio"]),
+             g(r["max_dF_x_rel"])] for r in d["rows"]]
+    return (provenance(rec) + "\n"
+            + f"Two cycles of 500 samples, {d['settings']['method']} rtol {g(d['settings']['rtol'])}, each model warm, "
+              f"median of {d['repeats']} alternating runs:\n\n"
+            + table(["case", "hand-built [ms]", "description-built [ms]", "ratio [-]",
+                     "max\\|ΔF_x\\|/max\\|F_x\\| [-]"], rows))
+
+
 def bench_rhs() -> str:
     rec = load("bench_rhs")
     d = rec["data"]
@@ -722,7 +735,7 @@ RENDER = {"compare-gate": compare_gate, "convergence": convergence, "tables-5-6"
           "bench-ida-farfield": bench_ida_farfield, "bench-dask": bench_dask,
           "symbolic-equations": symbolic_equations, "symbolic-models": symbolic_models,
           "symbolic-campaign": symbolic_campaign, "symbolic-device": symbolic_device,
-          "p695-evaluation": p695_evaluation, "p695-what-passes": p695_what_passes}
+          "p695-evaluation": p695_evaluation, "p695-what-passes": p695_what_passes, "device-models": device_models}
 
 
 def regenerate(text: str) -> str:

@@ -55,6 +55,9 @@ MEASUREMENTS = {
     # in results/, their scripts in the git history)
     "benchmark": (NSD + ["benchmark", "--out", "OUT"], "results.json", "json"),
     "polar": (NSD + ["polar", "--out", "OUT"], "polar.json", "json"),
+    # the device's two in-house models (hand-built: the product; description-built: the check) side by side
+    "bench_device_models": (PY + ["benchmarks/bench_device_models.py", "--repeats", "3", "--out", "OUT"],
+                            "bench_device_models.json", "json"),
     "bench_cycle": (PY + ["benchmarks/bench_cycle.py", "--no-compile", "--repeats", "3", "--out", "OUT"],
                     "bench_cycle.json", "json"),
     "bench_seismic": (PY + ["benchmarks/bench_seismic.py", "--no-compile", "--repeats", "3", "--out", "OUT"],
