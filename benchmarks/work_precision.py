@@ -193,7 +193,8 @@ def warm_up(cases, ladders: dict) -> float:
     run holds an import or a compilation (the in-house kernels, MuJoCo's and Exudyn's callbacks);
     returns the seconds this took."""
     from nsd_core.device.params import Params
-    from nsd_core.compilation.warmup import PATHS, tiny_drive
+    from nsd_core.compilation.warmup import tiny_drive
+    from nsd_core.engine.timing import PATHS
     t0 = time.perf_counter()
     paths = sorted({c.drive.path if c.drive.path in PATHS else "line" for c in cases})
     for e, ladder in ladders.items():

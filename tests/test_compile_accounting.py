@@ -7,7 +7,7 @@ from types import SimpleNamespace
 
 from numba import njit
 
-from nsd_core.compilation.warmup import warm_and_time
+from nsd_core.engine.timing import warm_and_time
 from nsd_core.engine.compile_once import compile_seconds
 
 

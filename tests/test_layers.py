@@ -1,6 +1,6 @@
 """The import graph, read from the source: layers depend one way, no circles, and the generic
 layers (the engine, the model description) know nothing of the device or the structure
-(docs/design.md, "Layers"). Function-level (lazy) imports count too."""
+(docs/architecture.md). Function-level (lazy) imports count too."""
 from __future__ import annotations
 
 import ast
@@ -15,10 +15,7 @@ PACKAGES = ("nsd_core", "comparisons", "reports", "nsd_cli")
 LAYERS = [("nsd_core.common",), ("nsd_core.engine", "nsd_core.ground"), ("nsd_core.model",), ("nsd_core.device",),
           ("nsd_core.structure",), ("nsd_core.compilation", "nsd_core"), ("nsd_core.study", "nsd_core.api"),
           ("comparisons",), ("reports",), ("nsd_cli",)]
-# the one edge that runs upward (docs/design.md, "Layers"): the in-house runs of the device and of the
-# structure are wrapped by the warm-up decorator, which keeps compilation out of a run's recorded time
-UPWARD = {("nsd_core.device.model", "nsd_core.compilation.warmup"),
-          ("nsd_core.structure.seismic", "nsd_core.compilation.warmup")}
+UPWARD: set = set()   # edges allowed to run upward: none (docs/architecture.md)
 ENGINE_MAY_IMPORT = {"numpy", "scipy", "numba"}
 
 

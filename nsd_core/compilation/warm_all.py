@@ -150,7 +150,8 @@ def items(peers: bool = True) -> list:
     peers' tiny runs (``peers=False``: the in-house modes alone)."""
     from nsd_core.device.model import DEFAULT_SOLVER, simulate
     from nsd_core.structure.seismic import simulate_seismic
-    from nsd_core.compilation.warmup import PATHS, warm
+    from nsd_core.compilation.warmup import warm
+    from nsd_core.engine.timing import PATHS
     out = first_compile.unit_items()
     m, b = DEFAULT_SOLVER["method"], DEFAULT_SOLVER["backend"]
     # one lock per mode and per peer: the runs under one lock compile the same kernels (every drive

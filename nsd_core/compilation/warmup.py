@@ -2,7 +2,8 @@
 
 The in-house engine's kernels are numba functions: the first call in a process compiles them (or
 loads them from the on-disk cache), which on a cold cache takes tens of seconds, against ~0.04 s for
-a 1 Hz cycle once warm. ``warm_and_time`` wraps ``simulate`` and ``simulate_seismic``: before the
+a 1 Hz cycle once warm. ``nsd_core.engine.timing.warm_and_time`` wraps ``simulate`` and
+``simulate_seismic`` and calls ``warm`` below (installed there when nsd_core is imported): before the
 wrapped run's own timer starts, the first call in a process for a (mode, method, backend) runs a
 tiny problem of the same kind (a 100 Hz, 1 mm line cycle of 16 samples; 4 ms of a harmonic ground
 motion) and records its duration as ``stats["compile_time"]`` (0 once warm); ``stats["cpu_time"]``
@@ -14,13 +15,11 @@ A pool worker does all of this before its first job: nsd_core.compilation.worker
 from __future__ import annotations
 
 import functools
-import inspect
 import time
 
-from nsd_core.engine.compile_once import compile_seconds
+from nsd_core.engine.timing import install
 
 _WARM: set[tuple] = set()   # (mode, method, backend, path kind) already compiled in this process
-PATHS = ("line", "circle", "ellipse", "figure8")
 
 
 # The tiny problems are as short as the bounds allow: what compiles does not depend on their length,
@@ -32,7 +31,7 @@ TINY_DT_OUT = 1e-3
 
 
 def tiny_drive(path: str = "line"):
-    """The warm-up's drive: a 100 Hz, 1 mm cycle of 16 samples along ``path`` (a path kind of PATHS)."""
+    """The warm-up's drive: a 100 Hz, 1 mm cycle of 16 samples along ``path`` (a path kind of nsd_core.engine.timing.PATHS)."""
     from nsd_core.device.drive import Drive
     minor = 0.0005 if path in ("ellipse", "figure8") else None
     return Drive(0.001, TINY_FREQUENCY, cycles=1, samples_per_cycle=16, path=path, minor=minor)
@@ -82,31 +81,4 @@ def warm(mode: str, fn, method: str, backend: str, path: str = "line") -> float:
     return time.perf_counter() - start
 
 
-def warm_and_time(mode: str):
-    """Decorator: warm the compiled kernels first (``compile_time``), then time the run's CPU."""
-    def wrap(fn):
-        sig = inspect.signature(fn)
-
-        @functools.wraps(fn)
-        def run(*args, **kwargs):
-            bound = sig.bind(*args, **kwargs)
-            bound.apply_defaults()
-            drive = bound.arguments.get("drive")
-            path = drive.path if drive is not None and drive.path in PATHS else "line"   # a table: a line
-            # what this run uses, at its first use (every mode at once is `nsd warm`'s: an explicit
-            # step, nsd_core.compilation.warm_all; automatic, it made a first drive cycle slower, measured)
-            compile_time = warm(mode, fn, bound.arguments["method"], bound.arguments["backend"], path)
-            c0, (cw0, cc0) = time.process_time(), compile_seconds()
-            result = fn(*args, **kwargs)
-            cpu = time.process_time() - c0
-            # what the run itself compiled (a structure the tiny run does not have: a building, other
-            # wires) is compilation too: moved out of its wall and CPU time
-            cw, cc = (a - b for a, b in zip(compile_seconds(), (cw0, cc0)))
-            result.stats["cpu_time"] = max(cpu - cc, 0.0)
-            if cw > 0.0 and "wall_time" in result.stats:
-                result.stats["wall_time"] = max(result.stats["wall_time"] - cw, 0.0)
-            result.stats["compile_time"] = compile_time + cw
-            return result
-        return run
-    return wrap
-
+install(warm)   # every run wrapped by warm_and_time (nsd_core.engine.timing) warms up through this

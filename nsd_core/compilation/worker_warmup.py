@@ -14,7 +14,8 @@ from nsd_core.compilation import first_compile
 from nsd_core.ground import motions as ground
 from nsd_core.device.model import DEFAULT_SOLVER, simulate
 from nsd_core.structure.seismic import simulate_seismic
-from nsd_core.compilation.warmup import PATHS, warm
+from nsd_core.compilation.warmup import warm
+from nsd_core.engine.timing import PATHS
 from nsd_core.engine.compile_once import share_work
 
 

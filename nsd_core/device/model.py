@@ -25,7 +25,7 @@ from nsd_core.engine.rk import METHODS
 from nsd_core.device.outputs import device_columns
 from nsd_core.device.params import ParameterError, Params
 from nsd_core.device.results import RunResult
-from nsd_core.compilation.warmup import warm_and_time
+from nsd_core.engine.timing import warm_and_time
 from nsd_core.engine.compiled_model import split_state
 from nsd_core.engine.semirecursive import ConstraintError, SemiRecursiveSystem
 

@@ -48,7 +48,7 @@ from nsd_core.device.model import (BODY, COMPILED_METHODS, DEFAULT_SOLVER, Devic
                                    check_validity, device_mechanism, rest_coordinates)
 from nsd_core.device.params import ParameterError, Params
 from nsd_core.device.results import RunResult
-from nsd_core.compilation.warmup import warm_and_time
+from nsd_core.engine.timing import warm_and_time
 from nsd_core.structure.seismic_summary import peaks_at_last_sample, seismic_summary  # noqa: F401 (this module's API)
 from nsd_core.engine.integrate import SolverError, check_tolerances, integrate
 from nsd_core.engine.kinematics import cross_rows
