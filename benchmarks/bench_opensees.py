@@ -24,7 +24,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from comparisons.engines.opensees_peer import gate_values, judge, run_opensees  # noqa: E402
-from nsd_core.ground.motions import fema_record  # noqa: E402
+from nsd_core.ground.records import fema_record  # noqa: E402
 from nsd_core.structure.isolation import designed_structure  # noqa: E402
 from nsd_core.structure.isolators import sized  # noqa: E402
 from nsd_core.device.params import Params  # noqa: E402

@@ -26,7 +26,7 @@ from compile_time import compile_times  # noqa: E402
 
 from nsd_core.engine.codegen import prefer_generated
 prefer_generated()  # the in-house engine as the studies run it (the generated evaluation)
-from nsd_core.ground.motions import fema_record
+from nsd_core.ground.records import fema_record
 from nsd_core.structure.isolation import default_structure
 from nsd_core.device.params import Params
 from nsd_core.common.files import atomic_write_json

@@ -365,6 +365,7 @@ def _seismic_ground(w: str, raw: dict) -> tuple[Any, dict]:
     its scale, window and rotation, each in range) or a synthetic motion (ground = "pulse:..."/"harmonic:...")."""
     from comparisons.seismic import parse_ground
     from nsd_core.ground import motions as gm
+    from nsd_core.ground.records import fema_record
     if ("record" in raw) == ("ground" in raw):
         raise ParameterError(f"{w}: give exactly one of record = \"SET:ID\" or ground = \"pulse:...\"/\"harmonic:...\"")
     if "ground" in raw:
@@ -388,7 +389,7 @@ def _seismic_ground(w: str, raw: dict) -> tuple[Any, dict]:
             raise ParameterError(f"{w}.window = {window!r}: must be [t0, t1] in the record's seconds")
         window = [_number(f"{w}.window[{j}]", v, positive=False) for j, v in enumerate(window)]
     try:
-        motion = gm.fema_record(set_, rid.strip(), scale=scale, window=window, rotate_deg=rotate)
+        motion = fema_record(set_, rid.strip(), scale=scale, window=window, rotate_deg=rotate)
     except ParameterError as e:
         raise ParameterError(f"{w}: {e}") from None
     return motion, {"record": rec, "scale": scale, "window": window, "rotate_deg": rotate}

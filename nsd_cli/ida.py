@@ -82,7 +82,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def _options(args):
     """Everything the command line says, checked (ParameterError, one line) before anything runs."""
-    from nsd_core.ground.motions import SETS, set_name
+    from nsd_core.ground.records import SETS, set_name
     from nsd_core.study.hunt import Hunt, parse_levels
     from nsd_core.study.ida import parse_limit
     from nsd_core.study.intensity import MEASURES
@@ -112,7 +112,7 @@ def run(args) -> int:
     from nsd_cli.limits import check_ida_scales, check_ida_work
     from nsd_cli.options import WORKERS_MAX, whole
     from nsd_cli.sweep import check_scheduler
-    from nsd_core.ground.motions import SIMILITUDE_TIME_FACTOR, fema_record
+    from nsd_core.ground.records import SIMILITUDE_TIME_FACTOR, fema_record
     from nsd_cli.seismic_building import with_building
     from nsd_cli.seismic_extras import isolated_structure
     from nsd_core.device.model import DEFAULT_SOLVER

@@ -125,7 +125,7 @@ def run_peer(r, run_engine) -> dict:
     peers do not write (the ground's), so a peer's run keeps its solver statistics only."""
     start = time.perf_counter()
     try:
-        from nsd_core.ground.motions import fema_record
+        from nsd_core.ground.records import fema_record
         from nsd_core.device.params import Params
         motion = fema_record(r.set, r.record, **r.ground)
         result = run_engine(r.engine, Params(**r.params), Structure(**r.structure), motion, duration=r.duration,

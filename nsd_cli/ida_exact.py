@@ -26,7 +26,7 @@ def exact_supports_alone(run: RunResult, trace: Trace, level: float) -> tuple[di
     relative to the ground) for an input ground acceleration: the sign is turned."""
     from eqsig import sdof
     from scipy.interpolate import CubicHermiteSpline
-    from nsd_core.ground.motions import fema_record
+    from nsd_core.ground.records import fema_record
     p = trace.point(level)
     s = Structure(**p.structure)
     if s.building is not None:   # several masses: no single oscillator to compare with, no series

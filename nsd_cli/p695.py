@@ -168,7 +168,7 @@ def _set_sa(args, records, structure, hunt, period):
     """The set's common ground settings and S_NRT (median Sa(T) of the records' components); the work checked."""
     import numpy as np
     from nsd_cli.limits import check_ida_work
-    from nsd_core.ground.motions import SIMILITUDE_TIME_FACTOR, fema_record
+    from nsd_core.ground.records import SIMILITUDE_TIME_FACTOR, fema_record
     from nsd_core.study.intensity import component_sa
     ground = {"scale": 1.0, "time_factor": SIMILITUDE_TIME_FACTOR, "window": None, "rotate_deg": 0.0,
               "normalised": True}
@@ -184,7 +184,7 @@ def run(args) -> int:
     """The evaluation: the request checked, every trace run (resumable, parallel), p695.json and its lines said."""
     from comparisons.engines import run_seismic_engine
     from comparisons.harness import code_fingerprint
-    from nsd_core.ground.motions import SIMILITUDE_TIME_FACTOR
+    from nsd_core.ground.records import SIMILITUDE_TIME_FACTOR
     from nsd_core.device.model import DEFAULT_SOLVER
     from nsd_core.study import p695
     from nsd_core.structure.isolators import sized

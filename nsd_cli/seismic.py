@@ -98,7 +98,7 @@ def check_record_flags(args) -> None:
 
 def ground_motion(args):
     """The GroundMotion the options describe (ParameterError on anything wrong)."""
-    from nsd_core.ground import motions as ground
+    from nsd_core.ground import records
     if args.record is not None:
         set_, sep, rid = args.record.partition(":")
         if not sep or not rid.strip():
@@ -109,12 +109,12 @@ def ground_motion(args):
             if len(parts) != 2:
                 raise ParameterError(f"--window {args.window!r}: expected T0,T1 (record seconds)")
             window = parts
-        tf = ground.SIMILITUDE_TIME_FACTOR if args.time_factor is None else args.time_factor
+        tf = records.SIMILITUDE_TIME_FACTOR if args.time_factor is None else args.time_factor
         scale = args.scale
         if getattr(args, "design_level", False):
             scale = seismic_extras.design_scale(set_, rid.strip(), args, window)
-        return ground.fema_record(set_, rid.strip(), scale=scale, time_factor=tf, window=window,
-                                  rotate_deg=args.rotate, normalised=not args.raw)
+        return records.fema_record(set_, rid.strip(), scale=scale, time_factor=tf, window=window,
+                                   rotate_deg=args.rotate, normalised=not args.raw)
     if getattr(args, "design_level", False):
         raise ParameterError("--design-level: scales a record (--record, --record-set); a synthetic --ground has "
                              "no design level")
@@ -359,7 +359,7 @@ def _set_request(args):
     import os
     from comparisons.engines import BASELINE_PEERS, parse_engine_list
     from nsd_cli.options import WORKERS_MAX, whole
-    from nsd_core.ground.motions import set_name
+    from nsd_core.ground.records import set_name
     from nsd_core.study.seismic_set import parse_records
     set_ = set_name(args.record_set)
     records = parse_records(args.records, set_)
@@ -388,7 +388,7 @@ def _set_request(args):
 def _set_runs(args, set_, records, engines):
     """The set's runs (each record with and without the device), each one's work checked; their params and structure."""
     from comparisons.harness import code_fingerprint
-    from nsd_core.ground.motions import SIMILITUDE_TIME_FACTOR, fema_record
+    from nsd_core.ground.records import SIMILITUDE_TIME_FACTOR, fema_record
     from nsd_core.device.model import DEFAULT_SOLVER
     from nsd_core.study.seismic_set import record_runs
     tf = SIMILITUDE_TIME_FACTOR if args.time_factor is None else args.time_factor

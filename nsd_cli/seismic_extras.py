@@ -75,7 +75,7 @@ def design_scale(set_: str, rid, args, window=None) -> float:
     (nsd_core.study.intensity.design_level_scale), on the whole record (a window is a part of the same
     scaled record, so its Sa does not set the scale); --scale must be left at 1."""
     from nsd_core.study.intensity import design_level_scale
-    from nsd_core.ground.motions import SIMILITUDE_TIME_FACTOR, fema_record
+    from nsd_core.ground.records import SIMILITUDE_TIME_FACTOR, fema_record
     if float(args.scale) != 1.0:
         raise ParameterError(f"--scale {args.scale!r}: --design-level sets each record's scale; leave --scale out")
     tf = SIMILITUDE_TIME_FACTOR if args.time_factor is None else args.time_factor

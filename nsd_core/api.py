@@ -29,7 +29,8 @@ from nsd_core.device.drive import Drive
 from nsd_core.device.params import Params
 from nsd_core.device.results import RunResult, versions
 from nsd_core.structure.building import building_from  # noqa: F401 (this module's API)
-from nsd_core.ground.motions import GroundMotion, fema_record, parse_ground_spec  # noqa: F401 (this module's API)
+from nsd_core.ground.motions import GroundMotion, parse_ground_spec
+from nsd_core.ground.records import fema_record  # noqa: F401 (this module's API)
 from nsd_core.structure.isolation import Structure, default_structure
 from nsd_core.structure.seismic_summary import seismic_summary
 

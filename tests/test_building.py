@@ -16,7 +16,7 @@ import pytest
 from scipy.linalg import expm
 
 from nsd_core.structure.building import building_from, fixed_base_periods
-from nsd_core.ground.motions import fema_record
+from nsd_core.ground.records import fema_record
 from nsd_core.structure.isolation import default_structure
 from nsd_core.device.params import ParameterError, Params
 from nsd_core.structure.seismic import seismic_summary, simulate_seismic

@@ -10,7 +10,8 @@ from comparisons.engines.base import EngineError
 from comparisons.engines.described_seismic import DescribedSeismic, ground_table
 from comparisons.seismic import gate_metrics, own_seismic_metrics
 from nsd_core.structure.describe_seismic import structure_for
-from nsd_core.ground.motions import fema_record, parse_ground_spec
+from nsd_core.ground.motions import parse_ground_spec
+from nsd_core.ground.records import fema_record
 from nsd_core.device.params import ParameterError, Params
 from nsd_core.structure.seismic import simulate_seismic
 

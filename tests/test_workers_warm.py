@@ -56,7 +56,7 @@ def test_a_failing_warm_up_is_reported_and_the_jobs_still_run():
 
 
 def _seismic_job(settings):
-    from nsd_core.ground.motions import fema_record
+    from nsd_core.ground.records import fema_record
     from nsd_core.structure.isolation import default_structure
     from nsd_core.device.params import Params
     from nsd_core.structure.seismic import simulate_seismic

@@ -47,7 +47,8 @@ from nsd_core.device.columns import units_of
 from nsd_core.structure.describe_seismic import seismic_description
 from nsd_core.device.forces import restrainer_forces, restrainer_stored_scalar, spring_push
 from nsd_core.device.geometry import device_geometry
-from nsd_core.ground.motions import Harmonic, Pulse, Record
+from nsd_core.ground.motions import Harmonic, Pulse
+from nsd_core.ground.records import Record
 from nsd_core.device.params import ParameterError
 from nsd_core.device.results import RunResult
 from nsd_core.structure.seismic import output_times

@@ -11,7 +11,7 @@ from __future__ import annotations
 from functools import partial
 
 from nsd_core.compilation import first_compile
-from nsd_core.ground import motions as ground
+from nsd_core.ground import records
 from nsd_core.device.model import DEFAULT_SOLVER, simulate
 from nsd_core.structure.seismic import simulate_seismic
 from nsd_core.compilation.warmup import warm
@@ -48,8 +48,8 @@ def warm_worker(kinds=(), record_sets=(), calls=()) -> None:
     items += [(f"warm-kind-{k[0]}", partial(_quietly, partial(warm, k[0], fns[k[0]], *k[1:]))) for k in kinds]
     share_work(items)
     for name in record_sets:
-        for f in ground.SETS[ground.set_name(name)][0]:
-            ground._package_file(f)   # cached per process: the set's HDF5 file read once
+        for f in records.SETS[records.set_name(name)][0]:
+            records._package_file(f)   # cached per process: the set's HDF5 file read once
 
 
 def _name(call) -> str:

@@ -17,7 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nsd_core.ground.motions import GroundMotion, fema_record, parse_ground_spec
+from nsd_core.ground.motions import GroundMotion, parse_ground_spec
+from nsd_core.ground.records import fema_record
 from nsd_core.common.errors import ParameterError
 from nsd_core.model.errors import ModelError
 

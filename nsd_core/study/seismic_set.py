@@ -84,7 +84,7 @@ class RecordRun:
 
 def parse_records(text: str | None, set_: str) -> list[int]:
     """'1,3,5-7' -> [1, 3, 5, 6, 7] within the set's IDs (None: all of them); ParameterError otherwise."""
-    from nsd_core.ground.motions import SETS, set_name
+    from nsd_core.ground.records import SETS, set_name
     ids = SETS[set_name(set_)][1]
     if text is None:
         return list(ids)
@@ -107,7 +107,7 @@ def record_runs(set_: str, records: list[int], ground: dict, params: dict, struc
     """Per record: the device run, the supports-alone run, and a device run per peer engine.
     Every record's ground motion is built here once, so a window outside a record is bad input
     (ParameterError) before anything runs."""
-    from nsd_core.ground.motions import fema_record, set_name
+    from nsd_core.ground.records import fema_record, set_name
     set_ = set_name(set_)
     runs = []
     for rid in records:
@@ -158,7 +158,7 @@ def run_record(r: RecordRun, run_engine: Callable | None = None, keep_partial: b
     a peer engine (comparisons.engines.run_seismic_engine: the study layer knows only the in-house engine)."""
     start = time.perf_counter()
     try:
-        from nsd_core.ground.motions import fema_record
+        from nsd_core.ground.records import fema_record
         from nsd_core.structure.isolation import Structure
         from nsd_core.device.params import Params
         from nsd_core.device.results import versions
@@ -300,7 +300,7 @@ def _cell(v) -> str:
 
 def _row(set_: str, rid: int, group: dict, recs: dict, peers: list[str]) -> tuple[dict, dict]:
     """One row of set.csv and the record's entry in set.json (folders, statuses, errors)."""
-    from nsd_core.ground.motions import record_metadata
+    from nsd_core.ground.records import record_metadata
     meta = record_metadata(set_, rid)
     row = {"set": set_, "id": rid, "earthquake": f"{meta.get('EarthquakeName', '')} ({meta.get('EarthquakeYear', '')})",
            "station": meta.get("RecordingStationName", ""), "magnitude": float(meta.get("EarthquakeMagnitude")),
