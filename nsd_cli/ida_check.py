@@ -8,9 +8,10 @@ series kept, and checked against other models on the same output times:
 - on the supports alone (which MuJoCo and Exudyn do not model): the exact solution of the linear
   oscillator (nsd_cli.ida_exact, eqsig's Nigam-Jennings recursion on the record's own samples).
 
-Each peer runs the record at its step and at half of it (its own error estimate, judged by the gate's
-rule); one that is not converged there runs it once more at the step its runs ask for (nsd_cli.ida_refine),
-its first pair's verdict kept beside the refined one.
+Each peer runs the record at its step and at the gate's companion step for its method (twice it for
+Exudyn, half of it for MuJoCo's Euler: comparisons.estimate.companion_times), its own error estimate
+judged by the gate's rule; one that is not converged there runs it once more at the step its runs ask
+for (nsd_cli.ida_refine), its first pair's verdict kept beside the refined one.
 
 A limit reached by the rod's length stops the run; the check then runs at the bracket's lower end,
 the highest level below the limit, where every model runs the whole record (said in the entry).
@@ -52,19 +53,39 @@ def parse_mode(text) -> str:
     return text
 
 
-# Each peer's step on a whole record: the gate's on its seismic cases (comparisons/cases.toml, judged by
-# the per-run rule there: MuJoCo Euler 2e-5 s, 1e-5 s under a building; Exudyn 1e-4 s). Each is run at
-# that step and at half of it, so that its own error estimate on this record is measured, not assumed.
-PEER_STEPS = {"mujoco": ("timestep", 2e-5, 1e-5), "exudyn": ("step_size", 1e-4, 1e-4)}
+# Each peer's step on a whole record. MuJoCo Euler: the gate's on its seismic cases (comparisons/cases.toml,
+# judged by the per-run rule there) 2e-5 s, 1e-5 s under a building. Exudyn: 1.25e-5 s, the step its own
+# runs asked for on the far-field median record (15 at its limit intensity, 16.9 model s): at the gate's
+# 1e-4 s its device force differed from the in-house run by 1.4e-2 of its peak (FAIL, not converged; 1.6e-3
+# at 2.5e-5 s, 1.1e-3 at 2e-5 s), its refinement asked 1.02e-5 s, capped at 1.25e-5 s, where it passed
+# (dF 4.4e-4, estimate 4.4e-4; docs/performance.md): a first pair at 1e-4 s was 57 s of runs spent on
+# a FAIL. Other far-field records need finer (their dF against the in-house run, at limit intensity):
+# record 4 (14.3 model s, 1.0 m/s^2) 1.8e-3 at 1.25e-5 s, 6.7e-3 at 2.5e-5 s (order 1.9: it asks 8.2e-6 s);
+# record 20 (28.5 model s, 0.78 m/s^2) 4.5e-2 at 2.5e-5 s. From 1e-4 s their refinement (at most 8x the
+# steps) could not reach a pass; from 1.25e-5 s it can. Each is run at that step and at its companion's (companion_times: 2h for Exudyn, h/2 for
+# MuJoCo's Euler, as the gate), so that its own error estimate on this record is measured, not assumed.
+PEER_STEPS = {"mujoco": ("timestep", 2e-5, 1e-5), "exudyn": ("step_size", 1.25e-5, 1.25e-5)}
 METRIC_TOLERANCE = {"du": "max_du_rel", "dF": "max_dF_device_rel", "da": "peak_a_rel"}
 
 
-def peer_settings(engine: str, building: bool, half: bool = False, step: float | None = None) -> dict:
+def companion_times(engine: str) -> float:
+    """A peer's companion step over its judged step: the gate's for its method with the cross-check's
+    settings (comparisons.estimate.companion_times: 2 for Exudyn, 1/2 for MuJoCo's Euler)."""
+    from comparisons.estimate import companion_times as gate_companion
+    return gate_companion(engine, {})
+
+
+def pair_cost(engine: str) -> float:
+    """A peer's pair (its run and its companion) in steps of its judged run: 1.5 (2h), 3 (h/2)."""
+    return 1.0 + 1.0 / companion_times(engine)
+
+
+def peer_settings(engine: str, building: bool, companion: bool = False, step: float | None = None) -> dict:
     """The settings of a peer's cross-check run: its step on a whole record (``PEER_STEPS``; ``step``:
-    a refined one, nsd_cli.ida_refine), halved for the run that estimates its error."""
+    a refined one, nsd_cli.ida_refine), times ``companion_times`` for the run that estimates its error."""
     key, h, h_building = PEER_STEPS[engine]
     step = step if step is not None else (h_building if building else h)
-    return {key: step / 2 if half else step}
+    return {key: step * companion_times(engine) if companion else step}
 
 
 def peer_step(engine: str) -> float:
@@ -79,7 +100,7 @@ def check_work(mode: str, durations: dict, peers: list[str]) -> dict:
         return {"mode": mode, "peer_steps": 0, "records": 0}
     n = len(durations) if mode == "all" else 1
     seconds = sum(durations.values()) if mode == "all" else max(durations.values())
-    steps = sum(3.0 * seconds / peer_step(e) for e in peers)   # the run at h and its check at h/2
+    steps = sum(pair_cost(e) * seconds / peer_step(e) for e in peers)   # the run at h and its companion
     if steps > STEPS_MAX:
         raise ParameterError(f"--cross-check all: {n} records x {len(peers)} engines ({', '.join(peers)}) over "
                              f"{seconds:.4g} model s would take about {steps:.3g} peer steps; allowed: at most "
@@ -166,15 +187,15 @@ def cross_check(traces: list[Trace], store: Store, frag: dict, peers: list[str],
                             for r in config["records"] if r["limit_im"] is not None and r["record"] != pick["record"]]
     chosen = [p for p in [*picks.values(), *others["device"], *others["nodevice"]] if p and "trace" in p]
     jobs = []
-    for pick in chosen:
+    for pick in chosen:   # the peers' runs first, the finest step first: the longest start at once
         tr, level = pick["trace"], pick["level"]
+        if tr.device:
+            building = tr.common["structure"].get("building") is not None
+            jobs += [tr.point(level, keep_series=True, engine=e, settings=peer_settings(e, building, c))
+                     for e in sorted(peers, key=peer_step) for c in (False, True)]
         jobs.append(tr.point(level, keep_series=True))
         if tr.device and peers:   # the in-house run's own error: the same point at the converged settings
             jobs.append(_converged(tr, level))
-        if tr.device:
-            building = tr.common["structure"].get("building") is not None
-            jobs += [tr.point(level, keep_series=True, engine=e, settings=peer_settings(e, building, half))
-                     for e in peers for half in (False, True)]
     if not jobs:
         return out, 0.0
     fresh = {j.key for j in jobs if (rec := store.load(j.key)) is None or rec["status"] == "failed"}
@@ -183,7 +204,7 @@ def cross_check(traces: list[Trace], store: Store, frag: dict, peers: list[str],
                          None, f"ida cross-check ({mode}): {len(jobs)} runs (those stored as failed run again)")
     # a peer not converged on its record runs it once more at the step its own runs ask for (ida_refine)
     steps = {id(p): _refinements(p, store, peers, fresh) for p in chosen if p["trace"].device}
-    planned = sum(3.0 * r["duration"] / r["step"] for per in steps.values() for r in per.values())
+    planned = sum(pair_cost(e) * r["duration"] / r["step"] for per in steps.values() for e, r in per.items())
     if planned > STEPS_MAX:   # the refinements' own bound (--cross-check all: several records at up to 8x)
         n = sum(len(per) for per in steps.values())
         out["refinement_skipped"] = (f"{n} engine run(s) not converged at their step were not run again: about "
@@ -192,8 +213,8 @@ def cross_check(traces: list[Trace], store: Store, frag: dict, peers: list[str],
         log(f"ida cross-check ({mode}): {out['refinement_skipped']}")
         steps = {}
     again = [p["trace"].point(p["level"], keep_series=True, engine=e,
-                              settings=peer_settings(e, _building(p["trace"]), half, r["step"]))
-             for p in chosen for e, r in steps.get(id(p), {}).items() for half in (False, True)]
+                              settings=peer_settings(e, _building(p["trace"]), c, r["step"]))
+             for p in chosen for e, r in steps.get(id(p), {}).items() for c in (False, True)]
     if again:
         fresh |= {j.key for j in again if (rec := store.load(j.key)) is None or rec["status"] == "failed"}
         elapsed += run_stored(again, store, job, workers, scheduler, True, log, None,
@@ -252,7 +273,8 @@ def _refinements(pick: dict, store: Store, peers: list[str], fresh: set) -> dict
         settings = (parts["rec"].get("metrics", {}).get("solver") or {}).get("settings") or {}
         step = settings.get(PEER_STEPS[e][0])
         if step:
-            args = (float(step), parts["verdict"], parts["diff"], parts["ref_check"], nominal_order(e, settings))
+            args = (float(step), parts["verdict"], parts["diff"], parts["ref_check"], nominal_order(e, settings),
+                    companion_times(e))
             new = refined_step(*args)
             if new is not None:
                 out[e] = {"step": new, "asked": asked_step(*args), "duration": float(ref["t"][-1]), "first": first}
@@ -303,14 +325,14 @@ def _entry(pick: dict, store: Store, peers: list[str], folder: Path, fresh: set,
 
 def _peer_entry(tr: Trace, level: float, e: str, store: Store, ref, own, fresh: set, step: float | None = None,
                 folder: Path | None = None) -> tuple[dict, dict | None]:
-    """A peer's pair (at ``step``, or its own) on a checked point: its entry (differences, timing, the
-    gate's verdict) and the parts the refinement reads (None when a run failed); ``folder``: the h
-    run's series copied there."""
+    """A peer's pair (at ``step``, or its own, and its companion) on a checked point: its entry
+    (differences, timing, the gate's verdict) and the parts the refinement reads (None when a run
+    failed); ``folder``: the judged run's series copied there."""
     building = _building(tr)
     runs = {}
-    for half in (False, True):
-        key = tr.point(level, keep_series=True, engine=e, settings=peer_settings(e, building, half, step)).key
-        runs[half] = (key, store.load(key))
+    for c in (False, True):
+        key = tr.point(level, keep_series=True, engine=e, settings=peer_settings(e, building, c, step)).key
+        runs[c] = (key, store.load(key))
     (key, rec), (key2, rec2) = runs[False], runs[True]
     timing = {"wall_time": (rec or {}).get("wall_time"), "run_now": key in fresh,
               "check_wall_time": (rec2 or {}).get("wall_time"), "check_run_now": key2 in fresh,
@@ -333,17 +355,18 @@ def _peer_entry(tr: Trace, level: float, e: str, store: Store, ref, own, fresh: 
 
 
 def judged(engine: str, diff: dict, h_vs_h2: dict, rec: dict, rec2: dict, own: dict | None = None) -> dict:
-    """The peer's own error estimate on this record (Richardson from its h and h/2 runs, the gate's
-    order for its method) and the gate's rule on du, dF and da (comparisons/tolerances.toml): consistent
+    """The peer's own error estimate on this record (Richardson from its run and its companion's, ``rec2``,
+    at 2h or h/2, whichever their step counts say; ``h_vs_h2``: their difference; the gate's order for
+    its method) and the gate's rule on du, dF and da (comparisons/tolerances.toml): consistent
     when the difference from the in-house run is within k (3) x (the estimate + the in-house run's own
     error, ``own``: its difference from the converged in-house run; as the gate adds its reference's),
     accurate when the estimate and the difference are within the tolerance. Without ``own`` the in-house
     run counts as exact: a peer refined below its error then reads as disagreeing."""
     from comparisons.config import load_tolerances
-    from comparisons.estimate import nominal_order, richardson_factor, step_needed, step_ratio
+    from comparisons.estimate import nominal_order, pair_factor, step_needed
     stats, stats2 = (r.get("metrics", {}).get("solver") or {} for r in (rec, rec2))
     order = nominal_order(engine, stats.get("settings") or {})
-    factor = richardson_factor(order, step_ratio(stats, stats2))
+    factor, _ = pair_factor(order, stats, stats2, companion_times(engine) > 1.0)
     rule = load_tolerances().rule
     key, step = PEER_STEPS[engine][0], (stats.get("settings") or {}).get(PEER_STEPS[engine][0])
     out, ok, needed = {}, True, []

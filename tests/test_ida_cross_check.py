@@ -158,3 +158,41 @@ def test_a_peer_refined_below_the_in_house_runs_own_error_is_not_called_a_disagr
     assert both["verdict"] == "PASS" and all(v["consistent"] and v["accurate"] for v in both["estimates"].values())
     far = judged("mujoco", {**diff, "dF": 5e-4}, h_vs_h2, rec, rec2, own)   # beyond both: still a disagreement
     assert far["verdict"] == "FAIL" and not far["estimates"]["dF"]["consistent"]
+
+
+def test_each_peer_pairs_its_run_with_the_gates_companion_for_its_method():
+    """Exudyn's companion at 2h (its observed order on the device is its nominal 2: the pair costs 1.5 x
+    its run), MuJoCo Euler's at h/2 (its nominal 1 understates what it shows), as the gate's
+    (comparisons.estimate.companion_times); the work estimate counts each pair's cost."""
+    from nsd_cli.ida_check import check_work, pair_cost, peer_settings
+    assert peer_settings("exudyn", False) == {"step_size": 1.25e-5}
+    assert peer_settings("exudyn", False, True) == {"step_size": 2.5e-5}
+    assert peer_settings("mujoco", False, True) == {"timestep": 1e-5}
+    assert peer_settings("mujoco", True, True) == {"timestep": 5e-6}
+    assert peer_settings("exudyn", False, True, step=1e-5) == {"step_size": 2e-5}
+    assert (pair_cost("exudyn"), pair_cost("mujoco")) == (1.5, 3.0)
+    work = check_work("median", {1: 10.0, 2: 16.9}, ["mujoco", "exudyn"])
+    assert work["peer_steps"] == pytest.approx(3.0 * 16.9 / 2e-5 + 1.5 * 16.9 / 1.25e-5)
+
+
+def test_a_coarser_companion_gives_the_judged_runs_estimate_and_refines_from_the_judged_run():
+    """With the companion at 2h the estimate is d(h, 2h) / (2^p - 1) (the step counts say which run is
+    the coarser), and the refinement extrapolates from the judged run (the finer) at the order the
+    record shows between 2h and h."""
+    import math
+    from nsd_cli.ida_check import judged
+    from nsd_cli.ida_refine import refined_step
+    rec = {"metrics": {"solver": {"settings": {"step_size": 1.25e-5}, "steps": 4000}}}
+    rec2 = {"metrics": {"solver": {"settings": {"step_size": 2.5e-5}, "steps": 2000}}}
+    diff = {"du": 1e-5, "dF": 2.4e-3, "da": 4e-4}
+    v = judged("exudyn", diff, {"du": 3e-5, "dF": 6.6e-3, "da": 1.2e-3}, rec, rec2)
+    assert v["estimates"]["dF"]["estimate"] == pytest.approx(6.6e-3 / 3)
+    assert v["estimates"]["du"]["estimate"] == pytest.approx(1e-5)
+    assert v["verdict"] == "FAIL" and v["estimates"]["dF"]["consistent"] and not v["estimates"]["dF"]["accurate"]
+    assert v["estimates"]["da"]["accurate"]
+    coarse = {"du": 4e-5, "dF": 9e-3, "da": 1.6e-3}   # the 2h run's differences from the in-house run
+    step = refined_step(1.25e-5, v, diff, coarse, 2.0, times=2.0)
+    p = math.log2(9e-3 / 2.4e-3)   # 1.91, below the method's 2
+    assert step == pytest.approx(1.25e-5 * (0.8e-3 / 2.4e-3) ** (1 / p))
+    # read the other way round (as h/2) the same numbers would ask for another step: the direction counts
+    assert refined_step(1.25e-5, v, diff, coarse, 2.0, times=0.5) != pytest.approx(step)
