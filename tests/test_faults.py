@@ -206,12 +206,12 @@ def test_disk_full_while_writing_a_result_is_exit_1_naming_the_file(tmp_path, ca
     """The writer's disk fills (fault injection at the OS boundary: the file object's write raises
     ENOSPC as the kernel would): exit 1, one line naming the file, no temporary file, the result
     already there unchanged."""
-    from nsd_core.device import results
+    from nsd_core.common import files
     out = tmp_path / "out"
     assert main([*CYCLE, "--out", str(out)]) == 0
     before = {p.name: p.read_bytes() for p in out.iterdir()}
     capsys.readouterr()
-    real_fdopen = results.os.fdopen
+    real_fdopen = files.os.fdopen
 
     class FullDisk:
         def __init__(self, f):
@@ -226,7 +226,7 @@ def test_disk_full_while_writing_a_result_is_exit_1_naming_the_file(tmp_path, ca
         def write(self, text):
             raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
 
-    monkeypatch.setattr(results.os, "fdopen", lambda fd, mode: FullDisk(real_fdopen(fd, mode)))
+    monkeypatch.setattr(files.os, "fdopen", lambda fd, mode: FullDisk(real_fdopen(fd, mode)))
     code = main([*CYCLE, "--amplitude", "0.02", "--out", str(out)])
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 1 and len(err) == 1, err
