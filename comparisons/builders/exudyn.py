@@ -358,9 +358,10 @@ def _run(model: Model, s: dict, duration: float, dt_out: float) -> ModelRun:
     reading = time.perf_counter() - begin
     return ModelRun(name, t_out, columns,
                     {o.name: o.unit for o in model.outputs},
-                    {"wall_time": wall, "output_time": reading, "steps": n_steps, "step_size": duration / n_steps,
+                    {"wall_time": wall, "output_time": reading, "steps": n_steps,
                      "closure_max": sample.closure, "tracking_error": sample.tracking,
-                     **s, "redundant_found": redundant, "newton_relaxed_after": None,
+                     **s, "step_size": duration / n_steps,   # the step used (the setting is its largest)
+                     "redundant_found": redundant, "newton_relaxed_after": None,
                      "linear_solver": "sparse" if ss.linearSolver.solverType == exu.LinearSolverType.EigenSparse
                      else "dense"})
 

@@ -197,8 +197,9 @@ def simulate(model: Model, duration: float, dt_out: float, settings: dict | None
     data[:, [k for k, o in enumerate(model.outputs) if o.kind == "work"]] = work
     return ModelRun(name, t_out, {o.name: data[:, k] for k, o in enumerate(model.outputs)},
                     {o.name: o.unit for o in model.outputs},
-                    {"wall_time": wall, "steps": n_steps, "timestep": h, "closure_max": closure,
-                     "tracking_error": tracking, "mujoco_version": mujoco.__version__, **s})
+                    {"wall_time": wall, "steps": n_steps, "closure_max": closure,
+                     "tracking_error": tracking, "mujoco_version": mujoco.__version__, **s,
+                     "timestep": h})   # the step used (the setting is its largest)
 
 
 def _run_python(model, s, m, d, drives, pairs, t_out, n_sub, h, n_steps, weights, uses, plan):
