@@ -69,6 +69,14 @@ def companion_times(engine: str, merged: dict) -> float:
     return 0.5 if engine == "mujoco" and nominal_order(engine, merged) < 2.0 else float(COMPANION)
 
 
+def step_used(step: float, dt_out: float | None) -> float:
+    """The step a fixed-step peer really takes for a ``step`` setting: the largest that divides the output
+    interval ``dt_out`` and is at most the setting (the setting itself when dt_out is None)."""
+    if dt_out is None:
+        return float(step)
+    return float(dt_out) / max(1, math.ceil(float(dt_out) / float(step) - 1e-9))
+
+
 def companion_label(engine: str, merged: dict, dt_out: float | None = None, coarse: bool = True) -> tuple[str, float]:
     """(label, step multiplier) of a peer's companion run with these (merged) settings: ``ENGINE_2h``
     at twice its step (``companion_times``) where ``coarse`` allows it, else ``ENGINE_h2`` at half of it,

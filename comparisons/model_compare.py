@@ -19,7 +19,7 @@ import time
 import numpy as np
 
 from comparisons.estimate import (STEP_SETTING, TIGHT_LABEL, TOLERANCE_LADDER, companion_label, nominal_order,
-                                  pair_factor, pair_order)
+                                  pair_factor, pair_order, step_used)
 from comparisons.model_cases import ModelCase
 from comparisons.verdict import FLOOR, Rule, case_verdicts, pass_sentence
 from nsd_core.model.description import Model
@@ -44,7 +44,9 @@ def companion(case: ModelCase, engine: str) -> tuple[str, dict]:
     merged = {**builder(engine).default_settings, **own}
     key = STEP_SETTING[engine]
     label, times = companion_label(engine, merged, case.dt_out, coarse=False)
-    return label, {**own, key: float(merged[key]) * times}
+    # half the step the judged run takes: a setting above the output interval steps at dt_out / n, and
+    # half of that setting could be the same step (two identical runs, no estimate)
+    return label, {**own, key: step_used(float(merged[key]), case.dt_out) * times}
 
 
 def builder(engine: str):
@@ -104,9 +106,30 @@ def scales(model: Model, ref: ModelRun) -> dict:
     return out
 
 
-def differences(a: ModelRun, b: ModelRun, sc: dict) -> dict:
-    """output -> max over the samples of |a - b| / scale."""
-    return {k: float(np.max(np.abs(a.outputs[k] - b.outputs[k]))) / sc[k][0] for k in a.outputs}
+def differences(a: ModelRun, b: ModelRun, sc: dict, skip: dict | None = None) -> dict:
+    """output -> max over the samples of |a - b| / scale, the samples ``skip`` names for an output left out."""
+    skip = skip or {}
+    return {k: float(np.max(np.delete(np.abs(a.outputs[k] - b.outputs[k]), skip.get(k, ())), initial=0.0)) / sc[k][0]
+            for k in a.outputs}
+
+
+JUMP_PROBE = 1e-10      # s: each side of an output time at which a prescribed acceleration is probed
+JUMP_RELATIVE = 1e-5    # a jump: |q''(t+) - q''(t-)| above this fraction of the largest |q''| probed
+
+
+def acceleration_jumps(model: Model, t: np.ndarray) -> dict:
+    """output -> the sample indices where it is two-valued: a drive force at an output time at which any
+    prescribed acceleration jumps (a ramp's end). The force there has a left and a right limit, and an
+    engine whose clock lands one round-off either side of the time reports either (a fixed-step peer's
+    n h against the reference's t): that sample measures the jump, not the engines."""
+    jumps = set()
+    for p in model.prescribed:
+        left = np.array([p(float(tk) - JUMP_PROBE)[2] for tk in t])
+        right = np.array([p(float(tk) + JUMP_PROBE)[2] for tk in t])
+        peak = max(float(np.max(np.abs(left), initial=0.0)), float(np.max(np.abs(right), initial=0.0)))
+        jumps |= set(np.flatnonzero(np.abs(right - left) > JUMP_RELATIVE * peak).tolist()) if peak > 0 else set()
+    index = np.array(sorted(jumps), dtype=np.int64)
+    return {o.name: index for o in model.outputs if o.kind == "drive_force" and index.size}
 
 
 def roundoff_floors(model: Model, sc: dict) -> dict:
@@ -121,22 +144,27 @@ def roundoff_floors(model: Model, sc: dict) -> dict:
     return {**floors, **{k + SOLUTION: v for k, v in floors.items()}}
 
 
-def solution_differences(run: ModelRun, case: ModelCase, sc: dict) -> dict:
-    ref = case.reference
-    return {k + SOLUTION: float(np.max(np.abs(run.outputs[k][ref.index] - v))) / sc[k][0]
-            for k, v in ref.columns.items()}
+def solution_differences(run: ModelRun, case: ModelCase, sc: dict, skip: dict | None = None) -> dict:
+    ref, skip = case.reference, skip or {}
+    out = {}
+    for k, v in ref.columns.items():
+        d = np.abs(run.outputs[k][ref.index] - v)
+        keep = ~np.isin(ref.index, skip.get(k, ()))
+        out[k + SOLUTION] = float(np.max(d[keep], initial=0.0)) / sc[k][0]
+    return out
 
 
 def judge(model: Model, case: ModelCase, engines: list[str], runs: dict, rule: Rule) -> tuple[list, dict]:
     """Rows and verdicts of one case from its runs (label -> ModelRun)."""
     conv, check = runs[CONVERGED], runs[CHECK]
     sc = scales(model, conv)
-    ref_error = differences(check, conv, sc)
+    skip = acceleration_jumps(model, conv.t)
+    ref_error = differences(check, conv, sc, skip)
     values, estimates, evidence = {}, {}, {}
     for e in engines:
         if e not in runs:
             continue
-        d = differences(runs[e], conv, sc)
+        d = differences(runs[e], conv, sc, skip)
         shares_reference = False
         values[e] = {**d, "closure_max": runs[e].stats.get("closure_max", 0.0)}
         if model.prescribed:
@@ -145,9 +173,9 @@ def judge(model: Model, case: ModelCase, engines: list[str], runs: dict, rule: R
             pair = runs[companion(case, e)[0]]
             p = nominal_order(e, {**builder(e).default_settings, **case.settings.get(e, {})})
             factor, ratio = pair_factor(p, runs[e].stats, pair.stats)
-            estimates[e] = {k: factor * v for k, v in differences(runs[e], pair, sc).items()}
+            estimates[e] = {k: factor * v for k, v in differences(runs[e], pair, sc, skip).items()}
             primary = max(d, key=lambda k: d[k])
-            d2 = differences(pair, conv, sc)
+            d2 = differences(pair, conv, sc, skip)
             key = STEP_SETTING[e]
             evidence[e] = {"order": p, "ratio": ratio, "factor": factor, "setting": key,
                            "step": float(runs[e].stats.get(key) or {**builder(e).default_settings,
@@ -156,7 +184,7 @@ def judge(model: Model, case: ModelCase, engines: list[str], runs: dict, rule: R
                            "primary_error": d[primary]}
         elif e in TOLERANCE_LADDER and TIGHT_LABEL.format(engine=e) in runs:   # its own tolerance ladder
             key, factor, order = TOLERANCE_LADDER[e]
-            estimates[e] = differences(runs[e], runs[TIGHT_LABEL.format(engine=e)], sc)
+            estimates[e] = differences(runs[e], runs[TIGHT_LABEL.format(engine=e)], sc, skip)
             merged = {**builder(e).default_settings, **case.settings.get(e, {})}
             evidence[e] = {"order": order, "setting": key, "step": float(merged[key]), "ladder": factor}
         else:   # the in-house engine: its estimate is its distance from the converged run
@@ -164,7 +192,7 @@ def judge(model: Model, case: ModelCase, engines: list[str], runs: dict, rule: R
             shares_reference = True
             evidence[e] = {}
         if case.reference is not None:
-            sol = solution_differences(runs[e], case, sc)
+            sol = solution_differences(runs[e], case, sc, skip)
             values[e].update(sol)
             # the in-house engine's estimate is its distance from the converged run, whose own error (ref_error)
             # it shares when the two coincide: against a solution its error is at most the sum
@@ -172,7 +200,7 @@ def judge(model: Model, case: ModelCase, engines: list[str], runs: dict, rule: R
             estimates[e].update({k: estimates[e][k[: -len(SOLUTION)]] + own * ref_error[k[: -len(SOLUTION)]]
                                  for k in sol})
     if case.reference is not None:   # the converged reference against the solution, within its own error
-        sol = solution_differences(conv, case, sc)
+        sol = solution_differences(conv, case, sc, skip)
         values[CONVERGED] = sol
         estimates[CONVERGED] = {k: ref_error[k[: -len(SOLUTION)]] for k in sol}
         evidence[CONVERGED] = {}
@@ -181,6 +209,16 @@ def judge(model: Model, case: ModelCase, engines: list[str], runs: dict, rule: R
     sc_all = {**sc, **{k + SOLUTION: v for k, v in sc.items()}}
     return case_verdicts(case.name, "model", names, values, estimates, ref_error, sc_all, evidence, rule,
                          floors=roundoff_floors(model, sc), reference_rtol=CONVERGED_SETTINGS["rtol"])
+
+
+def excluded(model: Model, t: np.ndarray, log, case: str) -> dict:
+    """output -> the output times [s] its differences leave out (``acceleration_jumps``), said once."""
+    out = {k: [float(t[i]) for i in idx] for k, idx in acceleration_jumps(model, t).items()}
+    if out:
+        times = sorted({x for v in out.values() for x in v})
+        log(f"  {case}: {', '.join(out)} at t = {', '.join(f'{x:.6g}' for x in times)} s left out: a prescribed "
+            "acceleration jumps there, so each drive force has two values (its left and right limits)")
+    return out
 
 
 def model_rule(model: Model, k: float) -> Rule:
@@ -220,6 +258,7 @@ def compare_model(model: Model, cases: list[ModelCase], engines: list[str], k: f
             rows, verdicts = judge(model, case, ok, runs, rule)
             summary["rows"] += rows
             entry["verdicts"] = verdicts
+            entry["excluded_samples"] = excluded(model, runs[CONVERGED].t, log, case.name)
         else:
             entry["verdicts"] = {}
         for e in engines:

@@ -143,9 +143,15 @@ def _row(case, engine, reference, metric, value, est, ref, bound, tol, consisten
 
 def _verdict(engine: str, rows: list[dict], ev: dict, rule: Rule, reference_rtol: float | None = None) -> dict:
     """One engine's verdict on one case, in words."""
-    incons = [r for r in rows if r["consistent"] is False]
+    # a difference beyond the bound where the engine's own estimate is itself over the tolerance is undecided:
+    # that estimate is not yet asymptotic (a step far from converged), so the bound it gives is no measure of a
+    # modelling difference; the engine is not converged, and a finer step (--refine) decides it
+    beyond = [r for r in rows if r["consistent"] is False]
+    incons = [r for r in beyond if r["accurate"]]
+    undecided = [r for r in beyond if not r["accurate"]]
     inacc = [r for r in rows if not r["accurate"]]
-    out = {"consistent": not incons, "accurate": not inacc, "pass": not incons and not inacc,
+    out = {"consistent": None if undecided and not incons else not incons, "accurate": not inacc,
+           "pass": not beyond and not inacc,
            "order": ev.get("order"), "observed_order": ev.get("observed_order"), "step": ev.get("step"),
            "setting": ev.get("setting"), "k": rule.k, "needs": None, "uncertain": None}
     parts = []
@@ -173,6 +179,11 @@ def _verdict(engine: str, rows: list[dict], ev: dict, rule: Rule, reference_rtol
             parts.append(text)
         if own:   # closure, tracking, energy balance: the engine's own checks, whatever the cause
             parts.append("its own check over tolerance: " + _items(own))
+    if undecided and not incons:
+        r = max(undecided, key=lambda r: r["value"] / r["bound"] if r["bound"] else math.inf)
+        out["undecided"] = {"metric": r["metric"], "ratio": r["value"] / r["bound"]}
+        parts.append(f"whether it agrees is undecided until it converges: {r['metric']} = {r['value']:.3g} is "
+                     f"{r['value'] / r['bound']:.3g}x its bound, from an estimate over tolerance (--refine)")
     unresolved = [r for r in rows if r["metric"] not in OWN and (r["reference_error"] or 0.0) > r["tolerance"]]
     if unresolved:
         r = max(unresolved, key=lambda r: r["reference_error"] / r["tolerance"])

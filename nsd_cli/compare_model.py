@@ -30,7 +30,7 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 
 from comparisons.engines.base import MAX_FIXED_STEPS, STEP_FLOOR, check_settings
-from comparisons.estimate import STEP_SETTING
+from comparisons.estimate import STEP_SETTING, step_used
 from comparisons.model_compare import (BUILDERS, CHECK, CONVERGED, REFERENCE, builder, compare_model, judge,
                                        model_rule, run_one, run_plan, table)
 from nsd_cli.options import check_out_dir, check_out_file
@@ -68,7 +68,7 @@ def run(args) -> int:
                 check_case_work(f"case.{c.name}", c.duration, c.dt_out, len(model.outputs), merged)
             if e in STEP_SETTING:   # bounded work: the h/2 run takes twice the steps, found before any run
                 key = STEP_SETTING[e]
-                steps = 2 * c.duration / float(merged[key])
+                steps = 2 * c.duration / step_used(float(merged[key]), c.dt_out)
                 if steps > MAX_FIXED_STEPS:
                     raise ParameterError(f"case.{c.name}.{e}.{key} = {merged[key]!r}: {steps:.3g} steps for "
                                          f"{c.duration:g} s and its h/2 run; at most {MAX_FIXED_STEPS} (a larger step "

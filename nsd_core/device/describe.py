@@ -75,17 +75,7 @@ free = ["cap"]
 ''']
     lines.append(device_forces(g))
     lines.append(f'''
-[[outputs]]
-name = "F_x"
-kind = "drive_force"
-element = "drive_x"
-
-[[outputs]]
-name = "F_y"
-kind = "drive_force"
-element = "drive_y"
-scale = 1.0    # N: the force across a line drive is zero up to round-off; judged in newtons
-
+{force_outputs(params, psi, drive)}
 [[outputs]]
 name = "cap_z"
 kind = "coordinate"
@@ -110,6 +100,23 @@ element = "spring"
 
 {case if case is not None else _default_case(amplitude, frequency, cycles, samples_per_cycle)}''')
     return "".join(lines)
+
+
+def force_outputs(params: Params, psi: float, drive) -> str:
+    """F_x and F_y, the drive's forces. A component that is zero in exact arithmetic is judged in newtons
+    (``scale = 1.0``; its own peak is round-off): the force across a line drive along X (the wires are
+    symmetric about X for any number), and along Y where the number of wires is even. On any other
+    path both are judged against their own peaks."""
+    angle = psi if drive is None else math.radians(drive.direction_deg)
+    line = drive is None or drive.path == "line"
+    zero = {"x": line and abs(math.cos(angle)) < 1e-12 and params.n_wires % 2 == 0,
+            "y": line and abs(math.sin(angle)) < 1e-12}
+    return "\n".join(f'''[[outputs]]
+name = "F_{c}"
+kind = "drive_force"
+element = "drive_{c}"
+''' + ("scale = 1.0    # N: the force across a line drive is zero up to round-off; judged in newtons\n"
+       if zero[c] else "") for c in "xy")
 
 
 ELEMENT_OUTPUTS = '''[[outputs]]
