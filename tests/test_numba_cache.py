@@ -8,7 +8,8 @@ import sys
 import textwrap
 from pathlib import Path
 
-from nsd_core.compilation.numba_cache import cache_folder, source_fingerprint, use_versioned_cache
+from nsd_core.compilation.numba_cache import (_sources, cache_folder, compiled_sources, source_fingerprint,
+                                              use_versioned_cache)
 
 
 def _tree(root: Path, law: str) -> None:
@@ -32,6 +33,48 @@ def test_an_edit_to_any_callee_changes_the_folder(tmp_path):
     assert cache_folder(tmp_path, env).parent == tmp_path / "c" / "nsd-harness" / "numba"
 
 
+KERNEL = """from numba import njit
+from nsd_core.constants import (SCALE,
+    OFFSET)
+
+
+@njit(cache=True)
+def law(x):
+    from nsd_core.lazy import helper
+    return SCALE * x + OFFSET + helper(x)
+"""
+
+
+def test_the_folder_follows_only_what_compiled_code_can_depend_on(tmp_path):
+    """An edit to a module the kernels import (a constant frozen at compile time, on a continued line, or a
+    lazy import) starts a fresh folder; an edit to a module no kernel reaches (the verdict, the command
+    line) keeps the compiled code's folder, while the full fingerprint (kept runs' keys) still changes."""
+    for pkg in ("nsd_core", "comparisons"):
+        (tmp_path / pkg).mkdir()
+        (tmp_path / pkg / "__init__.py").write_text("")
+    files = {"nsd_core/kernel.py": KERNEL, "nsd_core/constants.py": "SCALE = 2.0\nOFFSET = 0.0\n",
+             "nsd_core/lazy.py": "from numba import njit\n\n@njit\ndef helper(x):\n    return x\n",
+             "comparisons/verdict.py": "from nsd_core.kernel import law\nK = 3.0\n"}
+    for name, text in files.items():
+        (tmp_path / name).write_text(text)
+    assert compiled_sources(_sources(tmp_path)) == {"nsd_core.kernel", "nsd_core.constants", "nsd_core.lazy"}
+    folder, full = source_fingerprint(tmp_path, compiled_only=True), source_fingerprint(tmp_path)
+    (tmp_path / "comparisons/verdict.py").write_text("from nsd_core.kernel import law\nK = 4.0\n")
+    assert source_fingerprint(tmp_path, compiled_only=True) == folder and source_fingerprint(tmp_path) != full
+    for name, edit in (("nsd_core/constants.py", "SCALE = 2.0\nOFFSET = 1.0\n"),
+                       ("nsd_core/lazy.py", "from numba import njit\n\n@njit\ndef helper(x):\n    return 2 * x\n")):
+        (tmp_path / name).write_text(edit)
+        assert source_fingerprint(tmp_path, compiled_only=True) != folder
+        folder = source_fingerprint(tmp_path, compiled_only=True)
+
+
+def test_the_real_tree_keeps_the_engines_and_laws_and_leaves_the_verdict_out():
+    found = compiled_sources(_sources(Path(__file__).resolve().parents[1]))
+    assert {"nsd_core.engine.semirecursive", "nsd_core.device.laws", "nsd_core.model.laws",
+            "comparisons.builders.mujoco_kernels"} <= found
+    assert not {"comparisons.verdict", "comparisons.harness", "comparisons.model_compare"} & found
+
+
 def test_a_users_own_cache_setting_is_kept():
     env = {"NUMBA_CACHE_DIR": "/somewhere/of/mine"}
     assert use_versioned_cache(env) is None
@@ -53,7 +96,8 @@ def test_numba_writes_its_cache_into_the_versioned_folder(tmp_path):
     subprocess.run([sys.executable, "-c", code], env=env, check=True, timeout=120)
     root = tmp_path / "cache" / "nsd-harness" / "numba"
     folders = list(root.iterdir())
-    assert len(folders) == 1 and folders[0].name == source_fingerprint(Path(__file__).resolve().parents[1])
+    assert len(folders) == 1 and folders[0].name == source_fingerprint(Path(__file__).resolve().parents[1],
+                                                                        compiled_only=True)
     assert any(p.suffix == ".nbi" for p in folders[0].rglob("*")), "numba cached nothing there"
 
 

@@ -3,8 +3,9 @@
 numba's on-disk cache checks only the file of the function it compiled, not the functions that
 one calls: after an edit to a force law or to an engine kernel, a cached step loop in another file
 would go on running the old code. So the cache folder is keyed by a hash of every source file of
-``nsd_core`` and ``comparisons`` (whose MuJoCo callbacks are compiled from the same laws): any edit,
-any upgrade, starts a fresh folder. A NUMBA_CACHE_DIR set by the user is honoured as it is.
+``nsd_core`` and ``comparisons`` that compiled code can depend on (``compiled_sources``: the modules
+that import numba and what they import, transitively): an edit to any of them starts a fresh folder, an
+edit elsewhere keeps the machine code. A NUMBA_CACHE_DIR set by the user is honoured as it is.
 
 numba warns on stderr when it cannot cache a kernel ("Cannot cache compiled function ... as it uses
 dynamic globals": every kernel under NUMBA_OPT=0). Such a kernel is compiled again in the next
@@ -25,6 +26,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import re
 import sys
 import warnings
 from pathlib import Path
@@ -33,20 +35,65 @@ PACKAGES = ("nsd_core", "comparisons")
 CHOSEN = "NSD_VERSIONED_CACHE"   # the folder use_versioned_cache chose, for the child processes
 
 
-def source_fingerprint(root: Path) -> str:
-    """Hash of the names and contents of every .py file of the packages under ``root``."""
-    h = hashlib.sha256()
+def _sources(root: Path) -> dict[str, tuple[Path, bytes]]:
+    """module name -> (file, its bytes), every .py file of the packages under ``root``."""
+    out = {}
     for pkg in PACKAGES:
         base = root / pkg
         for f in sorted(base.rglob("*.py")) if base.is_dir() else ():
+            parts = f.relative_to(root).with_suffix("").parts
+            out[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = (f, f.read_bytes())
+    return out
+
+
+def source_fingerprint(root: Path, compiled_only: bool = False) -> str:
+    """Hash of the names and contents of every .py file of the packages under ``root`` (``compiled_only``:
+    of the files numba's machine code can depend on, ``compiled_sources``)."""
+    sources = _sources(root)
+    keep = compiled_sources(sources) if compiled_only else set(sources)
+    h = hashlib.sha256()
+    for name, (f, text) in sorted(sources.items(), key=lambda kv: kv[1][0]):
+        if name in keep:
             h.update(f.relative_to(root).as_posix().encode())
-            h.update(f.read_bytes())
+            h.update(text)
     return h.hexdigest()[:16]
+
+
+USES_NUMBA = re.compile(rb"^[ \t]*(?:import[ \t]+numba|from[ \t]+numba[ \t.])", re.M)
+IMPORT = re.compile(rb"^[ \t]*(?:from[ \t]+([\w.]+)[ \t]+import[ \t]+(\([^)]*\)|[^\n]*)|import[ \t]+([\w., \t]+))", re.M)
+
+
+def compiled_sources(sources: dict) -> set[str]:
+    """The modules numba's machine code can depend on: every module that imports numba (its kernels, and
+    the code generators whose output it compiles), and every module of the packages those import, lazily
+    too, transitively (a kernel freezes the globals it reads at compile time). An edit anywhere else (the verdict, the command line, the studies, a builder
+    that only calls compiled code) leaves the compiled code, and so its cache folder, as they were. A
+    package's import is its ``__init__``, whose own imports are followed in turn."""
+    def deps(text: bytes) -> set[str]:
+        found = set()
+        for frm, names, plain in IMPORT.findall(text):
+            mods = [m.strip().split(" ")[0] for m in plain.decode().split(",")] if plain else [frm.decode()]
+            if frm:
+                mods += [f"{frm.decode()}.{n.strip().split(' ')[0]}" for n in names.decode().strip("()").split(",")
+                         if n.strip()]
+            for m in mods:
+                while m and m not in sources:   # a name inside a module: the module
+                    m = m.rpartition(".")[0]
+                if m:
+                    found.add(m)
+        return found
+    todo = [m for m, (_, text) in sources.items() if USES_NUMBA.search(text)]
+    seen = set(todo)
+    while todo:
+        for d in deps(sources[todo.pop()][1]) - seen:
+            seen.add(d)
+            todo.append(d)
+    return seen
 
 
 def cache_folder(root: Path, environ=os.environ) -> Path:
     base = Path(environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
-    return base / "nsd-harness" / "numba" / source_fingerprint(root)
+    return base / "nsd-harness" / "numba" / source_fingerprint(root, compiled_only=True)
 
 
 def use_versioned_cache(environ=os.environ) -> str | None:
