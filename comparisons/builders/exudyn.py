@@ -100,6 +100,7 @@ from exudyn.itemInterface import (LoadMassProportional, MarkerBodyMass, MarkerBo
 from exudyn.rigidBodyUtilities import RigidBodyInertia
 
 from comparisons.builders.exudyn_compiled import CompiledForces
+from comparisons.builders.exudyn_drive import DriveTable, offsets as _offsets
 from comparisons.builders.exudyn_forces import LawStates, add_force
 from comparisons.builders.exudyn_frames import (AXIS_OF_DOF, constrained_axes, cross, frame_with_z, joint_coordinates,
                                                 joint_frame, law_axis, planar_normal)
@@ -279,18 +280,6 @@ def _offset(mbs, t, itemNumber, offsetUserFunctionParameters):
     return offsetUserFunctionParameters
 
 
-def _offsets(slots: dict, t: float, J: np.ndarray | None, derivative: int = 0) -> list[float]:
-    """The six offsets at t (or their ``derivative``-th time derivative, 0 or 2): the prescribed coordinates
-    in the joint frame, translations turned by J (the joint frame, when Exudyn reads them in global
-    coordinates; None: as they are)."""
-    out = [0.0] * 6
-    for k, p in slots.items():
-        out[k] = p(t)[derivative]
-    if J is not None:
-        out[:3] = [float(v) for v in J @ np.asarray(out[:3])]
-    return out
-
-
 def _run(model: Model, s: dict, duration: float, dt_out: float) -> ModelRun:
     t_out = output_times(duration, dt_out)
     per_out = max(1, int(math.ceil((t_out[1] - t_out[0]) / s["step_size"] - 1e-9)))
@@ -303,16 +292,25 @@ def _run(model: Model, s: dict, duration: float, dt_out: float) -> ModelRun:
     predicted = compiled is not None and compiled.predicted
     advance = compiled is not None and (predicted or bool(sample.stateful))
 
-    start_lambda = None
+    start_lambda, step = None, None
+    drive = DriveTable(build, h, n_steps).set if build.driven else None
+    excite = build.excite if build.ground_loads else None
 
     def pre_step(mbs, t):
         """t is the END of the step (Exudyn's convention); the state is the converged one at t - h."""
+        nonlocal step
         n = counter[0]
-        counter[0] += 1
-        build.excite(t)
-        build.drive(t)
-        if advance:   # the laws' commit, and the predicted forces: one compiled call
-            compiled.advance(mbs, h, predicted)
+        counter[0] = n + 1
+        if excite is not None:
+            excite(t)
+        if drive is not None:
+            drive(n, t)
+        if step is not None:   # the laws' commit, and the predicted forces: one compiled call
+            step()
+        elif advance:   # the first step: Exudyn's vectors as its solver holds them (CompiledForces.stepper)
+            step = compiled.stepper(mbs, h, predicted)
+            step()
+            build.states.started = True
         elif sample.stateful:
             sample.commit()
         if work is not None:   # the converged state at t - h, the states committed (no state moves after)

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
+import exudyn as exu
 from exudyn.itemInterface import ObjectGenericODE2
 
 from comparisons.builders.exudyn_frames import law_axis
@@ -135,6 +136,24 @@ class CompiledForces:
         self.states.started = True
         if predict:
             mbs.SetObjectParameter(self.object, "forceVector", f)
+
+    def stepper(self, mbs, h: float, predict: bool):
+        """``advance(mbs, h, predict)`` as a closure of no arguments for the pre-step function, run once a
+        step: its look-ups done once, the same compiled call on the same numbers. Exudyn's coordinate
+        vectors are read through views of its solver's own (``copy=False``): made from the pre-step
+        function, once the solver holds them; the caller sets ``states.started``."""
+        sd, CT = mbs.systemData, exu.ConfigurationType.Current
+        q, q_t = sd.GetODE2Coordinates(CT, False), sd.GetODE2Coordinates_t(CT, False)
+        q_tt = sd.GetODE2Coordinates_tt(CT, False) if predict else self.f
+        ix, advance, F, I, W, f = self.node_index(mbs), self.gen.advance, self.F, self.I, self.W, self.f
+        set_parameter, item = mbs.SetObjectParameter, self.object
+
+        def step():
+            if predict:
+                set_parameter(item, "forceVector", advance(q, q_t, q_tt, ix, h, True, F, I, W, f))
+            else:
+                advance(q, q_t, q_tt, ix, h, False, F, I, W, f)
+        return step
 
     def values(self, mbs) -> tuple[np.ndarray, np.ndarray]:
         """Every element's x' and law value at Exudyn's current coordinates and the committed states, in

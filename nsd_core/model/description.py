@@ -190,6 +190,14 @@ class Prescribed:
         s, c = math.sin(w * t + v["phase"]), math.cos(w * t + v["phase"])
         return v["centre"] + v["amplitude"] * s, v["amplitude"] * w * c, -v["amplitude"] * w * w * s
 
+    def table(self, times) -> np.ndarray:
+        """(q, q', q'') at every time of ``times``: 3 x len(times), at each time the floats of the call
+        at that time (a registered motion's own ``table``; the closed forms time by time)."""
+        motion = self.values.get("motion")
+        if motion is not None and hasattr(motion, "table"):
+            return motion.table(np.asarray(times, dtype=float))
+        return np.array([self(t) for t in np.asarray(times, dtype=float).tolist()], dtype=float).reshape(-1, 3).T
+
 
 @dataclass(frozen=True)
 class Output:

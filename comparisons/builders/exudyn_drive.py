@@ -1,0 +1,67 @@
+"""The prescribed motions' joint offsets for comparisons.builders.exudyn: at one time (``offsets``) and,
+for the pre-step function, at every step's end time, computed a block of steps at a time (``DriveTable``).
+
+Exudyn's pre-step function gets the end time of step n (0-based) as (n + 1) * h, h = duration / steps;
+the table is computed at those times with each motion's ``table`` (nsd_core.model.description.
+Prescribed.table: the same floats as the motion at one time), so a step reads its offsets instead of
+calling every motion. A time that differs from the table's (another solver's clock) is computed as
+before, at that time.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+BLOCK = 4096   # steps a block: 4096 x 6 offsets a driven joint (~1 MB as Python lists)
+
+
+def offsets(slots: dict, t: float, J: np.ndarray | None, derivative: int = 0) -> list[float]:
+    """The six offsets at t (or their ``derivative``-th time derivative, 0 or 2): the prescribed coordinates
+    in the joint frame, translations turned by J (the joint frame, when Exudyn reads them in global
+    coordinates; None: as they are)."""
+    out = [0.0] * 6
+    for k, p in slots.items():
+        out[k] = p(t)[derivative]
+    if J is not None:
+        out[:3] = [float(v) for v in J @ np.asarray(out[:3])]
+    return out
+
+
+def offset_rows(slots: dict, times: np.ndarray, J: np.ndarray | None) -> list[list[float]]:
+    """``offsets`` at every time of ``times``, one list a time (each motion over all times at once)."""
+    out = np.zeros((len(times), 6))
+    for k, p in slots.items():
+        out[:, k] = p.table(times)[0]
+    rows = out.tolist()
+    if J is not None:   # as ``offsets``: the three translations of each row turned by J
+        for r in rows:
+            r[:3] = [float(v) for v in J @ np.asarray(r[:3])]
+    return rows
+
+
+class DriveTable:
+    """The driven joints' offsets (Build.driven: (joint, slots, J)) at the end of every step of size h,
+    ``steps`` in all, set in Exudyn by ``set(n, t)`` before step n."""
+
+    def __init__(self, build, h: float, steps: int):
+        self.build, self.h, self.steps = build, h, steps
+        self.joints = [joint for joint, _, _ in build.driven]
+        self.first, self.times, self.rows = 0, [], []
+
+    def _fill(self, n: int) -> None:
+        """The block of steps from n on."""
+        times = np.arange(n + 1, min(n + BLOCK, self.steps) + 1) * self.h
+        self.first, self.times = n, times.tolist()
+        self.rows = [offset_rows(slots, times, J) for _, slots, J in self.build.driven]
+
+    def set(self, n: int, t: float) -> None:
+        """The offsets for step n, which ends at t (Exudyn's time)."""
+        i = n - self.first
+        if not 0 <= i < len(self.times):
+            self._fill(n)
+            i = 0
+        if self.times[i] != t:   # not the table's time: the motions at t itself
+            self.build.drive(t)
+            return
+        set_parameter = self.build.mbs.SetObjectParameter
+        for joint, rows in zip(self.joints, self.rows):
+            set_parameter(joint, "offsetUserFunctionParameters", rows[i])
