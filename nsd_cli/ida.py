@@ -186,7 +186,8 @@ def _cross_check(traces, store, engines, workers, args, index, runner, work: dic
     mode and estimate, and the times of the IDA's runs and of the cross-check apart."""
     import json
     import sys
-    from nsd_cli.ida_check import cost, cross_check, entries
+    from nsd_cli.ida_check import cross_check
+    from nsd_cli.ida_check_text import cost, entries
     from nsd_core.common.files import atomic_write_json
     frag = json.loads(read_regular_text(store.root / "fragility.json", "fragility.json"))
     if work["peer_steps"]:
@@ -218,7 +219,7 @@ def _print(index: dict, out) -> None:
         fit = ("median %.4g m/s^2, dispersion %.3f" % (f["median"], f["dispersion"]) if f["median"] is not None
                else "no fit")
         print(f"{name}: {fit} ({f['n_reached']} reached, {f['n_censored']} censored)")
-    from nsd_cli.ida_check import describe_entry, entries
+    from nsd_cli.ida_check_text import describe_entry, entries
     for name, c in entries(index.get("cross_check", {})):
         print(describe_entry(name, c))
     spent = index.get("cross_check_cost") or {}

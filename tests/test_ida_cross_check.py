@@ -96,7 +96,8 @@ def test_a_peer_its_own_estimate_calls_unconverged_gets_the_step_it_needs():
     """The rule on a cross-checked peer, from two synthetic runs: consistent but not accurate (the far-field
     record 15's Exudyn numbers at 1e-4 s), so FAIL with the step its estimate asks for (order 2, to 0.8 x
     the tolerance), and PASS when both are small; the printed line says which."""
-    from nsd_cli.ida_check import describe_entry, judged
+    from nsd_cli.ida_check import judged
+    from nsd_cli.ida_check_text import describe_entry
     rec = {"metrics": {"solver": {"settings": {"step_size": 1e-4}, "steps": 1000}}}
     rec2 = {"metrics": {"solver": {"settings": {"step_size": 5e-5}, "steps": 2000}}}
     diff = {"du": 2.7e-2, "dF": 4.6e-2, "da": 5.7e-2}
