@@ -39,6 +39,9 @@ from nsd_core.model.laws import PLANE
 
 HELPERS = (exudyn_kernels,)
 EPS_REL, EPS_MIN = 1e-7, 1e-2   # forward-difference step: EPS_REL max(EPS_MIN, |q_i|) (Exudyn's defaults)
+# the kinematics' and laws' work arrays, allocated once a compiled call (``scratch``) and passed down: each
+# is written before it is read, so one set serves every evaluation in a call (the Jacobian's 30)
+SCRATCH = "x, xd, T, N, S, R, G, r, v, w"
 
 
 def source(elements, nb: int, npts: int, nj: int, params: list[tuple[int, int]], ns: int,
@@ -68,7 +71,7 @@ def _state_source(nb: int, npts: int, nj: int, o: dict) -> list[str]:
         "from comparisons.builders.exudyn_kernels import arguments, forces",
         "", "",
         "@njit(cache=True)",
-        "def _state(F, I, W, f, q, q_t, x, xd, T, N, S, R, G, r, v, w):",
+        f"def _state(F, I, W, f, q, q_t, {SCRATCH}):",
         f"    ia, ib = I[{o['ia']}:{o['ia'] + npts}], I[{o['ib']}:{o['ib'] + npts}]",
         f"    jc, jp = I[{o['jc']}:{o['jc'] + nj}], I[{o['jp']}:{o['jp'] + nj}]",
         f"    turn = I[{o['turn']}:{o['turn'] + nj}] != 0",
@@ -113,19 +116,24 @@ def _evaluate_source(nb: int, o: dict, scratch: str) -> list[str]:
     """``evaluate`` (the generalized forces) and ``jacobian`` (their forward differences)."""
     return [
         "@njit(cache=True)",
-        "def evaluate(q, q_t, F, I, W, f):",
-        scratch,
-        "    ia, ib, jc, jp, turn = _state(F, I, W, f, q, q_t, x, xd, T, N, S, R, G, r, v, w)",
+        f"def _evaluate(q, q_t, F, I, W, f, {SCRATCH}):",
+        f"    ia, ib, jc, jp, turn = _state(F, I, W, f, q, q_t, {SCRATCH})",
         "    _laws(F, W, x, xd, T)",
         "    forces(T, ia, ib, jc, jp, turn, R, G, r, N, S, f)",
         "    return f",
         "", "",
         "@njit(cache=True)",
+        "def evaluate(q, q_t, F, I, W, f):",
+        scratch,
+        f"    return _evaluate(q, q_t, F, I, W, f, {SCRATCH})",
+        "", "",
+        "@njit(cache=True)",
         "def jacobian(q, q_t, F, I, W, fq, fv, J):",
+        scratch,
         f"    n = {7 * nb}",
         "    f0, f1 = np.empty(n), np.empty(n)",
         "    qq, vv = q.copy(), q_t.copy()",
-        "    evaluate(qq, vv, F, I, W, f0)",
+        f"    _evaluate(qq, vv, F, I, W, f0, {SCRATCH})",
         "    J[:, :] = 0.0",
         f"    for m in range({o['nactive']}):",
         f"        i = I[{o['active']} + m]",
@@ -137,11 +145,11 @@ def _evaluate_source(nb: int, o: dict, scratch: str) -> list[str]:
         "            z0 = z[i]",
         f"            d = {EPS_REL!r} * max({EPS_MIN!r}, abs(z0))",
         "            z[i] = z0 + d",
-        "            evaluate(qq, vv, F, I, W, f1)",
+        f"            _evaluate(qq, vv, F, I, W, f1, {SCRATCH})",
         "            z[i] = z0",
         "            for k in range(n):",
         "                J[k, i] -= c * (f1[k] - f0[k]) / d",
-        "    evaluate(q, q_t, F, I, W, f1)   # the turns' last angles back at the unperturbed state",
+        f"    _evaluate(q, q_t, F, I, W, f1, {SCRATCH})   # the turns' last angles back at the unperturbed state",
         "    return J",
         "", ""]
 
@@ -151,8 +159,11 @@ def _commit_source(elements, params, names: dict, nb: int, o: dict, scratch: str
     lines = ["@njit(cache=True)",
              "def commit(q, q_t, F, I, W):",
              scratch,
-             f"    f = np.empty({7 * nb})",
-             "    _state(F, I, W, f, q, q_t, x, xd, T, N, S, R, G, r, v, w)",
+             f"    return _commit(q, q_t, F, I, W, np.empty({7 * nb}), {SCRATCH})",
+             "", "",
+             "@njit(cache=True)",
+             f"def _commit(q, q_t, F, I, W, f, {SCRATCH}):",
+             f"    _state(F, I, W, f, q, q_t, {SCRATCH})",
              f"    h, started = F[{o['h']}], W[{o['started']}] != 0.0"]
     k, planes = 0, set()
     for j, (f, (p0, p1)) in enumerate(zip(elements, params)):
@@ -202,11 +213,12 @@ def _outputs_source(elements, params, names: dict, nb: int, ne: int, o: dict, sc
             "    return 0", "", "",
             "@njit(cache=True)",
             "def advance(q_all, q_t_all, q_tt_all, index, h, predict, F, I, W, f):",
+            scratch,
             "    q, q_t = q_all[index], q_t_all[index]",
-            "    commit(q, q_t, F, I, W)",
+            f"    _commit(q, q_t, F, I, W, f, {SCRATCH})   # f: scratch here, the forces below",
             "    if predict:   # CompiledForces.predict's Taylor step, operation for operation",
             "        a = q_tt_all[index]",
-            "        evaluate(q + h * q_t + (0.5 * h * h) * a, q_t + h * a, F, I, W, f)",
+            f"        _evaluate(q + h * q_t + (0.5 * h * h) * a, q_t + h * a, F, I, W, f, {SCRATCH})",
             "    return f", ""]
 
 
