@@ -86,7 +86,7 @@ def record(before: Path, after: Path, commits: tuple[str, str], out: Path, chang
                         "versions": a["versions"], "git_commit": commits[1]},
            "data": {"before": {**b, "commit": commits[0]}, "after": {**a, "commit": commits[1]},
                     **({"change": change} if change else {})}}
-    from benchmarks.docs import loaded
+    from benchmarks.docs_common import loaded
     rec["measured"]["loaded"] = loaded(rec["measured"])
     atomic_write_json(out, rec)
 

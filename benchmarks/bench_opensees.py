@@ -88,7 +88,7 @@ def main(argv=None) -> None:
     import os
     import platform
     import time
-    from benchmarks.docs import loaded
+    from benchmarks.docs_common import loaded
     from benchmarks.measure import _git_commit
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--out", required=True)

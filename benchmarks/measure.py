@@ -157,7 +157,7 @@ def measure(name: str, short: bool = False) -> dict:
                          "wall_s": wall,
                          "versions": versions(), "git_commit": commit},
             "data": data}
-    from benchmarks.docs import loaded
+    from benchmarks.docs_common import loaded
     rec["measured"]["loaded"] = loaded(rec["measured"])
     return rec
 

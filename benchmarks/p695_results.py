@@ -92,7 +92,7 @@ def main(argv: list[str] | None = None) -> int:
     a = ap.parse_args(argv)
     from nsd_core.device.results import versions
     from nsd_core.common.files import atomic_write_json
-    from benchmarks.docs import loaded
+    from benchmarks.docs_common import loaded
     log = _log(Path(a.log))
     measured = {k: log[k] for k in ("date_utc", "wall_s", "load_average_before", "load_average_after", "git_commit")}
     measured.update(machine=platform.platform(), processor=platform.machine(), cpus=os.cpu_count() or 1,

@@ -12,7 +12,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from benchmarks import docs, measure  # noqa: E402
+from benchmarks import docs, docs_common, docs_performance, measure  # noqa: E402
 
 wp = pytest.importorskip("work_precision")
 
@@ -69,7 +69,7 @@ def test_short_mode_commands():
 @pytest.mark.parametrize("name,render", [("bench_start", docs.bench_start), ("bench_record_set", docs.bench_record_set),
                                          ("work_precision", docs.work_precision), ("bench_dask", docs.bench_dask)])
 def test_generated_tables_come_from_the_committed_json(name, render):
-    rec = json.loads((docs.RESULTS / f"{name}.json").read_text())
+    rec = json.loads((docs_common.RESULTS / f"{name}.json").read_text())
     text = render()
     assert rec["command"] in text and text.count("\n|") >= 3
 
@@ -81,7 +81,7 @@ def test_bench_dask_measures_the_efficiency_and_the_overhead_per_task(tmp_path):
     import sys
     out = tmp_path / "bench_dask.json"
     p = subprocess.run([sys.executable, "benchmarks/bench_dask.py", "--records", "1", "--workers", "1", "--tasks", "20",
-                        "--out", str(out)], cwd=docs.ROOT, capture_output=True, text=True, timeout=900)
+                        "--out", str(out)], cwd=docs_common.ROOT, capture_output=True, text=True, timeout=900)
     assert p.returncode == 0, p.stderr[-2000:]
     rows = json.loads(out.read_text())["data"]["rows"]
     dask, pool = rows
@@ -96,9 +96,9 @@ def test_the_ida_table_says_a_refined_peer_its_first_verdict_and_its_steps():
          "estimates": {"du": {"estimate": 6.8e-6}, "dF": {"estimate": 4.4e-4}},
          "first": {"verdict": "FAIL", "estimates": {"du": {"estimate": 2.1e-4}, "dF": {"estimate": 1.6e-2}}},
          "refined": {"from": {"step_size": 1e-4}, "to": {"step_size": 1.25e-5}, "asked": 1.1e-5, "capped": True}}
-    text = docs._refined(v)
+    text = docs_performance._refined(v)
     assert "step_size 0.0001 -> 1.25e-05 s (its runs asked 1.1e-05 s; at most 8 x the steps)" in text
     assert "first pair said FAIL" in text and "dF 1.6e-02" in text
-    assert docs._refined({"du": 1e-5, "verdict": "PASS"}) == ""
-    rec = json.loads((docs.RESULTS / "bench_ida_farfield.json").read_text())
+    assert docs_performance._refined({"du": 1e-5, "verdict": "PASS"}) == ""
+    rec = json.loads((docs_common.RESULTS / "bench_ida_farfield.json").read_text())
     assert rec["command"] in docs.bench_ida_farfield()

@@ -9,7 +9,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from benchmarks import docs  # noqa: E402
+from benchmarks import docs, docs_common  # noqa: E402
 
 
 def test_committed_tables_regenerate_byte_identical():
@@ -25,7 +25,7 @@ def test_every_block_has_a_renderer_and_every_renderer_a_block():
 
 
 def test_each_result_says_where_and_when_it_was_measured():
-    for f in sorted(docs.RESULTS.glob("*.json")):
+    for f in sorted(docs_common.RESULTS.glob("*.json")):
         rec = json.loads(f.read_text())
         m = rec["measured"]
         assert rec["command"] and rec["name"] == f.stem
@@ -38,9 +38,9 @@ def test_each_result_says_where_and_when_it_was_measured():
 
 def test_a_changed_number_makes_the_tables_stale(tmp_path, monkeypatch):
     results = tmp_path / "results"
-    shutil.copytree(docs.RESULTS, results)
+    shutil.copytree(docs_common.RESULTS, results)
     rec = json.loads((results / "bench_cycle.json").read_text())
     rec["data"]["cases"][0]["median_s_per_cycle"] *= 2
     (results / "bench_cycle.json").write_text(json.dumps(rec))
-    monkeypatch.setattr(docs, "RESULTS", results)
+    monkeypatch.setattr(docs_common, "RESULTS", results)
     assert docs.stale() == ["docs/performance.md"]
