@@ -85,6 +85,8 @@ MEASUREMENTS.update({
     "symbolic_device": (PY + ["benchmarks/bench_symbolic.py", "models", "--models", "nsd_drive", "--out", "OUT"],
                         "symbolic_models.json", "json"),
     # ten generated mechanisms with the symbolic engine as a 4th peer (and the referee where a peer disagrees)
+    # the device's own description on paths, directions and parameter sets the gate was not tuned on
+    "device_variants": (PY + ["benchmarks/device_variants.py", "--out", "OUT"], "device_variants.json", "json"),
     "campaign_symbolic": (PY + ["benchmarks/campaign.py", "--seeds", "0-9", "--engines",
                                 "semirecursive,mujoco,exudyn,symbolic", "--workers", "1", "--timeout", "1200", "--out",
                                 "OUT"], "campaign.json", "json"),
