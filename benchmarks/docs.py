@@ -254,6 +254,12 @@ def campaign() -> str:
     return render(load, provenance, table, g, plain)
 
 
+def device_variants() -> str:
+    """The device's own description on variants the gate was not tuned on (benchmarks/docs_campaign.py)."""
+    from benchmarks.docs_campaign import device_variants as render
+    return render(load, provenance, table, g, plain)
+
+
 def first_command() -> str:
     """The README's first command before and after, side by side (benchmarks/docs_first_command.py)."""
     from benchmarks.docs_first_command import first_command as render
@@ -418,6 +424,7 @@ RENDER = {"compare-gate": compare_gate, "convergence": convergence, "tables-5-6"
           "gate-times": gate_times, "bench-start": bench_start, "compile-units": compile_units,
           "bench-record-set": bench_record_set, "compare-variant": compare_variant, "power": power,
           "verdict-cost": verdict_cost, "model-benchmarks": model_benchmarks, "campaign": campaign,
+          "device-variants": device_variants,
           "first-command": first_command,
           "model-builders": model_builders, "described-gate": described_gate,
           "gate-described": gate_described,

@@ -42,3 +42,33 @@ def campaign(load, provenance, table, g, plain) -> str:
             + ("Every mechanism that did not PASS at its case's settings:\n\n"
                + table(["seed", "family", "class", "refined", "verdict (last run)"], rest) if rest
                else "Every mechanism PASSed at its case's settings.\n"))
+
+
+def device_variants(load, provenance, table, g, plain) -> str:
+    """The device's description on variants the gate was not tuned on (benchmarks/device_variants.py)."""
+    rec = load("device_variants")
+    rows, counts = [], {"first": 0, "refined": 0, "not converged": 0, "disagrees": 0}
+    for r in rec["data"]["variants"]:
+        drive = f"{r['path']}, A {plain(r['amplitude_m'] * 1e3)} mm" + (
+            f", B {plain(r['minor_m'] * 1e3)} mm" if r.get("minor_m") else "") + f", {plain(r['frequency_hz'])} Hz" + (
+            f", psi {plain(r['direction_deg'])} deg" if r["direction_deg"] else "")
+        params = ", ".join(f"{k} = {v:g}" for k, v in r["params"].items()) or "nominal"
+        cells = []
+        for e, last in r["refined"].items():
+            first = r["first"].get(e, last)
+            counts["first"] += first["pass"]
+            counts["refined"] += last["pass"] and not first["pass"]
+            counts["not converged"] += not last["pass"] and "not converged" in last["text"]
+            counts["disagrees"] += "disagrees" in first["text"] or "disagrees" in last["text"]
+            word = "PASS" if first["pass"] else ("PASS after --refine" if last["pass"] else last["text"].split(":")[0])
+            cells.append(f"{e}: {word}")
+        left = "; ".join(f"{', '.join(sorted(r['excluded_samples']))} at t = {', '.join(g(t) for t in ts)} s"
+                         for ts in {tuple(v) for v in r["excluded_samples"].values()}) or "-"
+        rows.append([drive, params, "; ".join(cells), left, plain(r["wall_s"])])
+    n = sum(len(r["refined"]) for r in rec["data"]["variants"])
+    return (provenance(rec) + "\n"
+            + f"{len(rows)} variants x 3 engines: {counts['first']} of {n} verdicts PASS as first judged, "
+              f"{counts['refined']} more after --refine, {counts['not converged']} still not converged after "
+              f"its one re-run, **{counts['disagrees']} disagree**.\n\n"
+            + table(["drive", "parameters", "verdict (as first judged, or after --refine)", "drive-force samples left out",
+                     "wall s"], rows))
