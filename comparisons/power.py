@@ -25,7 +25,7 @@ from nsd_core.engine.workers import worker_pool
 from comparisons.config import SeismicCase
 from comparisons.engines import REFERENCE, run_job, run_seismic_job
 from comparisons.engines.perturb import KINDS, check, describe, perturbed
-from comparisons.harness import limit_for
+from comparisons.harness_rows import limit_for
 from comparisons.judge import differences, judge_case, own_checks
 from comparisons.reference import CHECK, CONVERGED, CONVERGED_SETTINGS, halved_settings, run_spec
 from comparisons.estimate import companion_label
