@@ -2,8 +2,9 @@
 of comparisons.builders.exudyn), the fast path beside the connectors of exudyn_forces (the readable
 reference: the same equations, one connector per element).
 
-One ObjectGenericODE2 spans every body's node (3 positions + 4 Euler parameters each) with a zero mass
-matrix; its force user function returns the generalized forces of all elements at the coordinates
+One ObjectGenericODE2 spans every body's node (3 positions + 4 Euler parameters each) with no mass
+matrix (empty: a zero one, the same numbers, cost Exudyn ~1.6 us a step on the device's drive, adding
+its zeros); its force user function returns the generalized forces of all elements at the coordinates
 Newton is trying (implicit, as the connectors). Per call one compiled function generated for the
 model (exudyn_codegen) takes Exudyn's coordinates to every element's (x, x') and the bodies' poses
 (``arguments``), calls the registry's laws (their states by Heun's method at the step, the
@@ -99,7 +100,7 @@ class CompiledForces:
         else:
             force, jacobian = self.user_functions()
             kw = {"forceUserFunction": force, "jacobianUserFunction": jacobian}
-        self.object = mbs.AddObject(ObjectGenericODE2(nodeNumbers=self.nodes, massMatrix=np.zeros((7 * nb, 7 * nb)),
+        self.object = mbs.AddObject(ObjectGenericODE2(nodeNumbers=self.nodes,
                                                       **kw))
 
     def node_index(self, mbs) -> np.ndarray:
