@@ -92,6 +92,19 @@ def drive_steps(duration: float, max_step: float | None) -> float:
     return max(duration * DRIVE_STEPS_PER_SECOND, floor)
 
 
+def check_record_flags(args) -> None:
+    """--scale, --rotate, --time-factor: finite numbers in their ranges (docs/limits.md), before any record is read."""
+    from nsd_core.ground.motions import _number, _positive  # the record's own checks first (their wording)
+    in_range("--scale", _positive("scale", args.scale), SCALE)
+    in_range("--rotate", _number("rotate_deg", args.rotate), ROTATE, "deg")
+    if args.time_factor is not None:
+        in_range("--time-factor", number("--time-factor", args.time_factor), TIME_FACTOR)
+    if args.duration is not None:
+        check_seismic_request(args.duration, args.dt_out)
+    else:
+        in_range("--dt-out", args.dt_out, DT_OUT, "s")
+
+
 def check_drive_work(duration: float, max_step: float | None, what: str = "this drive") -> float:
     steps = drive_steps(duration, max_step)
     if steps > STEPS_MAX:

@@ -82,19 +82,6 @@ def _ground_bounds() -> str:
     return ground_spec_bounds()
 
 
-def check_record_flags(args) -> None:
-    """--scale, --rotate, --time-factor: finite numbers in their ranges (docs/limits.md), before any record is read."""
-    from nsd_core.ground.motions import _number, _positive  # the record's own checks first (their wording)
-    lim.in_range("--scale", _positive("scale", args.scale), lim.SCALE)
-    lim.in_range("--rotate", _number("rotate_deg", args.rotate), lim.ROTATE, "deg")
-    if args.time_factor is not None:
-        lim.in_range("--time-factor", lim.number("--time-factor", args.time_factor), lim.TIME_FACTOR)
-    if args.duration is not None:
-        lim.check_seismic_request(args.duration, args.dt_out)
-    else:
-        lim.in_range("--dt-out", args.dt_out, lim.DT_OUT, "s")
-
-
 def ground_motion(args):
     """The GroundMotion the options describe (ParameterError on anything wrong)."""
     from nsd_core.ground import records
@@ -146,7 +133,7 @@ def run(args) -> int:
         raise ParameterError("--retry-failed: applies to --record-set only")
     if args.scheduler_timeout is not None:
         raise ParameterError("--scheduler-timeout: applies to --record-set --scheduler only")
-    check_record_flags(args)
+    lim.check_record_flags(args)
     params, engines, baseline, motion, structure, solver = _single_request(args)
     restoring = seismic_checks.restoring_force(args, params, structure)
     out = check_out_dir("--out", args.out)
@@ -299,15 +286,3 @@ def _baseline(args, engines) -> bool:
                                  "building; opensees builds it")
         return True
     return False
-
-
-def _window(text: str | None) -> list[float] | None:
-    if text is None:
-        return None
-    parts = text.split(",")
-    try:
-        if len(parts) != 2:
-            raise ValueError
-        return [float(parts[0]), float(parts[1])]
-    except ValueError:
-        raise ParameterError(f"--window {text!r}: expected T0,T1 (two numbers, record seconds)") from None

@@ -8,7 +8,6 @@ import sys
 from nsd_cli import limits as lim
 from nsd_cli import seismic_building, seismic_checks, seismic_extras
 from nsd_cli.options import base_params, check_out_dir, solver_settings
-from nsd_cli.seismic import _window, check_record_flags
 from nsd_core.device.params import ParameterError
 
 
@@ -62,7 +61,7 @@ def _set_request(args):
     from nsd_core.study.seismic_set import parse_records
     set_ = set_name(args.record_set)
     records = parse_records(args.records, set_)
-    check_record_flags(args)
+    lim.check_record_flags(args)
     if args.no_device:
         raise ParameterError("--no-device: --record-set runs every record both with and without the device "
                              "(the run without it on --isolator's baseline)")
@@ -124,3 +123,15 @@ def _set_runs(args, set_, records, engines):
             lim.check_seismic_request(own, args.dt_out, f"record {r.set}:{r.record}'s own duration")
         lim.check_building_work(own, stories, f"record {r.set}:{r.record}")
     return runs, params, structure
+
+
+def _window(text: str | None) -> list[float] | None:
+    if text is None:
+        return None
+    parts = text.split(",")
+    try:
+        if len(parts) != 2:
+            raise ValueError
+        return [float(parts[0]), float(parts[1])]
+    except ValueError:
+        raise ParameterError(f"--window {text!r}: expected T0,T1 (two numbers, record seconds)") from None
