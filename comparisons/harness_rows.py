@@ -25,7 +25,7 @@ class AppliedLimit(float):
 
 
 def limit_for(tolerances, engine, case, metric):
-    """Per-engine-and-case limits when the tolerances have them (config.Limits), else the flat one;
+    """Per-engine-and-case limits when the tolerances have them (tolerance_file.Limits), else the flat one;
     the most specific wins, returned as an AppliedLimit that names its source (None: no limit)."""
     own = getattr(tolerances, "engines", {}).get(engine, {})
     for source, table in (("case", own.get("case", {}).get(case, {})), ("engine", own), ("default", tolerances)):

@@ -2,11 +2,11 @@
 from __future__ import annotations
 
 import argparse
-import dataclasses
 from pathlib import Path
 from xml.sax.saxutils import escape, quoteattr
 
-from comparisons.config import PROFILES, load_cases, load_convergence, load_order, load_tolerances
+from comparisons.config import PROFILES, load_cases, load_convergence, load_order
+from comparisons.tolerance_file import load_tolerances
 from comparisons.engines import REFERENCE
 from nsd_cli.options import (WORKERS_MAX, add_param_arguments, base_params, check_out_dir, check_out_file,
                              parse_engines, whole)

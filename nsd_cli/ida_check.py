@@ -362,7 +362,7 @@ def judged(engine: str, diff: dict, h_vs_h2: dict, rec: dict, rec2: dict, own: d
     error, ``own``: its difference from the converged in-house run; as the gate adds its reference's),
     accurate when the estimate and the difference are within the tolerance. Without ``own`` the in-house
     run counts as exact: a peer refined below its error then reads as disagreeing."""
-    from comparisons.config import load_tolerances
+    from comparisons.tolerance_file import load_tolerances
     from comparisons.estimate import nominal_order, pair_factor, step_needed
     stats, stats2 = (r.get("metrics", {}).get("solver") or {} for r in (rec, rec2))
     order = nominal_order(engine, stats.get("settings") or {})

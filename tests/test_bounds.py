@@ -7,7 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from comparisons.config import DEFAULT_TOLERANCES, METRICS, load_tolerances
+from comparisons.config import DEFAULT_TOLERANCES, METRICS
+from comparisons.tolerance_file import load_tolerances
 from comparisons.engines.base import EngineError
 from nsd_cli.compare import format_table
 from nsd_cli.main import build_parser, main

@@ -12,7 +12,8 @@ from pathlib import Path
 
 import pytest
 
-from comparisons.config import load_cases, load_order, load_tolerances
+from comparisons.config import load_cases, load_order
+from comparisons.tolerance_file import load_tolerances
 from comparisons.engines.perturb import describe
 from comparisons.power import INJECTIONS, scaled
 from comparisons.reference import CONVERGED, observed_orders, order_rows, version_warnings

@@ -8,7 +8,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from comparisons.config import load_cases, load_tolerances
+from comparisons.config import load_cases
+from comparisons.tolerance_file import load_tolerances
 from comparisons.energy import energy_balance_rel
 from comparisons.engines.perturb import check, describe, perturbed
 from comparisons.power import power_study

@@ -112,7 +112,7 @@ def judge(params, structure, ground, duration=None, dt_out: float = 1e-3, settin
     """OpenSees on this run judged by the gate's rule: its runs at h and h/2, the in-house converged
     reference and its check (each computed unless given in ``runs``: keys h, h2, converged, check).
     Returns the differences, the estimates, the verdict (comparisons.verdict) and the runs."""
-    from comparisons.config import load_tolerances
+    from comparisons.tolerance_file import load_tolerances
     from comparisons.estimate import observed_order, richardson_factor, step_ratio
     from comparisons.verdict import case_verdicts, estimate_from_pair
     runs = dict(runs or {})
