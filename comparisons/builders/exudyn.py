@@ -33,8 +33,13 @@ starts from; joints and loop closures are constraints with Lagrange multipliers 
   at the same step, interleaved in one process, median of 3, load ~3-4 on 2 cores): "predicted"
   0.91-1.23x the adapter's CPU (A15mm_f1Hz 0.38 vs 0.34 s, A15mm_f10Hz 0.38 vs 0.36 s, A25.5mm_f1Hz
   11.5 vs 12.7 s, circle_A22mm_f10Hz 2.93 vs 2.39 s), "compiled" 1.48-1.76x. Per step, beside
-  Exudyn's solver: one Python pre-step (the drive's offsets ~1.7 us, then the laws' commit and, for
-  "predicted", the forces at the predicted state in one compiled call, CompiledForces.advance), and
+  Exudyn's solver: one Python pre-step (the drive's offsets read from a table computed a block of
+  steps at a time, exudyn_drive, ~1 us with Exudyn's SetObjectParameter; then the laws' commit and, for
+  "predicted", the forces at the predicted state in one compiled call on views of Exudyn's vectors,
+  CompiledForces.stepper, ~5.4 us with its SetObjectParameter): the gate's A25.5mm_f1Hz at 6.25e-6 s
+  33.3 us a step CPU in all (39.4 with the offsets computed each step, Exudyn's vectors copied and a
+  zero mass matrix in the force object; median of 3, interleaved, load ~2.5 on 2 cores), the rest
+  Exudyn's solver; circle_A22mm_f10Hz at 5e-6 s 75.3 us (79.1); and
   for "compiled" ~4.9 force calls (3.9 modified Newton iterations at newton_rel_tol 1e-10 and a
   residual), each a Python callback of ~5 us CPU (Exudyn's lists to arrays ~1 us, numba's dispatch
   ~0.6 us, ~2.7 us of compiled work): ~24 us a step the adapter's scheme does not spend, what keeps
