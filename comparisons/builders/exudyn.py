@@ -330,12 +330,7 @@ def _run(model: Model, s: dict, duration: float, dt_out: float) -> ModelRun:
     build.mbs.Assemble()
     if predicted:   # the initial accelerations see the forces at the initial state
         build.compiled.predict(build.mbs, 0.0)
-    ss = solver_settings(s, n_steps, duration)
-    redundant = redundant_constraints(build.mbs, ss) if model.loops and build.normal is None and s["redundant_constraints"] == "auto" else 0
-    if redundant or s["redundant_constraints"] == "ignore":
-        ss.linearSolver.ignoreSingularJacobian = True
-    elif unknowns(build.mbs) > SPARSE_ABOVE:   # dense LU grows as n^3: A02 with N = 40 (1.3k unknowns) 118 ms a
-        ss.linearSolver.solverType = exu.LinearSolverType.EigenSparse   # step dense, 1.8 ms sparse, the same to 2e-11
+    ss, redundant = _solver(build, model, s, n_steps, duration)
     # the drives' accelerations in the initial accelerations and multipliers (exudyn_start)
     start_lambda = consistent_start(build, ss, _offsets) if s["solver"] == "generalized_alpha" else None
     solver = {"generalized_alpha": exu.DynamicSolverType.GeneralizedAlpha,
@@ -367,6 +362,18 @@ def _run(model: Model, s: dict, duration: float, dt_out: float) -> ModelRun:
                      "redundant_found": redundant, "newton_relaxed_after": None,
                      "linear_solver": "sparse" if ss.linearSolver.solverType == exu.LinearSolverType.EigenSparse
                      else "dense"})
+
+
+def _solver(build, model: Model, s: dict, n_steps: int, duration: float):
+    """Exudyn's simulation settings for the run and the redundant constraints found (the full-pivot LU for
+    them; Eigen's sparse LU above SPARSE_ABOVE unknowns)."""
+    ss = solver_settings(s, n_steps, duration)
+    redundant = redundant_constraints(build.mbs, ss) if model.loops and build.normal is None and s["redundant_constraints"] == "auto" else 0
+    if redundant or s["redundant_constraints"] == "ignore":
+        ss.linearSolver.ignoreSingularJacobian = True
+    elif unknowns(build.mbs) > SPARSE_ABOVE:   # dense LU grows as n^3: A02 with N = 40 (1.3k unknowns) 118 ms a
+        ss.linearSolver.solverType = exu.LinearSolverType.EigenSparse   # step dense, 1.8 ms sparse, the same to 2e-11
+    return ss, redundant
 
 
 def check(model: Model) -> None:
