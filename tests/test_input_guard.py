@@ -24,7 +24,7 @@ ALLOWED = (
     ("nsd_core/engine/codegen.py", 'os.fdopen(fd, "w")', "a write"),
     ("nsd_core/device/results.py", 'os.fdopen(fd, "w")', "a write"),
     ("reports/render.py", 'open(merged, "wb")', "a write"),
-    ("nsd_core/compilation/numba_cache.py", "h.update(f.read_bytes())", "hash of the program's own source files"),
+    ("nsd_core/compilation/numba_cache.py", "(f, f.read_bytes())", "the program's own source files: hashed, and scanned for imports"),
     ("comparisons/builders/generated.py", "Path(module.__file__).read_bytes()", "hash of the program's source"),
     ("comparisons/builders/generated.py", "Path(path).read_bytes()", "hash of the program's source"),
     ("nsd_core/engine/problems/andrews.py", 'open(path or REFERENCES', "the committed Andrews reference"),
