@@ -179,3 +179,15 @@ def test_the_ground_motion_is_data_but_an_excitation_or_a_direction_is_shape():
     forces = [{**raw["forces"][0], "direction": [1.0, 0.0, 0.0]}, raw["forces"][1]]
     assert key(**harmonic) == key(excitation={"ground": "harmonic:amplitude=3,frequency=0.5"}) == key(**pulse)
     assert len({key(), key(**harmonic), key(forces=forces)}) == 3
+
+
+def test_a_stray_match_past_the_struct_is_not_taken_for_a_field():
+    """The offset search reads words past mjData into the heap, where one may hold a field's address by
+    chance (a CI run: act's address found 192 words after its own, the two probes then disagreed): the
+    field is the last of the first run of adjacent matches (its zero-size aliases), never a later one."""
+    import numpy as np
+    from comparisons.builders.mujoco_cabi import data_offsets, field_word
+    assert field_word(np.array([5, 20088, 20280]), 20086) == 20088
+    assert field_word(np.array([20090, 20091, 20092, 20300]), 20086) == 20092   # aliases, then the field
+    offsets = data_offsets()
+    assert offsets["qvel"] == offsets["qpos"] + 1 and offsets["act"] < offsets["xmat"]

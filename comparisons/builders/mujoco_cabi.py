@@ -67,9 +67,21 @@ def _offsets_of(xml: str, sentinel: float) -> dict[str, int]:
     time = np.flatnonzero(words[:anchor[-1] if anchor else 0].view(np.float64) == sentinel)
     if margin is None or not anchor or len(time) != 1:
         raise RuntimeError("mujoco_cabi: cannot locate mjData's fields")
-    out = {f: int(v[v >= anchor[-1]][-1]) for f, v in found.items()}
+    out = {f: field_word(v, anchor[-1]) for f, v in found.items()}
     out["time"] = int(time[0])
     return out
+
+
+def field_word(candidates: np.ndarray, start: int) -> int:
+    """The word of a field among the words holding its address, from ``start`` on: the last of the first
+    run of adjacent words (its zero-size aliases sit just before it in the struct). A later match is
+    not the field: the words read past the struct are the heap's, and one may hold the same address
+    by chance (seen once: ``act`` matched 192 words past its own, and two probes disagreed)."""
+    c = candidates[candidates >= start]
+    i = 0
+    while i + 1 < len(c) and c[i + 1] == c[i] + 1:
+        i += 1
+    return int(c[i])
 
 
 @functools.lru_cache(maxsize=1)
