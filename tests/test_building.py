@@ -181,6 +181,7 @@ def test_cli_bad_building_is_one_line_exit_2_nothing_written(tmp_path, bad, fiel
     assert not out.exists()
 
 
+@pytest.mark.slow   # 46 s on 2 cores; the peers' building columns stay in the default run: tests/test_described_seismic.py
 def test_cli_building_in_every_engine(tmp_path):
     """nsd seismic --building stories=3 with MuJoCo and Exudyn: every floor column in every engine's
     CSV, and their floors, drifts and floor accelerations within 1e-3 of the in-house engine's."""
@@ -226,6 +227,7 @@ def test_cli_compare_building_writes_three_configurations_and_the_report(tmp_pat
     assert any("building_profiles" in f.name for f in (tmp_path / "report").rglob("*.png"))
 
 
+@pytest.mark.slow   # 25 s; a set and the CLI's --building stay in the default run: tests/test_seismic_set.py, test_cli_compare_building_*
 def test_cli_record_set_takes_a_building(tmp_path):
     """nsd seismic --record-set with --building: every record with and without the device, each with the
     building; set.csv gains the worst story's peak drift ratio (with, without, ratio) and the worst
