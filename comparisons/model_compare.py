@@ -124,8 +124,7 @@ def acceleration_jumps(model: Model, t: np.ndarray) -> dict:
     n h against the reference's t): that sample measures the jump, not the engines."""
     jumps = set()
     for p in model.prescribed:
-        left = np.array([p(float(tk) - JUMP_PROBE)[2] for tk in t])
-        right = np.array([p(float(tk) + JUMP_PROBE)[2] for tk in t])
+        left, right = p.table(np.asarray(t, float) - JUMP_PROBE)[2], p.table(np.asarray(t, float) + JUMP_PROBE)[2]
         peak = max(float(np.max(np.abs(left), initial=0.0)), float(np.max(np.abs(right), initial=0.0)))
         jumps |= set(np.flatnonzero(np.abs(right - left) > JUMP_RELATIVE * peak).tolist()) if peak > 0 else set()
     index = np.array(sorted(jumps), dtype=np.int64)
