@@ -5,9 +5,9 @@
 For each revision: a fresh clone of this repository at that revision, then the README's first command
 (a new venv, ``pip install -c constraints.txt -e .``, ``nsd compare --convergence --report``) on an
 empty cache (``XDG_CACHE_HOME`` a new folder, ``NUMBA_CACHE_DIR`` unset), each phase timed; then the
-warm gate (``nsd compare`` once more on what the cold run left). The revisions alternate phase by
-phase (cold before, cold after, warm before, warm after), so that both meet the same load; the load
-average is kept beside every row. Writes DIR/bench_first_command.json.
+warm gate (``nsd compare`` again on what the cold run left, ``--warm`` times each). The revisions
+alternate phase by phase (cold before, cold after, then warm before, warm after, repeated), so that
+both meet the same load; the load average is kept beside every row. Writes DIR/bench_first_command.json.
 """
 from __future__ import annotations
 
@@ -53,6 +53,7 @@ def clone(revision: str, where: Path) -> Path:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--revisions", required=True, help="BEFORE,AFTER (git revisions)")
+    ap.add_argument("--warm", type=int, default=3, help="warm gate runs of each revision (default 3; their median is quoted)")
     ap.add_argument("--out", required=True)
     a = ap.parse_args(argv)
     revs = a.revisions.split(",")
@@ -73,10 +74,11 @@ def main(argv=None) -> int:
                  {"revision": r, "phase": "first command's nsd compare (cold cache)", **cmp_},
                  {"revision": r, "phase": "first command in all", "wall_s": total, "load_before": venv["load_before"]}]
         print(f"{r}: cold total {total:.1f} s (compare {cmp_['wall_s']:.1f} s, {cmp_['verdict']})", flush=True)
-    for r in revs:   # warm: the gate again on what the cold run left
-        w = timed([".venv/bin/nsd", "compare", "--out", "out/warm"], trees[r], envs[r])
-        rows.append({"revision": r, "phase": "warm nsd compare", **w})
-        print(f"{r}: warm {w['wall_s']:.1f} s ({w['verdict']})", flush=True)
+    for k in range(a.warm):   # warm: the gate again on what the cold run left, the revisions alternating
+        for r in revs:
+            w = timed([".venv/bin/nsd", "compare", "--out", f"out/warm{k}"], trees[r], envs[r])
+            rows.append({"revision": r, "phase": "warm nsd compare", **w})
+            print(f"{r}: warm {w['wall_s']:.1f} s ({w['verdict']})", flush=True)
     revisions = {r: subprocess.run(["git", "-C", str(trees[r]), "rev-parse", "HEAD"], capture_output=True,
                                    text=True).stdout.strip() for r in revs}
     out = Path(a.out)

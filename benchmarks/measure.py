@@ -43,7 +43,7 @@ MEASUREMENTS = {
                                  "--out", "OUT"], "bench_verdict_cost.json", "json"),
     # the README's first command (install, cold compare with its report) and the warm gate: the session's
     # base revision against this one, in fresh clones, side by side (benchmarks/bench_first_command.py)
-    "bench_first_command": (PY + ["benchmarks/bench_first_command.py", "--revisions", "4a95411,HEAD", "--out", "OUT"],
+    "bench_first_command": (PY + ["benchmarks/bench_first_command.py", "--revisions", "34e43b8,HEAD", "--out", "OUT"],
                             "bench_first_command.json", "json"),
     "tables": (NSD + ["tables", "--out", "OUT"], "tables.csv", "csv"),
     # every mechanism description in models/ through nsd compare --model, in every engine
