@@ -24,8 +24,8 @@ def first_command(load, provenance, table, g, plain) -> str:
         if a and b:
             many = len(a) > 1 or len(b) > 1
             a, b = statistics.median(a), statistics.median(b)
-            lines.append(f"{phase}{'  (median of each revision's runs)' if many else ''}: **{plain(a)} s** before, "
-                         f"**{plain(b)} s** after (ratio {g(b / a)})")
+            which = f"{phase} (median of each revision's runs)" if many else phase
+            lines.append(f"{which}: **{plain(a)} s** before, **{plain(b)} s** after (ratio {g(b / a)})")
     return (provenance(rec) + "\n\n" + "; ".join(lines) + ".\n\n"
             + table(["revision", "phase", "wall s", "CPU s (children)", "compare s (its own line)", "verdict",
                      "load before"], rows))
