@@ -7,7 +7,6 @@ the benchmark mechanisms are files under models/.
 from __future__ import annotations
 
 import math
-import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -15,11 +14,12 @@ import numpy as np
 from nsd_core.model.description import (COMPONENTS, GROUND, JOINT_DOFS, MOTION_KINDS, MOTION_PARSERS, OUTPUT_KINDS,
                                         WORK_SOURCES,
                                         Body, ForceElement, Joint, Loop, Model, Output, Prescribed)
-from nsd_core.common.errors import ParameterError
 from nsd_core.model.bounds import check_sizes
 from nsd_core.model.errors import ModelError
 from nsd_core.model.excitation import parse_excitation
 from nsd_core.model.laws import JOINT, PLANE, POINTS, get_law
+from nsd_core.model.load_fields import (_body_ref, _fields, _inertia, _is_name, _isnumber, _list, _name, _unique, _vec,
+                                        _where, number, read_toml)
 from nsd_core.model.load_plane import plane_component, plane_dofs
 
 POINT_UNITS = {"point": "m", "point_velocity": "m/s", "point_acceleration": "m/s^2"}
@@ -34,77 +34,6 @@ TOP = {"model", "bodies", "loops", "forces", "prescribed", "outputs", "initial",
 def load_model(path) -> Model:
     """The description in file ``path`` (ModelError for a missing file, bad TOML or any mistake)."""
     return parse_model(read_toml(path, "--model"), str(Path(path)))
-
-
-def read_toml(path, flag: str) -> dict:
-    """A TOML file as a dict; unreadable or not TOML is one ModelError line naming ``flag``."""
-    from nsd_core.common.files import MAX_DESCRIPTION_BYTES, printable, read_input_text
-    try:   # a regular file only, at most MAX_DESCRIPTION_BYTES, read within a time bound
-        text = read_input_text(path, flag, MAX_DESCRIPTION_BYTES, "UTF-8 TOML")
-    except ModelError:
-        raise
-    except ParameterError as e:
-        raise ModelError(str(e)) from None
-    try:
-        return tomllib.loads(text)
-    except tomllib.TOMLDecodeError as e:
-        raise ModelError(f"{flag} {printable(path)}: not valid TOML ({e})") from None
-    except RecursionError:
-        raise ModelError(f"{flag} {printable(path)}: not valid TOML (nested too deeply)") from None
-
-
-def _fields(where: str, table, allowed: set, required: tuple = ()) -> dict:
-    if not isinstance(table, dict):
-        raise ModelError(f"{where} = {table!r}: must be a table")
-    for k in table:
-        if k not in allowed:
-            raise ModelError(f"{where}.{k}: unknown field; allowed: {', '.join(sorted(allowed))}")
-    for k in required:
-        if k not in table:
-            raise ModelError(f"{where}.{k}: missing")
-    return table
-
-
-def number(where: str, v, low=-math.inf, high=math.inf, strict_low=False) -> float:
-    """``v`` as a float when it is a finite number in range, else ModelError naming ``where``."""
-    ok = not isinstance(v, bool) and isinstance(v, (int, float)) and math.isfinite(v)
-    if ok and (v > low if strict_low else v >= low) and v <= high:
-        return float(v)
-    rng = f"> {low:g}" if strict_low else (f">= {low:g}" if low > -math.inf else "finite")
-    raise ModelError(f"{where} = {v!r}: must be a number {rng}" + (f" and <= {high:g}" if high < math.inf else ""))
-
-
-def _vec(where: str, v, nonzero=False) -> tuple:
-    if not isinstance(v, list) or len(v) != 3:
-        raise ModelError(f"{where} = {v!r}: must be a list of 3 numbers")
-    out = tuple(number(where, x) for x in v)
-    if nonzero and math.hypot(*out) < 1e-12:
-        raise ModelError(f"{where} = {v!r}: must be a non-zero vector")
-    return out
-
-
-def _name(where: str, v) -> str:
-    if not isinstance(v, str) or not v or not all(c.isalnum() or c in "_-." for c in v):
-        raise ModelError(f"{where} = {v!r}: must be a name of letters, digits, '_', '-' or '.'")
-    return v
-
-
-def _inertia(where: str, v) -> np.ndarray:
-    if not isinstance(v, list) or len(v) not in (3, 6):
-        raise ModelError(f"{where} = {v!r}: must be 3 principal values [Ixx, Iyy, Izz] or 6 "
-                         "[Ixx, Iyy, Izz, Ixy, Ixz, Iyz] [kg m^2]")
-    x = [number(where, e) for e in v]
-    J = np.diag(x[:3])
-    if len(x) == 6:
-        J[0, 1] = J[1, 0] = x[3]
-        J[0, 2] = J[2, 0] = x[4]
-        J[1, 2] = J[2, 1] = x[5]
-    ev = np.linalg.eigvalsh(J)
-    tol = 1e-12 * max(1.0, float(np.max(np.abs(ev))))
-    if ev[0] < -tol or any(ev[i] + ev[j] < ev[k] - tol for i, j, k in ((0, 1, 2), (1, 2, 0), (0, 2, 1))):
-        raise ModelError(f"{where} = {v!r}: not a physical inertia (principal values must be >= 0 and "
-                         "obey the triangle inequality)")
-    return J
 
 
 def parse_model(raw: dict, path: str = "") -> Model:
@@ -134,20 +63,6 @@ def parse_model(raw: dict, path: str = "") -> Model:
     _unique("loops", loops)
     init = _initial(raw.get("initial", {}), bodies, {(p.joint, p.dof): p for p in prescribed})
     return Model(**{**model.__dict__, "outputs": outputs, **init})
-
-
-def _list(where: str, v) -> list:
-    if not isinstance(v, list):
-        raise ModelError(f"[[{where}]] = {v!r}: must be an array of tables")
-    return v
-
-
-def _unique(where: str, items) -> None:
-    seen = set()
-    for it in items:
-        if it.name in seen:
-            raise ModelError(f"{where}.{it.name}: the name is used twice")
-        seen.add(it.name)
 
 
 def _bodies(items) -> tuple[Body, ...]:
@@ -189,26 +104,6 @@ def _bodies(items) -> tuple[Body, ...]:
                         _inertia(f"{where}.inertia", t.get("inertia", [0.0, 0.0, 0.0])), str(t.get("source", ""))))
         names[name] = i
     return tuple(out)
-
-
-def _is_name(v) -> bool:
-    return isinstance(v, str) and bool(v) and all(c.isalnum() or c in "_-." for c in v) and v != GROUND
-
-
-def _isnumber(v) -> bool:
-    return not isinstance(v, bool) and isinstance(v, (int, float)) and math.isfinite(v)
-
-
-def _body_ref(where: str, v, names) -> str:
-    if v != GROUND and v not in names:
-        raise ModelError(f"{where} = {v!r}: unknown body; allowed: ground, {', '.join(sorted(names))}")
-    return v
-
-
-def _where(kind: str, i: int, t) -> str:
-    """How a message names the i-th table of ``kind``: by its name where it has a usable one."""
-    given = t.get("name") if isinstance(t, dict) else None
-    return f"{kind}.{given}" if _is_name(given) else f"{kind}[{i}]"
 
 
 def _loop(i: int, t: dict, names) -> Loop:
