@@ -82,7 +82,10 @@ def _grid(record, seconds):
     return h, n * h
 
 
-@pytest.mark.parametrize("fixed_base", [False, True], ids=["supports-alone", "fixed-base"])
+# isolated on the supports: 26 s of the README's test command (a fresh clone, 2026-11-28), slow mark; the
+# fixed base against the same exact solution stays in the default run
+@pytest.mark.parametrize("fixed_base", [pytest.param(False, marks=pytest.mark.slow), True],
+                         ids=["supports-alone", "fixed-base"])
 def test_supports_alone_building_equals_the_exact_linear_solution(record, fixed_base):
     """Every floor's displacement, drift and absolute acceleration and the slab's displacement against
     the exact solution, as max |error| / max |exact| per column. Measured (rtol 1e-10, 0.6 s of
