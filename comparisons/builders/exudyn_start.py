@@ -22,13 +22,16 @@ from __future__ import annotations
 import exudyn as exu
 import numpy as np
 
-# Entries of the added term below this fraction of its largest are the solve's round-off and are set to
-# zero (the device's circle: 38 of its 48 entries, 1e-32 to 1.7e-14 against a largest of 123, where the
-# exact term is zero). Kept, they decay through the generalized-alpha's algorithmic accelerations into
-# subnormal numbers, on which the processor's arithmetic is many times slower: 8 velocities stayed
-# subnormal through the whole run, and the device's circles ran 1.5x slower (circle_A22mm_f10Hz 5.97 ->
-# 3.87 CPU s without them, the same Newton iterations; forces within 5.5e-7 of the peak; 2026-11-28).
-ROUND_OFF = float(np.finfo(float).eps)
+# Entries of the initial accelerations, and of the multipliers, below this fraction of the largest are
+# round-off (of Exudyn's own solve and of the added term's) and are set to zero. The device's circle:
+# 38 of the added term's 48 entries are 1e-32 to 1.7e-14 against a largest of 123, where the exact term
+# is zero; two driven four-bars of the campaign (seeds 92, 119): 2 and 5 of 21 initial accelerations
+# 1.6e-16 to 1.5e-15 against 9.8 and 78. Kept, they decay through the generalized-alpha's algorithmic
+# accelerations into subnormal numbers, on which the processor's arithmetic is many times slower: on
+# the circle 8 velocities stayed subnormal through the whole run, 1.5x the CPU time (circle_A22mm_f10Hz
+# 5.97 -> 3.87 CPU s without them, the same Newton iterations; forces within 5.5e-7 of the peak;
+# 2026-11-28).
+ROUND_OFF = 1e3 * float(np.finfo(float).eps)
 EPS = 1e-6   # the offset step for the residual's response (it is linear in the offset: the step is immaterial)
 
 
@@ -69,8 +72,14 @@ def consistent_start(build, ss, offsets) -> np.ndarray | None:
         db[n2 + rows] -= response @ np.asarray(offsets(slots, 0.0, J, 2), float)
     solver.FinalizeSolver(mbs, ss)
     dx = np.linalg.lstsq(K, db, rcond=None)[0]
-    dx[np.abs(dx) < ROUND_OFF * np.max(np.abs(dx), initial=0.0)] = 0.0   # the solve's dust: see ROUND_OFF
-    sd.SetODE2Coordinates_tt(list(a0 + dx[:n2]), CT.Initial)
+    sd.SetODE2Coordinates_tt(list(without_dust(a0 + dx[:n2])), CT.Initial)
     ss.timeIntegration.generalizedAlpha.computeInitialAccelerations = False
     ss.timeIntegration.generalizedAlpha.resetAccelerations = False
-    return lam0 + dx[n2:]
+    return without_dust(lam0 + dx[n2:])
+
+
+def without_dust(x: np.ndarray) -> np.ndarray:
+    """``x`` with its entries below ROUND_OFF of its largest set to zero (see ROUND_OFF)."""
+    x = np.array(x, dtype=float)
+    x[np.abs(x) < ROUND_OFF * np.max(np.abs(x), initial=0.0)] = 0.0
+    return x
