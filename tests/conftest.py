@@ -23,10 +23,12 @@ def _evaluator_choice_kept():
         os.environ["NSD_EVALUATOR"] = before
 
 
+@pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config, items):
     """Under pytest-xdist (``--dist loadgroup``): the tests that share a module- or session-scoped
     fixture go to one worker together (the fixture is built once), every other test wherever a worker
-    is free."""
+    is free. First among the hooks: xdist's own reads the group markers in its hook of this name, and
+    after it a marker added here is not seen (the fixture was then built on each worker)."""
     for item in items:
         info = getattr(item, "_fixtureinfo", None)
         if info is None:
