@@ -56,6 +56,9 @@ def main(argv=None) -> int:
     ap.add_argument("--warm", type=int, default=3, help="warm gate runs of each revision (default 3; their median is quoted)")
     ap.add_argument("--out", required=True)
     a = ap.parse_args(argv)
+    if a.warm < 1:
+        print(f"bench_first_command: --warm {a.warm}: must be a whole number >= 1", file=sys.stderr)
+        return 2
     revs = a.revisions.split(",")
     work = Path(tempfile.mkdtemp(prefix="first-command-"))
     trees, envs, rows = {}, {}, []
