@@ -23,6 +23,19 @@ def _evaluator_choice_kept():
         os.environ["NSD_EVALUATOR"] = before
 
 
+@pytest.fixture(autouse=True)
+def _numba_cache_folder_kept():
+    """A test that points NUMBA_CACHE_DIR at its own folder (monkeypatch) gets the environment back,
+    but numba read the folder into its configuration at the test's compilation and keeps it until its
+    next compilation: a kernel module imported meanwhile in this worker (a lazy import, a generated
+    module) would look for its machine code in the test's deleted folder and compile again. Numba
+    reads the environment back after the test (monkeypatch's own teardown has run by then)."""
+    yield
+    config = sys.modules.get("numba.core.config")
+    if config is not None:
+        config.reload_config()
+
+
 @pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config, items):
     """Under pytest-xdist (``--dist loadgroup``): the tests that share a module- or session-scoped
