@@ -15,7 +15,8 @@ import sys
 
 from benchmarks.docs_common import ROOT, g, load, plain, provenance, table
 from benchmarks.docs_performance import (bench_cold, bench_cycle, bench_dask, bench_ida_farfield, bench_peer_seismic,
-                                        bench_record_set, bench_rhs, bench_seismic, bench_start, compile_units,
+                                        bench_record_set, bench_rhs, bench_seismic, bench_start, bench_subnormals,
+                                        compile_units,
                                         device_models, gate_times, work_precision)
 
 DOCS = (ROOT / "docs" / "validation.md", ROOT / "docs" / "performance.md", ROOT / "docs" / "engine-codegen.md",
@@ -432,7 +433,8 @@ RENDER = {"compare-gate": compare_gate, "convergence": convergence, "tables-5-6"
           "bench-ida-farfield": bench_ida_farfield, "bench-dask": bench_dask,
           "symbolic-equations": symbolic_equations, "symbolic-models": symbolic_models,
           "symbolic-campaign": symbolic_campaign, "symbolic-device": symbolic_device,
-          "p695-evaluation": p695_evaluation, "p695-what-passes": p695_what_passes, "device-models": device_models}
+          "p695-evaluation": p695_evaluation, "p695-what-passes": p695_what_passes, "device-models": device_models,
+          "bench-subnormals": bench_subnormals}
 
 
 def regenerate(text: str) -> str:

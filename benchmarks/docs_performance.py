@@ -272,3 +272,14 @@ def bench_dask() -> str:
               "ms per task; load: the 1-minute load when each command started / ended.\n\n"
             + table(["where", "workers", "runs", "IDA s", "sum of the runs' own wall s", "efficiency from 1 worker",
                      "overhead per empty task, ms", "load start / end"], rows))
+
+
+def bench_subnormals() -> str:
+    """The peers' gate runs with subnormal numbers flushed and kept (benchmarks/bench_subnormals.py)."""
+    rec = load("bench_subnormals")
+    d = rec["data"]
+    rows = [[r["engine"], r["case"], plain(r["cpu_s_kept"]), plain(r["cpu_s_flushed"]), g(r["ratio"]),
+             str(r["subnormal_kept"]), str(r["subnormal_flushed"]), g(r["largest_difference"])] for r in d["rows"]]
+    return (provenance(rec) + "\n"
+            + table(["peer", "case", "CPU s, kept", "CPU s, flushed", "kept / flushed [-]",
+                     "subnormal outputs, kept", "subnormal outputs, flushed", "largest difference [-]"], rows))

@@ -45,6 +45,9 @@ MEASUREMENTS = {
     # base revision against this one, in fresh clones, side by side (benchmarks/bench_first_command.py)
     "bench_first_command": (PY + ["benchmarks/bench_first_command.py", "--revisions", "34e43b8,HEAD", "--out", "OUT"],
                             "bench_first_command.json", "json"),
+    # the peers' gate runs with subnormal numbers flushed (as shipped) and kept, side by side
+    "bench_subnormals": (PY + ["benchmarks/bench_subnormals.py", "--repeats", "3", "--out", "OUT"],
+                         "bench_subnormals.json", "json"),
     "tables": (NSD + ["tables", "--out", "OUT"], "tables.csv", "csv"),
     # every mechanism description in models/ through nsd compare --model, in every engine
     "bench_models": (PY + ["benchmarks/bench_models.py", "--out", "OUT"], "bench_models.json", "json"),

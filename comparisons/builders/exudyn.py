@@ -112,6 +112,7 @@ from comparisons.builders.exudyn_frames import (AXIS_OF_DOF, constrained_axes, c
 from comparisons.builders.exudyn_outputs import Sampler
 from comparisons.builders.exudyn_replay import SeriesReader
 from comparisons.builders.exudyn_start import consistent_start
+from comparisons.builders.subnormals import flushed
 from comparisons.builders.exudyn_solver import (CHOICES, RELAXED_REL_TOL, check_settings, default_settings,  # noqa: F401
                                                 SPARSE_ABOVE, redundant_constraints, solver_settings, unknowns)
 from comparisons.builders.exudyn_work import Work
@@ -335,10 +336,11 @@ def _run(model: Model, s: dict, duration: float, dt_out: float) -> ModelRun:
     start_lambda = consistent_start(build, ss, _offsets) if s["solver"] == "generalized_alpha" else None
     solver = {"generalized_alpha": exu.DynamicSolverType.GeneralizedAlpha,
               "trapezoidal_index2": exu.DynamicSolverType.TrapezoidalIndex2}[s["solver"]]
-    begin = time.perf_counter()
     why = "SolveDynamic returned False"
     try:
-        ok = build.mbs.SolveDynamic(ss, solverType=solver)
+        with flushed():   # as MuJoCo's step loop (comparisons.builders.subnormals)
+            begin = time.perf_counter()
+            ok = build.mbs.SolveDynamic(ss, solverType=solver)
     except Exception as err:  # noqa: BLE001 (Exudyn's multi-line solver text, said on one line)
         ok, why = False, " ".join(str(err).split())[:200]
     if not ok or counter[0] != n_steps:
