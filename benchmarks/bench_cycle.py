@@ -33,7 +33,6 @@ from refcompare import discrepancy, in_house_reference  # noqa: E402
 import numpy as np  # noqa: E402
 
 from nsd_core.engine.codegen import prefer_generated  # noqa: E402
-prefer_generated()  # the in-house engine as the studies run it (the generated evaluation)
 from nsd_core.device.drive import Drive  # noqa: E402
 from nsd_core.device.model import DEFAULT_SOLVER, simulate  # noqa: E402
 from nsd_core.device.params import Params
@@ -87,6 +86,9 @@ def path_times(repeats: int) -> list[dict]:
 
 
 def main() -> None:
+    # the in-house engine as the studies run it (the generated evaluation); here, not at import, so that
+    # importing this module (a test does) leaves the environment alone
+    prefer_generated()
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--sweep", action="store_true", help="also time nsd sweep --paper (warm cache)")

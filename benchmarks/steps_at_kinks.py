@@ -57,7 +57,6 @@ import numpy as np
 from numba import njit, types
 
 from nsd_core.engine.codegen import prefer_generated
-prefer_generated()  # the in-house engine as the studies run it (the generated evaluation)
 from comparisons.config import SeismicCase, load_cases
 from nsd_core.common.files import atomic_write_json, atomic_write_text
 from nsd_core.engine import rk
@@ -523,6 +522,9 @@ def table(results: dict) -> str:
 
 
 def main(argv=None) -> int:
+    # the in-house engine as the studies run it (the generated evaluation); here, not at import, so that
+    # importing this module (a test does) leaves the environment alone
+    prefer_generated()
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", required=True)
     ap.add_argument("--cases", default=None, help="comma-separated case names (default: every drive case and "

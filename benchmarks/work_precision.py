@@ -46,7 +46,6 @@ import time
 from pathlib import Path
 
 from nsd_core.engine.codegen import prefer_generated
-prefer_generated()  # the in-house engine as the studies run it (the generated evaluation)
 from comparisons.config import SeismicCase, load_cases
 from comparisons.engines import get_engine
 from comparisons.engines.base import EngineError
@@ -258,6 +257,9 @@ def run_case(case, ladders: dict, repeats: int, to_aim: bool = False) -> dict:
 
 
 def main(argv=None) -> int:
+    # the in-house engine as the studies run it (the generated evaluation); here, not at import, so that
+    # importing this module (a test does) leaves the environment alone
+    prefer_generated()
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", required=True, help="folder for work_precision.json")
     ap.add_argument("--cases", default=None, help="case file (default: comparisons/cases.toml)")
