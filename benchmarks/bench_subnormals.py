@@ -31,6 +31,7 @@ from nsd_core.common.files import atomic_write_json  # noqa: E402
 
 TINY = np.finfo(float).tiny
 BUILDERS = (mujoco_compiled, exudyn_builder)
+PEERS = ("mujoco", "exudyn")   # the engines whose step loops flush (the builders above)
 
 
 def _run(case, engine: str, keep: bool):
@@ -90,7 +91,12 @@ def main(argv: list[str] | None = None) -> int:
     if a.repeats < 1:
         print(f"bench_subnormals: --repeats {a.repeats}: allowed: 1 or more", file=sys.stderr)
         return 2
-    rows = measure(a.engines.split(","), a.repeats)
+    engines = a.engines.split(",")
+    bad = [e for e in engines if e not in PEERS]
+    if bad:
+        print(f"bench_subnormals: --engines {bad[0]!r}: allowed: {', '.join(PEERS)}", file=sys.stderr)
+        return 2
+    rows = measure(engines, a.repeats)
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
     atomic_write_json(out / "bench_subnormals.json", {"repeats": a.repeats, "rows": rows})
