@@ -8,6 +8,7 @@ One module per subcommand in this package, each with ``HELP``, ``add_arguments(p
 from __future__ import annotations
 
 import argparse
+import contextlib
 import errno
 import importlib
 import importlib.util
@@ -171,11 +172,11 @@ def main(argv: list[str] | None = None) -> int:
     saved = _handle_signals()
     _state["tally"] = args.tally
     try:
-        from nsd_core.engine.codegen import evaluator_kind, prefer_generated
+        from nsd_core.engine.codegen import evaluator_kind, preferring_generated
         evaluator_kind()  # a bad NSD_EVALUATOR: one line, exit 2, before any work
-        if args.command in STUDIES or getattr(args, "record_set", None):
-            prefer_generated()
-        return int(args.handler(args) or 0)
+        study = args.command in STUDIES or getattr(args, "record_set", None)
+        with preferring_generated() if study else contextlib.nullcontext():
+            return int(args.handler(args) or 0)
     except InputError as e:
         print(f"nsd: error: {printable(e)}", file=sys.stderr)
         return 2

@@ -12,9 +12,9 @@ import pytest
 
 @pytest.fixture(autouse=True)
 def _evaluator_choice_kept():
-    """A study command run in-process (nsd_cli.main) sets NSD_EVALUATOR=generated for its workers
-    (nsd_core.engine.codegen.prefer_generated); put it back after each test, so that no test depends on
-    which ran before it."""
+    """A test that sets NSD_EVALUATOR itself (a benchmark's ``main()`` calls prefer_generated) gets it
+    put back after, so that no test depends on which ran before it (a study command run in-process puts
+    it back itself: nsd_core.engine.codegen.preferring_generated)."""
     before = os.environ.get("NSD_EVALUATOR")
     yield
     if before is None:

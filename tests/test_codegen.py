@@ -206,3 +206,22 @@ def test_whole_seismic_run_equals_the_generic_one(monkeypatch):
     assert g.stats["steps"] == r.stats["steps"]
     for k in ("x", "y", "device_Fx", "device_Fy", "ax_abs"):
         assert np.max(np.abs(g[k] - r[k])) <= 1e-9 * np.max(np.abs(r[k])), k
+
+
+def test_a_study_run_in_process_puts_the_evaluator_choice_back(monkeypatch, tmp_path):
+    """A study command asks for the generated evaluation while it runs, and leaves the program's own
+    environment as it found it (unset, or the user's choice), also when it fails."""
+    import os
+    from nsd_cli.main import main
+    monkeypatch.delenv("NSD_EVALUATOR", raising=False)
+    # a study whose input is refused inside its handler (after the choice is made): exit 2
+    assert main(["polar", "--out", str(tmp_path / "p"), "--points", "1"]) == 2
+    assert "NSD_EVALUATOR" not in os.environ
+    monkeypatch.setenv("NSD_EVALUATOR", "generic")
+    assert main(["polar", "--out", str(tmp_path / "p"), "--points", "1"]) == 2
+    assert os.environ["NSD_EVALUATOR"] == "generic"
+    from nsd_core.engine.codegen import preferring_generated
+    monkeypatch.delenv("NSD_EVALUATOR")
+    with preferring_generated():
+        assert os.environ["NSD_EVALUATOR"] == "generated"
+    assert "NSD_EVALUATOR" not in os.environ

@@ -67,7 +67,7 @@ def test_a_cold_first_cycle_shares_its_compilation_and_leaves_nothing_behind(tmp
     # the helper's kernels in the package-named sub-folders, where the command loads them (before the
     # child processes' naming was fixed they also went to numba's ones, named after the hash of the
     # source folder's absolute path, "engine_<40 hex>", never found); a generated evaluation (under
-    # NSD_EVALUATOR=generated, which a study command run in this test process leaves set) lives outside
+    # NSD_EVALUATOR=generated, which a study command asks for while it runs) lives outside
     # the packages and keeps numba's naming ("generated_<hash>")
     package_dirs = {d.name for pkg in ("nsd_core", "comparisons")
                     for d in (Path(__file__).resolve().parents[1] / pkg).rglob("*") if d.is_dir()}

@@ -32,8 +32,8 @@ def _nsd(args, cache, timeout=1800):
 
 
 def test_the_items_cover_every_mode_and_both_peers(monkeypatch):
-    # the engine's units follow NSD_EVALUATOR, which an in-process study command sets ("generated"):
-    # the default, unset, is what nsd warm meets
+    # the engine's units follow NSD_EVALUATOR (a user may have set it): the default, unset, is what
+    # nsd warm meets
     monkeypatch.delenv("NSD_EVALUATOR", raising=False)
     names = {lock for lock, _ in warm_all.items(peers=True)}
     assert {"warm-all-drive", "warm-all-seismic", "warm-unit-evaluate", "warm-unit-step_loop"} <= names

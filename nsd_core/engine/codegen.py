@@ -28,6 +28,7 @@ sets, IDA) ask for "generated", which compiles it. The two give the same numbers
 """
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import importlib.util
 import os
@@ -159,7 +160,23 @@ def evaluation_used(model, kind: str | None = None) -> str:
     return "generic" if kind == "generic" or (kind == "auto" and not is_compiled(model)) else "generated"
 
 
+@contextlib.contextmanager
+def preferring_generated():
+    """For a study (many runs of one structure): NSD_EVALUATOR=generated unless the user chose one,
+    while the block runs. Set in the environment, so a pool's workers started inside inherit it; put
+    back as it was after the block, so a program that runs a study in-process keeps its own choice."""
+    before = os.environ.get(ENV)
+    os.environ.setdefault(ENV, "generated")
+    try:
+        yield
+    finally:
+        if before is None:
+            os.environ.pop(ENV, None)
+        else:
+            os.environ[ENV] = before
+
+
 def prefer_generated() -> None:
-    """For a study (many runs of one structure): NSD_EVALUATOR=generated unless the user chose one.
-    Set in the environment, so a pool's workers (started after this) inherit it."""
+    """For a benchmark script's whole process: NSD_EVALUATOR=generated unless the user chose one
+    (call it in ``main()``, never at import: tests/test_import_environment.py)."""
     os.environ.setdefault(ENV, "generated")
