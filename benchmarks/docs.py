@@ -267,6 +267,12 @@ def first_command() -> str:
     return render(load, provenance, table, g, plain)
 
 
+def test_command() -> str:
+    """The README's test command in fresh clones on empty caches (benchmarks/docs_first_command.py)."""
+    from benchmarks.docs_first_command import test_command as render
+    return render(load, provenance, table, g, plain)
+
+
 def symbolic_equations() -> str:
     """The symbolic engine's derived equations of one small mechanism (benchmarks/docs_symbolic.py)."""
     from benchmarks.docs_symbolic import equations as render
@@ -426,7 +432,7 @@ RENDER = {"compare-gate": compare_gate, "convergence": convergence, "tables-5-6"
           "bench-record-set": bench_record_set, "compare-variant": compare_variant, "power": power,
           "verdict-cost": verdict_cost, "model-benchmarks": model_benchmarks, "campaign": campaign,
           "device-variants": device_variants,
-          "first-command": first_command,
+          "first-command": first_command, "test-command": test_command,
           "model-builders": model_builders, "described-gate": described_gate,
           "gate-described": gate_described,
           "work-precision": work_precision, "bench-cold": bench_cold, "bench-peer-seismic": bench_peer_seismic,

@@ -29,3 +29,28 @@ def first_command(load, provenance, table, g, plain) -> str:
     return (provenance(rec) + "\n\n" + "; ".join(lines) + ".\n\n"
             + table(["revision", "phase", "wall s", "CPU s (children)", "compare s (its own line)", "verdict",
                      "load before"], rows))
+
+
+def _min_s(seconds: float) -> str:
+    m, s = divmod(round(seconds), 60)
+    return f"{m}:{s:02d}"
+
+
+def test_command(load, provenance, table, g, plain) -> str:
+    """docs/performance.md's test-command table, from benchmarks/results/bench_test_command.json
+    (benchmarks/bench_test_command.py: the README's test command in fresh clones on empty caches)."""
+    rec = load("bench_test_command")
+    d = rec["data"]
+    rows = [[str(r["repeat"] + 1), f"`{r['commit'][:7]}`", r["summary"] or f"exit {r['exit_code']}",
+             plain(r["install_wall_s"]), f"{plain(r['pytest_wall_s'])} ({_min_s(r['pytest_wall_s'])})",
+             plain(r["pytest_cpu_s"] / 60), f"{plain(r['total_wall_s'])} ({_min_s(r['total_wall_s'])})",
+             plain(r["load_before"], 2)] for r in d["rows"]]
+    s, first = d["summary"], d["rows"][0]
+    text = (f"Median of {len(d['rows'])}: pytest **{plain(s['pytest_wall_s_median'])} s "
+            f"({_min_s(s['pytest_wall_s_median'])})**, install and pytest **{plain(s['total_wall_s_median'])} s "
+            f"({_min_s(s['total_wall_s_median'])})**, pytest's CPU {plain(s['pytest_cpu_s_median'] / 60)} min. "
+            f"Collected in the first clone: {first.get('collected_default')} tests in the default run, "
+            f"{first.get('collected_slow')} in the slow mark (`pytest -m slow`, run apart by .ci/run).")
+    return (provenance(rec) + "\n\n" + text + "\n\n"
+            + table(["repeat", "commit", "pytest's summary", "install s", "pytest wall s (min:s)",
+                     "pytest CPU min (with its workers)", "install + pytest s (min:s)", "load before"], rows))

@@ -46,6 +46,9 @@ MEASUREMENTS = {
     # in fresh clones, side by side (benchmarks/bench_first_command.py)
     "bench_first_command": (PY + ["benchmarks/bench_first_command.py", "--revisions", "cc555d9,HEAD", "--out", "OUT"],
                             "bench_first_command.json", "json"),
+    # the README's test command in fresh clones on empty caches, three times (benchmarks/bench_test_command.py)
+    "bench_test_command": (PY + ["benchmarks/bench_test_command.py", "--repeats", "3", "--out", "OUT"],
+                           "bench_test_command.json", "json"),
     # the peers' gate runs with subnormal numbers flushed (as shipped) and kept, side by side
     "bench_subnormals": (PY + ["benchmarks/bench_subnormals.py", "--repeats", "3", "--out", "OUT"],
                          "bench_subnormals.json", "json"),
