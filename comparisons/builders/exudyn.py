@@ -28,22 +28,8 @@ starts from; joints and loop closures are constraints with Lagrange multipliers 
   internal state (the SMA wire's stress, the Bouc-Wen zeta) is integrated with the motion by Heun's
   method at Exudyn's step, second order as generalized-alpha is: the force sees the state at the end
   of the step for the configuration Newton tries, the pre-step function commits it (exudyn_forces).
-  Cost on the device's 8 gate drive cases (the whole run, the model's build included, as the gate
-  counts it: comparisons.engines.run_engine with model = "described" against the hand-written adapter
-  at the same step, interleaved in one process, median of 3, load ~3-4 on 2 cores): "predicted"
-  0.91-1.23x the adapter's CPU (A15mm_f1Hz 0.38 vs 0.34 s, A15mm_f10Hz 0.38 vs 0.36 s, A25.5mm_f1Hz
-  11.5 vs 12.7 s, circle_A22mm_f10Hz 2.93 vs 2.39 s), "compiled" 1.48-1.76x. Per step, beside
-  Exudyn's solver: one Python pre-step (the drive's offsets read from a table computed a block of
-  steps at a time, exudyn_drive, ~1 us with Exudyn's SetObjectParameter; then the laws' commit and, for
-  "predicted", the forces at the predicted state in one compiled call on views of Exudyn's vectors,
-  CompiledForces.stepper, ~5.4 us with its SetObjectParameter): the gate's A25.5mm_f1Hz at 6.25e-6 s
-  33.3 us a step CPU in all (39.4 with the offsets computed each step, Exudyn's vectors copied and a
-  zero mass matrix in the force object; median of 3, interleaved, load ~2.5 on 2 cores), the rest
-  Exudyn's solver; circle_A22mm_f10Hz at 5e-6 s 75.3 us (79.1); and
-  for "compiled" ~4.9 force calls (3.9 modified Newton iterations at newton_rel_tol 1e-10 and a
-  residual), each a Python callback of ~5 us CPU (Exudyn's lists to arrays ~1 us, numba's dispatch
-  ~0.6 us, ~2.7 us of compiled work): ~24 us a step the adapter's scheme does not spend, what keeps
-  "compiled" above the adapter. The outputs cost ~6 us a sample (exudyn_outputs' docstring).
+  What it costs and which step each benchmark mechanism needs: docs/models.md ("Exudyn's cost and
+  steps").
 - Prescribed motions: the joint's offset is a symbolic user function returning its parameters (run in
   C++), set to q(t_end) before each step: generalized-alpha (index 3) evaluates the constraint at the
   step's end only, so this is exact.
@@ -64,32 +50,6 @@ velocities, the laws' values (at the committed states), the drive's generalized 
 axis' reaction; the sign of the in-house ``Evaluation.drive_force``: positive drives the coordinate
 up), kinetic and gravity
 energy (-sum m g . r_com, as nsd_core.engine.dynamics), work (exudyn_work: powers by the trapezoid).
-
-Steps for a relative error ~1e-3 (largest |Exudyn - in-house at rtol 1e-11| over an output's peak,
-worst output named; generalized-alpha rho_inf 0.8; second order, the error falls 4x per halving; wall
-time of the solve on a loaded 2-core machine):
-  andrews (0.03 s):        h = 5e-5 s: 1.6e-3 (Phi), 0.25 s;  2.5e-5 s: 3.9e-4, 0.6 s
-  IFToMM A01 (20 s):       h = 2e-3 s: 1.0e-3 (P1_x), 0.4 s;  1e-3 s: 2.5e-4, 0.7 s
-  slider_crank (0.4 s):    h = 2e-4 s: 4.2e-3 (drive torque), 0.45 s;  1e-4 s: 7.5e-4 (slider_v 1e-6)
-  IFToMM A04 (5 s):        h = 1e-2 s: 3.4e-4 (P3_z), 0.2 s;  5e-3 s: 8.5e-5 (one redundant equation found)
-  fourbar_spring (2 s):    h = 1e-3 s: 2.0e-3 (crank angle), 0.4 s;  5e-4 s: 5.1e-4
-  IFToMM A02 (5 s):        relaxed after a failure at the first singular position (h = 1e-4 s at 0.72 s,
-                           1e-3 s at 1.24 s): h = 1e-3 s: 1.1e-4 m (B0_x; B0_vy 7.8e-4 m/s), 2.4 s;
-                           5e-4 s: 2.8e-5 m; 2.5e-4 s: 6.9e-6 m; 1e-4 s: 9.5e-7 m (against the exact
-                           reference). Not at 2e-3 s (a step lands too near the singular position at
-                           1.24 s even relaxed). Tried and failing at 1e-3 s: full Newton, 100 Newton
-                           iterations, rho_inf 0.3/0.6/0.7 (0.5 passed at 1e-3 s, failed at 5e-4 s),
-                           the full-pivot LU with pivot thresholds 1e-8..1e-4 (0.72 s), trapezoidal
-                           index 2 (0.72 s), adaptive step reduction (1.26 s).
-  nsd_drive (2 s, 1 Hz):   h = 2e-3 s: 1.4e-3 (F_x), 1.1 s;  1e-3 s: 3.5e-4, 1.8 s;  5e-4 s: 8.7e-5, 3.1 s
-                           (the Richardson estimate from h, h/2 equals the error); the positions and
-                           other forces stay at ~2e-5 of their peaks at every step down to 5e-5 s (the
-                           in-house run keeps the ~250 Hz vertical ringing generalized-alpha damps).
-  nsd_seismic (1 s):       h = 1e-3 s: 1.0e-4 (rope0 tension; u_x 5.1e-5), 1.3 s;  5e-4 s: 6.4e-5 (u_x 1.2e-5);
-                           2.5e-4 s: 8.3e-5 (u_x 3.2e-6): the plate's motion second order (2.1, 1.9), the
-                           device's forces at the same ringing floor (~1e-4) at every step.
-  nsd_building (1 s):      h = 1e-3 s: 1.4e-3 (restrainer force over its peak), 1.3 s;  5e-4 s: 3.8e-4 (rope0
-                           3.8e-4), 2.8 s;  2.5e-4 s: 1.1e-4; floors and plate second order (2.0, 2.0).
 """
 from __future__ import annotations
 
