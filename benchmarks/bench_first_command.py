@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import os
 import re
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -88,6 +89,7 @@ def main(argv=None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     atomic_write_json(out / "bench_first_command.json", {"revisions": revisions, "rows": rows, "cpus": os.cpu_count(),
                                                          "versions": versions()})
+    shutil.rmtree(work, ignore_errors=True)   # two clones with their venvs and caches (~1.5 GB each)
     return 0 if all(r.get("exit_code", 0) == 0 for r in rows) else 1
 
 
