@@ -80,6 +80,12 @@ def test_command() -> str:
     return render(load, provenance, table, g, plain)
 
 
+def model_first() -> str:
+    """A user's first nsd compare --model, new description and again (benchmarks/docs_first_command.py)."""
+    from benchmarks.docs_first_command import model_first as render
+    return render(load, provenance, table, g, plain)
+
+
 def symbolic_equations() -> str:
     """The symbolic engine's derived equations of one small mechanism (benchmarks/docs_symbolic.py)."""
     from benchmarks.docs_symbolic import equations as render
@@ -240,6 +246,7 @@ RENDER = {"compare-gate": compare_gate, "convergence": convergence, "tables-5-6"
           "verdict-cost": verdict_cost, "model-benchmarks": model_benchmarks, "campaign": campaign,
           "device-variants": device_variants,
           "first-command": first_command, "test-command": test_command,
+          "model-first": model_first,
           "model-builders": model_builders, "described-gate": described_gate,
           "gate-described": gate_described,
           "work-precision": work_precision, "bench-cold": bench_cold, "bench-peer-seismic": bench_peer_seismic,

@@ -54,3 +54,20 @@ def test_command(load, provenance, table, g, plain) -> str:
     return (provenance(rec) + "\n\n" + text + "\n\n"
             + table(["repeat", "commit", "pytest's summary", "install s", "pytest wall s (min:s)",
                      "pytest CPU min (with its workers)", "install + pytest s (min:s)", "load before"], rows))
+
+
+def model_first(load, provenance, table, g, plain) -> str:
+    """docs/performance.md's table of a user's first ``nsd compare --model`` (benchmarks/bench_model_first.py)."""
+    rec = load("bench_model_first")
+    d = rec["data"]
+    rows = [[r["phase"], r["model"] or "-", plain(r["wall_s"]), plain(r["cpu_s"]), str(r["compile_notices"]),
+             {0: "PASS", 1: "FAIL"}.get(r["exit_code"], f"exit {r['exit_code']}"), plain(r["load_before"], 2)]
+            for r in d["rows"]]
+    new = {r["model"]: r["wall_s"] for r in d["rows"] if r["phase"].startswith("package compiled")}
+    warm = {r["model"]: r["wall_s"] for r in d["rows"] if r["phase"].startswith("again")}
+    extra = [new[m] - warm[m] for m in new if m in warm]
+    text = (f"A new description on a compiled package costs {plain(min(extra))}-{plain(max(extra))} s more than "
+            f"the same description again (its own generated code compiled once).") if extra else ""
+    return (provenance(rec) + "\n\n" + text + "\n\n"
+            + table(["phase", "description", "wall s", "CPU s (with its workers)", "compile notices", "verdict",
+                     "load before"], rows))
