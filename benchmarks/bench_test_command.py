@@ -2,7 +2,8 @@
 
     python benchmarks/bench_test_command.py --repeats 3 [--revision REV] --out DIR
 
-Each repeat, one after another: a fresh clone of this repository at REV (default HEAD), a new venv,
+Each repeat, one after another: a fresh clone of this repository at REV (default HEAD, resolved to its
+commit once at the start), a new venv,
 ``pip install -c constraints.txt -e '.[test]'``, then ``python -m pytest -q`` (the README's command:
 pyproject's addopts leave the slow mark out and spread the rest over every core), on an empty cache
 folder (``XDG_CACHE_HOME`` a new folder, ``NUMBA_CACHE_DIR`` unset): the cold cache is included. Kept
@@ -93,10 +94,16 @@ def main(argv=None) -> int:
     if a.repeats < 1:
         print(f"bench_test_command: --repeats {a.repeats}: must be a whole number >= 1", file=sys.stderr)
         return 2
+    p = subprocess.run(["git", "rev-parse", "--verify", a.revision + "^{commit}"], cwd=ROOT, capture_output=True,
+                       text=True)
+    if p.returncode:
+        print(f"bench_test_command: --revision {a.revision!r}: not a commit of this repository", file=sys.stderr)
+        return 2
+    commit = p.stdout.strip()   # resolved once: commits made while it runs are not measured
     work = Path(tempfile.mkdtemp(prefix="test-command-"))
     rows = []
     for k in range(a.repeats):
-        row = one_repeat(a.revision, work, k)
+        row = one_repeat(commit, work, k)
         rows.append(row)
         print(f"repeat {k}: pytest {row['pytest_wall_s']:.1f} s wall, {row['pytest_cpu_s']:.1f} s CPU, "
               f"{row['summary'] or 'no summary'}, exit {row['exit_code']}", flush=True)

@@ -12,6 +12,13 @@ def test_zero_repeats_is_one_line_exit_2_nothing_written(tmp_path, capsys):
     assert not (tmp_path / "o").exists()
 
 
+def test_a_revision_that_is_not_a_commit_is_one_line_exit_2_nothing_written(tmp_path, capsys):
+    assert main(["--revision", "no-such-rev", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no-such-rev" in err[0]
+    assert not (tmp_path / "o").exists()
+
+
 def test_the_summary_line_is_read_with_and_without_failures():
     out = ("....x..\n== warnings summary ==\n-- Docs: ...\n"
            "2429 passed, 5 skipped, 1 xfailed, 10 warnings in 424.53s (0:07:04)\n")

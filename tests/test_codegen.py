@@ -160,14 +160,22 @@ def test_a_study_command_asks_for_the_generated_evaluation(monkeypatch):
     """Many runs of one structure (an IDA) ask for the generated evaluation; a single run does not, nor
     a sweep, whose designs change the structure (14 structures in --paper, ~0.1 s a run): compiling one
     generated evaluation per structure cost its cold run ~100 s wall (77.8 -> 31.0 s without)."""
+    import contextlib
     from nsd_cli.main import main
     monkeypatch.delenv(codegen.ENV, raising=False)
+    seen, real = [], codegen.preferring_generated
+
+    @contextlib.contextmanager
+    def watched():   # what the command's handler runs under
+        with real():
+            seen.append(os.environ.get(codegen.ENV))
+            yield
+    monkeypatch.setattr(codegen, "preferring_generated", watched)
     assert main(["cycle", "--amplitude", "-1", "--frequency", "1", "--out", "x"]) == 2
-    assert codegen.ENV not in os.environ
     assert main(["sweep", "--param", "rod_length", "--values", "abc", "--out", "x"]) == 2
-    assert codegen.ENV not in os.environ
+    assert seen == [] and codegen.ENV not in os.environ
     assert main(["ida", "--record-set", "farfield", "--limit", "bogus", "--out", "x"]) == 2
-    assert os.environ[codegen.ENV] == "generated"
+    assert seen == ["generated"] and codegen.ENV not in os.environ   # asked for while it ran, then put back
 
 
 def test_a_bad_evaluator_choice_is_one_line_and_exit_2(tmp_path):
