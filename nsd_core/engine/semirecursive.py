@@ -18,7 +18,8 @@ from typing import Callable
 
 import numpy as np
 
-from nsd_core.engine.compiled import OK, reduced_dynamics, velocities_and_predictor
+from nsd_core.engine.compile_once import DONE, compile_once
+from nsd_core.engine.compiled import DYNAMICS, OK, VELOCITIES, reduced_dynamics, velocities_and_predictor
 from nsd_core.engine.compiled import assemble as assemble_kernel
 from nsd_core.engine.compiled_model import SystemModel, Workspace, build_model, make_workspace, split_state
 from nsd_core.engine.closure import closure, full_pivot_elimination
@@ -216,6 +217,11 @@ class SemiRecursiveSystem:
 
     def _rhs_compiled(self, ws, t, zfd, qd, qdd, extra):
         """The same equations as _rhs_numpy through nsd_core.engine.compiled (None: singular, use numpy)."""
+        if VELOCITIES not in DONE or DYNAMICS not in DONE:
+            # their units first (compiled, or loaded from the cache): numba files a call's own
+            # compilation apart from a unit's explicit signature, so a first call from Python before
+            # any unit of the process compiled them again (7 s of a described mechanism's first run)
+            compile_once(VELOCITIES, DYNAMICS)
         ws.qd[:] = qd
         ws.qdd[:] = qdd
         if velocities_and_predictor(self.model, ws, np.ascontiguousarray(zfd, dtype=float)) != OK:
