@@ -18,23 +18,21 @@ from __future__ import annotations
 import argparse
 import io
 import os
-import resource
 import shutil
 import subprocess
 import sys
 import tarfile
 import tempfile
-import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from benchmarks.bench_cold import timed  # noqa: E402
 from nsd_core.common.files import atomic_write_json  # noqa: E402
 from nsd_core.device.results import versions  # noqa: E402
 
 MODELS = ("fourbar_spring", "andrews", "slider_crank", "iftomm_a01_pendulum", "iftomm_a04_bricard")
-NOTICE = "nsd: compiling"
 
 
 def snapshot(where: Path) -> Path:
@@ -43,21 +41,6 @@ def snapshot(where: Path) -> Path:
     with tarfile.open(fileobj=io.BytesIO(tar)) as t:
         t.extractall(where, filter="data")
     return where
-
-
-def timed(args: list[str], root: Path, cache: Path) -> dict:
-    """One fresh ``nsd`` process from the snapshot ``root`` on the cache folder ``cache``."""
-    env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR", "NSD_EVALUATOR")}
-    env.update(XDG_CACHE_HOME=str(cache), MPLBACKEND="Agg")
-    load = os.getloadavg()[0]
-    before, start = resource.getrusage(resource.RUSAGE_CHILDREN), time.perf_counter()
-    p = subprocess.run([sys.executable, "-m", "nsd_cli.main", *args], cwd=root, env=env, capture_output=True,
-                       text=True)
-    wall, after = time.perf_counter() - start, resource.getrusage(resource.RUSAGE_CHILDREN)
-    return {"command": "nsd " + " ".join(os.path.basename(a) if a.startswith("/") else a for a in args), "exit_code": p.returncode,
-            "wall_s": wall, "cpu_s": (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime),
-            "compile_notices": sum(ln.startswith(NOTICE) for ln in p.stderr.splitlines()), "load_before": load,
-            "tail": "" if p.returncode in (0, 1) else (p.stdout + p.stderr)[-600:]}
 
 
 def main(argv=None) -> int:
@@ -73,21 +56,22 @@ def main(argv=None) -> int:
     work = Path(tempfile.mkdtemp(prefix="model-first-"))
     root, rows = snapshot(work / "src"), []
 
-    def run(phase: str, model: str | None, args: list[str], cache: Path) -> None:
-        r = {"phase": phase, "model": model, **timed(args, root, cache)}
+    def run(phase: str, model: str | None, args: list[str], cache: Path, out: Path) -> None:
+        r = {"phase": phase, "model": model, "command": "nsd " + " ".join(os.path.basename(a) for a in args),
+             **timed(args, out, cache, root)}
         rows.append(r)
         print(f"{phase} {model or ''}: {r['wall_s']:.1f} s wall, {r['cpu_s']:.1f} s CPU, exit {r['exit_code']}",
               flush=True)
 
-    def compare(model: str, k: int) -> list[str]:
-        return ["compare", "--model", str(root / "models" / f"{model}.toml"), "--out", str(work / f"out-{k}")]
+    def compare(model: str) -> list[str]:
+        return ["compare", "--model", str(root / "models" / f"{model}.toml")]
 
-    run("empty cache, first description", names[0], compare(names[0], 0), work / "cache-empty")
+    run("empty cache, first description", names[0], compare(names[0]), work / "cache-empty", work / "out-0")
     cache = work / "cache"
-    run("nsd warm", None, ["warm"], cache)
+    run("nsd warm", None, ["warm"], cache, work / "out-warm")   # (no --out: the folder is not used)
     for k, m in enumerate(names, start=1):
-        run("package compiled, new description", m, compare(m, k), cache)
-        run("again (warm)", m, compare(m, 100 + k), cache)
+        run("package compiled, new description", m, compare(m), cache, work / f"out-{k}")
+        run("again (warm)", m, compare(m), cache, work / f"out-{100 + k}")
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
     commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True).stdout.strip()
