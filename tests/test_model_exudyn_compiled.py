@@ -1,5 +1,5 @@
 """The Exudyn builder's compiled force paths (comparisons/builders/exudyn_compiled.py and
-exudyn_codegen.py): the generated function per model shape and its cache key, its Jacobian against a
+exudyn_codegen.py): the generated module per set of laws and its cache key, its Jacobian against a
 central difference, the "compiled" path against the "connectors" reference on the device's drive
 description, and the "predicted" path (forces once a step at the predicted end) against the in-house
 builder at second order."""
@@ -20,20 +20,27 @@ def _build(path: str, h: float = 1e-3) -> Build:
     return Build(model, check_settings({"step_size": h}, model), h)
 
 
-def test_generated_function_is_keyed_by_shape_and_laws():
-    """The same description's shape gives the same generated file whatever its parameters (they are
-    data); the file's name is the hash of its source and of the law sources it calls, and a second
-    build in the process reuses the loaded module."""
+def test_generated_module_is_keyed_by_its_laws_not_the_model():
+    """The generated module names laws and nothing of the model: the device's drive, its seismic model
+    and its building (other bodies, elements and counts) share one module, and a parameter or step
+    change is data. The file's name is the hash of its source and of the law sources it calls; a
+    description whose laws come from another module (the isolators' plane law) gets another."""
     a, b = _build("nsd_drive.toml").compiled, _build("nsd_drive.toml", 5e-4).compiled
     assert a.gen is b.gen
     assert a.F[a.F.size - 1] == 1e-3 and b.F[b.F.size - 1] == 5e-4   # the step is data, not code
-    text, bound = exudyn_codegen.source(a.elements, len(a.bodies), len(a.ia), len(a.jc),
-                                        *exudyn_codegen.pack(a)[4:], len(a.states.elements), exudyn_codegen.pack(a)[3])
+    laws = exudyn_codegen.law_set(a.elements)
+    assert {"rope", "sma_wire", "push_spring", "hunt_crossley_stop", "linear_spring_damper",
+            "joint_spring_damper"} <= {law.name for law in laws}
+    text, bound = exudyn_codegen.source(laws)
     key = exudyn_codegen.fingerprint(text, bound)
     assert (generated.folder() / f"exudyn_forces_{key}.py").read_text() == text
     assert exudyn_codegen.fingerprint(text + "\n", bound) != key
-    seismic = _build("nsd_seismic.toml").compiled   # joint laws (a turn among them): another shape
-    assert seismic.gen is not a.gen
+    seismic, building = _build("nsd_seismic.toml").compiled, _build("nsd_building.toml").compiled
+    assert seismic.gen is a.gen and building.gen is a.gen
+    assert len(building.elements) != len(a.elements) != len(seismic.elements)
+    mechanism = _build("fourbar_spring.toml").compiled   # the model layer's laws alone: a smaller module
+    assert {law.name for law in exudyn_codegen.law_set(mechanism.elements)} < {law.name for law in laws}
+    assert mechanism.gen is not a.gen
 
 
 def test_compiled_jacobian_is_the_force_functions_derivative():

@@ -1,33 +1,40 @@
-"""One compiled function per model for the compiled force path of comparisons.builders.exudyn
+"""One compiled module per set of laws for the compiled force path of comparisons.builders.exudyn
 (exudyn_compiled.CompiledForces): the element loop, the laws and their states in one numba call.
 
 Why: Exudyn calls the force function ~8 times a step (Newton's residuals) and differentiates it
 numerically; a Python loop over the laws and LawStates.at cost ~20 us a call (the hand-written
-adapter makes one compiled call a step). Generated here, for the description's force elements in
-order, are
+adapter makes one compiled call a step). Why one module per set of laws and not per model: the
+module's text names the laws it can call and nothing of the model, whose elements, counts and
+offsets are data (the arrays below). Every description whose laws come from the same registering
+modules (the model layer's own laws always among them) shares one compiled module: the device's
+drive, its seismic model with a restrainer or a building, a mechanism of the model layer's laws.
+A module made per model shape compiled its ~5 functions again for each (10-20 s of CPU each, four in
+the default gate). Generated here:
 - ``evaluate(q, q_t, F, I, W, f)``: the generalized forces f at Exudyn's coordinates: the kinematics
-  of exudyn_kernels.arguments, one call of each element's registry law (bound by name), a state's
-  value at the end of the step by Heun's method from the committed (s, r) (exudyn_forces.LawStates,
-  the same arithmetic), and exudyn_kernels.forces;
+  of exudyn_kernels.arguments, each element's registry law (``_force``, ``_plane_force``: a branch
+  per law, bound by name), a state's value at the end of the step by Heun's method from the committed
+  (s, r) (exudyn_forces.LawStates, the same arithmetic), and exudyn_kernels.forces;
 - ``jacobian(q, q_t, F, I, W, fq, fv, J)``: Exudyn's ObjectGenericODE2 jacobianUserFunction,
   J = -(fq df/dq + fv df/dq') by forward differences of ``evaluate`` inside the compiled call
   (Exudyn's own numerical Jacobian calls the Python function twice per coordinate); only the
-  columns of bodies some element touches (the ``active`` list in I);
+  columns of bodies some element touches (the ``active`` block of I);
 - ``commit(q, q_t, F, I, W)``: the step converged: every state and its rate move on (LawStates.commit);
 - ``series(Q, Q_t, F, I, W, X, XD)``: every element's (x, x') at each of a series of samples (the rows
   of Q, Q_t) into the rows of X, XD: the outputs' law arguments (exudyn_replay), by this kinematics;
+- ``values(q, q_t, F, I, W, x, xd, T)``: every element's law value at the committed states;
 - ``advance(q_all, q_t_all, q_tt_all, index, h, predict, F, I, W, f)``: the pre-step's work on Exudyn's
   whole coordinate vectors in one call: ``commit``, then (``predict``) the forces at the Taylor-
   predicted end of the step into f (CompiledForces.advance).
 A plane law's element comes as two consecutive joint entries (its x and y slides, exudyn_compiled):
-its law is called once at the first, giving both entries' values, its two-component state in two
-consecutive slots (Heun, LawStates.at_plane's arithmetic).
-Numbers live in three arrays (F: constants, I: integers, W: the states, the turns' last angles,
-the started flag), so the source depends on the description's shape only (element kinds, laws,
-states, counts); a parameter change reuses the compiled code. Cached as mujoco_codegen does: the
-source is written as ``exudyn_forces_<hash>.py`` to a cache folder and compiled with cache=True; the
-hash covers the source, exudyn_kernels (compiled into the generated file's cache) and each law's
-source files (transitively through the numba functions it calls), so an edit gives a new file.
+its law is called once at the first (the second's law code is -1), giving both entries' values, its
+two-component state in two consecutive slots (Heun, LawStates.at_plane's arithmetic).
+Numbers live in three arrays: F (floats: the bodies' reference coordinates, the elements' geometry and
+parameters, the step), I (integers: the counts and block offsets of ``HEAD``, the elements' bodies,
+law codes, kinds, parameter ranges and state slots) and W (the states, the turns' last angles, the
+started flag). Cached as mujoco_codegen does: the source is written as ``exudyn_forces_<hash>.py`` to
+a cache folder and compiled with cache=True; the hash covers the source, exudyn_kernels (compiled
+into the generated file's cache) and each law's source files (transitively through the numba
+functions it calls), so an edit gives a new file.
 """
 from __future__ import annotations
 
@@ -35,108 +42,165 @@ import numpy as np
 
 from comparisons.builders import generated
 from comparisons.builders import exudyn_kernels
+from nsd_core.model import laws as registry
 from nsd_core.model.laws import PLANE
 
 HELPERS = (exudyn_kernels,)
 EPS_REL, EPS_MIN = 1e-7, 1e-2   # forward-difference step: EPS_REL max(EPS_MIN, |q_i|) (Exudyn's defaults)
-# the kinematics' and laws' work arrays, allocated once a compiled call (``scratch``) and passed down: each
+# I's head: the counts, then the offsets of F's blocks, of I's blocks and of W's blocks
+HEAD = ("nb", "npts", "nj", "nactive", "pa", "pb", "e", "jax", "jx", "jy", "jpos", "jorig", "h",
+        "ia", "ib", "jc", "jp", "turn", "active", "code", "kind", "p0", "p1", "slot", "s", "r", "started")
+# an element's kind: a scalar law without and with a state, a plane law without and with one
+STATELESS, STATEFUL, PLANE_STATELESS, PLANE_STATEFUL = 0, 1, 2, 3
+# the kinematics' and laws' work arrays, allocated once a compiled call (``_scratch``) and passed down: each
 # is written before it is read, so one set serves every evaluation in a call (the Jacobian's 30)
 SCRATCH = "x, xd, T, N, S, R, G, r, v, w"
 
 
-def source(elements, nb: int, npts: int, nj: int, params: list[tuple[int, int]], ns: int,
-           sizes: dict) -> tuple[str, dict]:
-    """The generated module's text (elements in CompiledForces' order: points, then joints) and the
-    law functions it expects bound by name. ``params``: each element's [start, end) in F; ``sizes``
-    the offsets of F's, I's and W's blocks (CompiledForces.pack)."""
-    fns = generated.law_functions(elements)
-    names = {id(fn): f"law_{k}" for k, fn in enumerate(fns)}
-    ne = npts + nj
-    scratch = (f"    R, G = np.empty(({nb}, 3, 3)), np.empty(({nb}, 3, 4))\n"
-               f"    r, v, w = np.empty(({nb}, 3)), np.empty(({nb}, 3)), np.empty(({nb}, 3))\n"
-               f"    x, xd, T = np.empty({ne}), np.empty({ne}), np.empty({ne})\n"
-               f"    N, S = np.empty(({ne}, 3)), np.empty(({ne}, 2, 3))")
-    lines = (_state_source(nb, npts, nj, sizes) + _laws_source(elements, params, names, sizes)
-             + _evaluate_source(nb, sizes, scratch) + _commit_source(elements, params, names, nb, sizes, scratch)
-             + _outputs_source(elements, params, names, nb, ne, sizes, scratch))
-    return "\n".join(lines), {names[id(fn)]: fn for fn in fns}
+def law_set(elements) -> list:
+    """The laws a model's module can call, sorted by name: every registered law defined in a module that
+    defines one of ``elements``' laws, and the model layer's own (so the device's drive, its seismic
+    models and a mechanism of the model layer's laws share a module)."""
+    homes = {registry.__name__} | {_home(f.law) for f in elements}
+    return sorted((law for law in registry.LAWS.values() if _home(law) in homes), key=lambda law: law.name)
 
 
-def _state_source(nb: int, npts: int, nj: int, o: dict) -> list[str]:
-    """The module's head and ``_state``: every element's kinematics (exudyn_kernels.arguments)."""
+def _home(law) -> str:
+    return getattr(law.force, "py_func", law.force).__module__
+
+
+def _head(*names: str, prefix: str = "") -> str:
+    """``a, b = I[i], I[j]``: the named entries of I's head, as locals (``prefix`` + name)."""
+    return f"    {', '.join(prefix + n for n in names)} = {', '.join(f'I[{HEAD.index(n)}]' for n in names)}"
+
+
+def source(laws) -> tuple[str, dict]:
+    """The generated module's text for ``laws`` (law_set's list; an element's law code is its index
+    there) and the law functions it expects bound by name."""
+    bound = {}
+    for i, law in enumerate(laws):
+        bound[f"law_{i}"] = law.force
+        if law.rate is not None:
+            bound[f"rate_{i}"] = law.rate
+    lines = (_dispatch_source(laws) + _state_source() + _laws_source() + _evaluate_source()
+             + _commit_source() + _outputs_source())
+    return "\n".join(lines), bound
+
+
+def _dispatch_source(laws) -> list[str]:
+    """The module's head and one branch per law: ``_force``/``_rate`` (a scalar law's value and its
+    state's rate), ``_plane_force``/``_plane_rate`` (a plane law's two)."""
+    lines = ['"""Generated by comparisons.builders.exudyn_codegen: do not edit."""',
+             "import numpy as np",
+             "from numba import njit",
+             "from comparisons.builders.exudyn_kernels import arguments, forces", "", ""]
+    for name, args, plane, rate in (("_force", "c, x, xd, s, p", False, False), ("_rate", "c, x, xd, s, p", False, True),
+                                    ("_plane_force", "c, x, y, xd, yd, sx, sy, p", True, False),
+                                    ("_plane_rate", "c, x, y, xd, yd, sx, sy, p", True, True)):
+        lines += ["@njit(cache=True)", f"def {name}({args}):"]
+        for i, law in enumerate(laws):
+            if (law.acts_on == PLANE) != plane or (rate and law.rate is None):
+                continue
+            call = "x, y, xd, yd, sx, sy, p" if plane else ("x, xd, p" if law.state is None else "x, xd, s, p")
+            lines += [f"    if c == {i}:   # {law.name}", f"        return {'rate' if rate else 'law'}_{i}({call})"]
+        lines += ["    return 0.0, 0.0" if plane else "    return 0.0", "", ""]
+    return lines
+
+
+def _state_source() -> list[str]:
+    """``_scratch`` (the work arrays) and ``_state``: every element's kinematics (exudyn_kernels.arguments)."""
+    def block(name, rows):
+        return f"F[o_{name}:o_{name} + 3 * {rows}].reshape(({rows}, 3))"
     return [
-        '"""Generated by comparisons.builders.exudyn_codegen: do not edit."""',
-        "import numpy as np",
-        "from numba import njit",
-        "from comparisons.builders.exudyn_kernels import arguments, forces",
+        "@njit(cache=True)",
+        "def _scratch(I):",
+        _head("nb", "npts", "nj"),
+        "    ne = npts + nj",
+        "    R, G = np.empty((nb, 3, 3)), np.empty((nb, 3, 4))",
+        "    r, v, w = np.empty((nb, 3)), np.empty((nb, 3)), np.empty((nb, 3))",
+        "    x, xd, T = np.empty(ne), np.empty(ne), np.empty(ne)",
+        "    N, S = np.empty((ne, 3)), np.empty((ne, 2, 3))",
+        f"    return {SCRATCH}",
         "", "",
         "@njit(cache=True)",
         f"def _state(F, I, W, f, q, q_t, {SCRATCH}):",
-        f"    ia, ib = I[{o['ia']}:{o['ia'] + npts}], I[{o['ib']}:{o['ib'] + npts}]",
-        f"    jc, jp = I[{o['jc']}:{o['jc'] + nj}], I[{o['jp']}:{o['jp'] + nj}]",
-        f"    turn = I[{o['turn']}:{o['turn'] + nj}] != 0",
-        f"    arguments(q, q_t, F[0:{7 * nb}], ia, F[{o['pa']}:{o['pa'] + 3 * npts}].reshape(({npts}, 3)), ib, "
-        f"F[{o['pb']}:{o['pb'] + 3 * npts}].reshape(({npts}, 3)), F[{o['e']}:{o['e'] + 3 * npts}].reshape(({npts}, 3)), "
-        f"jc, jp, "
-        + ", ".join(f"F[{o[k]}:{o[k] + 3 * nj}].reshape(({nj}, 3))" for k in ("jax", "jx", "jy", "jpos", "jorig"))
-        + f", turn, W[0:{nj}], R, G, r, v, w, x, xd, N, S)",
+        _head("nb", "npts", "nj"),
+        _head("pa", "pb", "e", "jax", "jx", "jy", "jpos", "jorig", prefix="o_"),
+        _head("ia", "ib", "jc", "jp", "turn", prefix="o_"),
+        "    ia, ib = I[o_ia:o_ia + npts], I[o_ib:o_ib + npts]",
+        "    jc, jp = I[o_jc:o_jc + nj], I[o_jp:o_jp + nj]",
+        "    turn = I[o_turn:o_turn + nj] != 0",
+        f"    arguments(q, q_t, F[0:7 * nb], ia, {block('pa', 'npts')}, ib, {block('pb', 'npts')}, {block('e', 'npts')}, "
+        "jc, jp, " + ", ".join(block(k, "nj") for k in ("jax", "jx", "jy", "jpos", "jorig"))
+        + ", turn, W[0:nj], R, G, r, v, w, x, xd, N, S)",
         "    return ia, ib, jc, jp, turn",
         "", ""]
 
 
-def _laws_source(elements, params, names: dict, o: dict) -> list[str]:
-    """``_laws``: each law's value into T, a state's at the step's end by Heun (LawStates.at's arithmetic)."""
-    lines = ["@njit(cache=True)",
-             "def _laws(F, W, x, xd, T):",
-             f"    h, started = F[{o['h']}], W[{o['started']}] != 0.0"]
-    k, planes = 0, set()
-    for j, (f, (p0, p1)) in enumerate(zip(elements, params)):
-        law = names[id(f.law.force)]
-        if f.law.acts_on == PLANE:   # entries j, j + 1: one call, both values
-            if f.name not in planes:
-                planes.add(f.name)
-                lines += _plane_laws(j, f, law, names.get(id(f.law.rate)), o["s"] + k, o["r"] + k, p0, p1)
-                k += f.law.state_size
-            continue
-        lines.append(f"    # element {j}: {f.name} ({f.law.name})")
-        if f.law.state is None:
-            lines.append(f"    T[{j}] = {law}(x[{j}], xd[{j}], F[{p0}:{p1}])")
-        else:
-            s_at, r_at, rate = o["s"] + k, o["r"] + k, names[id(f.law.rate)]
-            lines += [f"    s = W[{s_at}]",
-                      "    if started:",
-                      f"        r = W[{r_at}]",
-                      f"        s = s + 0.5 * h * (r + {rate}(x[{j}], xd[{j}], s + h * r, F[{p0}:{p1}]))",
-                      f"    T[{j}] = {law}(x[{j}], xd[{j}], s, F[{p0}:{p1}])"]
-            k += 1
-    return lines + ["    return 0", "", ""]
+def _laws_source() -> list[str]:
+    """``_laws``: each law's value into T, a state's at the step's end by Heun (LawStates.at's and
+    at_plane's arithmetic)."""
+    return [
+        "@njit(cache=True)",
+        "def _laws(F, I, W, x, xd, T):",
+        _head("npts", "nj"),
+        _head("code", "kind", "p0", "p1", "slot", "s", "r", "started", "h", prefix="o_"),
+        "    h, started = F[o_h], W[o_started] != 0.0",
+        "    for j in range(npts + nj):",
+        "        c, kd = I[o_code + j], I[o_kind + j]",
+        "        if c < 0:   # a plane law's second entry: set with its first",
+        "            continue",
+        "        p = F[I[o_p0 + j]:I[o_p1 + j]]",
+        f"        if kd == {STATELESS}:",
+        "            T[j] = _force(c, x[j], xd[j], 0.0, p)",
+        f"        elif kd == {STATEFUL}:",
+        "            k = I[o_slot + j]",
+        "            s = W[o_s + k]",
+        "            if started:",
+        "                rk = W[o_r + k]",
+        "                s = s + 0.5 * h * (rk + _rate(c, x[j], xd[j], s + h * rk, p))",
+        "            T[j] = _force(c, x[j], xd[j], s, p)",
+        f"        elif kd == {PLANE_STATELESS}:",
+        "            T[j], T[j + 1] = _plane_force(c, x[j], x[j + 1], xd[j], xd[j + 1], 0.0, 0.0, p)",
+        "        else:",
+        "            k = I[o_slot + j]",
+        "            sx, sy = W[o_s + k], W[o_s + k + 1]",
+        "            if started:",
+        "                rx, ry = W[o_r + k], W[o_r + k + 1]",
+        "                ax, ay = _plane_rate(c, x[j], x[j + 1], xd[j], xd[j + 1], sx + h * rx, sy + h * ry, p)",
+        "                sx, sy = sx + 0.5 * h * (rx + ax), sy + 0.5 * h * (ry + ay)",
+        "            T[j], T[j + 1] = _plane_force(c, x[j], x[j + 1], xd[j], xd[j + 1], sx, sy, p)",
+        "    return 0",
+        "", ""]
 
 
-def _evaluate_source(nb: int, o: dict, scratch: str) -> list[str]:
+def _evaluate_source() -> list[str]:
     """``evaluate`` (the generalized forces) and ``jacobian`` (their forward differences)."""
     return [
         "@njit(cache=True)",
         f"def _evaluate(q, q_t, F, I, W, f, {SCRATCH}):",
         f"    ia, ib, jc, jp, turn = _state(F, I, W, f, q, q_t, {SCRATCH})",
-        "    _laws(F, W, x, xd, T)",
+        "    _laws(F, I, W, x, xd, T)",
         "    forces(T, ia, ib, jc, jp, turn, R, G, r, N, S, f)",
         "    return f",
         "", "",
         "@njit(cache=True)",
         "def evaluate(q, q_t, F, I, W, f):",
-        scratch,
+        f"    {SCRATCH} = _scratch(I)",
         f"    return _evaluate(q, q_t, F, I, W, f, {SCRATCH})",
         "", "",
         "@njit(cache=True)",
         "def jacobian(q, q_t, F, I, W, fq, fv, J):",
-        scratch,
-        f"    n = {7 * nb}",
+        f"    {SCRATCH} = _scratch(I)",
+        _head("nb", "nactive"),
+        _head("active", prefix="o_"),
+        "    n = 7 * nb",
         "    f0, f1 = np.empty(n), np.empty(n)",
         "    qq, vv = q.copy(), q_t.copy()",
         f"    _evaluate(qq, vv, F, I, W, f0, {SCRATCH})",
         "    J[:, :] = 0.0",
-        f"    for m in range({o['nactive']}):",
-        f"        i = I[{o['active']} + m]",
+        "    for m in range(nactive):",
+        "        i = I[o_active + m]",
         "        for which in range(2):",
         "            c = fq if which == 0 else fv",
         "            if c == 0.0:",
@@ -154,108 +218,86 @@ def _evaluate_source(nb: int, o: dict, scratch: str) -> list[str]:
         "", ""]
 
 
-def _commit_source(elements, params, names: dict, nb: int, o: dict, scratch: str) -> list[str]:
+def _commit_source() -> list[str]:
     """``commit``: every state and its rate move on to the converged step's end (LawStates.commit)."""
-    lines = ["@njit(cache=True)",
-             "def commit(q, q_t, F, I, W):",
-             scratch,
-             f"    return _commit(q, q_t, F, I, W, np.empty({7 * nb}), {SCRATCH})",
-             "", "",
-             "@njit(cache=True)",
-             f"def _commit(q, q_t, F, I, W, f, {SCRATCH}):",
-             f"    _state(F, I, W, f, q, q_t, {SCRATCH})",
-             f"    h, started = F[{o['h']}], W[{o['started']}] != 0.0"]
-    k, planes = 0, set()
-    for j, (f, (p0, p1)) in enumerate(zip(elements, params)):
-        if f.law.state is None:
-            continue
-        s_at, r_at, rate = o["s"] + k, o["r"] + k, names[id(f.law.rate)]
-        if f.law.acts_on == PLANE:
-            if f.name not in planes:
-                planes.add(f.name)
-                a = f"x[{j}], x[{j + 1}], xd[{j}], xd[{j + 1}]"
-                lines += ["    if started:",
-                          f"        rx, ry = W[{r_at}], W[{r_at + 1}]",
-                          f"        ax, ay = {rate}({a}, W[{s_at}] + h * rx, W[{s_at + 1}] + h * ry, F[{p0}:{p1}])",
-                          f"        W[{s_at}], W[{s_at + 1}] = W[{s_at}] + 0.5 * h * (rx + ax), W[{s_at + 1}] + 0.5 * h * (ry + ay)",
-                          f"    W[{r_at}], W[{r_at + 1}] = {rate}({a}, W[{s_at}], W[{s_at + 1}], F[{p0}:{p1}])"]
-                k += 2
-            continue
-        lines += ["    if started:",
-                  f"        s, r = W[{s_at}], W[{r_at}]",
-                  f"        W[{s_at}] = s + 0.5 * h * (r + {rate}(x[{j}], xd[{j}], s + h * r, F[{p0}:{p1}]))",
-                  f"    W[{r_at}] = {rate}(x[{j}], xd[{j}], W[{s_at}], F[{p0}:{p1}])"]
-        k += 1
-    return lines + [f"    W[{o['started']}] = 1.0", "    return 0", "", ""]
+    return [
+        "@njit(cache=True)",
+        "def commit(q, q_t, F, I, W):",
+        f"    {SCRATCH} = _scratch(I)",
+        f"    return _commit(q, q_t, F, I, W, np.empty(7 * I[{HEAD.index('nb')}]), {SCRATCH})",
+        "", "",
+        "@njit(cache=True)",
+        f"def _commit(q, q_t, F, I, W, f, {SCRATCH}):",
+        f"    _state(F, I, W, f, q, q_t, {SCRATCH})",
+        _head("npts", "nj"),
+        _head("code", "kind", "p0", "p1", "slot", "s", "r", "started", "h", prefix="o_"),
+        "    h, started = F[o_h], W[o_started] != 0.0",
+        "    for j in range(npts + nj):",
+        "        c, kd = I[o_code + j], I[o_kind + j]",
+        f"        if c < 0 or kd == {STATELESS} or kd == {PLANE_STATELESS}:",
+        "            continue",
+        "        p = F[I[o_p0 + j]:I[o_p1 + j]]",
+        "        s_at, r_at = o_s + I[o_slot + j], o_r + I[o_slot + j]",
+        f"        if kd == {STATEFUL}:",
+        "            if started:",
+        "                s, rk = W[s_at], W[r_at]",
+        "                W[s_at] = s + 0.5 * h * (rk + _rate(c, x[j], xd[j], s + h * rk, p))",
+        "            W[r_at] = _rate(c, x[j], xd[j], W[s_at], p)",
+        "        else:",
+        "            if started:",
+        "                rx, ry = W[r_at], W[r_at + 1]",
+        "                ax, ay = _plane_rate(c, x[j], x[j + 1], xd[j], xd[j + 1], W[s_at] + h * rx, W[s_at + 1] + h * ry, p)",
+        "                W[s_at], W[s_at + 1] = W[s_at] + 0.5 * h * (rx + ax), W[s_at + 1] + 0.5 * h * (ry + ay)",
+        "            W[r_at], W[r_at + 1] = _plane_rate(c, x[j], x[j + 1], xd[j], xd[j + 1], W[s_at], W[s_at + 1], p)",
+        "    W[o_started] = 1.0",
+        "    return 0",
+        "", ""]
 
 
-def _outputs_source(elements, params, names: dict, nb: int, ne: int, o: dict, scratch: str) -> list[str]:
+def _outputs_source() -> list[str]:
     """``series`` (each element's (x, x') per sample), ``values`` (committed law values) and ``advance``."""
-    return ["@njit(cache=True)",
-            "def series(Q, Q_t, F, I, W, X, XD):",
-            scratch,
-            f"    f = np.empty({7 * nb})",
-            "    for k in range(Q.shape[0]):",
-            "        _state(F, I, W, f, Q[k], Q_t[k], x, xd, T, N, S, R, G, r, v, w)",
-            "        for j in range(x.shape[0]):   # not X[k, :] = x: its shape check's error path compiles ~2 s",
-            "            X[k, j] = x[j]",
-            "            XD[k, j] = xd[j]",
-            "    return 0", "", "",
-            "@njit(cache=True)",
-            "def values(q, q_t, F, I, W, x, xd, T):",
-            "    # every element's (x, x') and law value at the committed states: exudyn_work's powers",
-            f"    R, G = np.empty(({nb}, 3, 3)), np.empty(({nb}, 3, 4))",
-            f"    r, v, w = np.empty(({nb}, 3)), np.empty(({nb}, 3)), np.empty(({nb}, 3))",
-            f"    N, S = np.empty(({ne}, 3)), np.empty(({ne}, 2, 3))",
-            f"    f = np.empty({7 * nb})",
-            "    _state(F, I, W, f, q, q_t, x, xd, T, N, S, R, G, r, v, w)",
-            *_committed_values(elements, params, names, o["s"]),
-            "    return 0", "", "",
-            "@njit(cache=True)",
-            "def advance(q_all, q_t_all, q_tt_all, index, h, predict, F, I, W, f):",
-            scratch,
-            "    q, q_t = q_all[index], q_t_all[index]",
-            f"    _commit(q, q_t, F, I, W, f, {SCRATCH})   # f: scratch here, the forces below",
-            "    if predict:   # CompiledForces.predict's Taylor step, operation for operation",
-            "        a = q_tt_all[index]",
-            f"        _evaluate(q + h * q_t + (0.5 * h * h) * a, q_t + h * a, F, I, W, f, {SCRATCH})",
-            "    return f", ""]
-
-
-def _committed_values(elements, params, names: dict, s_at: int) -> list[str]:
-    """``values``' lines: each element's law at its committed state (Element.force, plane_force: what
-    exudyn_work read through Python before), a plane law's once for both entries."""
-    lines, k, planes = [], 0, set()
-    for j, (f, (p0, p1)) in enumerate(zip(elements, params)):
-        law, p = names[id(f.law.force)], f"F[{p0}:{p1}]"
-        if f.law.acts_on == PLANE:
-            if f.name not in planes:
-                planes.add(f.name)
-                st = f"W[{s_at + k}], W[{s_at + k + 1}]" if f.law.state is not None else "0.0, 0.0"
-                lines.append(f"    T[{j}], T[{j + 1}] = {law}(x[{j}], x[{j + 1}], xd[{j}], xd[{j + 1}], {st}, {p})")
-                k += f.law.state_size
-            continue
-        if f.law.state is None:
-            lines.append(f"    T[{j}] = {law}(x[{j}], xd[{j}], {p})")
-        else:
-            lines.append(f"    T[{j}] = {law}(x[{j}], xd[{j}], W[{s_at + k}], {p})")
-            k += 1
-    return lines
-
-
-def _plane_laws(j: int, f, law: str, rate: str | None, s_at: int, r_at: int, p0: int, p1: int) -> list[str]:
-    """A plane law's lines in ``_laws``: T[j], T[j + 1] = (Q_x, Q_y) from entries j, j + 1 and its state
-    at the end of the step by Heun (LawStates.at_plane, operation for operation)."""
-    a, p = f"x[{j}], x[{j + 1}], xd[{j}], xd[{j + 1}]", f"F[{p0}:{p1}]"
-    lines = [f"    # elements {j}, {j + 1}: {f.name} ({f.law.name}, x and y)"]
-    if f.law.state is None:
-        return lines + [f"    T[{j}], T[{j + 1}] = {law}({a}, 0.0, 0.0, {p})"]
-    return lines + [f"    sx, sy = W[{s_at}], W[{s_at + 1}]",
-                    "    if started:",
-                    f"        rx, ry = W[{r_at}], W[{r_at + 1}]",
-                    f"        ax, ay = {rate}({a}, sx + h * rx, sy + h * ry, {p})",
-                    "        sx, sy = sx + 0.5 * h * (rx + ax), sy + 0.5 * h * (ry + ay)",
-                    f"    T[{j}], T[{j + 1}] = {law}({a}, sx, sy, {p})"]
+    return [
+        "@njit(cache=True)",
+        "def series(Q, Q_t, F, I, W, X, XD):",
+        f"    {SCRATCH} = _scratch(I)",
+        f"    f = np.empty(7 * I[{HEAD.index('nb')}])",
+        "    for k in range(Q.shape[0]):",
+        f"        _state(F, I, W, f, Q[k], Q_t[k], {SCRATCH})",
+        "        for j in range(x.shape[0]):   # not X[k, :] = x: its shape check's error path compiles ~2 s",
+        "            X[k, j] = x[j]",
+        "            XD[k, j] = xd[j]",
+        "    return 0", "", "",
+        "@njit(cache=True)",
+        "def values(q, q_t, F, I, W, x, xd, T):",
+        "    # every element's (x, x') and law value at the committed states: exudyn_work's powers",
+        "    x0, xd0, T0, N, S, R, G, r, v, w = _scratch(I)",
+        f"    f = np.empty(7 * I[{HEAD.index('nb')}])",
+        f"    _state(F, I, W, f, q, q_t, {SCRATCH})",
+        _head("npts", "nj"),
+        _head("code", "kind", "p0", "p1", "slot", "s", prefix="o_"),
+        "    for j in range(npts + nj):",
+        "        c, kd = I[o_code + j], I[o_kind + j]",
+        "        if c < 0:",
+        "            continue",
+        "        p, s_at = F[I[o_p0 + j]:I[o_p1 + j]], o_s + I[o_slot + j]",
+        f"        if kd == {STATELESS}:",
+        "            T[j] = _force(c, x[j], xd[j], 0.0, p)",
+        f"        elif kd == {STATEFUL}:",
+        "            T[j] = _force(c, x[j], xd[j], W[s_at], p)",
+        f"        elif kd == {PLANE_STATELESS}:",
+        "            T[j], T[j + 1] = _plane_force(c, x[j], x[j + 1], xd[j], xd[j + 1], 0.0, 0.0, p)",
+        "        else:",
+        "            T[j], T[j + 1] = _plane_force(c, x[j], x[j + 1], xd[j], xd[j + 1], W[s_at], W[s_at + 1], p)",
+        "    return 0", "", "",
+        "@njit(cache=True)",
+        "def advance(q_all, q_t_all, q_tt_all, index, h, predict, F, I, W, f):",
+        f"    {SCRATCH} = _scratch(I)",
+        "    q, q_t = q_all[index], q_t_all[index]",
+        f"    _commit(q, q_t, F, I, W, f, {SCRATCH})   # f: scratch here, the forces below",
+        "    if predict:   # CompiledForces.predict's Taylor step, operation for operation",
+        "        a = q_tt_all[index]",
+        f"        _evaluate(q + h * q_t + (0.5 * h * h) * a, q_t + h * a, F, I, W, f, {SCRATCH})",
+        "    return f", ""]
 
 
 def fingerprint(text: str, bound: dict) -> str:
@@ -264,19 +306,19 @@ def fingerprint(text: str, bound: dict) -> str:
 
 
 def module_for(text: str, bound: dict):
-    """The generated module (evaluate, jacobian, commit), compiled once per shape, from numba's disk
-    cache when an earlier process compiled it."""
+    """The generated module (evaluate, jacobian, commit, ...), compiled once per set of laws, from
+    numba's disk cache when an earlier process compiled it."""
     return generated.load(text, bound, HELPERS, "exudyn_forces")
 
 
-def pack(cf) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict, list]:
-    """F, I, W and the offsets (``sizes``) of a CompiledForces ``cf``, and each element's parameter
-    range in F."""
+def pack(cf, laws) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict, list]:
+    """F, I, W and the offsets (``sizes``, HEAD's names) of a CompiledForces ``cf`` whose module calls
+    ``laws``, and each element's parameter range in F."""
     npts, nj = len(cf.ia), len(cf.jc)
-    blocks_f = [cf.ref, cf.pa, cf.pb, cf.e, cf.jax, cf.jx, cf.jy, cf.jpos, cf.jorig]
-    names_f = ["ref", "pa", "pb", "e", "jax", "jx", "jy", "jpos", "jorig"]
+    assert npts + nj == len(cf.elements)
     sizes, at, parts = {}, 0, []
-    for nm, b in zip(names_f, blocks_f):
+    for nm in ("ref", "pa", "pb", "e", "jax", "jx", "jy", "jpos", "jorig"):
+        b = getattr(cf, nm)
         sizes[nm], at = at, at + b.size
         parts.append(np.ravel(b))
     params = []
@@ -291,15 +333,34 @@ def pack(cf) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict, list]:
     touched = sorted({int(i) for i in np.concatenate([cf.ia, cf.ib, cf.jc, cf.jp]) if i >= 0})
     active = [7 * b + k for b in touched for k in range(7)]
     ints = [("ia", cf.ia), ("ib", cf.ib), ("jc", cf.jc), ("jp", cf.jp), ("turn", cf.turn.astype(np.int64)),
-            ("active", np.array(active, dtype=np.int64))]
-    at, parts = 0, []
+            ("active", np.array(active, dtype=np.int64))] + list(zip(("code", "kind", "p0", "p1", "slot"),
+                                                                     _elements(cf.elements, laws, params)))
+    at, parts = len(HEAD), []
     for nm, b in ints:
-        sizes[nm], at = at, at + b.size
+        sizes[nm], at = at, at + len(b)
         parts.append(np.asarray(b, dtype=np.int64))
-    sizes["nactive"] = len(active)
-    I = np.concatenate(parts).astype(np.int64) if parts else np.zeros(0, np.int64)
     ns = len(cf.states.s)
-    sizes["s"], sizes["r"], sizes["started"] = nj, nj + ns, nj + 2 * ns
+    sizes.update(nb=len(cf.bodies), npts=npts, nj=nj, nactive=len(active), s=nj, r=nj + ns, started=nj + 2 * ns)
+    I = np.concatenate([np.array([sizes[n] for n in HEAD], dtype=np.int64)] + parts).astype(np.int64)
     W = np.concatenate([cf.last, np.asarray(cf.states.s, float), np.zeros(ns), [0.0]]).astype(float)
-    assert npts + nj == len(cf.elements)
     return F, I, W, sizes, params
+
+
+def _elements(elements, laws, params) -> tuple[list, ...]:
+    """Each element's law code (its law's index in ``laws``; -1 for a plane law's second entry), kind,
+    parameter range in F and first state slot (a running count of the laws' state sizes)."""
+    code = {law.name: i for i, law in enumerate(laws)}
+    cols, k, planes = ([], [], [], [], []), 0, set()
+    for f, (p0, p1) in zip(elements, params):
+        plane = f.law.acts_on == PLANE
+        if plane and f.name in planes:
+            row = (-1, STATELESS, p0, p1, -1)
+        else:
+            if plane:
+                planes.add(f.name)
+            kind = (PLANE_STATELESS if plane else STATELESS) + (f.law.state is not None)
+            row = (code[f.law.name], kind, p0, p1, k)
+            k += f.law.state_size
+        for col, v in zip(cols, row):
+            col.append(v)
+    return cols

@@ -80,10 +80,11 @@ class CompiledForces:
         self.nodes, self.index = [build.node[name] for name in self.bodies], None
         self.ref = np.concatenate([np.asarray(mbs.GetNodeParameter(n, "referenceCoordinates"), float)
                                    for n in self.nodes])
-        # one generated function per model shape: laws and states inside the compiled call (exudyn_codegen)
-        from comparisons.builders.exudyn_codegen import module_for, pack, source   # it imports this module
-        self.F, self.I, self.W, sizes, params = pack(self)
-        self.gen = module_for(*source(self.elements, nb, len(pts), len(jts), params, len(states.s), sizes))
+        # one generated module per set of laws: laws and states inside the compiled call (exudyn_codegen)
+        from comparisons.builders.exudyn_codegen import law_set, module_for, pack, source   # it imports this module
+        laws = law_set(self.elements)
+        self.F, self.I, self.W, sizes, params = pack(self, laws)
+        self.gen = module_for(*source(laws))
         self.s_at, self.ns = sizes["s"], len(states.s)
         # the committed states and rates are W's (views): the outputs and the work read them as committed
         states.s, states.r = self.W[self.s_at:self.s_at + self.ns], self.W[self.s_at + self.ns:self.s_at + 2 * self.ns]
