@@ -69,4 +69,48 @@ def every_mode_calls() -> list:
     shaped = [partial(run_seismic_job, e, Params(), structure_for(Params(), stories, restrainer), tiny_ground(),
                       TINY_DURATION, TINY_DT_OUT, None)
               for e in peers for stories, restrainer in ((0, True), (3, False))]
-    return peer_calls(specs) + shaped
+    # Exudyn's generated forces are one module per set of laws: a mechanism of the model layer's laws
+    # (nsd compare --model) shares the one this tiny pendulum compiles
+    described = [partial(tiny_described_run, "exudyn")] if "exudyn" in peers else []
+    return peer_calls(specs) + shaped + described
+
+
+# a pendulum with a spring to the ground: a described mechanism of the model layer's laws (SI units)
+TINY_MECHANISM = """
+[model]
+name = "warm_pendulum"
+gravity = [0.0, -9.81, 0.0]
+
+[[bodies]]
+name = "bar"
+joint = { type = "revolute", position = [0.0, 0.0, 0.0], axis = [0.0, 0.0, 1.0] }
+mass = 1.0
+com = [0.1, 0.0, 0.0]
+inertia = [1e-4, 3e-3, 3e-3]
+
+[[forces]]
+name = "spring"
+law = "linear_spring_damper"
+body_a = "bar"
+point_a = [0.2, 0.0, 0.0]
+body_b = "ground"
+point_b = [0.2, 0.2, 0.0]
+parameters = { stiffness = 100.0, damping = 0.1, free_length = 0.15 }
+
+[initial]
+coordinates = { bar = 0.1 }
+
+[[outputs]]
+name = "spring_force"
+kind = "force"
+element = "spring"
+"""
+
+
+def tiny_described_run(engine: str) -> None:
+    """A few steps of TINY_MECHANISM on a peer's described builder, at its default settings."""
+    import importlib
+    import tomllib
+    from nsd_core.model.load import parse_model
+    builder = importlib.import_module(f"comparisons.builders.{engine}")
+    builder.simulate(parse_model(tomllib.loads(TINY_MECHANISM)), 0.004, 0.002, {"step_size": 1e-3})

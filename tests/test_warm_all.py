@@ -108,3 +108,21 @@ def test_without_nsd_warm_a_first_cycle_compiles_what_it_uses(tmp_path):
     lines = [ln for ln in first.stderr.splitlines() if ln.startswith(NOTICE_START)]
     assert lines == [compile_once.NOTICE.format(seconds=compile_once.NOTICE_SECONDS)], lines
     assert not list(tmp_path.rglob(warm_all.MARK_IN_HOUSE)) and not list(tmp_path.rglob(warm_all.MARK))
+
+
+def test_nsd_warm_compiles_the_exudyn_module_every_model_law_mechanism_shares():
+    """``nsd warm``'s peer calls end with a tiny described pendulum on Exudyn; its generated forces are
+    the module of the model layer's laws, which a user's mechanism of those laws (the worked example,
+    Andrews' constant torque) shares: the same law set, the same generated text."""
+    import tomllib
+    from comparisons import warmup
+    from comparisons.builders import exudyn_codegen
+    from nsd_core.model.load import load_model, parse_model
+    calls = warmup.every_mode_calls()
+    assert any(getattr(c, "func", None) is warmup.tiny_described_run and c.args == ("exudyn",) for c in calls)
+    tiny = exudyn_codegen.law_set(parse_model(tomllib.loads(warmup.TINY_MECHANISM)).forces)
+    root = Path(__file__).resolve().parents[1] / "models"
+    for name in ("fourbar_spring.toml", "andrews.toml"):
+        assert exudyn_codegen.law_set(load_model(root / name).forces) == tiny, name
+    assert exudyn_codegen.source(tiny)[0] == exudyn_codegen.source(
+        exudyn_codegen.law_set(load_model(root / "andrews.toml").forces))[0]

@@ -8,8 +8,9 @@ units and a tiny run of every drive path, of the seismic mode, with the restrain
 building; with ``peers`` (``nsd warm``) the peers' tiny runs too (``PROVIDERS``: the layer that knows
 the peers names them). It is an explicit step (``nsd warm``: an install step, or a CI runner's first
 step, ``.ci/run``), after which no command of this version on the device compiles anything (a
-described mechanism, ``nsd compare --model``, still compiles its peers' generated forces and a law
-kernel the device never calls at its first run: docs/compilation.md).
+described mechanism, ``nsd compare --model``, still compiles MuJoCo's generated callback, Exudyn's
+forces for a law module it did not meet and a law kernel the device never calls at its first run:
+docs/compilation.md).
 
 It is not run automatically at a command's first run. That was tried and measured
 (docs/performance.md, "A newcomer's first commands"): the first ``nsd cycle`` on a cold cache went
