@@ -108,18 +108,27 @@ def _dispatch_source(laws) -> list[str]:
 
 
 def _state_source() -> list[str]:
-    """``_scratch`` (the work arrays) and ``_state``: every element's kinematics (exudyn_kernels.arguments)."""
+    """``_frames``, ``_scratch`` (the work arrays) and ``_state``: every element's kinematics
+    (exudyn_kernels.arguments)."""
     def block(name, rows):
         return f"F[o_{name}:o_{name} + 3 * {rows}].reshape(({rows}, 3))"
     return [
         "@njit(cache=True)",
-        "def _scratch(I):",
+        "def _frames(I):",
+        "    # the bodies' poses and the elements' directions and arms",
         _head("nb", "npts", "nj"),
         "    ne = npts + nj",
         "    R, G = np.empty((nb, 3, 3)), np.empty((nb, 3, 4))",
         "    r, v, w = np.empty((nb, 3)), np.empty((nb, 3)), np.empty((nb, 3))",
-        "    x, xd, T = np.empty(ne), np.empty(ne), np.empty(ne)",
         "    N, S = np.empty((ne, 3)), np.empty((ne, 2, 3))",
+        "    return N, S, R, G, r, v, w",
+        "", "",
+        "@njit(cache=True)",
+        "def _scratch(I):",
+        _head("npts", "nj"),
+        "    ne = npts + nj",
+        "    N, S, R, G, r, v, w = _frames(I)",
+        "    x, xd, T = np.empty(ne), np.empty(ne), np.empty(ne)",
         f"    return {SCRATCH}",
         "", "",
         "@njit(cache=True)",
@@ -270,7 +279,7 @@ def _outputs_source() -> list[str]:
         "@njit(cache=True)",
         "def values(q, q_t, F, I, W, x, xd, T):",
         "    # every element's (x, x') and law value at the committed states: exudyn_work's powers",
-        "    x0, xd0, T0, N, S, R, G, r, v, w = _scratch(I)",
+        "    N, S, R, G, r, v, w = _frames(I)",
         f"    f = np.empty(7 * I[{HEAD.index('nb')}])",
         f"    _state(F, I, W, f, q, q_t, {SCRATCH})",
         _head("npts", "nj"),
