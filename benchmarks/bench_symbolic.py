@@ -73,6 +73,8 @@ def models(out: Path, engines: list[str], names: list[str], duration: float | No
                          "symbolic": {k: sym.get(k) for k in ("derive_time", "codegen_time", "load_time", "wall_time",
                                                               "steps", "nfev", "operations", "closure_max", "cache")},
                          "symbolic_tight": {k: tight.get(k) for k in ("derive_time", "wall_time", "cache")},
+                         "symbolic_regularised": {k: runs[label].get(k) for k in ("derive_time", "wall_time", "cache")
+                                                  for label in ["symbolic_regularised"] if label in runs},
                          "difference": _largest(s["rows"], case, "symbolic"),
                          "failures": entry["failures"]})
     return {"engines": engines, "rows": rows, "duration": duration}

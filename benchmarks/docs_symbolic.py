@@ -39,9 +39,9 @@ def models(load, provenance, table, g, plain, name: str = "symbolic_models") -> 
             + (f"Over the first {g(d['duration'])} s of each case (no reference solution over a shortened window). "
                if d.get("duration") else "")
             + f"Each description judged with engines {', '.join(d['engines'])} (`nsd compare --model`'s "
-              "rule, the symbolic engine's estimate from its own run at rtol x 0.01), each derivation on an empty "
-              "cache: derivation, code generation and run seconds of its first run (its tolerance-ladder run finds "
-              "the cache: 0 s deriving), the integrator's steps, sympy's operation count of the derived "
+              "rule, the symbolic engine's estimate from its own run at rtol x 0.01 and, with loops, at 10 x its "
+              "regularisation), each derivation on an empty cache: derivation, code generation and run seconds "
+              "of its first run (its estimate's runs find the cache: 0 s deriving), the integrator's steps, sympy's operation count of the derived "
               "quantities, its largest difference from the converged in-house reference (a fraction of the "
               "output's scale), its largest loop-closure residual [m]:\n\n"
             + table(["model", "case", "symbolic", "derive s", "generate s", "run s", "steps", "operations",

@@ -38,6 +38,14 @@ COMPANION = 2   # the companion run's step over the judged run's
 # power of the tolerance (1: error ~ rtol), for the tolerance a verdict says it needs
 TOLERANCE_LADDER = {"symbolic": ("rtol", 0.01, 1.0)}
 TIGHT_LABEL = "{engine}_tight"
+# an adaptive peer's formulation companion on a description with loops: (setting, factor). The symbolic
+# engine's multipliers come from a regularised solve whose bias no tolerance controls; near a singular
+# position it outgrows the ladder's share (IFToMM A02: 3.7e-9 of scale against a ladder of 8.9e-10). Its
+# difference from its own run at setting x factor is added to its estimate: an upper bound on the bias
+# wherever the bias grows with the setting at least as setting^0.3 (e(10 mu) >= 2 e(mu)), as measured there
+# (e = 3.7e-9, 2.1e-8, 1.8e-7 at mu = 1e-8, 1e-7, 1e-6)
+FORMULATION_COMPANION = {"symbolic": ("regularisation", 10.0)}
+FORMULATION_LABEL = "{engine}_regularised"
 REFINED_LABEL = "{engine}_h{div}"
 
 

@@ -18,8 +18,9 @@ import time
 
 import numpy as np
 
-from comparisons.estimate import (STEP_SETTING, TIGHT_LABEL, TOLERANCE_LADDER, companion_label, nominal_order,
-                                  pair_factor, pair_order, step_used)
+from comparisons.estimate import (FORMULATION_COMPANION, FORMULATION_LABEL, STEP_SETTING, TIGHT_LABEL,
+                                  TOLERANCE_LADDER, companion_label, nominal_order, pair_factor, pair_order,
+                                  step_used)
 from comparisons.model_cases import ModelCase
 from comparisons.verdict import FLOOR, Rule, case_verdicts, pass_sentence
 from nsd_core.model.description import Model
@@ -53,10 +54,11 @@ def builder(engine: str):
     return importlib.import_module(BUILDERS[engine])
 
 
-def run_plan(case: ModelCase, engines: list[str]) -> list[tuple[str, str, dict]]:
+def run_plan(model: Model, case: ModelCase, engines: list[str]) -> list[tuple[str, str, dict]]:
     """(label, engine, settings) of every run a case needs: each engine at its case settings, each
-    fixed-step peer again at half its step (its estimate's companion), and the converged reference and
-    its check."""
+    fixed-step peer again at half its step (its estimate's companion), an adaptive peer at a tighter
+    tolerance and, on a description with loops, at its formulation companion's setting, and the
+    converged reference and its check."""
     plan = []
     for e in engines:
         own = dict(case.settings.get(e, {}))
@@ -66,6 +68,10 @@ def run_plan(case: ModelCase, engines: list[str]) -> list[tuple[str, str, dict]]
             plan.append((label, e, settings))
         if e in TOLERANCE_LADDER:   # an adaptive peer: once more at a far tighter tolerance (its estimate)
             plan.append((TIGHT_LABEL.format(engine=e), e, tightened(e, own)))
+        if e in FORMULATION_COMPANION and model.loops:
+            key, factor = FORMULATION_COMPANION[e]
+            value = {**builder(e).default_settings, **own}[key] * factor
+            plan.append((FORMULATION_LABEL.format(engine=e), e, {**own, key: value}))
     base = dict(case.settings.get(REFERENCE, {}))
     plan += [(CONVERGED, REFERENCE, {**base, **CONVERGED_SETTINGS}), (CHECK, REFERENCE, {**base, **CHECK_SETTINGS})]
     return plan
@@ -181,15 +187,15 @@ def judge(model: Model, case: ModelCase, engines: list[str], runs: dict, rule: R
                                                                   **case.settings.get(e, {})}[key]),
                            "observed_order": pair_order(d[primary], d2[primary], runs[e].stats, pair.stats, ratio),
                            "primary_error": d[primary]}
-        elif e in TOLERANCE_LADDER and TIGHT_LABEL.format(engine=e) in runs:   # its own tolerance ladder
-            key, factor, order = TOLERANCE_LADDER[e]
-            estimates[e] = differences(runs[e], runs[TIGHT_LABEL.format(engine=e)], sc, skip)
-            merged = {**builder(e).default_settings, **case.settings.get(e, {})}
-            evidence[e] = {"order": order, "setting": key, "step": float(merged[key]), "ladder": factor}
-        else:   # the in-house engine: its estimate is its distance from the converged run
+        elif e in TOLERANCE_LADDER and adaptive_estimate(model, case, e, runs, sc, skip) is not None:
+            estimates[e], evidence[e] = adaptive_estimate(model, case, e, runs, sc, skip)
+        elif e == REFERENCE:   # the in-house engine: its estimate is its distance from the converged run
             estimates[e] = dict(d)
             shares_reference = True
             evidence[e] = {}
+        else:   # a companion run failed (said as the case's failure): no estimate, so no verdict of agreement
+            estimates[e] = {k: math.inf for k in d}
+            evidence[e] = {"note": "no error estimate: a companion run of its estimate failed"}
         if case.reference is not None:
             sol = solution_differences(runs[e], case, sc, skip)
             values[e].update(sol)
@@ -208,6 +214,31 @@ def judge(model: Model, case: ModelCase, engines: list[str], runs: dict, rule: R
     sc_all = {**sc, **{k + SOLUTION: v for k, v in sc.items()}}
     return case_verdicts(case.name, "model", names, values, estimates, ref_error, sc_all, evidence, rule,
                          floors=roundoff_floors(model, sc), reference_rtol=CONVERGED_SETTINGS["rtol"])
+
+
+def adaptive_estimate(model: Model, case: ModelCase, engine: str, runs: dict, sc: dict,
+                      skip: dict | None = None) -> tuple[dict, dict] | None:
+    """(metric -> estimate, evidence) of an adaptive peer: its difference from its tolerance ladder's run,
+    plus, on a description with loops, its difference from its formulation companion (estimate.py says
+    why); None when a run it needs is missing. Where the formulation's share is the larger, no rtol is
+    advised (a tighter tolerance would not lower it)."""
+    tight, other = TIGHT_LABEL.format(engine=engine), FORMULATION_LABEL.format(engine=engine)
+    needs_other = engine in FORMULATION_COMPANION and bool(model.loops)
+    if engine not in runs or tight not in runs or (needs_other and other not in runs):
+        return None
+    key, factor, order = TOLERANCE_LADDER[engine]
+    merged = {**builder(engine).default_settings, **case.settings.get(engine, {})}
+    est = differences(runs[engine], runs[tight], sc, skip)
+    evidence = {"order": order, "setting": key, "step": float(merged[key]), "ladder": factor}
+    if needs_other:
+        share = differences(runs[engine], runs[other], sc, skip)
+        setting, times = FORMULATION_COMPANION[engine]
+        largest = max(share.values(), default=0.0)
+        evidence["formulation"] = {"setting": setting, "factor": times, "largest": largest}
+        if largest > max(est.values(), default=0.0):
+            evidence = {k: v for k, v in evidence.items() if k not in ("setting", "step")}
+        est = {k: v + share.get(k, 0.0) for k, v in est.items()}
+    return est, evidence
 
 
 def excluded(model: Model, t: np.ndarray, log, case: str) -> dict:
@@ -236,7 +267,7 @@ def compare_model(model: Model, cases: list[ModelCase], engines: list[str], k: f
                "rule": {**rule.describe(), "text": pass_sentence(k)}, "cases": {}, "rows": [], "runs": {}}
     for case in cases:
         runs, failures, timing = {}, {}, {}
-        for label, engine, settings in run_plan(case, engines):
+        for label, engine, settings in run_plan(model, case, engines):
             log(f"  {case.name}: {label} ...")
             res = run_one(model, case, engine, settings)
             timing[label] = {"wall_time": res["wall_time"]}

@@ -187,7 +187,7 @@ def _rejudge(model, case, engines: list[str], redo: set, summary: dict, rule) ->
     entry = summary["cases"][case.name]
     runs = dict(summary["runs"][case.name])
     failures, timing = dict(entry["failures"]), dict(entry["runs"])
-    for label, engine, settings in run_plan(case, engines):
+    for label, engine, settings in run_plan(model, case, engines):
         if engine not in redo or label in (CONVERGED, CHECK):
             continue
         print(f"  {case.name}: {label} (refined) ...")

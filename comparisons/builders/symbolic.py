@@ -24,7 +24,9 @@ closure (comparisons.builders.symbolic_start).
 Settings (``default_settings``): ``method`` DOP853 or Radau (scipy.integrate.solve_ivp), ``rtol``,
 ``atol``, ``max_step`` [s], ``baumgarte`` [1/s], ``regularisation`` and ``refinements`` (the
 multipliers' solve). The engine's error estimate is its own tolerance ladder: the run at
-``rtol`` against one at rtol x ``comparisons.estimate.TOLERANCE_LADDER`` (comparisons.model_compare).
+``rtol`` against one at rtol x ``comparisons.estimate.TOLERANCE_LADDER``, plus, with loops, the run
+against one at the regularisation x ``comparisons.estimate.FORMULATION_COMPANION`` (its bias, which no
+tolerance controls; comparisons.model_compare.adaptive_estimate).
 
 Run statistics (``ModelRun.stats``): ``wall_time`` (integration and outputs), ``derive_time`` and
 ``codegen_time`` of this run (0 when the cache had the equations), ``load_time``, ``cache``,

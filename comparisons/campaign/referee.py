@@ -4,7 +4,7 @@ no formulation shared with either side) runs the same case and says whose side i
 
 For each disagreeing peer of a case (``referee``):
 - the symbolic engine is judged against the converged reference by the gate's rule (its estimate from
-  its tolerance ladder): ``agrees_with_reference``;
+  its tolerance ladder and, with loops, its formulation companion): ``agrees_with_reference``;
 - and against the peer's run: its largest difference over k x (its estimate + the peer's), each
   output's, ``agrees_with_peer``;
 - ``side``: ``reference`` (it agrees with the reference, not the peer: the peer is wrong), ``peer``
@@ -15,8 +15,6 @@ The symbolic engine's runs are re-used when it already ran as a peer.
 from __future__ import annotations
 
 import time
-
-from comparisons.estimate import TIGHT_LABEL
 
 REFEREE = "symbolic"
 
@@ -31,8 +29,8 @@ def disagreeing(summary: dict) -> dict:
 
 def referee(model, cases: list, summary: dict) -> dict:
     """case -> peer -> the referee's finding (see the module docstring); {} when no peer disagrees."""
-    from comparisons.model_compare import (CHECK, CONVERGED, differences, judge, model_rule, run_one, run_plan,
-                                           scales)
+    from comparisons.model_compare import (CHECK, CONVERGED, adaptive_estimate, differences, judge, model_rule,
+                                           run_one, run_plan, scales)
     rule = model_rule(model, summary["rule"]["k"])
     out = {}
     by_name = {c.name: c for c in cases}
@@ -41,7 +39,7 @@ def referee(model, cases: list, summary: dict) -> dict:
         if CONVERGED not in runs or CHECK not in runs:
             continue
         start, failure = time.perf_counter(), None
-        for label, engine, settings in run_plan(case, [REFEREE]):
+        for label, engine, settings in run_plan(model, case, [REFEREE]):
             if engine == REFEREE and label not in runs:
                 res = run_one(model, case, engine, settings)
                 if res["status"] == "ok":
@@ -49,13 +47,14 @@ def referee(model, cases: list, summary: dict) -> dict:
                 else:
                     failure = res["message"]
         wall = time.perf_counter() - start
-        if failure or REFEREE not in runs or TIGHT_LABEL.format(engine=REFEREE) not in runs:
+        sc = scales(model, runs[CONVERGED])
+        estimate = None if failure else adaptive_estimate(model, case, REFEREE, runs, sc)
+        if estimate is None:
             out[name] = {p: {"side": "referee_failed", "message": failure, "wall_s": wall} for p in peers}
             continue
         rows, verdicts = judge(model, case, [REFEREE], runs, rule)
         mine = verdicts[REFEREE]
-        sc = scales(model, runs[CONVERGED])
-        own = differences(runs[REFEREE], runs[TIGHT_LABEL.format(engine=REFEREE)], sc)
+        own = estimate[0]
         found = {}
         for p in peers:
             est_p = {r["metric"]: r["estimate"] or 0.0 for r in summary["rows"] if r["case"] == name and r["engine"] == p}
