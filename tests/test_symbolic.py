@@ -177,7 +177,7 @@ def test_the_drive_force_holds_the_weight_with_the_contract_sign(cache):
     assert np.max(np.abs(run.outputs["W"] - (run.outputs["V"] - run.outputs["V"][0]))) < 1e-9
 
 
-@pytest.mark.slow   # every benchmark description: about 5 min on 2 cores (Bricard's 24,000-operation equations most)
+@pytest.mark.slow   # every benchmark description: 9.3 min in one process (Bricard 7.6: three runs of 24,000 operations)
 @pytest.mark.parametrize("name", ["fourbar_spring", "slider_crank", "iftomm_a01_pendulum", "andrews",
                                   "iftomm_a02_fourbar", "iftomm_a04_bricard"])
 def test_every_benchmark_description_passes_in_the_symbolic_engine(cache, name):
