@@ -204,6 +204,8 @@ def judge(model: Model, case: ModelCase, engines: list[str], runs: dict, rule: R
             own = 1.0 if shares_reference else 0.0
             estimates[e].update({k: estimates[e][k[: -len(SOLUTION)]] + own * ref_error[k[: -len(SOLUTION)]]
                                  for k in sol})
+            if "ladder_share" in evidence[e]:
+                evidence[e]["ladder_share"].update({k: evidence[e]["ladder_share"][k[: -len(SOLUTION)]] for k in sol})
     if case.reference is not None:   # the converged reference against the solution, within its own error
         sol = solution_differences(conv, case, sc, skip)
         values[CONVERGED] = sol
@@ -220,8 +222,9 @@ def adaptive_estimate(model: Model, case: ModelCase, engine: str, runs: dict, sc
                       skip: dict | None = None) -> tuple[dict, dict] | None:
     """(metric -> estimate, evidence) of an adaptive peer: its difference from its tolerance ladder's run,
     plus, on a description with loops, its difference from its formulation companion (estimate.py says
-    why); None when a run it needs is missing. Where the formulation's share is the larger, no rtol is
-    advised (a tighter tolerance would not lower it)."""
+    why); None when a run it needs is missing. The evidence keeps the ladder's share apart
+    (``ladder_share``): the rtol a verdict advises answers for that share alone, since a tighter
+    tolerance does not lower the formulation's."""
     tight, other = TIGHT_LABEL.format(engine=engine), FORMULATION_LABEL.format(engine=engine)
     needs_other = engine in FORMULATION_COMPANION and bool(model.loops)
     if engine not in runs or tight not in runs or (needs_other and other not in runs):
@@ -233,10 +236,8 @@ def adaptive_estimate(model: Model, case: ModelCase, engine: str, runs: dict, sc
     if needs_other:
         share = differences(runs[engine], runs[other], sc, skip)
         setting, times = FORMULATION_COMPANION[engine]
-        largest = max(share.values(), default=0.0)
-        evidence["formulation"] = {"setting": setting, "factor": times, "largest": largest}
-        if largest > max(est.values(), default=0.0):
-            evidence = {k: v for k, v in evidence.items() if k not in ("setting", "step")}
+        evidence["formulation"] = {"setting": setting, "factor": times, "largest": max(share.values(), default=0.0)}
+        evidence["ladder_share"] = dict(est)
         est = {k: v + share.get(k, 0.0) for k, v in est.items()}
     return est, evidence
 

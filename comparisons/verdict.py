@@ -172,8 +172,12 @@ def _verdict(engine: str, rows: list[dict], ev: dict, rule: Rule, reference_rtol
         own = sorted((r for r in inacc if r["metric"] in OWN), key=lambda r: -_error(r) / r["tolerance"])
         if steps:
             text = "not converged at these settings: " + _items(steps)
-            if ev.get("setting") and ev.get("step"):
-                need = step_needed(ev["step"], _error(steps[0]), steps[0]["tolerance"], ev["order"])
+            # the setting answers for the share of the error it controls (an adaptive peer's ladder share;
+            # its formulation's share does not fall with a tighter tolerance): none advised when that share is
+            # within the tolerance
+            err = (ev.get("ladder_share") or {}).get(steps[0]["metric"], _error(steps[0]))
+            if ev.get("setting") and ev.get("step") and err > steps[0]["tolerance"]:
+                need = step_needed(ev["step"], err, steps[0]["tolerance"], ev["order"])
                 out["needs"] = {ev["setting"]: need}
                 text += f"; needs {ev['setting']} <= {need:.3g}" + ("" if ev["setting"] == "rtol" else " s")
             parts.append(text)

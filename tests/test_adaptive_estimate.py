@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from comparisons.estimate import FORMULATION_LABEL, TIGHT_LABEL
+from comparisons.estimate import FORMULATION_LABEL, TIGHT_LABEL, step_needed
 from comparisons.model_cases import ModelCase
 from comparisons.model_compare import CHECK, CONVERGED, adaptive_estimate, judge, model_rule, run_plan, scales
 from nsd_core.model.load import load_model
@@ -36,7 +36,7 @@ def test_the_formulation_companion_is_planned_only_where_there_are_loops():
     assert FORMULATION_LABEL.format(engine="symbolic") not in labels and TIGHT_LABEL.format(engine="symbolic") in labels
 
 
-def test_the_estimate_adds_the_formulation_share_and_drops_the_rtol_advice_it_would_not_fix():
+def test_the_estimate_adds_the_formulation_share_and_keeps_the_ladders_apart():
     model = load_model(MODELS / "fourbar_spring.toml")
     runs = _runs(model, {CONVERGED: 0.0, "symbolic": 1e-9, "symbolic_tight": 1e-9 + 2e-10,
                          "symbolic_regularised": 1e-9 - 3e-9})
@@ -44,11 +44,34 @@ def test_the_estimate_adds_the_formulation_share_and_drops_the_rtol_advice_it_wo
     est, ev = adaptive_estimate(model, CASE, "symbolic", runs, sc)
     for o in model.outputs:
         assert np.isclose(est[o.name] * sc[o.name][0], 2e-10 + 3e-9, rtol=1e-6), (o.name, est[o.name])
-    assert ev["formulation"]["setting"] == "regularisation" and "setting" not in ev   # no rtol would lower it
-    # the ladder's share the larger: the rtol advice stays
-    runs["symbolic_regularised"] = runs["symbolic_tight"]
-    _, ev = adaptive_estimate(model, CASE, "symbolic", runs, sc)
-    assert ev["setting"] == "rtol"
+        assert np.isclose(ev["ladder_share"][o.name] * sc[o.name][0], 2e-10, rtol=1e-6)
+    assert ev["formulation"]["setting"] == "regularisation" and ev["setting"] == "rtol"
+
+
+def _verdict(model, tight: float, regularised: float) -> dict:
+    """The symbolic engine's verdict on a run equal to the converged one, its companions off by these
+    fractions of each output's scale."""
+    t = np.linspace(0.0, 1.0, 11)
+    sc = scales(model, _runs(model, {CONVERGED: 0.0})[CONVERGED])
+    runs = {label: ModelRun("symbolic", t, {o.name: np.sin(t) + off * sc[o.name][0] for o in model.outputs},
+                            {o.name: o.unit for o in model.outputs}, {})
+            for label, off in {CONVERGED: 0.0, CHECK: 0.0, "symbolic": 0.0, "symbolic_tight": tight,
+                               "symbolic_regularised": regularised}.items()}
+    return judge(model, CASE, ["symbolic"], runs, model_rule(model, 3.0))[1]["symbolic"]
+
+
+def test_the_rtol_advised_answers_for_the_ladders_share_alone():
+    model = load_model(MODELS / "fourbar_spring.toml")
+    # the formulation's share over the tolerance, the ladder's far within: no tolerance would lower it
+    v = _verdict(model, tight=1e-9, regularised=0.05)
+    assert v["text"].startswith("not converged at these settings") and "needs" not in v["text"], v["text"]
+    assert v["needs"] is None
+    # the ladder's share over it (a loose rtol, where both companions move with the integration's error):
+    # the rtol it needs, from the ladder's share 0.05 (error ~ rtol), not from the whole estimate 0.1
+    v = _verdict(model, tight=0.05, regularised=0.05)
+    assert f"needs rtol <= {step_needed(1e-10, 0.05, 1e-3, 1.0):.3g}" in v["text"], v["text"]
+    assert np.isclose(v["needs"]["rtol"], step_needed(1e-10, 0.05, 1e-3, 1.0), rtol=1e-9, atol=0.0)
+    assert not np.isclose(v["needs"]["rtol"], step_needed(1e-10, 0.1, 1e-3, 1.0), rtol=1e-3, atol=0.0)
 
 
 def test_a_missing_companion_leaves_no_estimate_and_no_pass():
