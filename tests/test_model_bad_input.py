@@ -79,6 +79,20 @@ def test_bad_input_is_exit_2_one_line_nothing_written(tmp_path, capsys, name):
     assert not out.exists()
 
 
+@pytest.mark.parametrize("value", ["1e300", "0.02"])
+def test_a_symbolic_regularisation_that_would_open_the_loops_is_exit_2(tmp_path, capsys, value):
+    """Its estimate runs it at x10 (comparisons.estimate.FORMULATION_COMPANION): at most 0.01 of S's
+    largest diagonal entry (1e300 dropped the loops' forces: a FAIL with its estimate blind to it)."""
+    model = tmp_path / "m.toml"
+    model.write_text(sub(SHORT, 'name = "c"', f'name = "c"\nsymbolic = {{ regularisation = {value} }}'))
+    out = tmp_path / "out"
+    code, stdout, stderr = nsd(capsys, "--model", str(model), "--engines", "semirecursive,symbolic", "--out", str(out))
+    lines = [ln for ln in stderr.splitlines() if ln.strip()]
+    assert code == 2 and len(lines) == 1, stdout + stderr
+    assert f"symbolic.regularisation = {float(value)!r}: must be <= 0.01" in lines[0], stderr
+    assert not out.exists()
+
+
 def test_a_dt_out_that_divides_within_round_off_is_accepted(tmp_path):
     """0.1 s over 0.3 s is 2.9999999999999996 intervals in doubles: it divides (within 1e-9)."""
     from comparisons.model_cases import load_model_cases

@@ -54,11 +54,16 @@ METHODS = ("DOP853", "Radau")
 
 
 def validate_settings(s: dict) -> None:
-    """The method one of METHODS; rtol at least 1e-11, so that its tolerance ladder's run stays >= 1e-13."""
+    """The method one of METHODS; rtol at least 1e-11, so that its tolerance ladder's run stays >= 1e-13;
+    the regularisation at most 0.01 of S's largest diagonal entry, so that its estimate's run at x10 stays
+    a small perturbation (a regularisation as large as S drops the loops' forces: the loops open)."""
     if s["method"] not in METHODS:
         raise ModelError(f"symbolic.method = {s['method']!r}: allowed: {', '.join(METHODS)}")
     if not s["rtol"] >= 1e-11:
         raise ModelError(f"symbolic.rtol = {s['rtol']!r}: must be >= 1e-11 (its error estimate runs at rtol x 0.01)")
+    if not s["regularisation"] <= 0.01:
+        raise ModelError(f"symbolic.regularisation = {s['regularisation']!r}: must be <= 0.01 (a fraction of S's "
+                         "largest diagonal entry; its error estimate runs at regularisation x 10)")
 
 
 def check(model: Model) -> None:
