@@ -187,8 +187,8 @@ def judge(model: Model, case: ModelCase, engines: list[str], runs: dict, rule: R
                                                                   **case.settings.get(e, {})}[key]),
                            "observed_order": pair_order(d[primary], d2[primary], runs[e].stats, pair.stats, ratio),
                            "primary_error": d[primary]}
-        elif e in TOLERANCE_LADDER and adaptive_estimate(model, case, e, runs, sc, skip) is not None:
-            estimates[e], evidence[e] = adaptive_estimate(model, case, e, runs, sc, skip)
+        elif e in TOLERANCE_LADDER and (found := adaptive_estimate(model, case, e, runs, sc, skip)) is not None:
+            estimates[e], evidence[e] = found
         elif e == REFERENCE:   # the in-house engine: its estimate is its distance from the converged run
             estimates[e] = dict(d)
             shares_reference = True
@@ -236,7 +236,7 @@ def adaptive_estimate(model: Model, case: ModelCase, engine: str, runs: dict, sc
     if needs_other:
         share = differences(runs[engine], runs[other], sc, skip)
         setting, times = FORMULATION_COMPANION[engine]
-        evidence["formulation"] = {"setting": setting, "factor": times, "largest": max(share.values(), default=0.0)}
+        evidence["formulation"] = {"setting": setting, "factor": times}
         evidence["ladder_share"] = dict(est)
         est = {k: v + share.get(k, 0.0) for k, v in est.items()}
     return est, evidence
