@@ -66,15 +66,14 @@ def models(out: Path, engines: list[str], names: list[str], duration: float | No
         wall = time.perf_counter() - t0
         for case, entry in s["cases"].items():
             runs = entry["runs"]
-            sym, tight = runs.get("symbolic", {}), runs.get("symbolic_tight", {})
+            sym, tight, reg = (runs.get(k, {}) for k in ("symbolic", "symbolic_tight", "symbolic_regularised"))
             rows.append({"model": name, "case": case, "wall_s": wall,
                          "verdicts": {e: {"pass": v["pass"], "text": v.get("text", "")}
                                       for e, v in entry["verdicts"].items()},
                          "symbolic": {k: sym.get(k) for k in ("derive_time", "codegen_time", "load_time", "wall_time",
                                                               "steps", "nfev", "operations", "closure_max", "cache")},
                          "symbolic_tight": {k: tight.get(k) for k in ("derive_time", "wall_time", "cache")},
-                         "symbolic_regularised": {k: runs[label].get(k) for k in ("derive_time", "wall_time", "cache")
-                                                  for label in ["symbolic_regularised"] if label in runs},
+                         "symbolic_regularised": {k: reg[k] for k in ("derive_time", "wall_time", "cache") if k in reg},
                          "difference": _largest(s["rows"], case, "symbolic"),
                          "failures": entry["failures"]})
     return {"engines": engines, "rows": rows, "duration": duration}
