@@ -24,9 +24,9 @@ def run(args) -> int:
     from reports.build import build_report, check_source
     if args.source and Path(args.source).is_dir():  # every file read is a regular one (a FIFO would block)
         no_special_files("--from", args.source, Path(args.source), "a results folder is read as regular files only")
-    check_source(args.source)  # the results folder first: bad input is found before anything else
+    planned = check_source(args.source)  # the results folder first: bad input is found before anything else
     out = check_out_dir("--out", args.out)
-    paths = build_report(args.source, out)
+    paths = build_report(args.source, out, planned=planned)
     print(f"report: {paths['pdf']} ({len(paths['pngs'])} pages, {paths['seconds']:.1f} s); "
           f"PNGs in {Path(paths['pdf']).parent}")
     return 0

@@ -290,10 +290,10 @@ def source_plan(results_dir: str | Path) -> tuple[list[tuple[str, Callable]], st
     return pages(data), f"{title}  |  {data.summary.get('date', '')}  |  revision {data.summary.get('git_revision', '?')}"
 
 
-def check_source(results_dir: str | Path) -> None:
+def check_source(results_dir: str | Path) -> tuple[list[tuple[str, Callable]], str]:
     """Read and check --from (an nsd compare, seismic, ida, sweep, polar or cycle folder) before anything is
-    written."""
-    checked_plan(results_dir)
+    written; returns the plan, for ``build_report(..., planned=)``."""
+    return checked_plan(results_dir)
 
 
 def checked_plan(results_dir: str | Path) -> tuple[list[tuple[str, Callable]], str]:
@@ -363,12 +363,15 @@ def _malformed(results_dir, e: Exception) -> ParameterError:
                           f"{printable(' '.join(str(e).split()))[:160]}); nothing written")
 
 
-def build_report(results_dir: str | Path, out_dir: str | Path, processes: int | None = None) -> dict[str, Any]:
+def build_report(results_dir: str | Path, out_dir: str | Path, processes: int | None = None,
+                 planned: tuple[list[tuple[str, Callable]], str] | None = None) -> dict[str, Any]:
     """Write ``out_dir/validation.pdf`` and ``out_dir/NN_page.png``; returns their paths. ``processes``:
-    1 or 2 processes draw the pages (reports.render; None: two where a second core is free)."""
+    1 or 2 processes draw the pages (reports.render; None: two where a second core is free).
+    ``planned``: what ``checked_plan(results_dir)`` returned, when the caller has already read the
+    folder (it is not read again)."""
     import matplotlib.pyplot as plt
     start = time.perf_counter()
-    plan, footer = checked_plan(results_dir)  # everything is checked before anything is written
+    plan, footer = planned or checked_plan(results_dir)  # everything is checked before anything is written
     title = footer.split("  |  ")[0]
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
