@@ -5,7 +5,8 @@
 For each revision: a fresh clone of this repository at that revision, then the README's first command
 (a new venv, ``pip install -c constraints.txt -e .``, ``nsd compare --convergence --report``) on an
 empty cache (``XDG_CACHE_HOME`` a new folder, ``NUMBA_CACHE_DIR`` unset), each phase timed; then the
-warm gate (``nsd compare`` again on what the cold run left, ``--warm`` times each). The revisions
+warm gate (``nsd compare`` again on what the cold run left, ``--warm`` times each). The report's own
+share is timed apart: ``nsd report`` on the cold run's folder, after the first command (not part of it). The revisions
 alternate phase by phase (cold before, cold after, then warm before, warm after, repeated), so that
 both meet the same load; the load average is kept beside every row. Writes DIR/bench_first_command.json.
 """
@@ -74,9 +75,11 @@ def main(argv=None) -> int:
         pip = timed([".venv/bin/pip", "install", "-q", "-c", "constraints.txt", "-e", "."], t, envs[r])
         cmp_ = timed([".venv/bin/nsd", "compare", "--convergence", "--report", "--out", "out/compare"], t, envs[r])
         total = venv["wall_s"] + pip["wall_s"] + cmp_["wall_s"]
+        rep = timed([".venv/bin/nsd", "report", "--from", "out/compare", "--out", "out/report-again"], t, envs[r])
         rows += [{"revision": r, "phase": "venv", **venv}, {"revision": r, "phase": "install", **pip},
                  {"revision": r, "phase": "first command's nsd compare (cold cache)", **cmp_},
-                 {"revision": r, "phase": "first command in all", "wall_s": total, "load_before": venv["load_before"]}]
+                 {"revision": r, "phase": "first command in all", "wall_s": total, "load_before": venv["load_before"]},
+                 {"revision": r, "phase": "its report again (nsd report on its folder)", **rep}]
         print(f"{r}: cold total {total:.1f} s (compare {cmp_['wall_s']:.1f} s, {cmp_['verdict']})", flush=True)
     for k in range(a.warm):   # warm: the gate again on what the cold run left, the revisions alternating
         for r in revs:

@@ -19,7 +19,8 @@ def first_command(load, provenance, table, g, plain) -> str:
     for r in d["rows"]:
         by.setdefault((r["revision"], r["phase"]), []).append(r["wall_s"])
     lines = []
-    for phase in ("first command in all", "first command's nsd compare (cold cache)", "warm nsd compare"):
+    for phase in ("first command in all", "first command's nsd compare (cold cache)", "warm nsd compare",
+                  "its report again (nsd report on its folder)"):
         a, b = by.get((revs[0], phase)), by.get((revs[-1], phase))
         if a and b:
             many = len(a) > 1 or len(b) > 1
