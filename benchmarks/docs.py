@@ -86,6 +86,12 @@ def model_first() -> str:
     return render(load, provenance, table, g, plain)
 
 
+def report_drawing() -> str:
+    """The report's drawing under two matplotlib versions, side by side (benchmarks/docs_first_command.py)."""
+    from benchmarks.docs_first_command import report_drawing as render
+    return render(load, provenance, table, g, plain)
+
+
 def symbolic_equations() -> str:
     """The symbolic engine's derived equations of one small mechanism (benchmarks/docs_symbolic.py)."""
     from benchmarks.docs_symbolic import equations as render
@@ -246,7 +252,7 @@ RENDER = {"compare-gate": compare_gate, "convergence": convergence, "tables-5-6"
           "verdict-cost": verdict_cost, "model-benchmarks": model_benchmarks, "campaign": campaign,
           "device-variants": device_variants,
           "first-command": first_command, "test-command": test_command,
-          "model-first": model_first,
+          "model-first": model_first, "report-drawing": report_drawing,
           "model-builders": model_builders, "described-gate": described_gate,
           "gate-described": gate_described,
           "work-precision": work_precision, "bench-cold": bench_cold, "bench-peer-seismic": bench_peer_seismic,

@@ -73,3 +73,24 @@ def model_first(load, provenance, table, g, plain) -> str:
     return (provenance(rec) + "\n\n" + text + "\n\n"
             + table(["phase", "description", "wall s", "CPU s (with its workers)", "compile notices", "verdict",
                      "load before"], rows))
+
+
+def report_drawing(load, provenance, table, g, plain) -> str:
+    """docs/performance.md's table of ``nsd report`` under two matplotlib versions (benchmarks/bench_report.py)."""
+    rec = load("bench_report")
+    d = rec["data"]
+    rows = [[str(r["repeat"] + 1), r["matplotlib"], str(r["pages"]), plain(r["wall_s"]), plain(r["cpu_s"]),
+             plain(r["report_s"]) if r.get("report_s") is not None else f"exit {r['exit_code']}",
+             plain(r["load_before"], 2)] for r in d["rows"]]
+    by: dict[str, list[float]] = {}
+    for r in d["rows"]:
+        if r.get("report_s") is not None:
+            by.setdefault(r["matplotlib"], []).append(r["report_s"])
+    med = {v: statistics.median(t) for v, t in by.items()}
+    text = "; ".join(f"matplotlib {v}: **{plain(m)} s** (median of {len(by[v])})" for v, m in med.items())
+    if len(med) == 2:
+        (va, a), (vb, b) = med.items()
+        text += f"; ratio {vb} / {va}: {g(b / a)}"
+    return (provenance(rec) + "\n\n" + f"The report's own line (drawing, start-up excluded): {text}.\n\n"
+            + table(["repeat", "matplotlib", "pages", "wall s", "CPU s (with its second process)",
+                     "report s (its own line)", "load before"], rows))

@@ -49,6 +49,9 @@ MEASUREMENTS = {
     # the README's test command in fresh clones on empty caches, three times (benchmarks/bench_test_command.py)
     "bench_test_command": (PY + ["benchmarks/bench_test_command.py", "--repeats", "3", "--out", "OUT"],
                            "bench_test_command.json", "json"),
+    # nsd report on the default gate's folder under matplotlib 3.11 (its text shaping) and the pinned 3.10
+    "bench_report": (PY + ["benchmarks/bench_report.py", "--matplotlib", "3.11.2,3.10.9", "--repeats", "3", "--out",
+                           "OUT"], "bench_report.json", "json"),
     # a user's first nsd compare --model: on an empty cache, and a new description after nsd warm (bench_model_first)
     "bench_model_first": (PY + ["benchmarks/bench_model_first.py", "--out", "OUT"], "bench_model_first.json", "json"),
     # the peers' gate runs with subnormal numbers flushed (as shipped) and kept, side by side
