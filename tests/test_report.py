@@ -109,6 +109,18 @@ def _page_text(pdf, i=0):
     return " ".join(PdfReader(pdf).pages[i].extract_text().split())
 
 
+def _page_one_text(folder, tmp_path) -> str:
+    """Page one's text layer, the folder read and checked as nsd report reads it and that page alone drawn
+    into a PDF (what page one says depends on no other page; test_cli_writes_the_report and
+    test_error_run_and_missing_engine_output_still_render draw whole reports)."""
+    from reports import render
+    from reports.build import checked_plan, naming
+    plan, footer = checked_plan(folder)
+    pdf = tmp_path / "page_one.pdf"
+    render.draw(plan[:1], footer, "page one", tmp_path, pdf, pdf, naming, processes=1)
+    return _page_text(pdf)
+
+
 def test_pdf_has_the_expected_pages(report):
     from pypdf import PdfReader
     paths, _ = report
@@ -147,10 +159,8 @@ def test_summary_verdict_matches_the_run(run_dir, report):
 
 
 def test_failing_run_names_the_failure_on_page_one(failing_dir, tmp_path):
-    from reports.build import build_report
     src, s = failing_dir
-    paths = build_report(src, tmp_path / "r")
-    text = _page_text(paths["pdf"])
+    text = _page_one_text(src, tmp_path)
     assert "VERDICT: FAIL" in text and "WHAT FAILED" in text
     assert text.index("WHAT FAILED") < text.index("The verdict per case and engine")  # failures come first
     assert "A15mm_f10Hz: mujoco disagrees beyond numerical error: max_dF_rel" in text
@@ -405,7 +415,6 @@ def test_page_one_and_the_text_summary_name_the_peer_model(run_dir, tmp_path, mo
     beside the engine, and in nsd compare's text summary. The run is the session's real one (MuJoCo on its
     default, the described model); the other values are written into a copy of its results.json."""
     from comparisons.report_text import format_estimated
-    from reports.build import build_report
     dst = tmp_path / "run"
     shutil.copytree(run_dir[0], dst)
     s = json.loads((dst / "results.json").read_text())
@@ -417,7 +426,7 @@ def test_page_one_and_the_text_summary_name_the_peer_model(run_dir, tmp_path, mo
         elif model == "not recorded":
             del r["stats"]["model"]
     (dst / "results.json").write_text(json.dumps(s))
-    page = _page_text(build_report(dst, tmp_path / "r")["pdf"])
+    page = _page_one_text(dst, tmp_path)
     text = format_estimated(s)
     described, adapter = "model built from the description", "hand-written adapter"
     if model == "mixed":
