@@ -115,6 +115,9 @@ def wrap_width(text: str, width: float, size: float, bold: bool = False, indent:
     with ``indent``; words longer than a line are split."""
     lines: list[str] = []
     for para in str(text).split("\n"):
+        if not para.startswith(" ") and text_width(para, size, bold) <= width:
+            lines.append(para)   # what the loop below makes of it: a text's width grows as it grows
+            continue
         line = ""
         for word in para.split(" "):
             cand = f"{line} {word}" if line.strip() else line + word
