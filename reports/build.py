@@ -85,6 +85,10 @@ def load(results_dir: str | Path) -> ReportData:
     summary = _json(root / "results.json", "written by nsd compare --out")
     if not isinstance(summary, dict):
         raise ParameterError(f"{root / 'results.json'}: malformed (expected a JSON object)")
+    if "verdict" not in summary and {"model_file", "rows"} <= set(summary):
+        raise ParameterError(f"--from {root}: an nsd compare --model folder, whose report the compare draws: "
+                             f"nsd compare --model {printable(str(summary['model_file']))} --report "
+                             f"(report/model_report.pdf); nothing written")
     for key, typ in REQUIRED.items():
         if key not in summary:
             raise ParameterError(f"{root / 'results.json'}: malformed (no {key!r}); is it an nsd compare result?")

@@ -206,6 +206,20 @@ def test_bad_input_exits_2_and_writes_nothing(run_dir, tmp_path, damage):
     assert not out.exists()
 
 
+def test_a_model_folder_says_which_command_draws_its_report(tmp_path):
+    """nsd compare --model writes its own results.json (no gate verdict): nsd report names the command
+    that draws that report instead of calling the folder malformed (exit 2, one line, nothing written)."""
+    src = tmp_path / "fourbar"
+    src.mkdir()
+    (src / "results.json").write_text(json.dumps({"model": "fourbar_spring", "model_file": "models/fourbar_spring.toml",
+                                                  "cases": {}, "rows": [], "passed": True, "exit_code": 0}))
+    out = tmp_path / "out"
+    p = nsd("report", "--from", str(src), "--out", str(out), timeout=120)
+    assert p.returncode == 2 and len(p.stderr.strip().splitlines()) == 1, p.stderr
+    assert "nsd compare --model models/fourbar_spring.toml --report" in p.stderr and "malformed" not in p.stderr
+    assert not out.exists()
+
+
 def test_cli_writes_the_report(run_dir, tmp_path):
     """The command writes the PDF and every PNG. Its time is not asserted here (the guide: speed is
     measured by benchmarks, not by timed tests on a shared machine)."""
