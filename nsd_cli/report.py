@@ -21,10 +21,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args) -> int:
     from nsd_cli.options import no_special_files
-    from reports.build import build_report, check_source
+    from reports.build import build_report, checked_plan
     if args.source and Path(args.source).is_dir():  # every file read is a regular one (a FIFO would block)
         no_special_files("--from", args.source, Path(args.source), "a results folder is read as regular files only")
-    planned = check_source(args.source)  # the results folder first: bad input is found before anything else
+    planned = checked_plan(args.source)  # the results folder first: bad input is found before anything else
     out = check_out_dir("--out", args.out)
     paths = build_report(args.source, out, planned=planned)
     print(f"report: {paths['pdf']} ({len(paths['pngs'])} pages, {paths['seconds']:.1f} s); "

@@ -294,15 +294,9 @@ def source_plan(results_dir: str | Path) -> tuple[list[tuple[str, Callable]], st
     return pages(data), f"{title}  |  {data.summary.get('date', '')}  |  revision {data.summary.get('git_revision', '?')}"
 
 
-def check_source(results_dir: str | Path) -> tuple[list[tuple[str, Callable]], str]:
-    """Read and check --from (an nsd compare, seismic, ida, sweep, polar or cycle folder) before anything is
-    written; returns the plan, for ``build_report(..., planned=)``."""
-    return checked_plan(results_dir)
-
-
 def checked_plan(results_dir: str | Path) -> tuple[list[tuple[str, Callable]], str]:
     """``source_plan``, a damaged field met while planning (a string where a number belongs...) made
-    one line, exit 2."""
+    one line, exit 2: --from read and checked before anything is written."""
     try:
         return source_plan(results_dir)
     except (TypeError, KeyError, IndexError, AttributeError) as e:
