@@ -64,8 +64,16 @@ def main(argv=None) -> int:
     ap.add_argument("--from", dest="source", help="a results folder (default: a fresh nsd compare --convergence)")
     ap.add_argument("--out", required=True)
     a = ap.parse_args(argv)
+    wanted = a.matplotlib.split(",")
+    bad = None
     if a.repeats < 1:
-        print(f"bench_report: --repeats {a.repeats}: must be a whole number >= 1", file=sys.stderr)
+        bad = f"--repeats {a.repeats}: must be a whole number >= 1"
+    elif not all(re.fullmatch(r"\d+(\.\d+)*", v) for v in wanted):
+        bad = f"--matplotlib {a.matplotlib!r}: expected versions such as 3.11.2,3.10.9"
+    elif a.source is not None and not Path(a.source).is_dir():
+        bad = f"--from {a.source!r}: not a folder"
+    if bad:
+        print(f"bench_report: {bad}", file=sys.stderr)
         return 2
     work = Path(tempfile.mkdtemp(prefix="bench-report-"))
     try:
@@ -73,7 +81,12 @@ def main(argv=None) -> int:
         if not a.source:
             subprocess.run([sys.executable, "-m", "nsd_cli.main", "compare", "--convergence", "--out", str(folder)],
                            capture_output=True, check=False)
-        pythons = {v: venv_with(v, work / f"venv-{v}") for v in a.matplotlib.split(",")}
+        try:
+            pythons = {v: venv_with(v, work / f"venv-{v}") for v in wanted}
+        except subprocess.CalledProcessError as e:
+            print(f"bench_report: --matplotlib {a.matplotlib!r}: a venv could not be made "
+                  f"({' '.join(map(str, e.cmd))[-120:]} exited {e.returncode}); nothing written", file=sys.stderr)
+            return 2
         found = {v: subprocess.run([str(py), "-c", "import matplotlib; print(matplotlib.__version__)"],
                                    capture_output=True, text=True).stdout.strip() for v, py in pythons.items()}
         rows = []
