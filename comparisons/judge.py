@@ -13,7 +13,7 @@ from comparisons.config import SeismicCase
 from comparisons.energy import energy_balance_rel
 from comparisons.engines import REFERENCE
 from comparisons.estimate import STEP_SETTING
-from comparisons.metrics import own_metrics, pair_metrics
+from comparisons.metrics import own_metrics, pair_metrics, path_length
 from comparisons.reference import CONVERGED_SETTINGS
 from comparisons.seismic import gate_metrics, own_seismic_metrics, seismic_metrics
 from comparisons.verdict import (CHECK, CONVERGED, PRIMARY, Rule, case_verdicts, drive_scales, estimate_from_pair,
@@ -84,9 +84,12 @@ def judge_case(case, engines: list[str], results: dict, entries: dict, rule: Rul
     scales = seismic_scales(conv) if seismic else drive_scales(conv, case.drive.frequency, case.drive.amplitude)
     # a stiffness-region boundary is a sample of the output grid: it can move by a sample either way
     floors = {} if seismic else {"region_shift_rel": 2.0 * 2.0 * math.pi / case.drive.samples_per_cycle}
+    # the loop work's difference is at most the force's max-norm difference x the path's length (in their scales)
+    work = 0.0 if seismic else scales["loop_area_rel"][0]
+    implied = {"loop_area_rel": scales["max_dF_rel"][0] * path_length(conv, case.drive.frequency) / work} if work else {}
     rows, verdicts = case_verdicts(case.name, "seismic" if seismic else "drive", list(values), values, estimates,
                                    ref_error, scales, evidence, rule, floors, own_checks(case, conv),
-                                   reference_rtol=CONVERGED_SETTINGS["rtol"])
+                                   reference_rtol=CONVERGED_SETTINGS["rtol"], implied=implied)
     for e, v in verdicts.items():
         v["evidence"] = evidence.get(e, {})
         if not check:

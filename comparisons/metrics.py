@@ -46,6 +46,13 @@ def _work(result: RunResult, frequency: float) -> float:
     return loop_area(result["x"][cyc], result["F_x"][cyc]) + loop_area(result["y"][cyc], result["F_y"][cyc])
 
 
+def path_length(result: RunResult, frequency: float) -> float:
+    """The length of the drive's path over the steady cycle, sum |dp| [m]: |loop work difference| is at
+    most max |F - F_ref| x this (the runs on the same path)."""
+    cyc = steady_cycle(result, frequency)
+    return float(np.sum(np.hypot(np.diff(result["x"][cyc]), np.diff(result["y"][cyc]))))
+
+
 def own_metrics(run: RunResult) -> dict[str, float]:
     """Metrics of one engine on its own: loop closure and drive tracking."""
     return {"closure_max": float(np.max(np.abs(run["closure"]))),

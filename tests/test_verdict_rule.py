@@ -43,6 +43,45 @@ def test_a_scalar_estimate_is_at_least_beta_of_its_max_norm_one():
     assert est == {"max_dF_rel": 2e-4, "peak_force_rel": pytest.approx(2e-5)}
 
 
+def test_a_peak_within_what_its_max_norm_bound_allows_is_numerical():
+    # the numbers of a device variant (n_wires = 6, rod_length = 0.19 m) whose peak's own estimate cancelled
+    # between h and h/2: |peak F - peak F_ref| <= max |F - F_ref|, and the force's difference is numerical
+    rows, v = judge({"max_dF_rel": 3.38e-6, "peak_force_rel": 2.18e-6},
+                    {"max_dF_rel": 3.09e-6, "peak_force_rel": 3.09e-7}, {"max_dF_rel": 2.6e-10, "peak_force_rel": 2.6e-10})
+    assert v["pass"] and v["consistent"], v["text"]
+    peak = next(r for r in rows if r["metric"] == "peak_force_rel")
+    assert peak["bound_from"] == "max_dF_rel" and peak["bound"] == pytest.approx(3 * (3.09e-6 + 2.6e-10) + 1e-12)
+    # a peak beyond even that bound still disagrees, and says whose bound it is beyond
+    rows, v = judge({"max_dF_rel": 4e-4, "peak_force_rel": 3.5e-4}, {"max_dF_rel": 1e-4, "peak_force_rel": 1e-6})
+    assert v["consistent"] is False
+    peak = next(r for r in rows if r["metric"] == "peak_force_rel")
+    assert peak["consistent"] is False and peak["bound"] == pytest.approx(3e-4 + 1e-12)
+    _, v = judge({"max_dF_rel": 2e-4, "peak_force_rel": 3.5e-4}, {"max_dF_rel": 1e-4, "peak_force_rel": 1e-6})
+    assert v["text"].startswith("disagrees beyond numerical error: peak_force_rel = 0.00035 is 1.17x the bound "
+                                "max_dF_rel's bound implies for it"), v["text"]
+
+
+def test_the_loop_work_is_bounded_by_the_force_times_the_path():
+    values, est = {"max_dF_rel": 1e-4, "loop_area_rel": 5e-4}, {"max_dF_rel": 1e-4, "loop_area_rel": 1e-6}
+    _, v = judge(values, est)                # without the case's factor: the loop's own estimate alone
+    assert v["consistent"] is False
+    rows, vs = case_verdicts("c", "drive", ["mujoco"], {"mujoco": values}, {"mujoco": est}, {}, SCALES, EV, RULE,
+                             implied={"loop_area_rel": 4.0})   # peak force x path / work = 4
+    assert vs["mujoco"]["consistent"], vs["mujoco"]["text"]
+    loop = next(r for r in rows if r["metric"] == "loop_area_rel")
+    assert loop["bound_from"] == "max_dF_rel" and loop["bound"] == pytest.approx(4 * (3e-4 + 1e-12))
+
+
+def test_the_path_of_a_line_and_of_a_circle_over_one_cycle():
+    from comparisons.metrics import path_length
+    from nsd_core.device.results import RunResult
+    t = np.linspace(0.0, 2.0, 4001)            # two cycles at 1 Hz: the steady cycle is the last
+    line = RunResult("x", {"t": t, "x": 0.015 * np.sin(2 * np.pi * t), "y": 0 * t}, {})
+    assert path_length(line, 1.0) == pytest.approx(4 * 0.015, rel=1e-6)
+    circle = RunResult("x", {"t": t, "x": 0.02 * np.cos(2 * np.pi * t), "y": 0.02 * np.sin(2 * np.pi * t)}, {})
+    assert path_length(circle, 1.0) == pytest.approx(2 * np.pi * 0.02, rel=1e-5)
+
+
 def test_numerical_difference_passes_and_a_model_difference_disagrees():
     _, v = judge({"max_dF_rel": 2.9e-4}, {"max_dF_rel": 1e-4}, {"max_dF_rel": 1e-9})
     assert v["pass"] and v["consistent"] and v["text"].startswith("consistent and accurate enough")
