@@ -306,7 +306,8 @@ def test_hostile_seismic_input(tmp_path, capsys, garbage, argv, files, fragment)
 
 
 # ---- valid inputs inside the bounds run (a building of 50 stories included), and say what they wrote
-@pytest.mark.parametrize("stories", [4, 12, 50])
+# 12 and 50 stories in the slow mark (~10 s each): 4 stories runs the same path in the default run
+@pytest.mark.parametrize("stories", [4, pytest.param(12, marks=pytest.mark.slow), pytest.param(50, marks=pytest.mark.slow)])
 def test_a_building_within_the_bounds_runs_and_draws_its_floors(tmp_path, capsys, stories):
     out = tmp_path / "out"
     code = main(["seismic", "--ground", "harmonic:amplitude=1,frequency=2,duration=0.05", "--building",

@@ -32,6 +32,7 @@ def _compare(model: str, out: Path, *extra: str) -> dict:
     return json.loads((out / "results.json").read_text())
 
 
+@pytest.mark.slow   # ~28 s end to end; the floor's rule itself is the test above, by hand
 def test_iftomm_a02_passes_where_the_in_house_run_is_the_converged_one(tmp_path):
     """Its in-house run coincides with the converged reference (estimate 0): it failed at 3.09e-12 of B0_vy
     against the solution, 3.1x a bound of round-off alone; now its bound holds the reference's own error."""

@@ -157,6 +157,7 @@ def _power_cli(tmp_path, case_text: str, engine: str) -> tuple[int, dict]:
     return p.returncode, json.loads((out / "power.json").read_text())
 
 
+@pytest.mark.slow   # ~44 s; the default run keeps the docs' --power command (test_readme.py) and the test above
 def test_power_cli_end_to_end_under_the_per_run_verdict(tmp_path):
     """nsd compare --power at 0.1 % on one drive case, MuJoCo: every listed error runs at h and h/2 in
     MuJoCo's own model and is judged by the rule; measured 28 of 31 seen (the rod mass +-0.1 % and the

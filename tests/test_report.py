@@ -121,6 +121,18 @@ def _page_one_text(folder, tmp_path) -> str:
     return _page_text(pdf)
 
 
+def _pages(folder, tmp_path, stems) -> tuple[list[str], Path]:
+    """(every page the folder's report has, a PDF of the pages ``stems`` alone, in the report's order),
+    the folder read and checked as nsd report reads it (an optional page's content depends on no other
+    page; whole reports are drawn by test_pdf_has_the_expected_pages and the CLI tests)."""
+    from reports import render
+    from reports.build import checked_plan, naming
+    plan, footer = checked_plan(folder)
+    pdf = tmp_path / "pages.pdf"
+    render.draw([p for p in plan if p[0] in stems], footer, "pages", tmp_path, pdf, pdf, naming, processes=1)
+    return [stem for stem, _ in plan], pdf
+
+
 def test_pdf_has_the_expected_pages(report):
     from pypdf import PdfReader
     paths, _ = report
@@ -231,7 +243,6 @@ def test_cli_writes_the_report(run_dir, tmp_path):
 
 def test_extra_pages_when_the_folder_has_them(run_dir, tmp_path):
     """Benchmark and study folders (written by nsd benchmark / nsd sweep) each add a page."""
-    from reports.build import build_report
     dst = tmp_path / "run"
     shutil.copytree(run_dir[0], dst)
     s = json.loads((dst / "results.json").read_text())
@@ -245,23 +256,22 @@ def test_extra_pages_when_the_folder_has_them(run_dir, tmp_path):
                     "work_precision": [{"rtol": 1e-8, "min_digits": 6.6, "wall_time": 0.05, "method": "DOP853"},
                                        {"rtol": 1e-10, "min_digits": 9.4, "wall_time": 0.1, "method": "DOP853"}]},
         "slider_crank": {"error": 1e-15, "cpu_time": 0.01, "goal": 1e-10, "passed": True}}}))
-    paths = build_report(dst, tmp_path / "r")
-    assert paths["pages"] == with_extra("benchmark")
-    assert "max |dF| against cost" in _page_text(paths["pdf"], EXPECTED.index("convergence"))
-    assert "Andrews" in _page_text(paths["pdf"], EXTRA_AT)
+    pages, pdf = _pages(dst, tmp_path, ("convergence", "benchmark"))
+    assert pages == with_extra("benchmark")
+    assert "max |dF| against cost" in _page_text(pdf, 0)
+    assert "Andrews" in _page_text(pdf, 1)
     assert not _figure_problems(dst, ("benchmark", "convergence"))
 
 
 def test_tables_page_from_nsd_tables(run_dir, tmp_path):
     """`nsd tables --out DIR/study` adds the Tables 5-6 page (paper against model)."""
-    from reports.build import build_report
     dst = tmp_path / "run"
     shutil.copytree(run_dir[0], dst)
     p = nsd("tables", "--out", str(dst / "study"))
     assert p.returncode == 0, p.stderr
-    paths = build_report(dst, tmp_path / "r")
-    assert paths["pages"] == with_extra("tables")
-    text = _page_text(paths["pdf"], EXTRA_AT)
+    pages, pdf = _pages(dst, tmp_path, ("tables",))
+    assert pages == with_extra("tables")
+    text = _page_text(pdf)
     assert "Tables 5 and 6" in text and "worst" in text
     assert not _figure_problems(dst, ("tables",))
 
@@ -269,7 +279,7 @@ def test_tables_page_from_nsd_tables(run_dir, tmp_path):
 def test_work_precision_page_when_the_folder_has_it(run_dir, tmp_path):
     """benchmarks/work_precision.py's JSON under work_precision/ adds the work-precision page; a
     malformed one is skipped (an optional page never breaks the report)."""
-    from reports.build import build_report
+    from reports.build import checked_plan
     dst = tmp_path / "run"
     shutil.copytree(run_dir[0], dst)
     (dst / "work_precision").mkdir()
@@ -284,13 +294,13 @@ def test_work_precision_page_when_the_folder_has_it(run_dir, tmp_path):
           "cases": [{"name": "A15mm_f1Hz", "runs": runs, "at_aim": at, "ratio_best_peer_over_in_house": 0.1 / 0.3}],
           "compile": {"mujoco": {"warm": {"startup_s": 1.5}, "cold": {"startup_s": 20.0}}}}
     (dst / "work_precision" / "work_precision.json").write_text(json.dumps(wp))
-    paths = build_report(dst, tmp_path / "r")
-    assert paths["pages"] == with_extra("work_precision")
-    text = _page_text(paths["pdf"], EXTRA_AT)
+    pages, pdf = _pages(dst, tmp_path, ("work_precision",))
+    assert pages == with_extra("work_precision")
+    text = _page_text(pdf)
     assert "Work-precision" in text and "A15mm_f1Hz" in text and "0.333" in text and "Euler h 2.50e-05" in text
     assert not _figure_problems(dst, ("work_precision",))
     (dst / "work_precision" / "work_precision.json").write_text('{"cases": "none"}')
-    assert build_report(dst, tmp_path / "r2")["pages"] == EXPECTED
+    assert [stem for stem, _ in checked_plan(dst)[0]] == EXPECTED
 
 
 # ---- the pages say everything in full, nothing overlaps, costs are warm ----------------

@@ -220,6 +220,7 @@ def test_report_bad_seismic_folder_exit_2_nothing_written(tmp_path, capsys):
     assert not out.exists()
 
 
+@pytest.mark.slow   # ~27 s; the peers' seismic runs are compared in the default run by test_harness_seismic.py
 def test_a_set_run_with_peer_engines_stores_their_differences(tmp_path):
     """--engines with --record-set: every peer's run is summarised like the in-house one (it once failed
     with KeyError 'ax_g': the peers did not write the ground's columns), its differences reach set.csv

@@ -139,6 +139,7 @@ def test_a_second_run_of_the_same_description_spends_no_time_deriving(cache, mon
     assert symbolic_codegen.cache_key(heavier) != symbolic_codegen.cache_key(model)
 
 
+@pytest.mark.slow   # ~28 s; the default run's symbolic engine sees a wrong peer (test_symbolic_referee.py)
 def test_one_percent_mass_in_the_symbolic_input_alone_disagrees(cache, monkeypatch):
     """The four-bar with its coupler 1 % heavier in the symbolic engine's input alone: the rule reads
     'disagrees beyond numerical error' for it; unperturbed, it passes."""
