@@ -86,7 +86,9 @@ def _rule_verdict(case, engine: str, rule, jobs: dict, refs: dict) -> dict[str, 
     gated = [r for r in rows if r["gated"] and r["engine"] == engine]
     ratios = {r["metric"]: (r["value"] / r["bound"] if r.get("bound") else r["value"] / r["tolerance"]) for r in gated}
     worst = max(ratios, key=ratios.get)
-    kind = "disagrees" if v["consistent"] is False else ("not converged" if not v["pass"] else "-")
+    kind = "disagrees" if v["consistent"] is False else (
+        "undecided" if v["consistent"] is None and v.get("undecided") and v["accurate"] else
+        "not converged" if not v["pass"] else "-")
     return {"failed": not v["pass"], "metric": worst, "ratio": ratios[worst],
             "value": next(r["value"] for r in gated if r["metric"] == worst), "verdict": v["text"], "kind": kind,
             "failing": sorted(r["metric"] for r in gated if not r["pass"])}

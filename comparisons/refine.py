@@ -1,6 +1,7 @@
 """``nsd compare --refine``: a peer that is not converged at its case settings runs once more at the
 step its own estimate asks for, within a cost cap, and the verdict is taken again on that run; a peer
-whose estimate is uncertain (observed order far below its method's) runs once at half its step.
+whose estimate is uncertain (observed order far below its method's), or whose agreement is undecided
+because its companion run is within the bound its run exceeds, runs once at half its step.
 
 The step asked for is the one at which the estimated error falls to 0.8 x the engineering tolerance
 (error ~ step^p, comparisons.estimate.step_needed). The cap: at most ``MAX_REFINE`` x the case's
@@ -29,7 +30,8 @@ def refinements(cases, summary: dict) -> tuple[list, list[dict]]:
                 continue
             if needs and not v.get("accurate"):
                 (setting, asked), = needs.items()
-            elif v.get("uncertain") and v.get("setting"):   # check the estimate one halving further
+            elif (v.get("uncertain") or "companion" in (v.get("undecided") or {})) and v.get("setting"):
+                # check the estimate one halving further
                 setting, asked = v["setting"], step / 2.0
             else:
                 continue

@@ -134,7 +134,7 @@ def _refine(cases, engines, tolerances, out, args, conv, order, summary) -> dict
     from nsd_core.common.files import atomic_write_json
     refined, changes = refinements(cases, summary)
     if not changes:
-        print("--refine: no peer is 'not converged at these settings' or has an uncertain estimate; nothing to re-run")
+        print("--refine: no peer is 'not converged at these settings', undecided or with an uncertain estimate; nothing to re-run")
         summary["refined"] = []
         atomic_write_json(out / "results.json", summary)
         return summary

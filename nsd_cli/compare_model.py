@@ -128,7 +128,7 @@ def refine(model, cases, engines: list[str], summary: dict) -> dict:
     for line in lines:
         print(line)
     if not changes:
-        print("--refine: no peer is 'not converged at these settings' or has an uncertain estimate; nothing to re-run")
+        print("--refine: no peer is 'not converged at these settings', undecided or with an uncertain estimate; nothing to re-run")
         return summary
     rule = model_rule(model, summary["rule"]["k"])
     by_name = {c.name: c for c in refined}
