@@ -135,8 +135,9 @@ def run(args) -> int:
         raise ParameterError("--scheduler-timeout: applies to --record-set --scheduler only")
     lim.check_record_flags(args)
     params, engines, baseline, motion, structure, solver = _single_request(args)
-    restoring = seismic_checks.restoring_force(args, params, structure)
+    seismic_checks.check_arguments(args, params)
     out = check_out_dir("--out", args.out)
+    restoring = seismic_checks.restoring_force(args, params, structure)
     head = {"ground": motion.describe(), "structure": structure.to_dict(), "device": not args.no_device}
     if restoring is not None:
         head["restoring_force"] = restoring

@@ -12,14 +12,21 @@ def add_arguments(p) -> None:
                         "displacement D_M (19.64 mm at model scale); in [1e-06, 0.999 rod length]")
 
 
-def restoring_force(args, params, structure) -> dict | None:
-    """The check for this run's configuration (None on a fixed base: no isolation level), with the
-    baseline's under "baseline" where the command also runs without the device; ParameterError, one
-    line, for a bad --design-displacement (before anything is written)."""
+def check_arguments(args, params) -> None:
+    """ParameterError, one line, for a bad --design-displacement: called before --out is made, the check
+    itself (seconds of quasi-static paths) after, so that a bad --out is refused at once."""
     from nsd_core.structure.restoring_force import check_design_displacement
     given = getattr(args, "design_displacement", None)
     if given is not None:
         check_design_displacement(given, params.rod_length)
+
+
+def restoring_force(args, params, structure) -> dict | None:
+    """The check for this run's configuration (None on a fixed base: no isolation level), with the
+    baseline's under "baseline" where the command also runs without the device; ParameterError, one
+    line, for a bad --design-displacement (``check_arguments``)."""
+    check_arguments(args, params)
+    given = getattr(args, "design_displacement", None)
     if getattr(args, "fixed_base", False):
         return None
     both = getattr(args, "compare_supports", False) or getattr(args, "compare_building", False) \
@@ -31,9 +38,14 @@ def restoring_force(args, params, structure) -> dict | None:
 
 
 def _one(params, structure, given, device: bool) -> dict:
+    """One configuration's check, kept on disk for these inputs and this source (nsd_core.common.result_cache:
+    seconds of quasi-static paths, the same for every run of a device and structure)."""
+    from nsd_core.common.result_cache import cached_json
     from nsd_core.structure.restoring_force import configuration_of, restoring_force_check
+    inputs = {"params": params.to_dict(), "structure": structure.to_dict(), "D": given, "device": device}
     try:
-        return restoring_force_check(params, structure, given, device=device)
+        return cached_json("restoring_force", inputs,
+                           lambda: restoring_force_check(params, structure, given, device=device))
     except (ValueError, RuntimeError, ArithmeticError) as e:   # a variant the quasi-static path cannot follow
         return {"pass": None, "configuration": configuration_of(structure, device),
                 "skipped": "the device's quasi-static force could not be followed to D: " + " ".join(str(e).split())[:200]}

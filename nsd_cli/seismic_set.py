@@ -21,8 +21,9 @@ def run_set(args) -> int:
     runs, params, structure = _set_runs(args, set_, records, engines)
     timeout = scheduler_timeout(args)
     check_scheduler(args.scheduler, timeout)
-    restoring = seismic_checks.restoring_force(args, params, structure)
+    seismic_checks.check_arguments(args, params)
     out = check_out_dir("--out", args.out)
+    restoring = seismic_checks.restoring_force(args, params, structure)
     seismic_checks.print_restoring_force(restoring)
     index = run_record_set(runs, out, workers=workers, scheduler=args.scheduler, scheduler_timeout=timeout,
                            retry_failed=args.retry_failed, run_engine=run_seismic_engine,

@@ -62,6 +62,7 @@ def test_device_drive_generated_equals_generic():
     assert max(worst.values()) <= 1e-12, worst
 
 
+@pytest.mark.slow   # 39 s of a cold default run (its generated module compiled); the device's drive case above stays
 def test_andrews_generated_equals_generic():
     _, model, z0, y0 = andrews_model()
     y = y0.copy()

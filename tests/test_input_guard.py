@@ -33,6 +33,8 @@ ALLOWED = (
     ("nsd_cli/compare.py", "DEFAULT_CASES.read_text(", "the committed default cases, for --help"),
     ("comparisons/builders/symbolic_codegen.py", "(here / m).read_bytes()", "hash of the program's source"),
     ("comparisons/builders/symbolic_codegen.py", "meta_file.read_text()", "the program's own code cache"),
+    ("nsd_core/ground/record_cache.py", 'with open(path, "rb")', "the program's own record cache (a pickle it wrote)"),
+    ("nsd_core/common/result_cache.py", 'path.read_text(encoding="utf-8")', "the program's own result cache (JSON it wrote)"),
 )
 
 
