@@ -38,9 +38,10 @@ def restoring_force(args, params, structure) -> dict | None:
 
 
 def _one(params, structure, given, device: bool) -> dict:
-    """One configuration's check, kept on disk for these inputs and this source (nsd_core.common.result_cache:
-    seconds of quasi-static paths, the same for every run of a device and structure)."""
-    from nsd_core.common.result_cache import cached_json
+    """One configuration's check, kept on disk for these inputs and this source
+    (nsd_core.compilation.result_cache: seconds of quasi-static paths, the same for every run of a device
+    and structure)."""
+    from nsd_core.compilation.result_cache import cached_json
     from nsd_core.structure.restoring_force import configuration_of, restoring_force_check
     inputs = {"params": params.to_dict(), "structure": structure.to_dict(), "D": given, "device": device}
     try:

@@ -34,7 +34,7 @@ ALLOWED = (
     ("comparisons/builders/symbolic_codegen.py", "(here / m).read_bytes()", "hash of the program's source"),
     ("comparisons/builders/symbolic_codegen.py", "meta_file.read_text()", "the program's own code cache"),
     ("nsd_core/ground/record_cache.py", 'with open(path, "rb")', "the program's own record cache (a pickle it wrote)"),
-    ("nsd_core/common/result_cache.py", 'path.read_text(encoding="utf-8")', "the program's own result cache (JSON it wrote)"),
+    ("nsd_core/compilation/result_cache.py", 'path.read_text(encoding="utf-8")', "the program's own result cache (JSON it wrote)"),
 )
 
 

@@ -1,4 +1,4 @@
-"""Results kept on disk (nsd_core/common/result_cache.py) and the restoring-force check that uses it."""
+"""Results kept on disk (nsd_core/compilation/result_cache.py) and the restoring-force check that uses it."""
 from __future__ import annotations
 
 import json
@@ -9,7 +9,7 @@ import sys
 import numpy as np
 import pytest
 
-from nsd_core.common import result_cache
+from nsd_core.compilation import result_cache
 
 
 def test_a_kept_result_is_the_computed_one_and_a_damaged_file_is_computed_again(tmp_path, monkeypatch):
