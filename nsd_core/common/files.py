@@ -157,14 +157,23 @@ def atomic_write_text(path: str | Path, text: str) -> None:
     A failed write (a full disk) removes the temporary file and raises OSError naming ``path``;
     the file that was there before stays as it was. Only a regular file is replaced
     (check_output_target: a FIFO or a device there is InputError, nothing written)."""
+    _atomic_write(path, text, "w")
+
+
+def atomic_write_bytes(path: str | Path, data: bytes) -> None:
+    """``atomic_write_text`` for bytes."""
+    _atomic_write(path, data, "wb")
+
+
+def _atomic_write(path: str | Path, data, mode: str) -> None:
     path = Path(path)
     check_output_target(path)
     tmp = None
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
+        with os.fdopen(fd, mode) as f:
+            f.write(data)
         os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; a result file gets the usual mode
         os.replace(tmp, path)
     except BaseException as e:

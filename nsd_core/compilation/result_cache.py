@@ -9,7 +9,6 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import tempfile
 from functools import lru_cache
 from pathlib import Path
 from typing import Any, Callable
@@ -38,23 +37,11 @@ def cached_json(kind: str, inputs: Any, compute: Callable[[], Any]) -> Any:
         return json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError):
         pass
-    from nsd_core.common.files import _json_default   # as summary.json writes it (numpy scalars, arrays)
+    from nsd_core.common.files import _json_default, atomic_write_text   # as summary.json writes it
     text = json.dumps(compute(), default=_json_default)
     value = json.loads(text)
-    tmp = None
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
-        os.replace(tmp, path)
-        tmp = None
-    except OSError:
+        atomic_write_text(path, text)
+    except (OSError, ValueError):   # a folder that cannot be made or written, a non-file in the way
         pass
-    finally:
-        if tmp is not None:
-            try:
-                os.unlink(tmp)
-            except OSError:
-                pass
     return value

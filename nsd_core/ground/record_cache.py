@@ -11,7 +11,6 @@ import importlib.util
 import os
 import pickle
 import sys
-import tempfile
 import warnings
 from importlib import metadata
 from pathlib import Path
@@ -53,25 +52,14 @@ def read(name: str) -> tuple | None:
 def keep(name: str, tables: tuple) -> None:
     """Keep ``tables`` for ``name`` (atomically: a reader sees the whole file or none); nothing is kept
     where the cache folder cannot be written."""
+    from nsd_core.common.files import atomic_write_bytes
     path = cache_file(name)
     if path is None:
         return
-    tmp = None
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
-        with os.fdopen(fd, "wb") as f:
-            pickle.dump(tables, f, protocol=pickle.HIGHEST_PROTOCOL)
-        os.replace(tmp, path)
-        tmp = None
-    except OSError:
+        atomic_write_bytes(path, pickle.dumps(tables, protocol=pickle.HIGHEST_PROTOCOL))
+    except (OSError, ValueError):   # a folder that cannot be made or written, a non-file in the way
         pass
-    finally:
-        if tmp is not None:
-            try:
-                os.unlink(tmp)
-            except OSError:
-                pass
 
 
 def load(name: str, loader) -> tuple:
