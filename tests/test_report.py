@@ -113,12 +113,7 @@ def _page_one_text(folder, tmp_path) -> str:
     """Page one's text layer, the folder read and checked as nsd report reads it and that page alone drawn
     into a PDF (what page one says depends on no other page; test_cli_writes_the_report and
     test_error_run_and_missing_engine_output_still_render draw whole reports)."""
-    from reports import render
-    from reports.build import checked_plan, naming
-    plan, footer = checked_plan(folder)
-    pdf = tmp_path / "page_one.pdf"
-    render.draw(plan[:1], footer, "page one", tmp_path, pdf, pdf, naming, processes=1)
-    return _page_text(pdf)
+    return _page_text(_pages(folder, tmp_path, ("summary",))[1])
 
 
 def _pages(folder, tmp_path, stems) -> tuple[list[str], Path]:

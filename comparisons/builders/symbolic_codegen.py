@@ -73,8 +73,8 @@ def cache_key(model: Model) -> str:
 
 
 def cache_root(environ=os.environ) -> Path:
-    base = Path(environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
-    return base / "nsd-harness" / "symbolic"
+    from nsd_core.common.files import cache_root
+    return cache_root("symbolic", environ)
 
 
 def _block(name: str, args: list, exprs: list, shapes: list, printer) -> list[str]:

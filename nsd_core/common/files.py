@@ -200,6 +200,12 @@ def atomic_copy(src: str | Path, dest: str | Path) -> None:
         raise
 
 
+def cache_root(kind: str, environ=os.environ) -> Path:
+    """The project's cache folder of one kind: ``$XDG_CACHE_HOME/nsd-harness/KIND`` (``~/.cache`` when
+    unset): numba's machine code, generated symbolic code, records, kept results."""
+    return Path(environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "nsd-harness" / kind
+
+
 def _umask() -> int:
     mask = os.umask(0o022)  # reading the umask means setting it: put it straight back
     os.umask(mask)

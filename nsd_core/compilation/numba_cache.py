@@ -92,8 +92,8 @@ def compiled_sources(sources: dict) -> set[str]:
 
 
 def cache_folder(root: Path, environ=os.environ) -> Path:
-    base = Path(environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
-    return base / "nsd-harness" / "numba" / source_fingerprint(root, compiled_only=True)
+    from nsd_core.common.files import cache_root
+    return cache_root("numba", environ) / source_fingerprint(root, compiled_only=True)
 
 
 def use_versioned_cache(environ=os.environ) -> str | None:

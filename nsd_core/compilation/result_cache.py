@@ -25,8 +25,8 @@ def _source_version() -> str:
 def result_file(kind: str, inputs: Any, environ=os.environ) -> Path:
     """Where the result of ``kind`` on ``inputs`` (JSON-able) is kept."""
     text = json.dumps(inputs, sort_keys=True, default=repr) + "|" + _source_version()
-    base = Path(environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
-    return base / "nsd-harness" / "results" / kind / f"{hashlib.sha256(text.encode()).hexdigest()[:24]}.json"
+    from nsd_core.common.files import cache_root
+    return cache_root("results", environ) / kind / f"{hashlib.sha256(text.encode()).hexdigest()[:24]}.json"
 
 
 def cached_json(kind: str, inputs: Any, compute: Callable[[], Any]) -> Any:

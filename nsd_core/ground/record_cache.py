@@ -32,8 +32,8 @@ def cache_file(name: str, environ=os.environ) -> Path | None:
         return None
     import pandas
     key = "|".join(map(str, (name, st.st_size, st.st_mtime_ns, version, pandas.__version__, sys.version_info[:2])))
-    base = Path(environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
-    return base / "nsd-harness" / "records" / f"{name}-{hashlib.sha256(key.encode()).hexdigest()[:16]}.pickle"
+    from nsd_core.common.files import cache_root
+    return cache_root("records", environ) / f"{name}-{hashlib.sha256(key.encode()).hexdigest()[:16]}.pickle"
 
 
 def read(name: str) -> tuple | None:
