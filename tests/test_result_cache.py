@@ -60,3 +60,13 @@ def test_a_bad_out_is_refused_before_the_restoring_force_check_runs(tmp_path):
         summaries.append(json.loads((tmp_path / name / "summary.json").read_text())["restoring_force"])
         assert len(list(kept.iterdir())) == 1
     assert summaries[0] == summaries[1]
+
+
+def test_a_fifo_where_a_kept_file_goes_is_never_opened(tmp_path, monkeypatch):
+    from nsd_core.ground import record_cache
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    for path in (record_cache.cache_file("nearfield_pulse"), result_cache.result_file("k", 1)):
+        path.parent.mkdir(parents=True)
+        os.mkfifo(path)
+    assert record_cache.read("nearfield_pulse") is None                   # would block on open()
+    assert result_cache.cached_json("k", 1, lambda: {"a": 1}) == {"a": 1}

@@ -34,7 +34,8 @@ def cached_json(kind: str, inputs: Any, compute: Callable[[], Any]) -> Any:
     (an exception from ``compute`` is raised and nothing is kept)."""
     path = result_file(kind, inputs)
     try:
-        return json.loads(path.read_text(encoding="utf-8"))
+        if path.is_file():   # a FIFO or a folder in its place is never opened: computed again
+            return json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError):
         pass
     from nsd_core.common.files import _json_default, atomic_write_text   # as summary.json writes it

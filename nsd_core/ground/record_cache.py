@@ -42,6 +42,8 @@ def read(name: str) -> tuple | None:
     if path is None:
         return None
     try:
+        if not path.is_file():   # nothing kept, or a FIFO or a folder in its place: not opened
+            return None
         with open(path, "rb") as f:
             out = pickle.load(f)
     except (OSError, EOFError, pickle.UnpicklingError, AttributeError, ImportError, ValueError, TypeError):
