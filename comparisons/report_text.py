@@ -1,6 +1,8 @@
 """The estimated rule's verdict as text: one line per case, engine and metric, then the verdicts in words."""
 from __future__ import annotations
 
+from comparisons.verdict import row_word
+
 
 def _g(x, fmt="11.3e") -> str:
     return f"{x:{fmt}}" if x is not None else f"{'-':>{fmt.split('.')[0]}}"
@@ -59,7 +61,7 @@ def format_estimated(summary: dict) -> str:
         if m.get("consistent") is None and m.get("bound") is None:
             verdict = "ok" if m["accurate"] else "NOT ACCURATE"
         else:
-            verdict = ("ok" if m["consistent"] else "DISAGREES") + ("" if m["accurate"] else ", NOT CONVERGED")
+            verdict = row_word(m) + ("" if m["accurate"] else ", NOT CONVERGED")
         lines.append(f"{m['case']:22s} {m['engine']:13s} {m['metric']:18s} {_g(m['value'])} {_g(m.get('estimate'))} "
                      f"{_g(m.get('bound'))} {_g(m.get('tolerance'))} {unit:>20s}  {verdict}")
     lines.append("")

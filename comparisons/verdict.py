@@ -173,7 +173,7 @@ def _verdict(engine: str, rows: list[dict], ev: dict, rule: Rule, reference_rtol
     # a difference beyond the bound that the engine's own companion run (the same model at the other step) is
     # within moves with the step as no modelling difference does: its estimate is not asymptotic there, so the
     # two runs cannot tell a numerical difference from a modelling one; --refine (a finer step) decides
-    moving = [r for r in beyond if r["accurate"] and r.get("companion") is not None and r["companion"] <= r["bound"]]
+    moving = [r for r in beyond if r["accurate"] and row_word(r) == "UNDECIDED"]
     incons = [r for r in beyond if r["accurate"] and r not in moving]
     undecided = [r for r in beyond if not r["accurate"]]
     inacc = [r for r in rows if not r["accurate"]]
@@ -241,6 +241,16 @@ def _verdict(engine: str, rows: list[dict], ev: dict, rule: Rule, reference_rtol
             f" (largest: {worst['metric']} at {worst['value'] / worst['bound']:.2g} of its bound)" if worst else ""))
     out["text"] = "; ".join(parts + ([out["uncertain"]] if out["uncertain"] else []))
     return out
+
+
+def row_word(r: dict) -> str:
+    """A gated row's own verdict in one word, as ``_verdict`` reads it: "ok" within its bound,
+    "DISAGREES" beyond it, "UNDECIDED" beyond it where the engine's estimate is over the tolerance or its
+    companion run is within the bound (the difference moves with the step); a row without a bound "ok"."""
+    if r.get("consistent") is not False:
+        return "ok"
+    moving = r.get("companion") is not None and r["companion"] <= r["bound"]
+    return "UNDECIDED" if not r["accurate"] or moving else "DISAGREES"
 
 
 def _items(rows: list[dict]) -> str:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import matplotlib
 
+from comparisons.verdict import row_word
 from reports.style import GREEN, GREY, LANDSCAPE, ORANGE, RED, fmt, fmt_full, natural, new_figure, rows_per_page, table
 
 FS = 7.0
@@ -77,7 +78,7 @@ def _est_result(r: dict) -> tuple[str, str | None]:
     if not r["gated"]:
         return ("ok (not gated)", None) if r["pass"] else ("over (not gated)", ORANGE)
     if r.get("consistent") is False:
-        return "DISAGREES", RED
+        return row_word(r), RED
     if not r.get("accurate", True):
         return "NOT CONVERGED", RED
     return "PASS", GREEN
@@ -143,7 +144,9 @@ def metric_table_pages(data) -> list:
                 f = new_figure(LANDSCAPE, "Metrics: differences against the engines' own error estimates" + part,
                                f"consistent: difference from the converged reference <= bound = k x (estimated error "
                                f"+ reference's), k = {s['rule'].get('k', '?')}, else DISAGREES; accurate enough: "
-                               "max(estimated error, difference) <= engineering tolerance, else NOT CONVERGED;\n"
+                               "max(estimated error, difference) <= engineering tolerance, else NOT CONVERGED; "
+                               "UNDECIDED: beyond the bound, but the estimate is over tolerance or the companion run "
+                               "is within the bound;\n"
                                "(own): the engine's own check against the tolerance; not gated: two engines "
                                "compared, reported only; differences, estimates and bounds in full")
             else:
@@ -185,6 +188,9 @@ def verdict_cell(s: dict, case: str, engine: str, v: dict) -> tuple[str, float]:
     if v.get("consistent") is False:
         w = v.get("worst_consistency") or {}
         return f"DISAGREES {w.get('metric', '')} {fmt(w.get('ratio'), 3)}x bound", 2.0
+    if v.get("consistent") is None and v.get("undecided"):
+        w = v["undecided"]
+        return f"UNDECIDED {w.get('metric', '')} {fmt(w.get('ratio'), 3)}x bound (--refine)", 2.0
     if not v["pass"]:
         need = v.get("needs") or {}
         tail = "".join(f" (rtol <= {fmt(x, 2)})" if k == "rtol" else f" (h <= {fmt(x, 2)} s)" for k, x in need.items())

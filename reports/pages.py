@@ -119,7 +119,9 @@ def page_one(data):
         y = _text(fig, y, "Each cell: PASS, with the largest difference / bound and the largest error / tolerance over "
                   "the metrics; DISAGREES (a difference beyond k x the estimated numerical errors: the engines differ "
                   "about the model); NOT CONVERGED (the engine's error exceeds a tolerance at its settings, with the "
-                  "step its estimate asks for). Every number: the metric tables; the rule: the metrics page.",
+                  "step its estimate asks for); UNDECIDED (a difference beyond the bound that the engine's own runs "
+                  "cannot yet call numerical or not: its estimate is over tolerance, or its companion run at another "
+                  "step is within the bound; --refine decides). Every number: the metric tables; the rule: the metrics page.",
                   size=7.5, color=GREY)
     else:
         y = _heading(fig, y - 0.004, "What passed, against which limit: the worst value / limit per case and engine")

@@ -109,6 +109,25 @@ def test_a_difference_the_companion_run_is_within_is_undecided_and_refined():
     assert changes == []
 
 
+def test_the_report_and_the_table_call_an_undecided_difference_undecided():
+    """The metric table, the text table and page one's matrix say UNDECIDED where the engine's verdict is
+    undecided (they said DISAGREES and NOT CONVERGED), and DISAGREES where the companion is beyond too."""
+    from comparisons.report_text import format_estimated
+    from reports.metric_tables import _est_result, verdict_cell
+    for companion, word in ((8.68e-6, "UNDECIDED"), (1.6e-5, "DISAGREES")):
+        ev = {"mujoco": {**EV["mujoco"], "companion": {"max_dF_rel": companion}}}
+        rows, vs = case_verdicts("c", "drive", ["mujoco"], {"mujoco": {"max_dF_rel": 1.54e-5}},
+                                 {"mujoco": {"max_dF_rel": 5.02e-6}}, {"max_dF_rel": 6e-10}, SCALES, ev, RULE)
+        assert _est_result(rows[0])[0] == word
+        s = {"metrics": rows, "verdicts": {"c": vs}, "runs": {}}
+        assert format_estimated(s).splitlines()[1].endswith("  " + word)
+        assert verdict_cell(s, "c", "mujoco", vs["mujoco"])[0].startswith(f"{word} max_dF_rel 1.02x bound")
+    # a difference beyond the bound from an estimate over the tolerance: undecided until it converges
+    rows, v = judge({"max_dF_rel": 5e-3}, {"max_dF_rel": 1.5e-3})
+    assert v["consistent"] is None and not v["accurate"]
+    assert _est_result(rows[0])[0] == "UNDECIDED"
+
+
 def test_numerical_difference_passes_and_a_model_difference_disagrees():
     _, v = judge({"max_dF_rel": 2.9e-4}, {"max_dF_rel": 1e-4}, {"max_dF_rel": 1e-9})
     assert v["pass"] and v["consistent"] and v["text"].startswith("consistent and accurate enough")
