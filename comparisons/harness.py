@@ -9,7 +9,6 @@ import datetime as dt
 import functools
 import hashlib
 import json
-import os
 import subprocess
 import time
 from concurrent.futures import as_completed
@@ -19,7 +18,7 @@ from typing import Any, Callable
 from nsd_core.device.cycle import analyse
 from nsd_core.device.results import RunResult, read_csv, versions, write_csv
 from nsd_core.common.files import atomic_write_json
-from nsd_core.engine.workers import worker_pool
+from nsd_core.engine.workers import default_workers, worker_pool
 
 from comparisons.config import METRICS, Case, SeismicCase
 from comparisons.engines import REFERENCE, run_job, run_seismic_job
@@ -119,7 +118,7 @@ def compare(cases: list[Case], engines: list[str], tolerances: dict[str, float],
         warn(line)
     rule = getattr(tolerances, "rule", None)   # None: the regression profile's fixed limits
     jobs = _jobs(cases, engines, order, rule)
-    workers = workers or min(len(jobs), os.cpu_count() or 1)
+    workers = workers or min(len(jobs), default_workers())
     started = time.perf_counter()
     book = _Runs(cases, engines, out, order, log, tally if tally is not None else {}, len(jobs))
     todo = [(c, e) for c, e in jobs if not book.resume(c, e)]

@@ -12,7 +12,6 @@ profiles (default, strict) side by side, one line per error.
 from __future__ import annotations
 
 import dataclasses
-import os
 import time
 from pathlib import Path
 from typing import Any, Callable
@@ -20,7 +19,7 @@ from typing import Any, Callable
 from nsd_core.device.cycle import analyse
 from nsd_core.device.geometry import device_geometry
 from nsd_core.common.files import atomic_write_json
-from nsd_core.engine.workers import worker_pool
+from nsd_core.engine.workers import default_workers, worker_pool
 
 from comparisons.config import SeismicCase
 from comparisons.engines import REFERENCE, run_job, run_seismic_job
@@ -127,7 +126,7 @@ def power_study(cases: list, engines: list[str], tolerances, out_dir: str | Path
     injections = INJECTIONS if injections is None else injections
     rule = getattr(tolerances, "rule", None)
     started = time.perf_counter()
-    workers = workers or os.cpu_count() or 1
+    workers = workers or default_workers()
     rows: list[dict] = []
     ref_labels = [CONVERGED] + ([CHECK] if rule is not None else [])
     warm = job_warmup([warm_spec(REFERENCE, isinstance(c, SeismicCase), getattr(c, "drive", None), CONVERGED_SETTINGS)

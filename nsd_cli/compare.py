@@ -8,8 +8,8 @@ from xml.sax.saxutils import escape, quoteattr
 from comparisons.config import PROFILES, load_cases, load_convergence, load_order
 from comparisons.tolerance_file import load_tolerances
 from comparisons.engines import REFERENCE
-from nsd_cli.options import (WORKERS_MAX, add_param_arguments, base_params, check_out_dir, check_out_file,
-                             parse_engines, whole)
+from nsd_cli.options import (WORKERS_HELP, add_param_arguments, base_params, check_out_dir, check_out_file,
+                             parse_engines, resolved_workers)
 from nsd_core.device.params import ParameterError
 from nsd_core.common.files import atomic_write_text
 
@@ -42,7 +42,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--engines", default="semirecursive,mujoco,exudyn",
                    help="comma-separated engines; must include the reference, semirecursive")
     add_param_arguments(p, "parameter overrides applied to every case")
-    p.add_argument("--workers", type=int, default=None, help="parallel processes (default: all cores)")
+    p.add_argument("--workers", type=int, default=None, help=WORKERS_HELP)
     p.add_argument("--junit", help="write JUnit XML here (one test per case and engine)")
     p.add_argument("--convergence", action="store_true",
                    help="also run the case file's [convergence] study (discrepancy vs step size per engine)")
@@ -191,7 +191,7 @@ def run(args) -> int:
     if REFERENCE not in engines:
         raise ParameterError(f"--engines {args.engines}: must include the reference {REFERENCE}; without it "
                              "nothing is gated and the verdict would mean nothing")
-    whole("--workers", args.workers, 1, WORKERS_MAX)
+    args.workers = resolved_workers(args.workers)
     own_files = bool(args.cases or args.tolerances)
     args.cases = args.cases or PROFILES[args.profile][0]
     args.tolerances = args.tolerances or PROFILES[args.profile][1]

@@ -13,9 +13,8 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import os
 
-from nsd_cli.options import (add_param_arguments, add_solver_arguments, base_params, check_out_dir,
+from nsd_cli.options import (WORKERS_HELP, add_param_arguments, add_solver_arguments, base_params, check_out_dir,
                              solver_settings)
 from nsd_core.common.files import read_regular_text
 from nsd_core.device.params import ParameterError
@@ -70,7 +69,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "and against the exact linear solution (supports alone): none; median (default) the record "
                         "closest to the fitted median; all every record that reached the limit (refused when the "
                         "other engines' estimated steps exceed a bound); each re-run is printed with its time")
-    p.add_argument("--workers", type=int, default=None, help="local processes (default: the cores)")
+    p.add_argument("--workers", type=int, default=None, help=WORKERS_HELP)
     p.add_argument("--scheduler", default=None, help="address of a running Dask scheduler")
     p.add_argument("--retry-failed", action="store_true", help="run levels stored as failed again")
     add_param_arguments(p)
@@ -110,7 +109,7 @@ def run(args) -> int:
     from comparisons.engines import parse_engine_list, run_seismic_engine
     from comparisons.harness import code_fingerprint
     from nsd_cli.limits import check_ida_scales, check_ida_work
-    from nsd_cli.options import WORKERS_MAX, whole
+    from nsd_cli.options import resolved_workers
     from nsd_cli.sweep import check_scheduler
     from nsd_core.ground.records import SIMILITUDE_TIME_FACTOR, fema_record
     from nsd_cli.seismic_building import with_building
@@ -126,8 +125,7 @@ def run(args) -> int:
     engines = parse_engine_list(args.engines)
     if engines[0] != "semirecursive":
         raise ParameterError(f"--engines {args.engines!r}: semirecursive (the reference) must come first")
-    workers = (os.cpu_count() or 1) if args.workers is None else args.workers
-    whole("--workers", workers, 1, WORKERS_MAX)
+    workers = resolved_workers(args.workers)
     params = base_params(args)
     args.restrainer = args.restrainer or limit.kind in ("restrainer", "impact")
     structure = with_building(args, isolated_structure(args, params))

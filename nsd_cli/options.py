@@ -13,6 +13,7 @@ from pathlib import Path
 
 from nsd_core.common.files import printable
 from nsd_core.device.params import ParameterError, Params, load_params, parse_set
+from nsd_core.engine.workers import WORKERS_MAX, default_workers
 
 
 class Progress:
@@ -89,7 +90,15 @@ def whole(name: str, v, low: int, high: int) -> None:
         raise ParameterError(f"{name} = {v}: must be a whole number in [{low}, {high}]")
 
 
-WORKERS_MAX = 256
+def resolved_workers(given: int | None) -> int:
+    """--workers as given (a whole number in [1, WORKERS_MAX]) or, not given, the default: NSD_WORKERS,
+    else the cores this process may use (nsd_core.engine.workers.default_workers); ParameterError, one
+    line, for a bad value of either."""
+    whole("--workers", given, 1, WORKERS_MAX)
+    return default_workers() if given is None else given
+
+
+WORKERS_HELP = "local processes, in [1, 256] (default: $NSD_WORKERS, else the cores this process may use)"
 
 
 # bytes (Linux): longer names are refused before anything is made; PATH_MAX keeps room for what a

@@ -12,7 +12,7 @@ from __future__ import annotations
 import argparse
 import os
 
-from nsd_cli.options import add_param_arguments, add_solver_arguments, base_params, check_out_dir, solver_settings
+from nsd_cli.options import WORKERS_HELP, add_param_arguments, add_solver_arguments, base_params, check_out_dir, solver_settings
 from nsd_core.device.params import ParameterError
 
 HELP = "FEMA P695 evaluation (CMR, SSF, beta_TOT, ACMR) on the far-field set, with and without the device"
@@ -61,7 +61,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--restrainer", action="store_true", help="run with the displacement restrainer")
     p.add_argument("--structure", action="append", default=[], metavar="NAME=VALUE",
                    help="override the default isolated structure (as nsd ida)")
-    p.add_argument("--workers", type=int, default=None, help="local processes (default: the cores)")
+    p.add_argument("--workers", type=int, default=None, help=WORKERS_HELP)
     add_param_arguments(p)
     add_solver_arguments(p)
     p.add_argument("--out", required=True, help="output folder (resumable)")
@@ -123,7 +123,7 @@ def _what_passes(traces, store, params, structures, states, limit, level, rating
 
 def _request(args):
     """The records, design category, quality ratings, local workers, configurations and hunt, checked in turn."""
-    from nsd_cli.options import WORKERS_MAX, reject_record_set_in_set, whole
+    from nsd_cli.options import reject_record_set_in_set, resolved_workers, whole
     from nsd_core.study import p695
     from nsd_core.study.hunt import Hunt
     from nsd_core.study.seismic_set import parse_records
@@ -135,8 +135,7 @@ def _request(args):
     whole("--bootstrap", args.bootstrap, 100, 100000)
     if args.seed is not None:
         whole("--seed", args.seed, 0, 2 ** 32 - 1)
-    workers = (os.cpu_count() or 1) if args.workers is None else args.workers
-    whole("--workers", workers, 1, WORKERS_MAX)
+    workers = resolved_workers(args.workers)
     if args.duration is not None and not (0.1 <= args.duration <= 1000.0):
         raise ParameterError(f"--duration = {args.duration!r}: allowed: model seconds in [0.1, 1000]")
     configs = _isolators(args.isolators)

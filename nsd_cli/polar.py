@@ -11,7 +11,7 @@ import os
 from pathlib import Path
 
 from nsd_cli import limits as lim
-from nsd_cli.options import add_param_arguments, base_params, check_finite, check_out_dir
+from nsd_cli.options import WORKERS_HELP, add_param_arguments, base_params, check_finite, check_out_dir, resolved_workers
 from nsd_core.device.drive import Drive
 from nsd_core.device.params import ParameterError
 
@@ -30,7 +30,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help=f"quasi-static points per cycle, in [{lim.POLAR_POINTS[0]}, {lim.POLAR_POINTS[1]}] (default 100); "
                         f"designs x 360/step x points <= {lim.POLAR_WORK_MAX}")
     add_param_arguments(p)
-    p.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="local processes, in [1, 64]")
+    p.add_argument("--workers", type=int, default=None, help=WORKERS_HELP)
     p.add_argument("--out", required=True, help="output folder (put it under a compare folder as DIR/polar for the report)")
 
 
@@ -41,8 +41,7 @@ def run(args) -> int:
         raise ParameterError(f"--wires {args.wires!r}: must be comma-separated whole numbers in "
                              f"[{lim.POLAR_WIRES[0]}, {lim.POLAR_WIRES[1]}]") from None
     lim.check_polar_work(wires, args.step, args.points_per_cycle)
-    if not 1 <= args.workers <= 64:
-        raise ParameterError(f"--workers = {args.workers}: must be in [1, 64]")
+    args.workers = resolved_workers(args.workers)
     base = base_params(args)
     lim.in_range("--amplitude", args.amplitude, (Drive.A_MIN, base.rod_length * (1 - 1e-12)), "m (below rod_length)")
     for n in wires:

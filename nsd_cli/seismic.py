@@ -17,7 +17,7 @@ import math
 
 from nsd_cli import limits as lim
 from nsd_cli import seismic_building, seismic_checks, seismic_extras
-from nsd_cli.options import (Progress, add_param_arguments, add_solver_arguments, base_params, check_finite,
+from nsd_cli.options import (WORKERS_HELP, Progress, add_param_arguments, add_solver_arguments, base_params, check_finite,
                              check_out_dir, solver_settings)
 from nsd_core.device.params import ParameterError
 
@@ -65,7 +65,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     seismic_building.add_arguments(p)
     seismic_checks.add_arguments(p)
     p.add_argument("--records", default=None, metavar="1,3,5-7", help="with --record-set: these records only (default all)")
-    p.add_argument("--workers", type=int, default=None, help="with --record-set: local processes (default: the cores)")
+    p.add_argument("--workers", type=int, default=None, help="with --record-set: " + WORKERS_HELP)
     p.add_argument("--scheduler", default=None, help="with --record-set: address of a running Dask scheduler")
     p.add_argument("--scheduler-timeout", type=float, default=None, metavar="S",
                    help=f"with --scheduler: seconds to wait for the connection and for the scheduler's answer, each "

@@ -55,9 +55,8 @@ def run_set(args) -> int:
 
 def _set_request(args):
     """A record set's name, records, engines and local workers, checked; the flags a set cannot take refused."""
-    import os
     from comparisons.engines import BASELINE_PEERS, parse_engine_list
-    from nsd_cli.options import WORKERS_MAX, whole
+    from nsd_cli.options import resolved_workers
     from nsd_core.ground.records import set_name
     from nsd_core.study.seismic_set import parse_records
     set_ = set_name(args.record_set)
@@ -79,8 +78,7 @@ def _set_request(args):
                              "--engines semirecursive,opensees")
     if engines[0] != "semirecursive":
         raise ParameterError(f"--engines {args.engines!r}: semirecursive (the reference) must come first")
-    workers = os.cpu_count() or 1 if args.workers is None else args.workers
-    whole("--workers", workers, 1, WORKERS_MAX)
+    workers = resolved_workers(args.workers)
     return set_, records, engines, workers
 
 

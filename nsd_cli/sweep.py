@@ -3,12 +3,11 @@ cores or a Dask scheduler. A sweep in which some design failed exits 3."""
 from __future__ import annotations
 
 import argparse
-import os
 import re
 import socket
 
-from nsd_cli.options import (WORKERS_MAX, add_param_arguments, add_solver_arguments, base_params, check_out_dir,
-                             parse_engines, parse_numbers, positive, solver_settings, whole)
+from nsd_cli.options import (WORKERS_HELP, add_param_arguments, add_solver_arguments, base_params, check_out_dir,
+                             parse_engines, parse_numbers, positive, resolved_workers, solver_settings)
 from nsd_cli.limits import SWEEP_STEPS_MAX, check_drive_work
 from nsd_core.device.params import FIELDS, ParameterError
 
@@ -30,7 +29,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="output samples per cycle (default 500, the parametric study's own; one drive's default "
                              "in nsd cycle, nsd compare and the Python API is 2000)")
     parser.add_argument("--engines", default="semirecursive", help="comma-separated: semirecursive, mujoco, exudyn")
-    parser.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="local processes")
+    parser.add_argument("--workers", type=int, default=None, help=WORKERS_HELP)
     parser.add_argument("--scheduler", default=None, help="address of a running Dask scheduler")
     parser.add_argument("--scheduler-timeout", type=float, default=None, metavar="S",
                         help="with --scheduler: seconds to wait for the connection and for the scheduler's answer, "
@@ -140,7 +139,7 @@ def run(args) -> int:
     base = base_params(args)
     for n in ("amplitude", "frequency"):
         positive(f"--{n}", getattr(args, n))
-    whole("--workers", args.workers, 1, WORKERS_MAX)
+    args.workers = resolved_workers(args.workers)
     if args.paper == bool(args.param):
         raise ParameterError("--param / --paper: give exactly one (--param NAME --values ... or --paper)")
     if args.paper and args.values is not None:

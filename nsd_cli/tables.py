@@ -2,9 +2,8 @@
 from __future__ import annotations
 
 import argparse
-import os
 
-from nsd_cli.options import WORKERS_MAX, add_param_arguments, base_params, check_out_dir, positive, whole
+from nsd_cli.options import WORKERS_HELP, add_param_arguments, base_params, check_out_dir, positive, resolved_workers
 from nsd_core.device.params import ParameterError
 
 HELP = "the paper's Tables 5 and 6 next to the model"
@@ -14,7 +13,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_param_arguments(parser, "parameter overrides (the base set)")
     parser.add_argument("--method", default="slack", help="slack (direct, default) or path (the quasi-static path)")
     parser.add_argument("--step", type=float, default=2e-5, help="path method's displacement step [m]")
-    parser.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="local processes")
+    parser.add_argument("--workers", type=int, default=None, help=WORKERS_HELP)
     parser.add_argument("--out", default=None, help="folder for tables.csv")
 
 
@@ -27,7 +26,7 @@ def run(args) -> int:
     positive("--step", args.step)
     if args.step is not None and not 1e-7 <= args.step <= 1e-3:
         raise ParameterError(f"--step = {args.step}: must be in [1e-7, 1e-3] m")
-    whole("--workers", args.workers, 1, WORKERS_MAX)
+    args.workers = resolved_workers(args.workers)
     out = check_out_dir("--out", args.out)
     rows = table_rows(base, method=args.method, step=args.step, workers=args.workers)
     print(format_rows(rows))

@@ -73,11 +73,14 @@ def run_dir(tmp_path_factory):
 
 @pytest.fixture(scope="session")
 def report(run_dir, tmp_path_factory):
-    from reports.build import build_report
+    """The session run's report, drawn once by the command (``nsd report --from``): its paths as
+    reports.build.build_report returns them, read back from the folder, and the finished process."""
     out = tmp_path_factory.mktemp("rep") / "report"
-    start = time.perf_counter()
-    paths = build_report(run_dir[0], out)
-    return paths, time.perf_counter() - start
+    p = nsd("report", "--from", str(run_dir[0]), "--out", str(out), timeout=300)
+    assert p.returncode == 0, p.stderr[-2000:]
+    pngs = sorted(out.glob("[0-9][0-9]_*.png"))
+    return {"pdf": str(out / "validation.pdf"), "pngs": [str(x) for x in pngs],
+            "pages": [x.stem.split("_", 1)[1] for x in pngs]}, p
 
 
 @pytest.fixture(scope="session")
@@ -227,13 +230,15 @@ def test_a_model_folder_says_which_command_draws_its_report(tmp_path):
     assert not out.exists()
 
 
-def test_cli_writes_the_report(run_dir, tmp_path):
-    """The command writes the PDF and every PNG. Its time is not asserted here (the guide: speed is
-    measured by benchmarks, not by timed tests on a shared machine)."""
-    out = tmp_path / "cli"
-    p = nsd("report", "--from", str(run_dir[0]), "--out", str(out), timeout=300)
-    assert p.returncode == 0, p.stderr
+def test_cli_writes_the_report(report):
+    """The command (the session's report fixture runs it) writes the PDF and every PNG, says where, and
+    leaves nothing else. Its time is not asserted here (the guide: speed is measured by benchmarks, not
+    by timed tests on a shared machine)."""
+    paths, p = report
+    out = Path(paths["pdf"]).parent
     assert (out / "validation.pdf").is_file() and len(list(out.glob("*.png"))) == len(EXPECTED)
+    assert sorted(x.name for x in out.iterdir()) == sorted(["validation.pdf"] + [Path(x).name for x in paths["pngs"]])
+    assert str(out) in p.stdout, p.stdout
 
 
 def test_extra_pages_when_the_folder_has_them(run_dir, tmp_path):

@@ -3,8 +3,6 @@ from __future__ import annotations
 
 import json
 import os
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -43,20 +41,20 @@ def test_a_failed_computation_keeps_nothing(tmp_path, monkeypatch):
     assert not result_cache.result_file("k", 1).exists()
 
 
-def test_a_bad_out_is_refused_before_the_restoring_force_check_runs(tmp_path):
+def test_a_bad_out_is_refused_before_the_restoring_force_check_runs(tmp_path, monkeypatch, capsys):
     """nsd seismic checks --out before it computes the check (seconds of quasi-static paths): a bad --out
-    leaves no kept check behind; a good run keeps one, and a second run reads it to the same summary."""
-    env = {**os.environ, "XDG_CACHE_HOME": str(tmp_path / "cache")}
+    leaves no kept check behind; a good run keeps one, and a second run reads it to the same summary.
+    In this process (the compiled code and records as loaded; a fresh folder for the kept results)."""
+    from nsd_cli.main import main
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
     kept = tmp_path / "cache" / "nsd-harness" / "results" / "restoring_force"
     (tmp_path / "file").write_text("x")
-    args = [sys.executable, "-m", "nsd_cli.main", "seismic", "--record", "nearfield-pulse:2", "--window", "2,2.3",
-            "--dt-out", "0.002"]
-    p = subprocess.run(args + ["--out", str(tmp_path / "file" / "out")], env=env, capture_output=True, text=True)
-    assert p.returncode == 2 and "--out" in p.stderr and not kept.exists(), p.stderr
+    args = ["seismic", "--record", "nearfield-pulse:2", "--window", "2,2.3", "--dt-out", "0.002"]
+    assert main(args + ["--out", str(tmp_path / "file" / "out")]) == 2
+    assert "--out" in capsys.readouterr().err and not kept.exists()
     summaries = []
     for name in ("a", "b"):
-        p = subprocess.run(args + ["--out", str(tmp_path / name)], env=env, capture_output=True, text=True)
-        assert p.returncode == 0, p.stderr
+        assert main(args + ["--out", str(tmp_path / name)]) == 0, capsys.readouterr().err
         summaries.append(json.loads((tmp_path / name / "summary.json").read_text())["restoring_force"])
         assert len(list(kept.iterdir())) == 1
     assert summaries[0] == summaries[1]

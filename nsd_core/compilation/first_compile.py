@@ -23,6 +23,8 @@ import sys
 from functools import partial
 from pathlib import Path
 
+from nsd_core.engine.workers import usable_cores
+
 HELPER = "NSD_FIRST_COMPILE_HELPER"   # set in the helper: it never starts one itself
 # the modules whose import compiles a mode's callbacks (njit with their signature: at import)
 CALLBACKS = {"drive": "nsd_core.device.compiled", "seismic": "nsd_core.structure.compiled_seismic"}
@@ -58,14 +60,6 @@ def mark_ready(key: tuple) -> None:
             (folder / _mark(key)).touch()
         except OSError:   # a read-only cache: the next command checks again, and starts a helper
             pass
-
-
-def usable_cores() -> int:
-    """The cores this process may run on (its affinity: `taskset -c 0` leaves one of a machine's two)."""
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:   # not Linux
-        return os.cpu_count() or 1
 
 
 def worth_a_helper(key: tuple) -> bool:

@@ -26,8 +26,32 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from multiprocessing import get_context
 
+from nsd_core.common.errors import ParameterError
+
 PR_SET_PDEATHSIG = 1  # linux/prctl.h
 WATCH_INTERVAL = 0.5  # s between the watchdog's looks at the parent
+WORKERS_MAX = 256     # local worker processes a command may be asked for (--workers, NSD_WORKERS)
+WORKERS_ENV = "NSD_WORKERS"   # a command's local workers when its --workers is not given
+
+
+def usable_cores() -> int:
+    """The cores this process may run on (its affinity: `taskset -c 0` leaves one of a machine's two)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:   # not Linux
+        return os.cpu_count() or 1
+
+
+def default_workers(environ=os.environ) -> int:
+    """A command's local worker processes when its --workers is not given: ``NSD_WORKERS`` where set (a
+    whole number in [1, WORKERS_MAX]; ParameterError, one line, otherwise), else the usable cores."""
+    given = environ.get(WORKERS_ENV, "").strip()
+    if not given:
+        return usable_cores()
+    if not given.isdigit() or not 1 <= int(given) <= WORKERS_MAX:
+        raise ParameterError(f"{WORKERS_ENV} = {given!r}: must be a whole number in [1, {WORKERS_MAX}] "
+                             "(or unset: the usable cores)")
+    return int(given)
 
 
 def die_with_parent(parent: int) -> None:
