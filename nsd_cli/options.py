@@ -98,7 +98,7 @@ def resolved_workers(given: int | None) -> int:
     return default_workers() if given is None else given
 
 
-WORKERS_HELP = "local processes, in [1, 256] (default: $NSD_WORKERS, else the cores this process may use)"
+WORKERS_HELP = f"local processes, in [1, {WORKERS_MAX}] (default: $NSD_WORKERS, else the cores this process may use)"
 
 
 # bytes (Linux): longer names are refused before anything is made; PATH_MAX keeps room for what a
