@@ -72,6 +72,7 @@ class SeismicCase:
     settings: dict[str, dict] = field(default_factory=dict)
     engine_params: dict[str, Params] = field(default_factory=dict)
     building: dict | None = None                                  # [building] table (docs/building.md)
+    refined: tuple = ()                                           # engines at a step --refine chose
     mode = "seismic"
 
     def params_for(self, engine: str) -> Params:
@@ -110,6 +111,7 @@ class Case:
     params: Params
     settings: dict[str, dict] = field(default_factory=dict)       # engine -> solver settings
     engine_params: dict[str, Params] = field(default_factory=dict)  # engine -> its own parameter set
+    refined: tuple = ()                                             # engines at a step --refine chose
 
     def params_for(self, engine: str) -> Params:
         return self.engine_params.get(engine, self.params)

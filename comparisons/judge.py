@@ -80,7 +80,7 @@ def judge_case(case, engines: list[str], results: dict, entries: dict, rule: Rul
                            (entries.get(pair) or {}).get("stats") or {}, values[e][primary], to_ref_pair[primary],
                            seismic)
         estimates[e] = estimate_from_pair(diff(e, pair), ev["factor"], rule.beta)
-        evidence[e] = {**ev, "companion": to_ref_pair}
+        evidence[e] = {**ev, "companion": to_ref_pair, "refined": e in getattr(case, "refined", ())}
     scales = seismic_scales(conv) if seismic else drive_scales(conv, case.drive.frequency, case.drive.amplitude)
     # a stiffness-region boundary is a sample of the output grid: it can move by a sample either way
     floors = {} if seismic else {"region_shift_rel": 2.0 * 2.0 * math.pi / case.drive.samples_per_cycle}

@@ -56,6 +56,7 @@ class ModelCase:
     dt_out: float
     settings: dict                     # engine -> settings
     reference: Reference | None = None
+    refined: tuple = ()                # engines at a step --refine chose
 
     def times(self) -> np.ndarray:
         return output_times(self.duration, self.dt_out)

@@ -186,7 +186,7 @@ def judge(model: Model, case: ModelCase, engines: list[str], runs: dict, rule: R
                            "step": float(runs[e].stats.get(key) or {**builder(e).default_settings,
                                                                   **case.settings.get(e, {})}[key]),
                            "observed_order": pair_order(d[primary], d2[primary], runs[e].stats, pair.stats, ratio),
-                           "primary_error": d[primary], "companion": d2}
+                           "primary_error": d[primary], "companion": d2, "refined": e in case.refined}
         elif e in TOLERANCE_LADDER and (found := adaptive_estimate(model, case, e, runs, sc, skip)) is not None:
             estimates[e], evidence[e] = found
         elif e == REFERENCE:   # the in-house engine: its estimate is its distance from the converged run

@@ -1,7 +1,9 @@
 """``nsd compare --refine``: a peer that is not converged at its case settings runs once more at the
 step its own estimate asks for, within a cost cap, and the verdict is taken again on that run; a peer
 whose estimate is uncertain (observed order far below its method's), or whose agreement is undecided
-because its companion run is within the bound its run exceeds, runs once at half its step.
+(its companion run is within the bound its run exceeds, or its difference did not fall with the step),
+runs once at half its step. A refined peer is marked on its case (``refined``): a difference that has
+still not fallen at the refined pair (three steps: h/2, h, 2h) is a disagreement there, not undecided.
 
 The step asked for is the one at which the estimated error falls to 0.8 x the engineering tolerance
 (error ~ step^p, comparisons.estimate.step_needed). The cap: at most ``MAX_REFINE`` x the case's
@@ -30,7 +32,7 @@ def refinements(cases, summary: dict) -> tuple[list, list[dict]]:
                 continue
             if needs and not v.get("accurate"):
                 (setting, asked), = needs.items()
-            elif (v.get("uncertain") or "companion" in (v.get("undecided") or {})) and v.get("setting"):
+            elif (v.get("uncertain") or {"companion", "stalled"} & set(v.get("undecided") or {})) and v.get("setting"):
                 # check the estimate one halving further
                 setting, asked = v["setting"], step / 2.0
             else:
@@ -39,7 +41,7 @@ def refinements(cases, summary: dict) -> tuple[list, list[dict]]:
             to = max(asked, CONVERGED_SETTINGS["rtol"]) if setting == "rtol" else max(asked, step / MAX_REFINE)
             c = new[case_name]
             settings = {**c.settings, engine: {**c.settings.get(engine, {}), setting: to}}
-            new[case_name] = dataclasses.replace(c, settings=settings)
+            new[case_name] = dataclasses.replace(c, settings=settings, refined=(*c.refined, engine))
             changes.append({"case": case_name, "engine": engine, "setting": setting, "from": step, "to": to,
                             "asked": asked, "capped": to > asked})
     return [new[c.name] for c in cases], changes

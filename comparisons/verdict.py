@@ -20,6 +20,12 @@ quantity (``SCALAR_OF``); and its bound is at least what the max-norm metric's b
 the loop work's at most the force's times the path's length), so a scalar is never called a modelling
 difference that the numerical error of its own quantity can explain. A floor below which differences are round-off (``FLOOR``) keeps two equal runs
 from failing on 0 <= 0.
+
+A pair whose observed order is far below its method's (``stalled_order``) did not fall with the step: a
+modelling difference does not, but neither does an error not yet in its asymptotic range, whose estimate
+at the method's order is then too small. A difference beyond its bound there, but within the bound the
+pair gives at first order (``first_order_growth`` x the bound), is *undecided*; ``--refine`` runs a third,
+finer step, and a refined pair that has still not fallen disagrees.
 """
 from __future__ import annotations
 
@@ -28,8 +34,8 @@ import math
 import numpy as np
 
 from comparisons.engines import get_engine
-from comparisons.estimate import (STEP_SETTING, companion_label, nominal_order, pair_factor, pair_order,
-                                  step_needed)
+from comparisons.estimate import (STEP_SETTING, companion_factor, companion_label, nominal_order, pair_factor,
+                                  pair_order, richardson_factor, step_needed)
 
 CONVERGED, CHECK = "converged", "converged_check"
 FLOOR = 1e-12                      # relative differences below this are round-off
@@ -139,10 +145,37 @@ def case_verdicts(case, kind: str, engines: list[str], values: dict, estimates: 
             err = max(est, value) if consistent else est
             erows.append(_row(case, e, CONVERGED, metric, value, est, ref, bound, tol, consistent, err <= tol, scales))
             companion = (ev.get("companion") or {}).get(metric)   # the same model at the companion's step
-            erows[-1].update(bound_from=bound_from, companion=None if companion is None else _finite(companion))
+            # a stalled pair, before any refinement: undecided within the bound it gives at first order
+            stalled = stalled_order(ev) is not None and not ev.get("refined")
+            erows[-1].update(bound_from=bound_from, companion=None if companion is None else _finite(companion),
+                             stalled=stalled and value <= first_order_growth(ev) * bound)
         rows += erows
         verdicts[e] = _verdict(e, erows, ev, rule, reference_rtol)
     return rows, verdicts
+
+
+def stalled_order(ev: dict) -> float | None:
+    """The observed order of a peer's pair where it is far below its method's (p_obs < p - 1) on an
+    error above round-off: the difference did not fall with the step as the method's error does, so
+    the pair alone cannot tell a modelling difference (which does not fall) from steps not yet
+    asymptotic (an estimate too small); None otherwise."""
+    p_obs, p = ev.get("observed_order"), ev.get("order")
+    if p and p_obs is not None and math.isfinite(p_obs) and p_obs < p - 1.0 and ev.get("primary_error", 0.0) > FLOOR * 1e3:
+        return p_obs
+    return None
+
+
+def first_order_growth(ev: dict) -> float:
+    """How much larger a pair's estimate is at first order than at its method's order p: the factor
+    (judged run's error over the pair's difference) at order 1 over that at p, for the pair's step
+    ratio r and side (a coarser companion: (r^p - 1) / (r - 1), 3 for p = 2 and r = 2); 1 where the
+    evidence does not say."""
+    p, r, f = ev.get("order"), ev.get("ratio") or 2.0, ev.get("factor")
+    if not p or p <= 1.0 or not f or not math.isfinite(f) or r <= 1.0:
+        return 1.0
+    coarser = math.isclose(f, companion_factor(p, r), rel_tol=1e-9)
+    one = companion_factor(1.0, r) if coarser else richardson_factor(1.0, r)
+    return one / f if math.isfinite(one) else 1.0
 
 
 def _bound(rule: Rule, estimates: dict, ref_error: dict, floors: dict | None, metric: str) -> tuple:
@@ -171,8 +204,9 @@ def _verdict(engine: str, rows: list[dict], ev: dict, rule: Rule, reference_rtol
     # modelling difference; the engine is not converged, and a finer step (--refine) decides it
     beyond = [r for r in rows if r["consistent"] is False]
     # a difference beyond the bound that the engine's own companion run (the same model at the other step) is
-    # within moves with the step as no modelling difference does: its estimate is not asymptotic there, so the
-    # two runs cannot tell a numerical difference from a modelling one; --refine (a finer step) decides
+    # within moves with the step as no modelling difference does; one from a pair whose observed order is far
+    # below the method's did not fall with the step, as a modelling difference does not, but neither does an
+    # error not yet asymptotic: either way the two runs cannot tell; --refine (a third, finer step) decides
     moving = [r for r in beyond if r["accurate"] and row_word(r) == "UNDECIDED"]
     incons = [r for r in beyond if r["accurate"] and r not in moving]
     undecided = [r for r in beyond if not r["accurate"]]
@@ -212,11 +246,7 @@ def _verdict(engine: str, rows: list[dict], ev: dict, rule: Rule, reference_rtol
         if own:   # closure, tracking, energy balance: the engine's own checks, whatever the cause
             parts.append("its own check over tolerance: " + _items(own))
     if moving and not incons:
-        r = max(moving, key=lambda r: r["value"] / r["bound"])
-        out["undecided"] = {"metric": r["metric"], "ratio": r["value"] / r["bound"], "companion": r["companion"]}
-        parts.append(f"whether it agrees is undecided: {r['metric']} = {r['value']:.3g} is {r['value'] / r['bound']:.3g}x "
-                     f"its bound, but its companion run, the same model at another step, is within it "
-                     f"({r['companion']:.3g}): the difference moves with the step (--refine decides)")
+        parts.append(_undecided_text(max(moving, key=lambda r: r["value"] / r["bound"]), ev, out))
     if undecided and not incons:
         r = max(undecided, key=lambda r: r["value"] / r["bound"] if r["bound"] else math.inf)
         out["undecided"] = {"metric": r["metric"], "ratio": r["value"] / r["bound"]}
@@ -229,11 +259,15 @@ def _verdict(engine: str, rows: list[dict], ev: dict, rule: Rule, reference_rtol
         out["reference_unresolved"] = True
         parts.append(f"the converged reference itself is not converged to the tolerance on this case ({r['metric']}: "
                      f"its own error {r['reference_error']:.3g} at {at} > {r['tolerance']:.3g})")
-    p_obs, p = ev.get("observed_order"), ev.get("order")
-    if not incons and p and p_obs is not None and math.isfinite(p_obs) and p_obs < p - 1.0 \
-            and ev.get("primary_error", 0.0) > FLOOR * 1e3:
-        out["uncertain"] = (f"estimate uncertain: observed order {p_obs:.2f} against the assumed {p:g} "
+    p_obs = stalled_order(ev)
+    if not incons and p_obs is not None and "stalled" not in (out.get("undecided") or {}):
+        out["uncertain"] = (f"estimate uncertain: observed order {p_obs:.2f} against the assumed {ev['order']:g} "
                             "(the steps may not be asymptotic; --refine checks at a finer step)")
+    elif incons and p_obs is not None:
+        parts.append(f"the difference did not fall with the step at the refined pair either (observed order "
+                     f"{p_obs:.2f} against {ev['order']:g})" if ev.get("refined") else
+                     f"the difference did not fall with the step (observed order {p_obs:.2f} against "
+                     f"{ev['order']:g}) and is beyond even the bound its pair gives at first order")
     if not parts:
         rs = [r for r in rows if r["bound"]]
         worst = max(rs, key=lambda r: r["value"] / r["bound"]) if rs else None
@@ -243,14 +277,33 @@ def _verdict(engine: str, rows: list[dict], ev: dict, rule: Rule, reference_rtol
     return out
 
 
+def _undecided_text(r: dict, ev: dict, out: dict) -> str:
+    """Why a difference beyond its bound is undecided (its companion within the bound, or a stalled
+    pair), recorded in ``out["undecided"]``."""
+    ratio = r["value"] / r["bound"]
+    head = f"whether it agrees is undecided: {r['metric']} = {r['value']:.3g} is {ratio:.3g}x its bound, but "
+    if r.get("companion") is not None and r["companion"] <= r["bound"]:
+        out["undecided"] = {"metric": r["metric"], "ratio": ratio, "companion": r["companion"]}
+        return head + (f"its companion run, the same model at another step, is within it ({r['companion']:.3g}): "
+                       "the difference moves with the step (--refine decides)")
+    p_obs = stalled_order(ev)
+    out["undecided"] = {"metric": r["metric"], "ratio": ratio, "stalled": True, "observed_order": p_obs}
+    return head + (f"it did not fall with the step (observed order {p_obs:.2f} against the method's "
+                   f"{ev['order']:g}) and is within the bound its pair gives at first order "
+                   f"({first_order_growth(ev) * r['bound']:.3g}): a modelling difference, or steps not yet "
+                   "asymptotic; the two runs cannot tell which (--refine runs half the step: a modelling "
+                   "difference stays beyond its bound there)")
+
+
 def row_word(r: dict) -> str:
     """A gated row's own verdict in one word, as ``_verdict`` reads it: "ok" within its bound,
     "DISAGREES" beyond it, "UNDECIDED" beyond it where the engine's estimate is over the tolerance or its
-    companion run is within the bound (the difference moves with the step); a row without a bound "ok"."""
+    companion run is within the bound (the difference moves with the step) or its pair stalled (observed
+    order far below the method's, before any refinement); a row without a bound "ok"."""
     if r.get("consistent") is not False:
         return "ok"
     moving = r.get("companion") is not None and r["companion"] <= r["bound"]
-    return "UNDECIDED" if not r["accurate"] or moving else "DISAGREES"
+    return "UNDECIDED" if not r["accurate"] or moving or r.get("stalled") else "DISAGREES"
 
 
 def _items(rows: list[dict]) -> str:

@@ -169,7 +169,8 @@ def _bounded(refined: list, cases: list, changes: list[dict]) -> tuple[list, lis
                else f"at most {MAX_FIXED_STEPS} steps with its h/2 run")
         if lowest >= r["from"] * (1.0 - 1e-12):   # already at the bound: the original case stands
             original = next(o for o in cases if o.name == c.name).settings.get(r["engine"], {})
-            by_name[c.name] = dataclasses.replace(c, settings={**c.settings, r["engine"]: original})
+            by_name[c.name] = dataclasses.replace(c, settings={**c.settings, r["engine"]: original},
+                                                  refined=tuple(e for e in c.refined if e != r["engine"]))
             lines.append(f"--refine: {r['case']}: {r['engine']} not refined: its {r['setting']} {r['from']:.3g} s is "
                          f"at the bound ({cap})")
             continue
