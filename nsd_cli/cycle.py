@@ -6,7 +6,7 @@ import argparse
 
 from nsd_cli.limits import check_drive_work
 from nsd_cli.options import (Progress, add_param_arguments, add_solver_arguments, base_params, check_finite,
-                             check_out_dir, solver_settings)
+                             check_out_dir, solver_settings, draw_figures)
 
 HELP = "one force-displacement cycle of the in-house model"
 
@@ -87,6 +87,5 @@ def run(args) -> int:
     if summary["outside_working_range"]:
         print("  WARNING: the ropes went slack: part of this cycle lies outside the working range")
     print(f"wrote {out / 'cycle.csv'} and {out / 'summary.json'}")
-    from reports.build import draw_study  # the force-displacement loop as a PNG into the same folder
-    draw_study(out)
+    draw_figures(out)  # the force-displacement loop as a PNG into the same folder
     return 0

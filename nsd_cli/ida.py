@@ -15,7 +15,7 @@ import argparse
 import dataclasses
 
 from nsd_cli.options import (WORKERS_HELP, add_param_arguments, add_solver_arguments, base_params, check_out_dir,
-                             solver_settings)
+                             solver_settings, draw_figures)
 from nsd_core.common.files import read_regular_text
 from nsd_core.device.params import ParameterError
 
@@ -173,8 +173,7 @@ def run(args) -> int:
         import json
         print("limit states apart (limit_states.json, .csv, .png):")
         print("\n".join(summary_lines(json.loads(read_regular_text(out / "limit_states.json", "limit_states.json")))))
-    from reports.build import draw_study  # the study's PNGs into its own folder
-    draw_study(out)
+    draw_figures(out)  # the study's PNGs into its own folder
     undetermined = [t["name"] for t in index["traces"] if t["undetermined"]]
     return 3 if undetermined or bad else 0
 

@@ -174,6 +174,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         from nsd_core.engine.codegen import evaluator_kind, preferring_generated
         evaluator_kind()  # a bad NSD_EVALUATOR: one line, exit 2, before any work
+        from nsd_cli.options import figures_wanted
+        figures_wanted()  # a bad NSD_FIGURES: the same
         study = args.command in STUDIES or getattr(args, "record_set", None)
         with preferring_generated() if study else contextlib.nullcontext():
             return int(args.handler(args) or 0)

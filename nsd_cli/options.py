@@ -38,6 +38,29 @@ class Progress:
         self.stream.flush()
 
 
+FIGURES_ENV = "NSD_FIGURES"
+
+
+def figures_wanted(environ=os.environ) -> bool:
+    """Whether a study command draws its PNGs into its folder: ``NSD_FIGURES`` = 1 (or unset, or empty)
+    draws them, 0 leaves them to ``nsd report --from FOLDER`` (the numbers are written either way);
+    ParameterError, one line, for anything else."""
+    given = environ.get(FIGURES_ENV, "").strip()
+    if given not in ("", "0", "1"):
+        raise ParameterError(f"{FIGURES_ENV} = {given!r}: must be 1 (draw each study's PNGs into its folder) or 0 "
+                             "(numbers only; nsd report --from FOLDER draws them later)")
+    return given != "0"
+
+
+def draw_figures(out) -> list[str]:
+    """A study command's PNGs into its folder ``out``, unless NSD_FIGURES = 0 (said in one line)."""
+    if not figures_wanted():
+        print(f"figures: none drawn ({FIGURES_ENV}=0; nsd report --from {printable(out)} draws them)")
+        return []
+    from reports.build import draw_study
+    return draw_study(out)
+
+
 def add_param_arguments(p: argparse.ArgumentParser, what: str = "parameter overrides") -> None:
     """--params FILE and --set NAME=VALUE (repeatable): the device's parameters."""
     p.add_argument("--params", help=f"TOML file of {what}")

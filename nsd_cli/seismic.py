@@ -18,7 +18,7 @@ import math
 from nsd_cli import limits as lim
 from nsd_cli import seismic_building, seismic_checks, seismic_extras
 from nsd_cli.options import (WORKERS_HELP, Progress, add_param_arguments, add_solver_arguments, base_params, check_finite,
-                             check_out_dir, solver_settings)
+                             check_out_dir, solver_settings, draw_figures)
 from nsd_core.device.params import ParameterError
 
 HELP = "seismic response of the isolated structure (in-house engine)"
@@ -152,8 +152,7 @@ def run(args) -> int:
         code = seismic_extras.run_compare(args, params, structure, motion, solver, out, head)
     else:
         code = _single_run(args, params, structure, motion, solver, out, head, engines, baseline)
-    from reports.build import draw_study  # the run's (or the pair's) PNGs into its own folder
-    draw_study(out)
+    draw_figures(out)  # the run's (or the pair's) PNGs into its own folder
     return code
 
 

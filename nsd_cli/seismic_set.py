@@ -7,7 +7,7 @@ import sys
 
 from nsd_cli import limits as lim
 from nsd_cli import seismic_building, seismic_checks, seismic_extras
-from nsd_cli.options import base_params, check_out_dir, solver_settings
+from nsd_cli.options import base_params, check_out_dir, solver_settings, draw_figures
 from nsd_core.device.params import ParameterError
 
 
@@ -46,8 +46,7 @@ def run_set(args) -> int:
             print(f"nsd seismic: warning: {e['set']}:{e['id']} {w}", file=sys.stderr)
     print(f"{len(index['rows'])} records: " + ", ".join(f"{c[k]} {k}" for k in c if k == "ok" or c[k])
           + f"; {index['elapsed_this_run_s']:.1f} s; wrote {out / 'set.csv'} and {out / 'set.json'}")
-    from reports.build import draw_study  # the set's PNGs into its own folder
-    draw_study(out)
+    draw_figures(out)  # the set's PNGs into its own folder
     if c["solver_failure"] or c["error"] or c["missing"]:
         return 3
     return 4 if c["rod_reach"] or c["outside_validity"] else 0

@@ -7,7 +7,7 @@ import re
 import socket
 
 from nsd_cli.options import (WORKERS_HELP, add_param_arguments, add_solver_arguments, base_params, check_out_dir,
-                             parse_engines, parse_numbers, positive, resolved_workers, solver_settings)
+                             parse_engines, parse_numbers, positive, resolved_workers, solver_settings, draw_figures)
 from nsd_cli.limits import SWEEP_STEPS_MAX, check_drive_work
 from nsd_core.device.params import FIELDS, ParameterError
 
@@ -179,6 +179,5 @@ def run(args) -> int:
           f"{index['elapsed_this_run_s']:.1f} s; wrote {out / 'sweep.json'}")
     for study, path in index["studies"].items():
         print(f"  {study}: {out / path}")
-    from reports.build import draw_study  # the study's PNGs into its own folder
-    draw_study(out)
+    draw_figures(out)  # the study's PNGs into its own folder
     return 3 if index["failed"] or index["missing"] else 0

@@ -14,6 +14,16 @@ import pytest
 # so a command's own second worker only adds its start-up (spawn, imports, warm-up: ~3.5 CPU s a
 # compare on a warm cache, measured on the short case file). Tests of the pools pass --workers.
 os.environ.setdefault("NSD_WORKERS", "1")
+# The study commands draw no PNGs into their folders (~1 s a figure on a 2-core machine) unless a test
+# asks (the ``figures`` fixture, or NSD_FIGURES set before pytest): the tests that check the figures
+# or the pages use the fixture; the rest check numbers, which are written either way.
+os.environ.setdefault("NSD_FIGURES", "0")
+
+
+@pytest.fixture
+def figures(monkeypatch):
+    """The study commands in this test (in this process or as a child) draw their PNGs."""
+    monkeypatch.setenv("NSD_FIGURES", "1")
 
 
 @pytest.fixture(autouse=True)

@@ -12,8 +12,10 @@ def folders(tmp_path_factory):
     from nsd_cli.main import main
     root = tmp_path_factory.mktemp("cycles")
     line, circle = root / "line", root / "circle"
-    assert main(["cycle", "--amplitude", "0.0255", "--frequency", "10", "--out", str(line)]) == 0
-    assert main(["cycle", "--path", "circle", "--amplitude", "0.015", "--frequency", "10", "--out", str(circle)]) == 0
+    with pytest.MonkeyPatch.context() as mp:   # the loop's PNG drawn (tests/conftest.py: NSD_FIGURES)
+        mp.setenv("NSD_FIGURES", "1")
+        assert main(["cycle", "--amplitude", "0.0255", "--frequency", "10", "--out", str(line)]) == 0
+        assert main(["cycle", "--path", "circle", "--amplitude", "0.015", "--frequency", "10", "--out", str(circle)]) == 0
     return line, circle
 
 

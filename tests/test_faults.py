@@ -150,7 +150,7 @@ def test_a_held_lock_names_its_pid_and_writes_nothing(tmp_path, capsys):
     assert sorted(os.listdir(out)) == [".nsd.lock"] and lock.read_text().startswith("4242")
 
 
-def test_a_stale_lock_is_taken_over(tmp_path, capsys):
+def test_a_stale_lock_is_taken_over(tmp_path, capsys, figures):
     out = tmp_path / "out"
     out.mkdir()
     (out / ".nsd.lock").write_text("999999\nnsd cycle ...\n")  # no process holds it

@@ -308,7 +308,7 @@ def test_hostile_seismic_input(tmp_path, capsys, garbage, argv, files, fragment)
 # ---- valid inputs inside the bounds run (a building of 50 stories included), and say what they wrote
 # 12 and 50 stories in the slow mark (~10 s each): 4 stories runs the same path in the default run
 @pytest.mark.parametrize("stories", [4, pytest.param(12, marks=pytest.mark.slow), pytest.param(50, marks=pytest.mark.slow)])
-def test_a_building_within_the_bounds_runs_and_draws_its_floors(tmp_path, capsys, stories):
+def test_a_building_within_the_bounds_runs_and_draws_its_floors(tmp_path, capsys, stories, figures):
     out = tmp_path / "out"
     code = main(["seismic", "--ground", "harmonic:amplitude=1,frequency=2,duration=0.05", "--building",
                  f"stories={stories}", "--out", str(out)])
@@ -340,7 +340,7 @@ def test_a_large_building_runs_the_generic_evaluation():
     assert used == {3: "generated", 4: "generic", 12: "generic"}
 
 
-def test_a_full_disk_while_a_figure_is_written_names_the_figure(tmp_path, capsys, monkeypatch):
+def test_a_full_disk_while_a_figure_is_written_names_the_figure(tmp_path, capsys, monkeypatch, figures):
     """matplotlib's writer raises ENOSPC without a file name (fault injected at that boundary): the one
     line names the figure's file, as every other full-disk message does; no temporary file is left."""
     import matplotlib.figure
@@ -478,7 +478,7 @@ def test_a_stored_run_whose_series_is_gone_is_not_a_result(tmp_path):
 
 
 @pytest.mark.slow
-def test_a_record_set_with_a_12_story_building_runs(tmp_path):
+def test_a_record_set_with_a_12_story_building_runs(tmp_path, figures):
     """Both runs of a record with a 12-story building (numba failed on its generated evaluation:
     MemoryError under 4 GB, RecursionError after ~140 s) finish, in a real process, and draw."""
     p = subprocess.run([sys.executable, "-m", "nsd_cli.main", "seismic", "--record-set", "farfield", "--records", "1",

@@ -186,7 +186,7 @@ def _csv(path):
 
 
 @pytest.mark.slow
-def test_small_ida_on_one_record(tmp_path, capsys):
+def test_small_ida_on_one_record(tmp_path, capsys, figures):
     """Two levels on near-field pulse record 9 (6.3 model s), with and without the device; the
     supports alone is linear, so its peaks scale with the level exactly; a second call resumes
     from the store and writes the same bytes; the supports alone's cross-check against the exact

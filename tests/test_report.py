@@ -412,7 +412,7 @@ def test_cold_compile_cache_records_integration_not_compilation(tmp_path):
     assert run["cpu_time"] <= 0.1 * compiled and compiled > run["wall_time"], (run, res["worker_warmup"])
 
 
-def test_study_folders_draw_their_own_figures_and_report_from_them(tmp_path):
+def test_study_folders_draw_their_own_figures_and_report_from_them(tmp_path, figures):
     """nsd sweep draws its PNGs into its own folder; nsd report --from accepts a sweep and a polar
     folder; their pages keep every text on the page and apart."""
     sweep = tmp_path / "sweep"

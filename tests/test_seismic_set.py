@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import csv
 import json
+import os
 import signal
 import subprocess
 import sys
@@ -14,6 +15,7 @@ import pytest
 from nsd_core.device.params import ParameterError
 from nsd_core.study.seismic_set import parse_records
 
+FIGURES = {**os.environ, "NSD_FIGURES": "1"}   # the set's PNGs drawn (tests/conftest.py)
 SHORT = ["--record-set", "nearfield-pulse", "--records", "2,3", "--window", "2,2.6", "--dt-out", "0.002"]
 
 
@@ -82,7 +84,7 @@ def test_a_window_outside_one_record_of_the_set_is_bad_input(tmp_path, capsys):
 @pytest.fixture(scope="module")
 def set_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("set") / "run"
-    p = nsd("seismic", *SHORT, "--workers", "2", "--out", str(out))
+    p = nsd("seismic", *SHORT, "--workers", "2", "--out", str(out), env=FIGURES)
     assert p.returncode == 0, p.stderr
     return out, p
 
@@ -115,7 +117,7 @@ def test_set_rows_are_complete_and_match_the_per_record_runs(set_run):
 def test_a_finished_set_run_again_runs_nothing_and_writes_the_same_bytes(set_run):
     out, _ = set_run
     before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
-    p = nsd("seismic", *SHORT, "--workers", "2", "--out", str(out))
+    p = nsd("seismic", *SHORT, "--workers", "2", "--out", str(out), env=FIGURES)
     assert p.returncode == 0 and "4 already stored, 0 to run" in p.stderr, p.stderr
     assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
 
