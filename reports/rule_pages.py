@@ -51,9 +51,11 @@ def rule_pages(s: dict, defs: dict, units: dict, table_pages, subtitle) -> list:
              "CONVERGED at these settings, with the step the estimate asks for (nsd compare --refine runs it)"],
             ["own checks", "closure, tracking and energy balance against their tolerance; an energy balance beyond the "
              "converged reference's own (the output grid's quadrature error)"],
-            ["undecided", "beyond the bound, where the engine's own estimate is over the tolerance, or where its "
-             "companion run (the same model at the other step) is within the bound: the difference moves with the "
-             "step, so its runs cannot call it numerical or not; nsd compare --refine decides at a finer step"],
+            ["undecided", "beyond the bound, where the engine's own estimate is over the tolerance, where its "
+             "companion run (the same model at the other step) is within the bound, or where the difference did not "
+             "fall with the step (observed order < p - 1) and is within the bound at first order: its two runs "
+             "cannot call it numerical or not; nsd compare --refine decides at a finer step (one that has still not "
+             "fallen there DISAGREES)"],
             ["scalar metrics", f"a peak or loop-work difference can cancel by chance between h and 2h: its estimate "
              f"is at least {fmt(beta, 3)} x the estimate of the max-norm difference it comes from, and its bound at "
              "least what that metric's bound implies for it (a peak: the same; the loop work: x peak force x path "
