@@ -119,6 +119,9 @@ def case_verdicts(case, kind: str, engines: list[str], values: dict, estimates: 
         if e not in values:
             continue
         ev = evidence.get(e, {})
+        # a stalled pair, before any refinement: undecided within the bound it gives at first order
+        stalled = stalled_order(ev) is not None and not ev.get("refined")
+        growth = first_order_growth(ev) if stalled else 1.0
         erows = []
         for metric, value in values[e].items():
             if metric not in rule.engineering:
@@ -145,10 +148,8 @@ def case_verdicts(case, kind: str, engines: list[str], values: dict, estimates: 
             err = max(est, value) if consistent else est
             erows.append(_row(case, e, CONVERGED, metric, value, est, ref, bound, tol, consistent, err <= tol, scales))
             companion = (ev.get("companion") or {}).get(metric)   # the same model at the companion's step
-            # a stalled pair, before any refinement: undecided within the bound it gives at first order
-            stalled = stalled_order(ev) is not None and not ev.get("refined")
             erows[-1].update(bound_from=bound_from, companion=None if companion is None else _finite(companion),
-                             stalled=stalled and value <= first_order_growth(ev) * bound)
+                             stalled=stalled and value <= growth * bound)
         rows += erows
         verdicts[e] = _verdict(e, erows, ev, rule, reference_rtol)
     return rows, verdicts
