@@ -214,3 +214,12 @@ def test_compiled_paths_equal_the_scipy_path(path, extra, tmp_path):
     assert np.max(np.abs(b["F_y"])) > 0.05 * np.max(np.abs(b["F_x"]))  # really off the line
     for col in ("F_x", "F_y", "cap_z", "wall_z", "spring_zeta", "wire0_stress"):
         np.testing.assert_allclose(a[col], b[col], rtol=0, atol=1e-6 * np.max(np.abs(b[col])))
+
+
+@pytest.mark.parametrize("method", ["DOP853", "RK45"])
+def test_the_step_loops_tableau_type_is_each_pairs(method):
+    """rk.TABLEAU_TYPE is written from the arrays' dimensions (no scipy at import): it must be the type of
+    each pair's tableau, or the step loop's explicit signature would not accept it."""
+    from numba import typeof
+    from nsd_core.engine.rk import TABLEAU_TYPE
+    assert typeof(tableau(method)) == TABLEAU_TYPE

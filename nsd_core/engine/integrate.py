@@ -12,14 +12,21 @@ from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
-from scipy.integrate import DOP853, LSODA, RK23, RK45, Radau
 
 from nsd_core.common.errors import InputError, SolverError
 from nsd_core.engine.compiled_model import Workspace
 from nsd_core.engine.semirecursive import SemiRecursiveSystem
 
 STEP_FLOOR = 1e-8  # s: the smallest max_step accepted (bounded work; docs/limits.md)
-METHODS = {"RK45": RK45, "DOP853": DOP853, "RK23": RK23, "Radau": Radau, "LSODA": LSODA}
+# scipy's solvers by name; scipy.integrate is imported where one is made (~1 s: every command would pay
+# it at start-up, the in-house runs use the compiled step loop)
+METHODS = ("RK45", "DOP853", "RK23", "Radau", "LSODA")
+
+
+def solver_class(method: str):
+    """scipy's step-by-step solver named ``method`` (one of METHODS)."""
+    import scipy.integrate
+    return getattr(scipy.integrate, method)
 
 
 @dataclass
@@ -71,7 +78,7 @@ def integrate(system: SemiRecursiveSystem, ws: Workspace, y0: np.ndarray, t_eval
     steps = 0
     t = t0
     while True:
-        solver = METHODS[method](fun, t, y, t1, rtol=rtol, atol=atol, max_step=max_step, first_step=first_step)
+        solver = solver_class(method)(fun, t, y, t1, rtol=rtol, atol=atol, max_step=max_step, first_step=first_step)
         while k < len(t_eval) and t_eval[k] <= t:
             ys[k] = y
             if outputs:

@@ -16,8 +16,6 @@ from collections import namedtuple
 
 import numpy as np
 from numba import njit
-from scipy.integrate import DOP853 as _SciDOP853
-from scipy.integrate import RK45 as _SciRK45
 
 from numba import typeof, types
 
@@ -38,12 +36,14 @@ METHODS = ("DOP853", "RK45")   # the pairs the compiled step loop offers (``tabl
 
 
 def tableau(method: str) -> Tableau:
+    """scipy's coefficients of the pair ``method`` (scipy.integrate imported here, at the first run)."""
+    from scipy.integrate import DOP853, RK45
     if method == "RK45":
-        s = _SciRK45
+        s = RK45
         return Tableau(_f(s.A), _f(s.B), _f(s.C), _f(s.E), np.zeros(0), np.zeros(0), _f(s.P), np.zeros((0, 0)),
                        np.zeros((0, 0)), np.zeros(0), np.array([s.n_stages, s.error_estimator_order, 0.0]))
     if method == "DOP853":
-        s = _SciDOP853
+        s = DOP853
         return Tableau(_f(s.A), _f(s.B), _f(s.C), np.zeros(0), _f(s.E3), _f(s.E5), np.zeros((0, 0)), _f(s.D),
                        _f(s.A_EXTRA), _f(s.C_EXTRA), np.array([s.n_stages, s.error_estimator_order, 1.0]))
     raise ValueError(method)
@@ -307,7 +307,9 @@ def _step_loop(m, w, forces, motion, evaluator, tab, t_eval, settings, out, stat
     return _done(stats, steps, nfev, OK, k)
 
 
-TABLEAU_TYPE = typeof(tableau("DOP853"))
+# the type of either pair's tableau (a test checks it against both): its arrays' dimensions, not
+# scipy's numbers, so that importing this module does not import scipy.integrate
+TABLEAU_TYPE = typeof(Tableau(*(np.zeros((0,) * n) for n in (2, 1, 1, 1, 1, 1, 2, 2, 2, 1, 1))))
 OUTPUTS_TYPE = typeof(make_outputs(1, 1, 1, 1, 1, 1, 1))
 F1, F2, I1 = types.float64[::1], types.float64[:, ::1], types.int64[::1]
 # explicit signatures: the force, motion and evaluation callbacks are typed as function pointers, so
