@@ -6,7 +6,9 @@ Each repeat, one after another: a fresh clone of this repository at REV (default
 commit once at the start), a new venv,
 ``pip install -c constraints.txt -e '.[test]'``, then ``python -m pytest -q`` (the README's command:
 pyproject's addopts leave the slow mark out and spread the rest over every core), on an empty cache
-folder (``XDG_CACHE_HOME`` a new folder, ``NUMBA_CACHE_DIR`` unset): the cold cache is included. Kept
+folder (``XDG_CACHE_HOME`` a new folder, ``NUMBA_CACHE_DIR`` unset): the cold cache is included; in a
+newcomer's environment (bench_first_command.newcomer_env: what this shell sets and a new Debian shell
+does not, PYTHONDONTWRITEBYTECODE among it, removed and named in each row). Kept
 per repeat: the wall and CPU seconds (the command and its children) of the install and of pytest,
 pytest's own summary line and counts, the load average before. Also kept, from the first clone: how
 many tests the default run and the slow mark collect (no test lost: each is in one or the other).
@@ -28,7 +30,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from benchmarks.bench_first_command import clone, timed  # noqa: E402
+from benchmarks.bench_first_command import clone, newcomer_env, timed  # noqa: E402
 from nsd_core.common.files import atomic_write_json  # noqa: E402
 from nsd_core.device.results import versions  # noqa: E402
 
@@ -67,13 +69,11 @@ def pytest_timed(tree: Path, env: dict) -> dict:
 def one_repeat(revision: str, work: Path, k: int) -> dict:
     """A fresh clone, install and test run; the clone and its cache are removed after."""
     tree = clone(revision, work / f"clone-{k}")
-    env = {key: v for key, v in os.environ.items() if key not in ("NUMBA_CACHE_DIR", "VIRTUAL_ENV", "PYTHONPATH",
-                                                                   "NSD_EVALUATOR")}
-    env.update(XDG_CACHE_HOME=str(work / f"cache-{k}"), MPLBACKEND="Agg")
+    env, removed = newcomer_env(work / f"cache-{k}")
     venv = timed([sys.executable, "-m", "venv", ".venv"], tree, env)
     pip = timed([".venv/bin/pip", "install", "-q", "-c", "constraints.txt", "-e", ".[test]"], tree, env)
     commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=tree, capture_output=True, text=True).stdout.strip()
-    row = {"repeat": k, "commit": commit, "install_wall_s": venv["wall_s"] + pip["wall_s"],
+    row = {"repeat": k, "commit": commit, "environment_removed": removed, "install_wall_s": venv["wall_s"] + pip["wall_s"],
            "install_cpu_s": venv["cpu_s"] + pip["cpu_s"], **pytest_timed(tree, env)}
     row["exit_code"] = row["exit_code"] or venv["exit_code"] or pip["exit_code"]
     row["total_wall_s"] = row["install_wall_s"] + row["pytest_wall_s"]
