@@ -73,8 +73,9 @@ def one_repeat(revision: str, work: Path, k: int) -> dict:
     venv = timed([sys.executable, "-m", "venv", ".venv"], tree, env)
     pip = timed([".venv/bin/pip", "install", "-q", "-c", "constraints.txt", "-e", ".[test]"], tree, env)
     commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=tree, capture_output=True, text=True).stdout.strip()
-    row = {"repeat": k, "commit": commit, "environment_removed": removed, "install_wall_s": venv["wall_s"] + pip["wall_s"],
-           "install_cpu_s": venv["cpu_s"] + pip["cpu_s"], **pytest_timed(tree, env)}
+    row = {"repeat": k, "commit": commit, "environment_removed": removed,
+           "install_wall_s": venv["wall_s"] + pip["wall_s"], "install_cpu_s": venv["cpu_s"] + pip["cpu_s"],
+           **pytest_timed(tree, env)}
     row["exit_code"] = row["exit_code"] or venv["exit_code"] or pip["exit_code"]
     row["total_wall_s"] = row["install_wall_s"] + row["pytest_wall_s"]
     if k == 0:

@@ -65,7 +65,7 @@ def integrate(system: SemiRecursiveSystem, ws: Workspace, y0: np.ndarray, t_eval
     check_tolerances(rtol, atol, max_step)
     t0, t1 = float(t_eval[0]), float(t_eval[-1])
     start = time.perf_counter()
-    nfev = [0]
+    nfev, solver_of = [0], solver_class(method)
 
     def fun(t, y):
         nfev[0] += 1
@@ -78,7 +78,7 @@ def integrate(system: SemiRecursiveSystem, ws: Workspace, y0: np.ndarray, t_eval
     steps = 0
     t = t0
     while True:
-        solver = solver_class(method)(fun, t, y, t1, rtol=rtol, atol=atol, max_step=max_step, first_step=first_step)
+        solver = solver_of(fun, t, y, t1, rtol=rtol, atol=atol, max_step=max_step, first_step=first_step)
         while k < len(t_eval) and t_eval[k] <= t:
             ys[k] = y
             if outputs:
