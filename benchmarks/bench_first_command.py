@@ -3,7 +3,7 @@
     python benchmarks/bench_first_command.py --revisions BEFORE,AFTER --out DIR
 
 For each revision: a fresh clone of this repository at that revision, then the README's first command
-(a new venv, ``pip install -c constraints.txt -e .``, ``nsd compare --convergence --report``) on an
+as that revision's README writes it (a new venv, its ``pip install``, ``nsd compare --convergence --report``) on an
 empty cache (``XDG_CACHE_HOME`` a new folder, ``NUMBA_CACHE_DIR`` unset), each phase timed; then the
 warm gate (``nsd compare`` again on what the cold run left, ``--warm`` times each). The report's own
 share is timed apart: ``nsd report`` on the cold run's folder, after the first command (not part of it). The revisions
@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import os
 import re
+import shlex
 import shutil
 import subprocess
 import sys
@@ -48,7 +49,7 @@ def timed(cmd: list[str], cwd: Path, env: dict) -> dict:
 
 # what this harness's own shell may set and a newcomer's does not: the package's variables, another venv, and
 # PYTHONDONTWRITEBYTECODE (set on this project's sandboxes), under which every process compiles the
-# project's own ~100 source files again (~0.4 s each; pip compiled the installed packages' already)
+# modules it imports again (the project's own ~100 files alone ~0.4 s; the README's install compiles none)
 NOT_A_NEWCOMERS = ("NUMBA_CACHE_DIR", "VIRTUAL_ENV", "PYTHONPATH", "NSD_EVALUATOR", "PYTHONDONTWRITEBYTECODE")
 
 
@@ -58,6 +59,16 @@ def newcomer_env(cache: Path) -> tuple[dict, list[str]]:
     env = {k: v for k, v in os.environ.items() if k not in NOT_A_NEWCOMERS}
     env.update(XDG_CACHE_HOME=str(cache), MPLBACKEND="Agg")
     return env, sorted(k for k in NOT_A_NEWCOMERS if k in os.environ)
+
+
+def readme_command(tree: Path, runs: str = "nsd compare") -> list[list[str]]:
+    """The README's quick-start command in ``tree`` that ``runs`` this ("nsd compare": the first; "pytest":
+    the tests), split at '&&' into its argv lists: the venv (run by this Python), the install, the run."""
+    readme = (tree / "README.md").read_text(encoding="utf-8")
+    line = next(ln for ln in readme.splitlines() if ln.startswith("python3 -m venv") and runs in ln)
+    parts = [shlex.split(p) for p in line.split("&&")]
+    parts[0][0] = sys.executable
+    return parts
 
 
 def clone(revision: str, where: Path) -> Path:
@@ -83,9 +94,8 @@ def main(argv=None) -> int:
         envs[r], removed = newcomer_env(work / f"cache-{r}")
     for r in revs:   # cold: the README's first command, phase by phase
         t = trees[r]
-        venv = timed([sys.executable, "-m", "venv", ".venv"], t, envs[r])
-        pip = timed([".venv/bin/pip", "install", "-q", "-c", "constraints.txt", "-e", "."], t, envs[r])
-        cmp_ = timed([".venv/bin/nsd", "compare", "--convergence", "--report", "--out", "out/compare"], t, envs[r])
+        venv_cmd, pip_cmd, compare_cmd = readme_command(t)
+        venv, pip, cmp_ = (timed(c, t, envs[r]) for c in (venv_cmd, pip_cmd, compare_cmd))
         total = venv["wall_s"] + pip["wall_s"] + cmp_["wall_s"]
         rep = timed([".venv/bin/nsd", "report", "--from", "out/compare", "--out", "out/report-again"], t, envs[r])
         rows += [{"revision": r, "phase": "venv", **venv}, {"revision": r, "phase": "install", **pip},

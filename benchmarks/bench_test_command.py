@@ -4,7 +4,7 @@
 
 Each repeat, one after another: a fresh clone of this repository at REV (default HEAD, resolved to its
 commit once at the start), a new venv,
-``pip install -c constraints.txt -e '.[test]'``, then ``python -m pytest -q`` (the README's command:
+the install as that revision's README writes it (``pip install ... -e '.[test]'``), then ``python -m pytest -q`` (the README's command:
 pyproject's addopts leave the slow mark out and spread the rest over every core), on an empty cache
 folder (``XDG_CACHE_HOME`` a new folder, ``NUMBA_CACHE_DIR`` unset): the cold cache is included; in a
 newcomer's environment (bench_first_command.newcomer_env: what this shell sets and a new Debian shell
@@ -30,7 +30,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from benchmarks.bench_first_command import clone, newcomer_env, timed  # noqa: E402
+from benchmarks.bench_first_command import clone, newcomer_env, readme_command, timed  # noqa: E402
 from nsd_core.common.files import atomic_write_json  # noqa: E402
 from nsd_core.device.results import versions  # noqa: E402
 
@@ -70,8 +70,8 @@ def one_repeat(revision: str, work: Path, k: int) -> dict:
     """A fresh clone, install and test run; the clone and its cache are removed after."""
     tree = clone(revision, work / f"clone-{k}")
     env, removed = newcomer_env(work / f"cache-{k}")
-    venv = timed([sys.executable, "-m", "venv", ".venv"], tree, env)
-    pip = timed([".venv/bin/pip", "install", "-q", "-c", "constraints.txt", "-e", ".[test]"], tree, env)
+    venv_cmd, pip_cmd, _ = readme_command(tree, "pytest")   # the install as that revision's README writes it
+    venv, pip = timed(venv_cmd, tree, env), timed(pip_cmd, tree, env)
     commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=tree, capture_output=True, text=True).stdout.strip()
     row = {"repeat": k, "commit": commit, "environment_removed": removed,
            "install_wall_s": venv["wall_s"] + pip["wall_s"], "install_cpu_s": venv["cpu_s"] + pip["cpu_s"],
