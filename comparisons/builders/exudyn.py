@@ -65,7 +65,7 @@ from exudyn.itemInterface import (LoadMassProportional, MarkerBodyMass, MarkerBo
 from exudyn.rigidBodyUtilities import RigidBodyInertia
 
 from comparisons.builders.exudyn_compiled import CompiledForces
-from comparisons.builders.exudyn_drive import DriveTable, offsets as _offsets
+from comparisons.builders.exudyn_drive import DriveTable, GroundTable, offsets as _offsets
 from comparisons.builders.exudyn_forces import LawStates, add_force
 from comparisons.builders.exudyn_frames import (AXIS_OF_DOF, constrained_axes, cross, frame_with_z, joint_coordinates,
                                                 joint_frame, law_axis, planar_normal)
@@ -131,20 +131,13 @@ class Build:
 
     def _ground_load(self, body: str):
         """-m a_g at the body's centre of mass (the excitation): a mass-proportional load, set to
-        -a_g(t) at the end of every step (``excite``); it starts at a_g(0), which the initial
-        accelerations see."""
+        -a_g(t) at the end of every step (exudyn_drive.GroundTable: generalized-alpha solves the equations
+        of motion at the step's end, its alpha averaging acting on the accelerations, not the loads, so
+        a load that depends on time alone is exact there, set once a step); it starts at a_g(0), which
+        the initial accelerations see."""
         marker = self.mbs.AddMarker(MarkerBodyMass(bodyNumber=self.obj[body]))
         return self.mbs.AddLoad(LoadMassProportional(markerNumber=marker,
                                                      loadVector=list(-self.excitation.acceleration(0.0))))
-
-    def excite(self, t: float) -> None:
-        """The excitation's load for the step ending at t. Generalized-alpha solves the equations of
-        motion at the step's end (its alpha averaging acts on the accelerations, not the loads), so a
-        load that depends on time alone is exact there, set once a step."""
-        if self.ground_loads:
-            a = list(-self.excitation.acceleration(t))
-            for ld in self.ground_loads:
-                self.mbs.SetLoadParameter(ld, "loadVector", a)
 
     def marker(self, body: str, point, frame=np.eye(3)):
         """A rigid marker at ``point`` of ``body`` (in the body's frame), axes ``frame`` (its columns
@@ -260,7 +253,10 @@ def _run(model: Model, s: dict, duration: float, dt_out: float) -> ModelRun:
 
     start_lambda, step = None, None
     drive = DriveTable(build, h, n_steps).set if build.driven else None
-    excite = build.excite if build.ground_loads else None
+    ground = GroundTable(build, h, n_steps) if build.ground_loads else None
+    excite = ground.set if ground is not None else None
+    if work is not None:
+        work.ground = ground
 
     def pre_step(mbs, t):
         """t is the END of the step (Exudyn's convention); the state is the converged one at t - h."""
@@ -268,7 +264,7 @@ def _run(model: Model, s: dict, duration: float, dt_out: float) -> ModelRun:
         n = counter[0]
         counter[0] = n + 1
         if excite is not None:
-            excite(t)
+            excite(n, t)
         if drive is not None:
             drive(n, t)
         if step is not None:   # the laws' commit, and the predicted forces: one compiled call
@@ -309,7 +305,7 @@ def _run(model: Model, s: dict, duration: float, dt_out: float) -> ModelRun:
     if sample.stateful:
         sample.commit()
     if work is not None:
-        work.step(duration)
+        work.step(duration, live=False)
     sample.record(t_out[-1])
     wall = time.perf_counter() - begin
     begin = time.perf_counter()

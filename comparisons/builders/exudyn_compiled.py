@@ -167,6 +167,25 @@ class CompiledForces:
                         self.F, self.I, self.W, x, xd, T)
         return xd, T
 
+    def values_reader(self, mbs):
+        """``values(mbs)`` as a closure of no arguments for the pre-step function (the work's powers at
+        every step): Exudyn's coordinate vectors read through views of its solver's own, as ``stepper``
+        reads them, into arrays kept between calls; the same compiled call on the same numbers."""
+        sd, CT = mbs.systemData, exu.ConfigurationType.Current
+        q_all, q_t_all = sd.GetODE2Coordinates(CT, False), sd.GetODE2Coordinates_t(CT, False)
+        ix, values, F, I, W = self.node_index(mbs), self.gen.values, self.F, self.I, self.W
+        q, q_t = np.empty(len(ix)), np.empty(len(ix))
+        take_q, take_q_t = q_all.take, q_t_all.take
+        ne = len(self.elements)
+        x, xd, T = np.empty(ne), np.empty(ne), np.empty(ne)
+
+        def read() -> tuple[np.ndarray, np.ndarray]:
+            take_q(ix, out=q)
+            take_q_t(ix, out=q_t)
+            values(q, q_t, F, I, W, x, xd, T)
+            return xd, T
+        return read
+
     def user_functions(self):
         """Exudyn's force and Jacobian user functions: plain closures around the compiled calls (the
         force function runs ~5 times a step: no attribute look-ups, Exudyn's lists as arrays)."""

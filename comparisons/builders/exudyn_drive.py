@@ -1,5 +1,7 @@
-"""The prescribed motions' joint offsets for comparisons.builders.exudyn: at one time (``offsets``) and,
-for the pre-step function, at every step's end time, computed a block of steps at a time (``DriveTable``).
+"""What the pre-step function of comparisons.builders.exudyn sets before each step, at every step's end
+time, computed a block of steps at a time: the prescribed motions' joint offsets (``offsets`` at one
+time, ``DriveTable``) and the excitation's loads -m a_g (``GroundTable``, whose accelerations the work of
+the excitation reads too).
 
 Exudyn's pre-step function gets the end time of step n (0-based) as (n + 1) * h, h = duration / steps;
 the table is computed at those times with each motion's ``table`` (nsd_core.model.description.
@@ -65,3 +67,38 @@ class DriveTable:
         set_parameter = self.build.mbs.SetObjectParameter
         for joint, rows in zip(self.joints, self.rows):
             set_parameter(joint, "offsetUserFunctionParameters", rows[i])
+
+
+class GroundTable:
+    """The excitation's a_g = (a_x, a_y, 0) at the end of every step of size h, ``steps`` in all (the
+    ground motion's series over a block of times: the same floats as Excitation.acceleration at each);
+    ``set(n, t)`` sets the ground loads (Build.ground_loads) to -a_g before step n, which ends at t."""
+
+    def __init__(self, build, h: float, steps: int):
+        self.build, self.h, self.steps = build, h, steps
+        self.first, self.times, self.rows = 0, [], []
+
+    def _fill(self, n: int) -> None:
+        """The block of steps from n on: a_g at their end times, as lists (what Exudyn's loads take)."""
+        times = np.arange(n + 1, min(n + BLOCK, self.steps) + 1) * self.h
+        self.first, self.times = n, times.tolist()
+        self.rows = self.build.excitation.accelerations(times).tolist()
+
+    def acceleration(self, t: float) -> list[float]:
+        """a_g(t) from the table when t is one of its times (the last block's), else at t itself."""
+        i = int(round(t / self.h)) - 1 - self.first
+        if 0 <= i < len(self.times) and self.times[i] == t:
+            return self.rows[i]
+        return self.build.excitation.acceleration(t).tolist()
+
+    def set(self, n: int, t: float) -> None:
+        """The loads for step n, which ends at t (Exudyn's time)."""
+        i = n - self.first
+        if not 0 <= i < len(self.times):
+            self._fill(n)
+            i = 0
+        a = self.rows[i] if self.times[i] == t else self.build.excitation.acceleration(t).tolist()
+        load = [-a[0], -a[1], -a[2]]
+        set_parameter = self.build.mbs.SetLoadParameter
+        for ld in self.build.ground_loads:
+            set_parameter(ld, "loadVector", load)

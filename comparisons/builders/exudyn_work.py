@@ -13,6 +13,7 @@ outputs read a force: exudyn_outputs.Sampler.law_value, the laws' committed stat
 """
 from __future__ import annotations
 
+import exudyn as exu
 import numpy as np
 
 from nsd_core.model.laws import PLANE, POINTS
@@ -36,8 +37,11 @@ class Work:
         self.velocity_index = None   # the nodes' velocity entries in Exudyn's ODE2 rates, once assembled
         self.work = np.zeros(len(self.outputs))
         self.power, self.t = None, 0.0
-        self.entries = None   # each work element's entry in the compiled elements (compiled_terms)
+        self.entries = None   # the work elements' entries in the compiled elements (compiled_terms)
         self.plan = None      # the outputs' indices by source (_plan)
+        self.ground = None    # the run's exudyn_drive.GroundTable (a_g at the steps' ends), set by the builder
+        self.rates = None     # during the solve: Exudyn's ODE2 rates (a view of its vector, read in place)
+        self.reader = None    # and the compiled values' reader on its vectors (CompiledForces.values_reader)
 
     def arguments(self):
         """Each work element's (x, x', committed state), read from the poses as its outputs are (the
@@ -51,41 +55,47 @@ class Work:
         P = self.sample.read(self.joints)
         return [None if f is None else (*law_arguments(b, P, self.sample.q, f), *state(f)) for f in self.elements]
 
-    def compiled_terms(self) -> list:
-        """The compiled paths' work elements' powers at the converged state: x' and the law's value at
-        the committed state of every element in one compiled call (CompiledForces.values), then per
-        output Q x' (a plane law's Q_x x' + Q_y y'; a points law's -T x'), the same arithmetic as
-        ``element_power``."""
+    def compiled_terms(self, live: bool) -> np.ndarray:
+        """The compiled paths' work elements' powers at the converged state, in ``_plan``'s order: x' and
+        the law's value at the committed state of every element in one compiled call (CompiledForces.
+        values, or during the solve its reader on Exudyn's own vectors), then per output Q x' (a plane
+        law's Q_x x' + Q_y y'; a points law's -T x'): ``element_power``'s arithmetic on arrays."""
         compiled = self.b.compiled
         if self.entries is None:
             at = {}
             for j, f in enumerate(compiled.elements):   # a plane law's first entry (x; y is the next)
                 at.setdefault(f.name, j)
-            self.entries = [None if f is None else at[f.name] for f in self.elements]
-        xd, T = (a.tolist() for a in compiled.values(self.b.mbs))   # Python floats: ~3x faster arithmetic here
-        out = []
-        for f, j in zip(self.elements, self.entries):
-            if f is None:
-                out.append(None)
-            elif f.law.acts_on == PLANE:
-                out.append(T[j] * xd[j] + T[j + 1] * xd[j + 1])
-            else:
-                out.append((-1.0 if f.law.acts_on == POINTS else 1.0) * T[j] * xd[j])
+            kept = [f for f in self.elements if f is not None]
+            self.entries = (np.array([at[f.name] for f in kept], dtype=np.int64),
+                            np.array([-1.0 if f.law.acts_on == POINTS else 1.0 for f in kept]),
+                            np.array([f.law.acts_on == PLANE for f in kept], dtype=bool))
+        j, sign, plane = self.entries
+        xd, T = self.reader() if live else compiled.values(self.b.mbs)
+        terms = T * xd
+        out = sign * terms[j]
+        out[plane] += terms[j[plane] + 1]
         return out
 
-    def powers(self, t: float) -> np.ndarray:
+    def powers(self, t: float, live: bool = False) -> np.ndarray:
+        """Every work output's power at the converged state at t (``live``: during the solve)."""
         b, out = self.b, np.zeros(len(self.outputs))
         if self.plan is None:
             self.plan = self._plan()
         elements, excitation, drives = self.plan
-        if elements:
-            terms = (self.compiled_terms() if b.compiled is not None else
-                     [None if a is None else element_power(f, a) for f, a in zip(self.elements, self.arguments())])
-            for k in elements:
-                out[k] = terms[k]
+        if live and self.rates is None:   # the first step: Exudyn's vectors as its solver holds them
+            self.rates = b.mbs.systemData.GetODE2Coordinates_t(exu.ConfigurationType.Current, False)
+            self.reader = b.compiled.values_reader(b.mbs) if b.compiled is not None else None
+        if len(elements):
+            if b.compiled is not None:
+                out[elements] = self.compiled_terms(live)
+            else:
+                for k, f, a in zip(range(len(self.elements)), self.elements, self.arguments()):
+                    if f is not None:
+                        out[k] = element_power(f, a)
         if excitation:
-            v = b.mbs.systemData.GetODE2Coordinates_t()[self.velocity_index]
-            p = -float(b.excitation.acceleration(t) @ (self.mass @ v))
+            rates = self.rates if live else b.mbs.systemData.GetODE2Coordinates_t()
+            a = np.array(self.ground.acceleration(t)) if self.ground is not None else b.excitation.acceleration(t)
+            p = -float(a @ (self.mass @ rates[self.velocity_index]))
             for k in excitation:
                 out[k] = p
         for k in drives:
@@ -96,7 +106,7 @@ class Work:
         """The outputs' indices by source, once (the pre-step runs every step): force elements,
         the excitation, the drives; and the nodes' velocity entries in Exudyn's ODE2 rates."""
         b = self.b
-        elements = [k for k, f in enumerate(self.elements) if f is not None]
+        elements = np.array([k for k, f in enumerate(self.elements) if f is not None], dtype=np.int64)
         excitation = [k for k, (o, f) in enumerate(zip(self.outputs, self.elements)) if f is None and o.source == "excitation"]
         drives = [k for k, (o, f) in enumerate(zip(self.outputs, self.elements)) if f is None and o.source != "excitation"]
         if excitation:
@@ -104,9 +114,10 @@ class Work:
                                             for body in b.model.bodies])
         return elements, excitation, drives
 
-    def step(self, t: float) -> None:
-        """The converged state at t: the trapezoid from the last one."""
-        now = self.powers(t)
+    def step(self, t: float, live: bool = True) -> None:
+        """The converged state at t: the trapezoid from the last one (``live``: from the pre-step
+        function, during the solve; False after it)."""
+        now = self.powers(t, live)
         if self.power is not None:
             self.work += 0.5 * (t - self.t) * (self.power + now)
         self.power, self.t = now, t

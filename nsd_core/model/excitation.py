@@ -38,6 +38,11 @@ class Excitation:
         a = self.motion.values_at(float(t))
         return np.array([a[4], a[5], 0.0])
 
+    def accelerations(self, times) -> np.ndarray:
+        """a_g at every time of ``times``: one row (a_x, a_y, 0) each, the floats of ``acceleration``."""
+        a = self.motion(np.asarray(times, dtype=float))[2]
+        return np.column_stack([a, np.zeros(len(a))])
+
     def gravity(self, g, t: float) -> np.ndarray:
         """The uniform field every body feels in the ground's frame: g - a_g(t) [m/s^2]."""
         return np.asarray(g, dtype=float) - self.acceleration(t)
