@@ -40,28 +40,42 @@ def offset_rows(slots: dict, times: np.ndarray, J: np.ndarray | None) -> list[li
     return rows
 
 
-class DriveTable:
-    """The driven joints' offsets (Build.driven: (joint, slots, J)) at the end of every step of size h,
-    ``steps`` in all, set in Exudyn by ``set(n, t)`` before step n."""
+class _StepTable:
+    """Rows computed at the end times of a block of steps of size h (``steps`` in all), a block at a
+    time: ``_rows(times)`` gives them; ``_index(n, t)`` is step n's row, or None when Exudyn's time t
+    is not the table's (another solver's clock: the caller computes at t itself)."""
 
     def __init__(self, build, h: float, steps: int):
         self.build, self.h, self.steps = build, h, steps
-        self.joints = [joint for joint, _, _ in build.driven]
         self.first, self.times, self.rows = 0, [], []
 
-    def _fill(self, n: int) -> None:
-        """The block of steps from n on."""
-        times = np.arange(n + 1, min(n + BLOCK, self.steps) + 1) * self.h
-        self.first, self.times = n, times.tolist()
-        self.rows = [offset_rows(slots, times, J) for _, slots, J in self.build.driven]
+    def _rows(self, times: np.ndarray) -> list:
+        raise NotImplementedError
+
+    def _index(self, n: int, t: float) -> int | None:
+        i = n - self.first
+        if not 0 <= i < len(self.times):   # the block of steps from n on
+            times = np.arange(n + 1, min(n + BLOCK, self.steps) + 1) * self.h
+            self.first, self.times, self.rows = n, times.tolist(), self._rows(times)
+            i = 0
+        return i if self.times[i] == t else None
+
+
+class DriveTable(_StepTable):
+    """The driven joints' offsets (Build.driven: (joint, slots, J)) at the end of every step, set in
+    Exudyn by ``set(n, t)`` before step n."""
+
+    def __init__(self, build, h: float, steps: int):
+        super().__init__(build, h, steps)
+        self.joints = [joint for joint, _, _ in build.driven]
+
+    def _rows(self, times: np.ndarray) -> list:
+        return [offset_rows(slots, times, J) for _, slots, J in self.build.driven]
 
     def set(self, n: int, t: float) -> None:
         """The offsets for step n, which ends at t (Exudyn's time)."""
-        i = n - self.first
-        if not 0 <= i < len(self.times):
-            self._fill(n)
-            i = 0
-        if self.times[i] != t:   # not the table's time: the motions at t itself
+        i = self._index(n, t)
+        if i is None:   # not the table's time: the motions at t itself
             self.build.drive(t)
             return
         set_parameter = self.build.mbs.SetObjectParameter
@@ -69,20 +83,13 @@ class DriveTable:
             set_parameter(joint, "offsetUserFunctionParameters", rows[i])
 
 
-class GroundTable:
-    """The excitation's a_g = (a_x, a_y, 0) at the end of every step of size h, ``steps`` in all (the
-    ground motion's series over a block of times: the same floats as Excitation.acceleration at each);
-    ``set(n, t)`` sets the ground loads (Build.ground_loads) to -a_g before step n, which ends at t."""
+class GroundTable(_StepTable):
+    """The excitation's a_g = (a_x, a_y, 0) at the end of every step (the ground motion's series over a
+    block of times: the same floats as Excitation.acceleration at each); ``set(n, t)`` sets the ground
+    loads (Build.ground_loads) to -a_g before step n, which ends at t."""
 
-    def __init__(self, build, h: float, steps: int):
-        self.build, self.h, self.steps = build, h, steps
-        self.first, self.times, self.rows = 0, [], []
-
-    def _fill(self, n: int) -> None:
-        """The block of steps from n on: a_g at their end times, as lists (what Exudyn's loads take)."""
-        times = np.arange(n + 1, min(n + BLOCK, self.steps) + 1) * self.h
-        self.first, self.times = n, times.tolist()
-        self.rows = self.build.excitation.accelerations(times).tolist()
+    def _rows(self, times: np.ndarray) -> list:
+        return self.build.excitation.accelerations(times).tolist()   # lists: what Exudyn's loads take
 
     def acceleration(self, t: float) -> list[float]:
         """a_g(t) from the table when t is one of its times (the last block's), else at t itself."""
@@ -93,11 +100,8 @@ class GroundTable:
 
     def set(self, n: int, t: float) -> None:
         """The loads for step n, which ends at t (Exudyn's time)."""
-        i = n - self.first
-        if not 0 <= i < len(self.times):
-            self._fill(n)
-            i = 0
-        a = self.rows[i] if self.times[i] == t else self.build.excitation.acceleration(t).tolist()
+        i = self._index(n, t)
+        a = self.rows[i] if i is not None else self.build.excitation.acceleration(t).tolist()
         load = [-a[0], -a[1], -a[2]]
         set_parameter = self.build.mbs.SetLoadParameter
         for ld in self.build.ground_loads:

@@ -89,7 +89,7 @@ class Work:
             if b.compiled is not None:
                 out[elements] = self.compiled_terms(live)
             else:
-                for k, f, a in zip(range(len(self.elements)), self.elements, self.arguments()):
+                for k, (f, a) in enumerate(zip(self.elements, self.arguments())):
                     if f is not None:
                         out[k] = element_power(f, a)
         if excitation:
