@@ -110,8 +110,6 @@ def _dispatch_source(laws) -> list[str]:
 def _state_source() -> list[str]:
     """``_frames``, ``_scratch`` (the work arrays) and ``_state``: every element's kinematics
     (exudyn_kernels.arguments)."""
-    def block(name, rows):
-        return f"F[o_{name}:o_{name} + 3 * {rows}].reshape(({rows}, 3))"
     return [
         "@njit(cache=True)",
         "def _frames(I):",
@@ -133,16 +131,12 @@ def _state_source() -> list[str]:
         "", "",
         "@njit(cache=True)",
         f"def _state(F, I, W, f, q, q_t, {SCRATCH}):",
-        _head("nb", "npts", "nj"),
-        _head("pa", "pb", "e", "jax", "jx", "jy", "jpos", "jorig", prefix="o_"),
-        _head("ia", "ib", "jc", "jp", "turn", prefix="o_"),
-        "    ia, ib = I[o_ia:o_ia + npts], I[o_ib:o_ib + npts]",
-        "    jc, jp = I[o_jc:o_jc + nj], I[o_jp:o_jp + nj]",
-        "    turn = I[o_turn:o_turn + nj] != 0",
-        f"    arguments(q, q_t, F[0:7 * nb], ia, {block('pa', 'npts')}, ib, {block('pb', 'npts')}, {block('e', 'npts')}, "
-        "jc, jp, " + ", ".join(block(k, "nj") for k in ("jax", "jx", "jy", "jpos", "jorig"))
-        + ", turn, W[0:nj], R, G, r, v, w, x, xd, N, S)",
-        "    return ia, ib, jc, jp, turn",
+        "    # L: the counts and the blocks' offsets exudyn_kernels.arguments reads F and I at",
+        _head("npts", "nj"),
+        _head("pa", "pb", "e", "jax", "jx", "jy", "jpos", "jorig", "ia", "ib", "jc", "jp", "turn", prefix="o_"),
+        "    L = (npts, nj, o_pa, o_pb, o_e, o_jax, o_jx, o_jy, o_jpos, o_jorig, o_ia, o_ib, o_jc, o_jp, o_turn)",
+        "    arguments(q, q_t, F, I, W, L, R, G, r, v, w, x, xd, N, S)",
+        "    return L",
         "", ""]
 
 
@@ -188,9 +182,9 @@ def _evaluate_source() -> list[str]:
     return [
         "@njit(cache=True)",
         f"def _evaluate(q, q_t, F, I, W, f, {SCRATCH}):",
-        f"    ia, ib, jc, jp, turn = _state(F, I, W, f, q, q_t, {SCRATCH})",
+        f"    L = _state(F, I, W, f, q, q_t, {SCRATCH})",
         "    _laws(F, I, W, x, xd, T)",
-        "    forces(T, ia, ib, jc, jp, turn, R, G, r, N, S, f)",
+        "    forces(T, I, L, R, G, r, N, S, f)",
         "    return f",
         "", "",
         "@njit(cache=True)",

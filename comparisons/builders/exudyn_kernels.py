@@ -37,138 +37,133 @@ def _poses(q, q_t, ref, R, G, r, v, w):
 
 
 @njit(cache=True)
-def _mv(A, x):
-    return np.array([A[0, 0] * x[0] + A[0, 1] * x[1] + A[0, 2] * x[2], A[1, 0] * x[0] + A[1, 1] * x[1] + A[1, 2] * x[2],
-                     A[2, 0] * x[0] + A[2, 1] * x[1] + A[2, 2] * x[2]])
+def arguments(q, q_t, F, I, W, L, R, G, r, v, w, x, xd, N, S):
+    """(x, x') of every element: points elements first (distance, or offset along e when e is non-zero),
+    then joint laws (a slide along jax in the parent's frame, or a turn about it measured from jx
+    towards jy, continuous from the last call's angle, W[m]). Keeps each element's unit vector N and
+    the arms and points S (points: arm a, arm b; joints: the child's origin and its arm) for ``forces``.
 
-
-@njit(cache=True)
-def _dot(a, b):
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-@njit(cache=True)
-def _cross(a, b):
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
-
-
-@njit(cache=True)
-def _point(i, p, R, r, v, w, out):
-    """World position, arm from the centre of mass and velocity of local point p of body i (-1: the
-    ground, p in the world) into out[0:3], out[3:6], out[6:9]."""
-    if i < 0:
-        for k in range(3):
-            out[k], out[3 + k], out[6 + k] = p[k], 0.0, 0.0
-        return
-    for k in range(3):
-        out[3 + k] = R[i, k, 0] * p[0] + R[i, k, 1] * p[1] + R[i, k, 2] * p[2]
-    s0, s1, s2 = out[3], out[4], out[5]
-    out[0], out[1], out[2] = r[i, 0] + s0, r[i, 1] + s1, r[i, 2] + s2
-    out[6] = v[i, 0] + w[i, 1] * s2 - w[i, 2] * s1
-    out[7] = v[i, 1] + w[i, 2] * s0 - w[i, 0] * s2
-    out[8] = v[i, 2] + w[i, 0] * s1 - w[i, 1] * s0
-
-
-@njit(cache=True)
-def _load(f, G, i, c, F, j, S, k, m):
-    """Force c F[j] at world arm S[k, m] of body i onto the generalized forces f (nothing for the
-    ground); scalar arithmetic: no array is allocated (it runs ~10 times a Newton iteration)."""
-    if i < 0:
-        return
-    o = 7 * i
-    Fx, Fy, Fz = c * F[j, 0], c * F[j, 1], c * F[j, 2]
-    sx, sy, sz = S[k, m, 0], S[k, m, 1], S[k, m, 2]
-    tx, ty, tz = sy * Fz - sz * Fy, sz * Fx - sx * Fz, sx * Fy - sy * Fx
-    f[o], f[o + 1], f[o + 2] = f[o] + Fx, f[o + 1] + Fy, f[o + 2] + Fz
-    for n in range(4):
-        f[o + 3 + n] += G[i, 0, n] * tx + G[i, 1, n] * ty + G[i, 2, n] * tz
-
-
-@njit(cache=True)
-def _torque(f, G, i, c, t, j):
-    if i >= 0:
-        for n in range(4):
-            f[7 * i + 3 + n] += c * (G[i, 0, n] * t[j, 0] + G[i, 1, n] * t[j, 1] + G[i, 2, n] * t[j, 2])
-
-
-@njit(cache=True)
-def arguments(q, q_t, ref, ia, pa, ib, pb, e, jc, jp, jax, jx, jy, jpos, jorig, turn, last, R, G, r, v, w, x, xd, N, S):
-    """(x, x') of every element: points elements first (distance, or offset along e[j] when e[j] is
-    non-zero), then joint laws (a slide along jax in the parent's frame, or a turn about it measured
-    from jx towards jy, continuous from ``last``). Keeps each element's unit vector N and the arms and
-    points S (points: arm a, arm b; joints: the child's origin and its arm) for ``forces``."""
-    _poses(q, q_t, ref, R, G, r, v, w)
-    a, b = np.empty(9), np.empty(9)
-    npts = ia.shape[0]
-    for j in range(npts):
-        _point(ia[j], pa[j], R, r, v, w, a)
-        _point(ib[j], pb[j], R, r, v, w, b)
-        d0, d1, d2 = a[0] - b[0], a[1] - b[1], a[2] - b[2]
-        u0, u1, u2 = a[6] - b[6], a[7] - b[7], a[8] - b[8]
-        if e[j, 0] != 0.0 or e[j, 1] != 0.0 or e[j, 2] != 0.0:
-            N[j, 0], N[j, 1], N[j, 2] = e[j, 0], e[j, 1], e[j, 2]
-            x[j] = d0 * e[j, 0] + d1 * e[j, 1] + d2 * e[j, 2]
-        else:
-            L = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-            x[j] = L
-            if L > 0.0:
-                N[j, 0], N[j, 1], N[j, 2] = d0 / L, d1 / L, d2 / L
-            else:   # the points coincide (a stop at rest): no direction, no force
-                N[j, 0], N[j, 1], N[j, 2] = 0.0, 0.0, 0.0
-        xd[j] = u0 * N[j, 0] + u1 * N[j, 1] + u2 * N[j, 2]
-        for k in range(3):
-            S[j, 0, k], S[j, 1, k] = a[3 + k], b[3 + k]
-    for m in range(jc.shape[0]):
-        j, c, p = npts + m, jc[m], jp[m]
-        _point(c, jorig[m], R, r, v, w, a)        # the child's frame origin: world point, arm, velocity
+    The model's numbers are read in place from F (its first block the bodies' reference coordinates,
+    then 3 floats an element in the blocks at L's offsets) and I (the elements' bodies, turn flags),
+    L = (npts, nj, pa, pb, e, jax, jx, jy, jpos, jorig, ia, ib, jc, jp, turn). One loop, no helper
+    taking arrays, no view: numba counts references to every array a call or a view takes, each count
+    an atomic operation that cost more than this arithmetic (~240 an evaluation of the device, 2/3 of
+    its time). The products and sums are in the order of a matrix times a vector."""
+    npts, nj, o_pa, o_pb, o_e, o_jax, o_jx, o_jy, o_jpos, o_jorig, o_ia, o_ib, o_jc, o_jp, o_turn = L
+    _poses(q, q_t, F, R, G, r, v, w)
+    P = np.empty((2, 9))   # an element's two ends (a joint's: the child's origin): world point, arm, velocity
+    V = np.empty((5, 3))   # a joint's axis, x and y directions, position (in the world) and the child's x
+    for j in range(npts + nj):
+        m = j - npts
+        for end in range(2 if m < 0 else 1):
+            if m < 0:
+                i, o = (I[o_ia + j], o_pa + 3 * j) if end == 0 else (I[o_ib + j], o_pb + 3 * j)
+            else:
+                i, o = I[o_jc + m], o_jorig + 3 * m
+            if i < 0:   # the ground: the point is in the world
+                for k in range(3):
+                    P[end, k], P[end, 3 + k], P[end, 6 + k] = F[o + k], 0.0, 0.0
+                continue
+            for k in range(3):
+                P[end, 3 + k] = R[i, k, 0] * F[o] + R[i, k, 1] * F[o + 1] + R[i, k, 2] * F[o + 2]
+            s0, s1, s2 = P[end, 3], P[end, 4], P[end, 5]
+            P[end, 0], P[end, 1], P[end, 2] = r[i, 0] + s0, r[i, 1] + s1, r[i, 2] + s2
+            P[end, 6] = v[i, 0] + w[i, 1] * s2 - w[i, 2] * s1
+            P[end, 7] = v[i, 1] + w[i, 2] * s0 - w[i, 0] * s2
+            P[end, 8] = v[i, 2] + w[i, 0] * s1 - w[i, 1] * s0
+        if m < 0:
+            d0, d1, d2 = P[0, 0] - P[1, 0], P[0, 1] - P[1, 1], P[0, 2] - P[1, 2]
+            u0, u1, u2 = P[0, 6] - P[1, 6], P[0, 7] - P[1, 7], P[0, 8] - P[1, 8]
+            e0, e1, e2 = F[o_e + 3 * j], F[o_e + 3 * j + 1], F[o_e + 3 * j + 2]
+            if e0 != 0.0 or e1 != 0.0 or e2 != 0.0:
+                N[j, 0], N[j, 1], N[j, 2] = e0, e1, e2
+                x[j] = d0 * e0 + d1 * e1 + d2 * e2
+            else:
+                length = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+                x[j] = length
+                if length > 0.0:
+                    N[j, 0], N[j, 1], N[j, 2] = d0 / length, d1 / length, d2 / length
+                else:   # the points coincide (a stop at rest): no direction, no force
+                    N[j, 0], N[j, 1], N[j, 2] = 0.0, 0.0, 0.0
+            xd[j] = u0 * N[j, 0] + u1 * N[j, 1] + u2 * N[j, 2]
+            for k in range(3):
+                S[j, 0, k], S[j, 1, k] = P[0, 3 + k], P[1, 3 + k]
+            continue
+        c, p, turn = I[o_jc + m], I[o_jp + m], I[o_turn + m] != 0
+        # the joint's directions and position in the world (turned by the parent; the ground's are), and
+        # the child's x direction (a turn's angle)
+        for t in range(5):
+            o, i = (o_jax, o_jx, o_jy, o_jpos, o_jx)[t] + 3 * m, p if t < 4 else c
+            if t == 4 and not turn:
+                break
+            for k in range(3):
+                V[t, k] = F[o + k] if i < 0 else R[i, k, 0] * F[o] + R[i, k, 1] * F[o + 1] + R[i, k, 2] * F[o + 2]
         if p < 0:
-            ax, bx, by = jax[m].copy(), jx[m].copy(), jy[m].copy()
-            rel = a[0:3] - jpos[m]
-            vrel = a[6:9].copy()
-            wrel = w[c].copy()
+            rel0, rel1, rel2 = P[0, 0] - V[3, 0], P[0, 1] - V[3, 1], P[0, 2] - V[3, 2]
+            vr0, vr1, vr2 = P[0, 6], P[0, 7], P[0, 8]
+            wr0, wr1, wr2 = w[c, 0], w[c, 1], w[c, 2]
         else:
-            ax, bx, by = _mv(R[p], jax[m]), _mv(R[p], jx[m]), _mv(R[p], jy[m])
-            rel = a[0:3] - (r[p] + _mv(R[p], jpos[m]))
+            rel0, rel1, rel2 = P[0, 0] - (r[p, 0] + V[3, 0]), P[0, 1] - (r[p, 1] + V[3, 1]), P[0, 2] - (r[p, 2] + V[3, 2])
             # the rate of ax . rel in the turning parent's frame: the child origin's velocity less that of the
             # parent's material point under it (ax turns with the parent, which cancels rel's own turn)
-            vrel = a[6:9] - (v[p] + _cross(w[p], a[0:3] - r[p]))
-            wrel = w[c] - w[p]
-        N[j, 0], N[j, 1], N[j, 2] = ax[0], ax[1], ax[2]   # not N[j] = ax: its shape check's error path compiles ~1.5 s
-        if turn[m]:
-            cx = _mv(R[c], jx[m])
-            raw = math.atan2(_dot(by, cx), _dot(bx, cx))
+            d0, d1, d2 = P[0, 0] - r[p, 0], P[0, 1] - r[p, 1], P[0, 2] - r[p, 2]
+            vr0 = P[0, 6] - (v[p, 0] + (w[p, 1] * d2 - w[p, 2] * d1))
+            vr1 = P[0, 7] - (v[p, 1] + (w[p, 2] * d0 - w[p, 0] * d2))
+            vr2 = P[0, 8] - (v[p, 2] + (w[p, 0] * d1 - w[p, 1] * d0))
+            wr0, wr1, wr2 = w[c, 0] - w[p, 0], w[c, 1] - w[p, 1], w[c, 2] - w[p, 2]
+        a0, a1, a2 = V[0, 0], V[0, 1], V[0, 2]
+        N[j, 0], N[j, 1], N[j, 2] = a0, a1, a2
+        if turn:
+            raw = math.atan2(V[2, 0] * V[4, 0] + V[2, 1] * V[4, 1] + V[2, 2] * V[4, 2],
+                             V[1, 0] * V[4, 0] + V[1, 1] * V[4, 1] + V[1, 2] * V[4, 2])
             # continuous across +-pi: the turn nearest the last call's (a step turns far less than pi)
-            x[j] = last[m] + (raw - last[m] + math.pi) % (2.0 * math.pi) - math.pi
-            last[m] = x[j]
-            xd[j] = _dot(ax, wrel)
+            x[j] = W[m] + (raw - W[m] + math.pi) % (2.0 * math.pi) - math.pi
+            W[m] = x[j]
+            xd[j] = a0 * wr0 + a1 * wr1 + a2 * wr2
         else:
-            x[j] = _dot(ax, rel)
-            xd[j] = _dot(ax, vrel)
+            x[j] = a0 * rel0 + a1 * rel1 + a2 * rel2
+            xd[j] = a0 * vr0 + a1 * vr1 + a2 * vr2
         for k in range(3):
-            S[j, 0, k], S[j, 1, k] = a[k], a[3 + k]
+            S[j, 0, k], S[j, 1, k] = P[0, k], P[0, 3 + k]
 
 
 @njit(cache=True)
-def forces(T, ia, ib, jc, jp, turn, R, G, r, N, S, f):
+def forces(T, I, L, R, G, r, N, S, f):
     """Generalized forces f of the elements' values T: a points element's tension pulls a by -T N at
     its arm and b by +T N; a joint law's Q drives its coordinate up: Q N on the child at its origin
-    (or a torque Q N) and the opposite on the parent, there."""
+    (or a torque Q N) and the opposite on the parent, there. Scalar arithmetic, written out here: a
+    helper called with the arrays cost a reference count update per array and call, each an atomic
+    operation (~140 an evaluation of the device, more than the loads' arithmetic). L: ``arguments``'."""
+    npts, nj, o_ia, o_ib, o_jc, o_jp, o_turn = L[0], L[1], L[10], L[11], L[12], L[13], L[14]
     f[:] = 0.0
-    npts = ia.shape[0]
-    for j in range(npts):
-        _load(f, G, ia[j], -T[j], N, j, S, j, 0)
-        _load(f, G, ib[j], T[j], N, j, S, j, 1)
-    for m in range(jc.shape[0]):
-        j, c, p = npts + m, jc[m], jp[m]
-        if turn[m]:
-            _torque(f, G, c, T[j], N, j)
-            _torque(f, G, p, -T[j], N, j)
-        else:
-            _load(f, G, c, T[j], N, j, S, j, 1)
-            if p >= 0:   # the parent is pushed at the same world point: its arm from its own centre
-                for k in range(3):
-                    S[j, 0, k] -= r[p, k]
-                _load(f, G, p, -T[j], N, j, S, j, 0)
+    for j in range(npts + nj):
+        m = j - npts
+        if m >= 0 and I[o_turn + m] != 0:
+            for side in range(2):
+                i, c = (I[o_jc + m], T[j]) if side == 0 else (I[o_jp + m], -T[j])
+                if i >= 0:
+                    for n in range(4):
+                        f[7 * i + 3 + n] += c * (G[i, 0, n] * N[j, 0] + G[i, 1, n] * N[j, 1] + G[i, 2, n] * N[j, 2])
+            continue
+        for side in range(2):
+            if m < 0:   # a points element: -T N on body a at arm S[j, 0], +T N on body b at arm S[j, 1]
+                i, c, k = (I[o_ia + j], -T[j], 0) if side == 0 else (I[o_ib + j], T[j], 1)
+            elif side == 0:   # a slide: Q N on the child at its origin (arm S[j, 1])
+                i, c, k = I[o_jc + m], T[j], 1
+            else:   # and -Q N on the parent at the same world point: its arm from its own centre
+                i, c, k = I[o_jp + m], -T[j], 0
+                if i >= 0:
+                    for d in range(3):
+                        S[j, 0, d] -= r[i, d]
+            if i < 0:
+                continue
+            o = 7 * i
+            Fx, Fy, Fz = c * N[j, 0], c * N[j, 1], c * N[j, 2]
+            sx, sy, sz = S[j, k, 0], S[j, k, 1], S[j, k, 2]
+            tx, ty, tz = sy * Fz - sz * Fy, sz * Fx - sx * Fz, sx * Fy - sy * Fx
+            f[o], f[o + 1], f[o + 2] = f[o] + Fx, f[o + 1] + Fy, f[o + 2] + Fz
+            for n in range(4):
+                f[o + 3 + n] += G[i, 0, n] * tx + G[i, 1, n] * ty + G[i, 2, n] * tz
 
 
 @njit(cache=True)
