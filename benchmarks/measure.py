@@ -57,6 +57,9 @@ MEASUREMENTS = {
     # the peers' gate runs with subnormal numbers flushed (as shipped) and kept, side by side
     "bench_subnormals": (PY + ["benchmarks/bench_subnormals.py", "--repeats", "3", "--out", "OUT"],
                          "bench_subnormals.json", "json"),
+    # Exudyn's compiled forces, revision against revision (the kernels' time and the runs that spend it)
+    "bench_exudyn_forces": (PY + ["benchmarks/bench_exudyn_forces.py", "--revisions", "984438c,87c4a8e", "--repeats",
+                                  "3", "--out", "OUT"], "bench_exudyn_forces.json", "json"),
     "tables": (NSD + ["tables", "--out", "OUT"], "tables.csv", "csv"),
     # every mechanism description in models/ through nsd compare --model, in every engine
     "bench_models": (PY + ["benchmarks/bench_models.py", "--out", "OUT"], "bench_models.json", "json"),
