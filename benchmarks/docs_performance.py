@@ -283,3 +283,19 @@ def bench_subnormals() -> str:
     return (provenance(rec) + "\n"
             + table(["peer", "case", "CPU s, kept", "CPU s, flushed", "kept / flushed [-]",
                      "subnormal outputs, kept", "subnormal outputs, flushed", "largest difference [-]"], rows))
+
+
+def bench_exudyn_forces() -> str:
+    """Exudyn's compiled forces, revision against revision (benchmarks/bench_exudyn_forces.py)."""
+    rec = load("bench_exudyn_forces")
+    d = rec["data"]
+    labels = list(d["summary"][0]["runs_s"])
+    rows = [[f"`{s['revision']}` ({s['commit'][:7]})", g(s["evaluate_us"]), g(s["advance_us"]),
+             *[plain(s["runs_s"][k]) for k in labels]] for s in d["summary"]]
+    same = ", ".join(f"{k}: {'yes' if v else 'NO'}" for k, v in d["same_numbers"].items())
+    return (provenance(rec) + "\n"
+            + f"Median of {d['repeats']} fresh processes a revision, alternating; the calls from a compiled loop of "
+              f"{d['calls']} (numba's dispatch from Python excluded). Every output the same bit for bit in the two "
+              f"revisions: {same}.\n\n"
+            + table(["revision", "evaluate, us a call", "advance (pre-step), us a call",
+                     *[f"{k}, run s" for k in labels]], rows))
