@@ -134,8 +134,16 @@ def main(argv: list[str] | None = None) -> int:
     if not a.out:
         ap.error("--out is required")
     revs = [r.strip() for r in a.revisions.split(",") if r.strip()]
-    if len(revs) != 2 or a.repeats < 1:
-        print(f"--revisions = {a.revisions!r}: two revisions, comma-separated; --repeats >= 1", file=sys.stderr)
+    if len(revs) != 2:
+        print(f"--revisions = {a.revisions!r}: two git revisions, comma-separated", file=sys.stderr)
+        return 2
+    for r in revs:
+        if subprocess.run(["git", "rev-parse", "--verify", "--quiet", f"{r}^{{commit}}"], cwd=ROOT,
+                          capture_output=True).returncode != 0:
+            print(f"--revisions: {r!r} is not a commit of this repository", file=sys.stderr)
+            return 2
+    if a.repeats < 1:
+        print(f"--repeats = {a.repeats}: must be >= 1", file=sys.stderr)
         return 2
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
