@@ -375,7 +375,7 @@ def assemble(m, w, t, zf):
     return _assemble(m, w, t, zf)
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline="always")
 def _state_rates(y, m, w, dydt):
     """dy/dt = [z'_f, z''_f, extra rates] (the layout of compiled_model.split_state) from an evaluation."""
     nf = m.free.shape[0]

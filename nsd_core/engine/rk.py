@@ -56,7 +56,10 @@ def make_outputs(n_samples: int, ny: int, n: int, nd: int, npr: int, ne: int, ke
                    np.zeros(n_samples), np.zeros((n_samples, ne)), np.zeros(keep_steps))
 
 
-@njit(cache=True, _nrt=False)
+# The step loop's helpers below are inlined into it by numba (inline="always"): compiled as functions of
+# their own, each would be a library whose machine code numba generates twice, alone and again linked
+# into the loop (docs/compilation.md). The loop's arithmetic is the same, its outputs bit for bit.
+@njit(cache=True, _nrt=False, inline="always")
 def _rms(v):
     acc = 0.0
     for x in v:
@@ -64,7 +67,7 @@ def _rms(v):
     return math.sqrt(acc / v.shape[0])
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline="always")
 def _record(k, t, y, m, w, forces, motion, evaluator, out):
     code = evaluator(t, y, m, w, forces, motion, True)
     copy_into(out.y[k], y)
@@ -81,7 +84,7 @@ def _record(k, t, y, m, w, forces, motion, evaluator, out):
     return code
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline="always")
 def _error_norm(tab, K, h, scale, err, err3):
     ny = scale.shape[0]
     ns = int(tab.info[0])
@@ -105,7 +108,7 @@ def _error_norm(tab, K, h, scale, err, err3):
     return abs(h) * e5 / math.sqrt((e5 + 0.01 * e3) * ny)
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline="always")
 def _stage_state(K, coeffs, s, h, y, out):
     for i in range(y.shape[0]):
         acc = 0.0
@@ -114,7 +117,7 @@ def _stage_state(K, coeffs, s, h, y, out):
         out[i] = y[i] + acc * h
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline="always")
 def _dense(tab, K, F, t_old, h, y_old, y_new, f_new, tq, out):
     """Value of the step's interpolant at tq into out (F prepared by _prepare_dense for DOP853)."""
     x = (tq - t_old) / h
@@ -140,14 +143,14 @@ def _dense(tab, K, F, t_old, h, y_old, y_new, f_new, tq, out):
         out[i] = acc + y_old[i]
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline="always")
 def _done(stats, steps, nfev, code, k):
     """The loop's counts (accepted steps, evaluations, status, samples done) into stats; returns the status."""
     stats[0], stats[1], stats[2], stats[3] = steps, nfev, code, k
     return code
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline="always")
 def _first_step(m, w, forces, motion, evaluator, tab, t0, t1, y, f, settings, vectors):
     """scipy's select_initial_step from (t0, y) and f = f(t0, y): returns (status, first step size)."""
     f_new, ys, scale, err, err3 = vectors[3], vectors[4], vectors[5], vectors[6], vectors[7]
@@ -174,7 +177,7 @@ def _first_step(m, w, forces, motion, evaluator, tab, t0, t1, y, f, settings, ve
     return OK, min(100.0 * h0, h1, t1 - t0, max_step)
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline="always")
 def _advance(m, w, forces, motion, evaluator, tab, t, t1, h_abs, min_step, y, f, K, settings, vectors):
     """Trial steps from (t, y) until one passes the error test (scipy's step-size control): returns
     (status, t_new, h, the next step size, evaluations made); the accepted step's stages in K, y_new, f_new."""
@@ -215,7 +218,7 @@ def _advance(m, w, forces, motion, evaluator, tab, t, t1, h_abs, min_step, y, f,
         rejected = True
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline="always")
 def _prepare_dense(m, w, forces, motion, evaluator, tab, t, h, y, y_new, f_new, K, F, ys):
     """DOP853's three extra stages and its interpolant's coefficients F for the step (t, h): (status, evaluations)."""
     ns, nk = int(tab.info[0]), K.shape[0]
@@ -237,7 +240,7 @@ def _prepare_dense(m, w, forces, motion, evaluator, tab, t, h, y, y_new, f_new, 
     return OK, nk - ns - 1
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline="always")
 def _record_step(k, t, h, t_new, t_eval, tab, K, F, y, y_new, f_new, yq, m, w, forces, motion, evaluator, out):
     """The requested times from sample k up to t_new recorded from the step's dense output: (status, next k)."""
     while k < t_eval.shape[0] and t_eval[k] <= t_new:
