@@ -227,7 +227,7 @@ def set_stage_accelerations(ud, acc_half, n):
         ud[b], ud[b + 1], ud[b + 2] = acc_half[i, 2 * n], acc_half[i, 2 * n + 1], acc_half[i, 2 * n + 2]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _measure(ud, weights, qacc, uses_ptr, uses_k, uses_w, drive_at, n, h, t, rk4):
     """Step n's drive forces, added to the outputs that use them, and the feed-forward's estimate
     updated; False when the step evaluated the passive forces other than the integrator's number of
@@ -251,7 +251,7 @@ def _measure(ud, weights, qacc, uses_ptr, uses_k, uses_w, drive_at, n, h, t, rk4
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def work_powers(ud, values, sign, work_of, power, fn_subtree, m_addr, d_addr, linvel, mass, t, ground):
     """Each work output's power at this evaluation (mujoco_passive.Passive.powers, the same arithmetic):
     an element's sign x value x x' (the generated callback keeps x' beside the value), the excitation's

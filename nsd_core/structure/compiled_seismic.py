@@ -165,7 +165,7 @@ def seismic_model(system, g, structure, ground, device: bool):
                        n_extra=system.n_extra, newton_tol=system.newton_tol)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _kinetic_and_height(m, w, vgx, vgy):
     """Kinetic energy relative to the frame translating with the ground, and sum m g z_com."""
     kin, height = 0.0, 0.0
