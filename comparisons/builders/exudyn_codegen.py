@@ -55,6 +55,10 @@ STATELESS, STATEFUL, PLANE_STATELESS, PLANE_STATEFUL = 0, 1, 2, 3
 # the kinematics' and laws' work arrays, allocated once a compiled call (``_scratch``) and passed down: each
 # is written before it is read, so one set serves every evaluation in a call (the Jacobian's 30)
 SCRATCH = "x, xd, T, N, S, R, G, r, v, w"
+# the module's own helpers, called only by its entry points: compiled without the Python and C entry
+# wrappers numba otherwise generates for every function (machine code nothing calls; a call from Python
+# would crash the process), ~1 s less a set of laws on a cold cache
+HELPER_JIT = "@njit(cache=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)"
 
 
 def law_set(elements) -> list:
@@ -97,7 +101,7 @@ def _dispatch_source(laws) -> list[str]:
     for name, args, plane, rate in (("_force", "c, x, xd, s, p", False, False), ("_rate", "c, x, xd, s, p", False, True),
                                     ("_plane_force", "c, x, y, xd, yd, sx, sy, p", True, False),
                                     ("_plane_rate", "c, x, y, xd, yd, sx, sy, p", True, True)):
-        lines += ["@njit(cache=True)", f"def {name}({args}):"]
+        lines += [HELPER_JIT, f"def {name}({args}):"]
         for i, law in enumerate(laws):
             if (law.acts_on == PLANE) != plane or (rate and law.rate is None):
                 continue
@@ -111,7 +115,7 @@ def _state_source() -> list[str]:
     """``_frames``, ``_scratch`` (the work arrays) and ``_state``: every element's kinematics
     (exudyn_kernels.arguments)."""
     return [
-        "@njit(cache=True)",
+        HELPER_JIT,
         "def _frames(I):",
         "    # the bodies' poses and the elements' directions and arms",
         _head("nb", "npts", "nj"),
@@ -121,7 +125,7 @@ def _state_source() -> list[str]:
         "    N, S = np.empty((ne, 3)), np.empty((ne, 2, 3))",
         "    return N, S, R, G, r, v, w",
         "", "",
-        "@njit(cache=True)",
+        HELPER_JIT,
         "def _scratch(I):",
         _head("npts", "nj"),
         "    ne = npts + nj",
@@ -129,7 +133,7 @@ def _state_source() -> list[str]:
         "    x, xd, T = np.empty(ne), np.empty(ne), np.empty(ne)",
         f"    return {SCRATCH}",
         "", "",
-        "@njit(cache=True)",
+        HELPER_JIT,
         f"def _state(F, I, W, f, q, q_t, {SCRATCH}):",
         "    # L: the counts and the blocks' offsets exudyn_kernels.arguments reads F and I at",
         _head("npts", "nj"),
@@ -144,7 +148,7 @@ def _laws_source() -> list[str]:
     """``_laws``: each law's value into T, a state's at the step's end by Heun (LawStates.at's and
     at_plane's arithmetic)."""
     return [
-        "@njit(cache=True)",
+        HELPER_JIT,
         "def _laws(F, I, W, x, xd, T):",
         _head("npts", "nj"),
         _head("code", "kind", "p0", "p1", "slot", "s", "r", "started", "h", prefix="o_"),
@@ -180,7 +184,7 @@ def _laws_source() -> list[str]:
 def _evaluate_source() -> list[str]:
     """``evaluate`` (the generalized forces) and ``jacobian`` (their forward differences)."""
     return [
-        "@njit(cache=True)",
+        HELPER_JIT,
         f"def _evaluate(q, q_t, F, I, W, f, {SCRATCH}):",
         f"    L = _state(F, I, W, f, q, q_t, {SCRATCH})",
         "    _laws(F, I, W, x, xd, T)",
@@ -229,7 +233,7 @@ def _commit_source() -> list[str]:
         f"    {SCRATCH} = _scratch(I)",
         f"    return _commit(q, q_t, F, I, W, np.empty(7 * I[{HEAD.index('nb')}]), {SCRATCH})",
         "", "",
-        "@njit(cache=True)",
+        HELPER_JIT,
         f"def _commit(q, q_t, F, I, W, f, {SCRATCH}):",
         f"    _state(F, I, W, f, q, q_t, {SCRATCH})",
         _head("npts", "nj"),

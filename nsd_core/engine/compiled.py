@@ -34,6 +34,13 @@ announce_compilation()  # one line on stderr when this process compiles the engi
 
 OK, NEWTON_FAILED, SINGULAR_BLOCK, SINGULAR_MASS = 0, 1, 2, 3
 
+# helpers called only from this module's compiled functions, on the model and workspace tuples (~80 arrays):
+# compiled without the Python and C entry wrappers numba otherwise generates (unboxing every array; most
+# of such a helper's machine code, which nothing calls). A call from Python would crash the process:
+# tests/test_compiled_only.py keeps their names inside this module.
+compiled_only = njit(cache=True, _nrt=False, no_cpython_wrapper=True, no_cfunc_wrapper=True)
+COMPILED_ONLY = ("_closure", "_factor_dependent_block", "_newton")
+
 
 @njit(cache=True, _nrt=False)
 def copy_into(dst, src):
@@ -88,7 +95,7 @@ def lu_solve(a, piv, b):
         b[i] /= a[i, i]
 
 
-@njit(cache=True, _nrt=False)
+@compiled_only
 def _closure(m, w, with_rates, with_positions):
     """Phi and Phi_z (with_positions), c (with_rates) of the loop cuts into the workspace."""
     if with_positions:
@@ -99,7 +106,7 @@ def _closure(m, w, with_rates, with_positions):
                    with_rates, w.Phi, w.J, w.c, w.scratch, with_positions)
 
 
-@njit(cache=True, _nrt=False)
+@compiled_only
 def _factor_dependent_block(m, w):
     dep, rows = m.dependent, m.rows
     for i in range(dep.shape[0]):
@@ -108,8 +115,8 @@ def _factor_dependent_block(m, w):
     return lu_factor(w.Jd, w.piv)
 
 
-@njit(cache=True, _nrt=False)
-def newton(m, w, z):
+@compiled_only
+def _newton(m, w, z):
     """Newton on the independent loop equations for the dependent coordinates of z (in place)."""
     dep, rows = m.dependent, m.rows
     nd = dep.shape[0]
@@ -181,7 +188,7 @@ def _assemble(m, w, t, zf):
         return OK
     w.counters[0] += 1
     if w.has_lin[0] == 0:
-        return newton(m, w, w.z)
+        return _newton(m, w, w.z)
     move = 0.0
     for j in range(nd):  # z_dep + S dz along the manifold (S from the last evaluation)
         acc = w.z_lin[dep[j]]
@@ -190,7 +197,7 @@ def _assemble(m, w, t, zf):
         w.pred[j] = acc
         w.z[dep[j]] = acc
         move = max(move, abs(acc - w.z_lin[dep[j]]))
-    code = newton(m, w, w.z)
+    code = _newton(m, w, w.z)
     dev = np.inf
     if code == OK:
         dev = 0.0
@@ -199,7 +206,7 @@ def _assemble(m, w, t, zf):
     if dev > 0.02 * move + 1e-10:  # maybe another branch: solve from the warm start too
         w.counters[2] += 1
         copy_into(w.z_alt, z)
-        if newton(m, w, w.z_alt) == OK:
+        if _newton(m, w, w.z_alt) == OK:
             dev_alt = 0.0
             for j in range(nd):
                 dev_alt = max(dev_alt, abs(w.z_alt[dep[j]] - w.pred[j]))
