@@ -1,6 +1,6 @@
 """Functions compiled without numba's Python entry wrapper (a call from Python would crash the process):
 the in-house engine's helpers in nsd_core.engine.compiled.COMPILED_ONLY and the private helpers of
-Exudyn's generated force module stay out of reach of Python code."""
+Exudyn's generated force module are used only inside compiled functions."""
 from __future__ import annotations
 
 import ast
@@ -19,17 +19,64 @@ def _sources():
         yield from (p for p in (ROOT / pkg).rglob("*.py") if p.name != Path(__file__).name)
 
 
-def test_the_in_house_helpers_without_a_python_entry_are_named_nowhere_else():
+def _jitted(tree: ast.Module) -> set[str]:
+    """Names of the module's functions that numba compiles: decorated with njit or compiled_only, or
+    passed to a call of njit(...) (``njit(sig)(f)``, ``njit(sig)(f.py_func)``)."""
+    out = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.FunctionDef) and any("njit" in ast.unparse(d) or "compiled_only" in ast.unparse(d)
+                                                     for d in node.decorator_list):
+            out.add(node.name)
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Call) and "njit" in ast.unparse(node.func.func):
+            out |= {n.id for a in node.args for n in ast.walk(a) if isinstance(n, ast.Name)}
+    return out
+
+
+def _bindings(tree: ast.Module, name: str, home: bool) -> tuple[bool, set[str]]:
+    """Whether the module's bare ``name`` is the compiled module's (defined there, or imported from it),
+    and the names the module binds to nsd_core.engine.compiled itself."""
+    direct, aliases = home, set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and node.module == "nsd_core.engine.compiled":
+            direct |= any(a.name == name for a in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module == "nsd_core.engine":
+            aliases |= {a.asname or a.name for a in node.names if a.name == "compiled"}
+        elif isinstance(node, ast.Import):
+            aliases |= {a.asname for a in node.names if a.name == "nsd_core.engine.compiled" and a.asname}
+    return direct, aliases
+
+
+def _uses_outside_compiled(tree: ast.Module, name: str, home: bool) -> list[int]:
+    """Lines where the compiled module's ``name`` is used (not imported) outside a compiled function."""
+    jitted, bad = _jitted(tree), []
+    direct, aliases = _bindings(tree, name, home)
+
+    def visit(node, inside):
+        for child in ast.iter_child_nodes(node):
+            if isinstance(child, ast.FunctionDef):
+                visit(child, inside or child.name in jitted)
+            elif isinstance(child, (ast.Import, ast.ImportFrom)):
+                continue
+            else:
+                hit = (direct and isinstance(child, ast.Name) and child.id == name) or (
+                    isinstance(child, ast.Attribute) and child.attr == name and isinstance(child.value, ast.Name)
+                    and child.value.id in aliases)
+                if hit and not inside:
+                    bad.append(child.lineno)
+                visit(child, inside)
+    visit(tree, False)
+    return bad
+
+
+def test_the_in_house_helpers_without_a_python_entry_are_used_only_in_compiled_code():
     assert compiled.COMPILED_ONLY
-    home = Path(compiled.__file__).resolve()
     for name in compiled.COMPILED_ONLY:
-        fn = getattr(compiled, name)
-        assert fn.targetoptions.get("no_cpython_wrapper"), name
-        used = (rf"from nsd_core\.engine\.compiled import[^\n]*\b{name}\b", rf"\b(compiled|C)\.{name}\b")
+        assert getattr(compiled, name).targetoptions.get("no_cpython_wrapper"), name
         for path in _sources():
-            if path.resolve() != home:
-                text = path.read_text()
-                assert not any(re.search(u, text) for u in used), f"{path}: uses {name}"
+            text = path.read_text()
+            if name in text:
+                home = path.resolve() == Path(compiled.__file__).resolve()
+                assert not _uses_outside_compiled(ast.parse(text), name, home), f"{path}: {name} outside compiled code"
 
 
 def test_the_generated_module_s_helpers_are_private_and_its_users_call_only_entry_points():

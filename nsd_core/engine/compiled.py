@@ -34,12 +34,12 @@ announce_compilation()  # one line on stderr when this process compiles the engi
 
 OK, NEWTON_FAILED, SINGULAR_BLOCK, SINGULAR_MASS = 0, 1, 2, 3
 
-# helpers called only from this module's compiled functions, on the model and workspace tuples (~80 arrays):
-# compiled without the Python and C entry wrappers numba otherwise generates (unboxing every array; most
-# of such a helper's machine code, which nothing calls). A call from Python would crash the process:
-# tests/test_compiled_only.py keeps their names inside this module.
+# helpers called only from compiled functions, on the model and workspace tuples (~80 arrays): compiled
+# without the Python and C entry wrappers numba otherwise generates (unboxing every array; most of such a
+# helper's machine code, which nothing calls). A call from Python would crash the process:
+# tests/test_compiled_only.py checks that every use is inside a compiled function.
 compiled_only = njit(cache=True, _nrt=False, no_cpython_wrapper=True, no_cfunc_wrapper=True)
-COMPILED_ONLY = ("_closure", "_factor_dependent_block", "_newton")
+COMPILED_ONLY = ("_closure", "_factor_dependent_block", "_newton", "derivatives")
 
 
 @njit(cache=True, _nrt=False)
@@ -392,7 +392,7 @@ def _state_rates(y, m, w, dydt):
     copy_into(dydt[2 * nf:], w.extra_rate)
 
 
-@njit(cache=True, _nrt=False)
+@compiled_only
 def derivatives(evaluator, t, y, m, w, forces, motion, dydt, reactions):
     """dy/dt = [z'_f, z''_f, extra rates] into dydt from ``evaluator`` (an EVAL_FN); the status code.
     The reactions w.lam, w.tau are computed too unless ``reactions`` is False (an integrator's stages)."""
