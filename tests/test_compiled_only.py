@@ -1,13 +1,13 @@
 """Functions compiled without numba's Python entry wrapper (a call from Python would crash the process):
-the in-house engine's helpers in nsd_core.engine.compiled.COMPILED_ONLY and the private helpers of
-Exudyn's generated force module are used only inside compiled functions."""
+the in-house engine's helpers in nsd_core.engine.compiled.COMPILED_ONLY, Exudyn's kernels that only its
+generated force module calls, and that module's private helpers are used only inside compiled functions."""
 from __future__ import annotations
 
 import ast
 import re
 from pathlib import Path
 
-from comparisons.builders import exudyn_codegen
+from comparisons.builders import exudyn_codegen, exudyn_kernels
 from nsd_core.engine import compiled
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -32,24 +32,25 @@ def _jitted(tree: ast.Module) -> set[str]:
     return out
 
 
-def _bindings(tree: ast.Module, name: str, home: bool) -> tuple[bool, set[str]]:
-    """Whether the module's bare ``name`` is the compiled module's (defined there, or imported from it),
-    and the names the module binds to nsd_core.engine.compiled itself."""
+def _bindings(tree: ast.Module, module: str, name: str, home: bool) -> tuple[bool, set[str]]:
+    """Whether the bare ``name`` in a module's code is ``module``'s (defined there, or imported from it),
+    and the names the module binds to ``module`` itself."""
     direct, aliases = home, set()
+    package, _, last = module.rpartition(".")
     for node in ast.walk(tree):
-        if isinstance(node, ast.ImportFrom) and node.module == "nsd_core.engine.compiled":
+        if isinstance(node, ast.ImportFrom) and node.module == module:
             direct |= any(a.name == name for a in node.names)
-        elif isinstance(node, ast.ImportFrom) and node.module == "nsd_core.engine":
-            aliases |= {a.asname or a.name for a in node.names if a.name == "compiled"}
+        elif isinstance(node, ast.ImportFrom) and node.module == package:
+            aliases |= {a.asname or a.name for a in node.names if a.name == last}
         elif isinstance(node, ast.Import):
-            aliases |= {a.asname for a in node.names if a.name == "nsd_core.engine.compiled" and a.asname}
+            aliases |= {a.asname for a in node.names if a.name == module and a.asname}
     return direct, aliases
 
 
-def _uses_outside_compiled(tree: ast.Module, name: str, home: bool) -> list[int]:
-    """Lines where the compiled module's ``name`` is used (not imported) outside a compiled function."""
+def _uses_outside_compiled(tree: ast.Module, module: str, name: str, home: bool) -> list[int]:
+    """Lines where ``module``'s ``name`` is used (not imported) outside a compiled function."""
     jitted, bad = _jitted(tree), []
-    direct, aliases = _bindings(tree, name, home)
+    direct, aliases = _bindings(tree, module, name, home)
 
     def visit(node, inside):
         for child in ast.iter_child_nodes(node):
@@ -68,15 +69,21 @@ def _uses_outside_compiled(tree: ast.Module, name: str, home: bool) -> list[int]
     return bad
 
 
-def test_the_in_house_helpers_without_a_python_entry_are_used_only_in_compiled_code():
-    assert compiled.COMPILED_ONLY
-    for name in compiled.COMPILED_ONLY:
-        assert getattr(compiled, name).targetoptions.get("no_cpython_wrapper"), name
-        for path in _sources():
-            text = path.read_text()
-            if name in text:
-                home = path.resolve() == Path(compiled.__file__).resolve()
-                assert not _uses_outside_compiled(ast.parse(text), name, home), f"{path}: {name} outside compiled code"
+def _wrapperless(module) -> list[str]:
+    return [n for n, v in vars(module).items() if getattr(v, "targetoptions", {}).get("no_cpython_wrapper")]
+
+
+def test_the_helpers_without_a_python_entry_are_used_only_in_compiled_code():
+    assert set(compiled.COMPILED_ONLY) == set(_wrapperless(compiled))
+    assert {"arguments", "forces"} <= set(_wrapperless(exudyn_kernels))
+    for module in (compiled, exudyn_kernels):
+        for name in _wrapperless(module):
+            for path in _sources():
+                text = path.read_text()
+                if name in text:
+                    home = path.resolve() == Path(module.__file__).resolve()
+                    assert not _uses_outside_compiled(ast.parse(text), module.__name__, name, home), \
+                        f"{path}: {module.__name__}.{name} outside compiled code"
 
 
 def test_the_generated_module_s_helpers_are_private_and_its_users_call_only_entry_points():

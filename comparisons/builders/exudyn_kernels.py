@@ -2,7 +2,9 @@
 bodies' poses from Exudyn's node coordinates (3 positions + 4 Euler parameters each), every element's
 (x, x') (``arguments``) and the laws' values mapped to generalized forces (``forces``). The code
 generated per model (exudyn_codegen) calls these, so they live apart from the module that builds the
-Exudyn object (no import circle).
+Exudyn object (no import circle). ``_poses``, ``arguments`` and ``forces`` are called only from that
+compiled code: they are compiled without numba's Python and C entry wrappers (machine code nothing would
+run; a call from Python would crash the process: tests/test_compiled_only.py).
 
 Generalized forces of a rigid body on Euler parameters (e0, e1, e2, e3): a force F at the world arm
 s from the centre of mass gives F on the position coordinates and G^T (s x F) on the parameters, where
@@ -17,7 +19,7 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True)
+@njit(cache=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
 def _poses(q, q_t, ref, R, G, r, v, w):
     """Every body's rotation R, G matrix, centre of mass r and its velocity v, angular velocity w
     (world), from its node's coordinates (reference + displacement)."""
@@ -36,7 +38,7 @@ def _poses(q, q_t, ref, R, G, r, v, w):
             w[i, k] = G[i, k, 0] * q_t[o + 3] + G[i, k, 1] * q_t[o + 4] + G[i, k, 2] * q_t[o + 5] + G[i, k, 3] * q_t[o + 6]
 
 
-@njit(cache=True)
+@njit(cache=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
 def arguments(q, q_t, F, I, W, L, R, G, r, v, w, x, xd, N, S):
     """(x, x') of every element: points elements first (distance, or offset along e when e is non-zero),
     then joint laws (a slide along jax in the parent's frame, or a turn about it measured from jx
@@ -127,7 +129,7 @@ def arguments(q, q_t, F, I, W, L, R, G, r, v, w, x, xd, N, S):
             S[j, 0, k], S[j, 1, k] = P[0, k], P[0, 3 + k]
 
 
-@njit(cache=True)
+@njit(cache=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
 def forces(T, I, L, R, G, r, N, S, f):
     """Generalized forces f of the elements' values T: a points element's tension pulls a by -T N at
     its arm and b by +T N; a joint law's Q drives its coordinate up: Q N on the child at its origin
