@@ -18,8 +18,11 @@ import math
 import numpy as np
 from numba import njit
 
+# the kernels only compiled code calls (the module's docstring)
+compiled_only = njit(cache=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
 
-@njit(cache=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
+
+@compiled_only
 def _poses(q, q_t, ref, R, G, r, v, w):
     """Every body's rotation R, G matrix, centre of mass r and its velocity v, angular velocity w
     (world), from its node's coordinates (reference + displacement)."""
@@ -38,7 +41,7 @@ def _poses(q, q_t, ref, R, G, r, v, w):
             w[i, k] = G[i, k, 0] * q_t[o + 3] + G[i, k, 1] * q_t[o + 4] + G[i, k, 2] * q_t[o + 5] + G[i, k, 3] * q_t[o + 6]
 
 
-@njit(cache=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
+@compiled_only
 def arguments(q, q_t, F, I, W, L, R, G, r, v, w, x, xd, N, S):
     """(x, x') of every element: points elements first (distance, or offset along e when e is non-zero),
     then joint laws (a slide along jax in the parent's frame, or a turn about it measured from jx
@@ -129,7 +132,7 @@ def arguments(q, q_t, F, I, W, L, R, G, r, v, w, x, xd, N, S):
             S[j, 0, k], S[j, 1, k] = P[0, k], P[0, 3 + k]
 
 
-@njit(cache=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
+@compiled_only
 def forces(T, I, L, R, G, r, N, S, f):
     """Generalized forces f of the elements' values T: a points element's tension pulls a by -T N at
     its arm and b by +T N; a joint law's Q drives its coordinate up: Q N on the child at its origin

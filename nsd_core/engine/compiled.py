@@ -39,7 +39,6 @@ OK, NEWTON_FAILED, SINGULAR_BLOCK, SINGULAR_MASS = 0, 1, 2, 3
 # helper's machine code, which nothing calls). A call from Python would crash the process:
 # tests/test_compiled_only.py checks that every use is inside a compiled function.
 compiled_only = njit(cache=True, _nrt=False, no_cpython_wrapper=True, no_cfunc_wrapper=True)
-COMPILED_ONLY = ("_closure", "_factor_dependent_block", "_newton", "derivatives")
 
 
 @njit(cache=True, _nrt=False)
