@@ -69,8 +69,7 @@ def test_a_law_registered_here_reaches_the_compiled_callback():
         laws.LawParameter("k3", "N m/rad^3", 0.0), laws.LawParameter("c", "N m s/rad", 0.0)), _cubic_torsion, "cubic"))
     try:
         model = parse_model(_cart_pendulum(spring.name, torsion.name), "cart_pendulum")
-        lay = mujoco_codegen.layout(model)
-        text, bound = mujoco_codegen.source(model, lay, nbody=3)
+        text, bound = mujoco_codegen.source(mujoco_codegen.laws_of(model))
         compiled, python = both(model, 0.5, 0.01, {"timestep": 2e-4})
     finally:
         laws.LAWS.pop(spring.name, None)
@@ -101,7 +100,9 @@ def test_a_law_with_a_state_registered_here_reaches_the_compiled_callback():
     assert_same(model, compiled, python)
 
 
-def test_parameters_do_not_change_the_generated_source_but_laws_do():
+def test_parameters_do_not_change_the_generated_source_but_laws_from_another_module_do():
+    """The source is the set of laws (generated.law_set): the model layer's own, and every law of each
+    module that registers one of the description's; rope is the device's."""
     raw = _cart_pendulum("linear_spring_damper", "joint_spring_damper")
     raw["forces"][0]["parameters"] = {"stiffness": 100.0, "free_length": 0.4}
     raw["forces"][1]["parameters"] = {"stiffness": 3.0}
@@ -111,7 +112,7 @@ def test_parameters_do_not_change_the_generated_source_but_laws_do():
     raw["forces"][0]["law"] = "rope"
     raw["forces"][0]["parameters"] = {"stiffness": 100.0, "free_length": 0.4}
     c = parse_model(raw, "c")
-    key = {n: mujoco_codegen.fingerprint(*mujoco_codegen.source(x, mujoco_codegen.layout(x), 3))
+    key = {n: mujoco_codegen.fingerprint(*mujoco_codegen.source(mujoco_codegen.laws_of(x)))
            for n, x in (("a", a), ("b", b), ("c", c))}
     assert key["a"] == key["b"] != key["c"]
 
@@ -164,21 +165,34 @@ def test_the_seismic_descriptions_run_the_same_compiled_and_in_python(name):
     assert_same(model, compiled, python)
 
 
-def test_the_ground_motion_is_data_but_an_excitation_or_a_direction_is_shape():
-    """A ground motion's numbers (a harmonic's amplitude, a pulse instead) live in userdata and reuse
-    the compiled callback; adding an excitation or a direction changes the source."""
+def test_the_ground_motion_an_excitation_a_direction_and_the_counts_are_data():
+    """A ground motion's numbers, an excitation, a direction, the number of elements and bodies live in
+    userdata: every such description reuses the compiled callback of its set of laws."""
     raw = _cart_pendulum("linear_spring_damper", "joint_spring_damper")
     raw["forces"][0]["parameters"] = {"stiffness": 100.0, "free_length": 0.4}
     raw["forces"][1]["parameters"] = {"stiffness": 3.0}
 
     def key(**extra):
         model = parse_model({**raw, **extra}, "k")
-        return mujoco_codegen.fingerprint(*mujoco_codegen.source(model, mujoco_codegen.layout(model), 3))
+        return mujoco_codegen.fingerprint(*mujoco_codegen.source(mujoco_codegen.laws_of(model)))
     harmonic = {"excitation": {"ground": "harmonic:amplitude=1,frequency=2"}}
     pulse = {"excitation": {"ground": "pulse:velocity=0.5,frequency=1,gamma=2,phase=0"}}
     forces = [{**raw["forces"][0], "direction": [1.0, 0.0, 0.0]}, raw["forces"][1]]
-    assert key(**harmonic) == key(excitation={"ground": "harmonic:amplitude=3,frequency=0.5"}) == key(**pulse)
-    assert len({key(), key(**harmonic), key(forces=forces)}) == 3
+    more = raw["forces"] + [{**raw["forces"][0], "name": "second_spring"}]
+    assert len({key(), key(**harmonic), key(**pulse), key(forces=forces), key(forces=more)}) == 1
+
+
+def _callback_key(name: str) -> str:
+    return mujoco_codegen.fingerprint(*mujoco_codegen.source(mujoco_codegen.laws_of(load_model(MODELS / f"{name}.toml"))))
+
+
+def test_the_device_drive_its_seismic_models_and_building_share_one_callback():
+    """The gate's MuJoCo descriptions (the drive, the isolated device, the building with its restrainer)
+    are one set of laws: one module, compiled once; a mechanism of the model layer's laws alone has its own."""
+    keys = {name: _callback_key(name) for name in ("nsd_drive", "nsd_seismic", "nsd_building", "andrews")}
+    assert keys["nsd_drive"] == keys["nsd_seismic"] == keys["nsd_building"] != keys["andrews"]
+    assert {law.name for law in mujoco_codegen.laws_of(load_model(MODELS / "nsd_building.toml"))} >= {
+        "rope", "sma_wire", "push_spring", "hunt_crossley_stop", "linear_spring_damper"}
 
 
 def test_a_stray_match_past_the_struct_is_not_taken_for_a_field():

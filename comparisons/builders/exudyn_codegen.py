@@ -42,10 +42,10 @@ import numpy as np
 
 from comparisons.builders import generated
 from comparisons.builders import exudyn_kernels
-from nsd_core.model import laws as registry
 from nsd_core.model.laws import PLANE
 
 HELPERS = (exudyn_kernels,)
+law_set = generated.law_set   # the set of laws a module is generated for (shared with mujoco_codegen)
 EPS_REL, EPS_MIN = 1e-7, 1e-2   # forward-difference step: EPS_REL max(EPS_MIN, |q_i|) (Exudyn's defaults)
 # I's head: the counts, then the offsets of F's blocks, of I's blocks and of W's blocks
 HEAD = ("nb", "npts", "nj", "nactive", "pa", "pb", "e", "jax", "jx", "jy", "jpos", "jorig", "h",
@@ -59,18 +59,6 @@ SCRATCH = "x, xd, T, N, S, R, G, r, v, w"
 # wrappers numba otherwise generates for every function (machine code nothing calls; a call from Python
 # would crash the process), ~1 s less a set of laws on a cold cache
 HELPER_JIT = "@njit(cache=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)"
-
-
-def law_set(elements) -> list:
-    """The laws a model's module can call, sorted by name: every registered law defined in a module that
-    defines one of ``elements``' laws, and the model layer's own (so the device's drive, its seismic
-    models and a mechanism of the model layer's laws share a module)."""
-    homes = {registry.__name__} | {_home(f.law) for f in elements}
-    return sorted((law for law in registry.LAWS.values() if _home(law) in homes), key=lambda law: law.name)
-
-
-def _home(law) -> str:
-    return getattr(law.force, "py_func", law.force).__module__
 
 
 def _head(*names: str, prefix: str = "") -> str:

@@ -18,7 +18,21 @@ from pathlib import Path
 
 import numba
 
+from nsd_core.model import laws as registry
+
 _LOADED: dict[str, object] = {}
+
+
+def law_set(elements) -> list:
+    """The laws a generated module is made for, sorted by name: every registered law defined in a module
+    that defines one of ``elements``' laws, and the model layer's own. So the device's drive, its seismic
+    models and a mechanism of the model layer's laws share a module (exudyn_codegen, mujoco_codegen)."""
+    homes = {registry.__name__} | {_home(f.law) for f in elements}
+    return sorted((law for law in registry.LAWS.values() if _home(law) in homes), key=lambda law: law.name)
+
+
+def _home(law) -> str:
+    return getattr(law.force, "py_func", law.force).__module__
 
 
 def law_functions(elements) -> list:

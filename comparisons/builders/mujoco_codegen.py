@@ -1,17 +1,22 @@
-"""The compiled passive callback of comparisons.builders.mujoco, generated from a model description.
+"""The compiled passive callback of comparisons.builders.mujoco, generated once per set of laws.
 
-No line here or in the generated code is written for a mechanism or a law: ``source`` writes, for the
-description's force elements in order, one call of each element's registry law function (its
-``Law.force`` and ``Law.rate``, bound by name in the generated module's namespace) between the
-generic helpers of mujoco_kernels, as comparisons.builders.mujoco.Passive does in Python. The
-generated ``mjcb_passive`` and ``mjcb_act_dyn`` are numba ``cfunc``s that read mjData's fields at
-offsets found by mujoco_cabi; every number of the description (points, body ids, dof addresses,
-law parameters, drive armatures) lives in ``mjData.userdata`` (``pack``), so the source depends on
-the description's *shape* only: the sequence of force elements (kind, law, state), the counts of
-coordinates, bodies, states and drives, and the MuJoCo build. Changing a parameter reuses the
-compiled callback.
+No line here or in the generated code is written for a mechanism or a law: ``source`` writes, for
+each law of the set (generated.law_set: every law registered by the modules that register the
+description's laws, the model layer's own always among them), one branch that calls the law's
+registry functions (its ``Law.force`` and ``Law.rate``, bound by name in the generated module's
+namespace) between the generic helpers of mujoco_kernels, as comparisons.builders.mujoco.Passive
+does in Python; ``passive`` loops over the description's force elements in order and takes each
+element's branch by its law's code. The generated ``mjcb_passive`` and ``mjcb_act_dyn`` are numba
+``cfunc``s that read mjData's fields at offsets found by mujoco_cabi; every number of the description
+(the counts of coordinates, bodies, states, drives and body slots, each element's law code, block and
+parameters, whether it has a direction, whether the description has work outputs or an excitation,
+the drive armatures, the ground motion) lives in ``mjData.userdata`` (``pack``), so the source depends
+on the set of laws and the MuJoCo build only. The device's drive, its seismic models (a restrainer, a
+building) and every mechanism of the same laws share one compiled callback: a module made per
+description shape compiled the kernels again for each (the restrainer's 1.8 s, the building's 3.1 s of
+a cold gate's runs).
 
-Compiled once per shape: the source is written to ``mujoco_passive_<hash>.py`` in numba's cache
+Compiled once per set of laws: the source is written to ``mujoco_passive_<hash>.py`` in numba's cache
 folder (nsd_core.compilation.numba_cache) and compiled with ``cache=True``, so a later process loads the machine
 code. numba's cache checks only that file, not the law functions it calls, so the hash covers, besides
 the source, each law's module, name and the source files of everything it calls (transitively through
@@ -31,9 +36,10 @@ block (PLANE_*, below): both coordinates' addresses, both values (Q_x, Q_y) and,
 outputs, its power Q_x x' + Q_y y' as a third value column (``Layout.columns``, ``Layout.power``),
 with a generated ``advance2_<rate>`` (the same RK4 step, both components at once).
 
-The description's shape includes which points elements have a ``direction`` (points_state_along) and
-whether it has an excitation (ground_values at the stage's time, then ground_load on the body slots,
-which then include every body with a mass); the ground motion's block is data (userdata's tail).
+A points element with a ``direction`` takes points_state_along, one without points_state; with an
+excitation the callback adds ground_values at the stage's time through ground_load on the body slots
+(which then include every body with a mass); both are data (the element table, the header), as the
+ground motion's block is (userdata's tail).
 """
 from __future__ import annotations
 
@@ -50,13 +56,21 @@ from comparisons.builders.mujoco_cabi import data_offsets, function_address
 from nsd_core.ground import motions as ground_motion
 from comparisons.builders.mujoco_mjcf import joint_name, state_activations
 from nsd_core.model.description import GROUND, Model
-from nsd_core.model.laws import PLANE, POINTS
+from nsd_core.model.laws import JOINT, PLANE, POINTS
 
 
 HELPERS = (K, mujoco_cabi, ground_motion)   # the modules the generated source calls into
 # a plane element's block: x's qposadr, dofadr, the state's first activation, x at the last advance,
 # Q_x and x', then y's qposadr, dofadr, y at the last advance, Q_y and y', its power and the constant 1
 PL_SLOT, PL_PREVIOUS, PL_VALUE, PL_Y, PL_POWER, PLANE_HEAD = 2, 3, 4, 6, 11, 13
+# the description's numbers the source does not hold, after mujoco_kernels' header and scratch: the
+# counts (coordinates, velocities, states, MuJoCo's bodies), the userdata ``ud`` covers, the element
+# table (its length and start), the states' rates, 1 with work outputs
+G_NQ, G_NV, G_NA, G_NBODY, G_CORE, G_N_ELEMENTS, G_ELEMENTS_AT, G_RATES_AT, G_WORK, SHAPE_SIZE = range(10)
+SHAPE_AT = K.HEADER + K.SCRATCH
+# an element's row of the table: its law's code (index in the law set), its block, its parameters
+# [start, end), 1 for a points element with a direction
+E_CODE, E_AT, E_P0, E_P1, E_ALONG, ELEMENT_SIZE = range(6)
 
 
 @dataclass(frozen=True)
@@ -77,6 +91,7 @@ class Layout:
     excitation_at: int               # the excitation's ground_values block, last (0: none)
     columns: tuple[tuple[int, ...], ...] = ()   # each element's value columns (a plane law's: Q_x, Q_y)
     power: tuple[int, ...] = ()      # each element's column whose value times the next is its power
+    elements_at: int = 0             # the element table (ELEMENT_SIZE a row, in the description's order)
 
     @property
     def core(self) -> int:
@@ -94,7 +109,7 @@ def layout(model: Model) -> Layout:
                                 for b in (f.body_a, f.body_b) if b != GROUND))
     if model.excitation is not None:   # every body with a mass feels -m a_g: a slot holds its Jacobians
         slots += tuple(b.name for b in model.bodies if b.mass > 0.0 and b.name not in slots)
-    slots_at = K.HEADER + K.SCRATCH
+    slots_at = SHAPE_AT + SHAPE_SIZE
     drives_at = at = slots_at + K.slot_size(nv) * len(slots)
     at += K.DRIVE_SIZE * len(model.prescribed)
     blocks, params, values, columns, power = [], [], [], [], []
@@ -112,9 +127,12 @@ def layout(model: Model) -> Layout:
         blocks.append(at)
         params.append((at + head, at + head + len(f.parameters)))
         at += head + len(f.parameters)
+    elements_at = at
+    at += ELEMENT_SIZE * len(model.forces)
     exc = 0 if model.excitation is None else len(model.excitation.block)
     return Layout(at + na + exc, nq, nv, na, drives_at, slots, slots_at, tuple(blocks), tuple(params), at,
-                  np.array(values, dtype=np.int64), at + na if exc else 0, tuple(columns), tuple(power))
+                  np.array(values, dtype=np.int64), at + na if exc else 0, tuple(columns), tuple(power),
+                  elements_at)
 
 
 def pack(ud: np.ndarray, model: Model, m: mujoco.MjModel, drives: list, lay: Layout) -> None:
@@ -125,6 +143,12 @@ def pack(ud: np.ndarray, model: Model, m: mujoco.MjModel, drives: list, lay: Lay
                            f"are not the layout's {(lay.nq, lay.nv, lay.na, lay.size)}")
     ud[:] = 0.0
     ud[K.JAC_FN] = function_address("mj_jac")   # < 2^53: exact as a float64
+    code = {law.name: i for i, law in enumerate(laws_of(model))}
+    ud[SHAPE_AT:SHAPE_AT + SHAPE_SIZE] = (lay.nq, lay.nv, lay.na, m.nbody, lay.core, len(model.forces), lay.elements_at,
+                                          lay.rates_at, float(any(o.kind == "work" for o in model.outputs)))
+    for e, (f, at, (p0, p1)) in enumerate(zip(model.forces, lay.blocks, lay.params)):
+        row = lay.elements_at + ELEMENT_SIZE * e
+        ud[row:row + ELEMENT_SIZE] = (code[f.law.name], at, p0, p1, float(f.law.acts_on == POINTS and f.direction is not None))
     ud[K.T_COMMIT] = np.nan   # the states not advanced yet (ADVANCE is the run's: mujoco_compiled)
     ud[K.N_DRIVES], ud[K.DRIVES_AT] = len(drives), lay.drives_at
     ud[K.N_SLOTS], ud[K.SLOTS_AT] = len(lay.slots), lay.slots_at
@@ -163,28 +187,40 @@ def pack(ud: np.ndarray, model: Model, m: mujoco.MjModel, drives: list, lay: Lay
         ud[p0:p1] = f.parameters
 
 
-def source(model: Model, lay: Layout, nbody: int) -> tuple[str, dict]:
-    """The generated module's text and the law functions it expects bound by name."""
-    fns = generated.law_functions(model.forces)
-    names = {id(fn): f"law_{k}" for k, fn in enumerate(fns)}
+def laws_of(model: Model) -> list:
+    """The set of laws ``model``'s callback is generated for (generated.law_set); an element's law code is
+    its law's index here."""
+    return generated.law_set(model.forces)
+
+
+def source(laws) -> tuple[str, dict]:
+    """The generated module's text for ``laws`` (laws_of's list) and the law functions it expects bound
+    by name (``law_<code>``, ``rate_<code>``)."""
+    bound = {}
+    for i, law in enumerate(laws):
+        bound[f"law_{i}"] = law.force
+        if law.rate is not None:
+            bound[f"rate_{i}"] = law.rate
     o = data_offsets()
     words = max(o.values()) + 1
     ptr = lambda field, shape: f"carray(double_ptr(np.int64(w[{o[field]}])), {shape})"  # noqa: E731
-    lines = _module_head(model, fns, names) + _passive_head(lay, nbody, o, words, ptr)
-    work = any(out.kind == "work" for out in model.outputs)
-    for e, (f, at, (p0, p1)) in enumerate(zip(model.forces, lay.blocks, lay.params)):
-        lines += _element_lines(e, f, at, p0, p1, names, lay, work)
-    lines += _passive_tail(model, lay, o) + _act_dyn_source(lay, o, words, ptr)
-    return "\n".join(lines), {names[id(fn)]: fn for fn in fns}
+    lines = _module_head(laws, bound) + _passive_head(o, words, ptr)
+    branch = "if"
+    for i, law in enumerate(laws):
+        lines.append(f"        {branch} c == {i}:   # {law.name}")
+        lines += ["        " + line for line in _law_lines(i, law)]
+        branch = "elif"
+    lines += _passive_tail(o) + _act_dyn_source(o, words, ptr)
+    return "\n".join(lines), bound
 
 
-def _module_head(model: Model, fns: list, names: dict) -> list[str]:
+def _module_head(laws, bound: dict) -> list[str]:
     """The module's docstring (the builds and the bound laws), its imports and each rate's advance."""
     return [
         f'"""Generated by comparisons.builders.mujoco_codegen: do not edit. MuJoCo {mujoco.__version__}, '
         f'numba {numba.__version__}.',
         "Bound by the loader before this runs: " + ", ".join(
-            f"{names[id(fn)]} = {generated.identity(fn)}" for fn in fns) + '."""',
+            f"{name} = {generated.identity(fn)}" for name, fn in bound.items()) + '."""',
         "import numpy as np",
         "from numba import carray, cfunc, njit, types",
         "from comparisons.builders.mujoco_cabi import double_ptr",
@@ -192,102 +228,114 @@ def _module_head(model: Model, fns: list, names: dict) -> list[str]:
         "points_state, points_state_along, prepare_bodies",
         "from nsd_core.ground.motions import ground_values",
         "", "",
-        *[line for fn in fns if any(fn is f.law.rate and f.law.acts_on != PLANE for f in model.forces)
-          for line in _advance_source(names[id(fn)])],
-        *[line for fn in fns if any(fn is f.law.rate and f.law.acts_on == PLANE for f in model.forces)
-          for line in _advance_plane_source(names[id(fn)])]]
+        *[line for i, law in enumerate(laws) if law.rate is not None
+          for line in (_advance_plane_source if law.acts_on == PLANE else _advance_source)(f"rate_{i}")]]
 
 
-def _passive_head(lay: Layout, nbody: int, o: dict, words: int, ptr) -> list[str]:
-    """``passive``'s start: mjData's arrays, the states' advance since the last call, the body slots."""
-    lines = [
+def _passive_head(o: dict, words: int, ptr) -> list[str]:
+    """``passive``'s start: the counts from userdata, mjData's arrays, the states' advance since the last
+    call, the body slots, the loop over the element table."""
+    g = lambda k: f"np.int64(head[{SHAPE_AT + k}])"  # noqa: E731
+    return [
         "@cfunc(types.void(types.voidptr, types.voidptr), cache=True)",
         "def passive(m, d):",
         f"    w = carray(d, ({words},), dtype=np.uint64)",
         f"    ud_addr = np.int64(w[{o['userdata']}])",
-        f"    ud = carray(double_ptr(ud_addr), ({lay.core},))",
-        f"    qpos = {ptr('qpos', (lay.nq,))}",
-        f"    qvel = {ptr('qvel', (lay.nv,))}",
-        f"    qfrc = {ptr('qfrc_passive', (lay.nv,))}",
-        f"    xpos = {ptr('xpos', (nbody, 3))}",
-        f"    xmat = {ptr('xmat', (nbody, 9))}",
-        # the kernels' integer arguments as int64, not literals: numba compiles a kernel once per literal
-        # value it is called with (a 3-story building's 21 elements: 42 compilations, ~12 s, instead of 3)
-        f"    nv = np.int64({lay.nv})",
+        f"    head = carray(double_ptr(ud_addr), ({SHAPE_AT + SHAPE_SIZE},))",
+        # the kernels' integer arguments as int64 values, never literals: numba compiles a kernel once per
+        # literal value it is called with
+        f"    nq, nv, na, nbody, core = {g(G_NQ)}, {g(G_NV)}, {g(G_NA)}, {g(G_NBODY)}, {g(G_CORE)}",
+        "    ud = carray(double_ptr(ud_addr), (core,))",
+        f"    qpos = {ptr('qpos', '(nq,)')}",
+        f"    qvel = {ptr('qvel', '(nv,)')}",
+        f"    qfrc = {ptr('qfrc_passive', '(nv,)')}",
+        f"    xpos = {ptr('xpos', '(nbody, 3)')}",
+        f"    xmat = {ptr('xmat', '(nbody, 9)')}",
+        f"    act = {ptr('act', '(na,)')}",
+        # the states' advance along the actual change of x since the last one (Euler; see Passive)
+        f"    advance = ud[{K.ADVANCE}] != 0.0",
+        f"    now = carray(d, ({o['time'] + 1},), dtype=np.float64)[{o['time']}]",
+        f"    dt = now - ud[{K.T_COMMIT}]",
+        "    moved = na > 0 and advance and not dt <= 0.0   # (NaN before the first: x recorded, no advance)",
+        f"    rates_at, work = {g(G_RATES_AT)}, head[{SHAPE_AT + G_WORK}] != 0.0",
+        f"    if ud[{K.N_SLOTS}] > 0.0:",
+        "        prepare_bodies(m, d, ud, ud_addr, xpos, qvel, nv)",
+        f"    table = {g(G_ELEMENTS_AT)}",
+        f"    for e in range({g(G_N_ELEMENTS)}):",
+        f"        row = table + {ELEMENT_SIZE} * e",
+        f"        c, at = np.int64(ud[row + {E_CODE}]), np.int64(ud[row + {E_AT}])",
+        f"        p = ud[np.int64(ud[row + {E_P0}]):np.int64(ud[row + {E_P1}])]",
     ]
-    if lay.na:   # the states' advance along the actual change of x since the last one (Euler; see Passive)
-        lines += [f"    act = {ptr('act', (lay.na,))}",
-                  f"    advance = ud[{K.ADVANCE}] != 0.0",
-                  f"    now = carray(d, ({o['time'] + 1},), dtype=np.float64)[{o['time']}]",
-                  f"    dt = now - ud[{K.T_COMMIT}]",
-                  "    moved = advance and not dt <= 0.0   # (NaN before the first: x recorded, no advance)"]
-    if lay.slots:
-        lines.append("    prepare_bodies(m, d, ud, ud_addr, xpos, qvel, nv)")
-    return lines
 
 
-def _element_lines(e: int, f, at: int, p0: int, p1: int, names: dict, lay: Layout, work: bool) -> list[str]:
-    """Element ``e``'s lines in ``passive``: its (x, x'), its law and state, its value kept, its force applied."""
-    law = names[id(f.law.force)]
-    lines = [f"    # {f.name}: {f.law.name}"]
-    if f.law.acts_on == PLANE:
-        return lines + _plane_lines(f, at, p0, p1, law, names[id(f.law.rate)] if f.law.rate else "", lay, work)
-    if f.law.acts_on == POINTS:
-        state = "points_state" if f.direction is None else "points_state_along"
-        lines.append(f"    x, xd = {state}(ud, np.int64({at}), xpos, xmat, nv)")
-        slot, previous = at + K.P_SLOT, at + K.P_PREVIOUS
+def _law_lines(i: int, law) -> list[str]:
+    """Law ``i``'s branch of the element loop: the element's (x, x'), its law and state, its value kept,
+    its force applied (Passive.law's arithmetic, in its order)."""
+    if law.acts_on == PLANE:
+        return _plane_lines(i, law)
+    if law.acts_on == POINTS:
+        lines = [f"    if ud[row + {E_ALONG}] != 0.0:",
+                 "        x, xd = points_state_along(ud, at, xpos, xmat, nv)",
+                 "    else:",
+                 "        x, xd = points_state(ud, at, xpos, xmat, nv)"]
+        slot, previous, value = K.P_SLOT, K.P_PREVIOUS, K.P_VALUE
     else:
-        lines.append(f"    x, xd = qpos[int(ud[{at}])], qvel[int(ud[{at + 1}])]")
-        slot, previous = at + K.J_SLOT, at + K.J_PREVIOUS
-    if f.law.state is None:
-        lines.append(f"    f = {law}(x, xd, ud[{p0}:{p1}])")
+        assert law.acts_on == JOINT, law.acts_on
+        lines = ["    x, xd = qpos[int(ud[at])], qvel[int(ud[at + 1])]"]
+        slot, previous, value = K.J_SLOT, K.J_PREVIOUS, K.J_VALUE
+    if law.state is None:
+        lines.append(f"    f = law_{i}(x, xd, p)")
     else:   # as Passive.law: advanced (Euler), or its rate handed to MuJoCo by mjcb_act_dyn (RK4)
-        lines += [f"    s = act[int(ud[{slot}])]",
+        lines += [f"    k = int(ud[at + {slot}])",
+                  "    s = act[k]",
                   "    if moved:",
                   "        if dt > 0.0:",
-                  f"            s = advance_{names[id(f.law.rate)]}(ud[{previous}], x, s, dt, ud[{p0}:{p1}])",
-                  f"            act[int(ud[{slot}])] = s",
-                  f"        ud[{previous}] = x",
+                  f"            s = advance_rate_{i}(ud[at + {previous}], x, s, dt, p)",
+                  "            act[k] = s",
+                  f"        ud[at + {previous}] = x",
                   "    elif not advance:",
-                  f"        ud[{lay.rates_at} + int(ud[{slot}])] = {names[id(f.law.rate)]}(x, xd, s, ud[{p0}:{p1}])",
-                  f"    f = {law}(x, xd, s, ud[{p0}:{p1}])"]
-    value = lay.values[lay.columns[e][0]]   # (a plane law before it takes three value columns)
-    lines.append(f"    ud[{value}] = f")
-    if work:   # x' beside the value: the step loop's power
-        lines.append(f"    ud[{value + 1}] = xd")
-    return lines + [f"    apply_points(ud, np.int64({at}), f, nv)" if f.law.acts_on == POINTS
-                    else f"    qfrc[int(ud[{at + 1}])] += f"]
+                  f"        ud[rates_at + k] = rate_{i}(x, xd, s, p)",
+                  f"    f = law_{i}(x, xd, s, p)"]
+    lines += [f"    ud[at + {value}] = f",
+              "    if work:   # x' beside the value: the step loop's power",
+              f"        ud[at + {value + 1}] = xd"]
+    return lines + ["    apply_points(ud, at, f, nv)" if law.acts_on == POINTS else "    qfrc[int(ud[at + 1])] += f"]
 
 
-def _passive_tail(model: Model, lay: Layout, o: dict) -> list[str]:
+def _passive_tail(o: dict) -> list[str]:
     """``passive``'s end: the states' time, the ground's load, the bodies' forces, the drives' feeds."""
-    lines = []
-    if lay.na:
-        lines += ["    if moved:", f"        ud[{K.T_COMMIT}] = now"]
-    if model.excitation is not None:   # -m a_g(t) at every body's centre, t: this stage's time
-        lines += [f"    ground = carray(double_ptr(ud_addr + {8 * lay.excitation_at}), "
-                  f"(np.int64(ud[{K.EXCITATION_SIZE}]),))",
-                  f"    ag = ground_values(carray(d, ({o['time'] + 1},), dtype=np.float64)[{o['time']}], ground, 0)",
-                  "    ground_load(ud, xmat, ag[4], ag[5], nv)"]
-    if lay.slots:
-        lines.append("    finish_bodies(ud, qfrc, nv)")
-    if model.prescribed:
-        lines.append(f"    drive_feeds(ud, qfrc, carray(d, ({o['time'] + 1},), dtype=np.float64)[{o['time']}])")
-    return lines
+    return [
+        "    if moved:",
+        f"        ud[{K.T_COMMIT}] = now",
+        f"    n_ground = np.int64(ud[{K.EXCITATION_SIZE}])",
+        "    if n_ground > 0:   # -m a_g(t) at every body's centre, t: this stage's time (its block: core on)",
+        "        ground = carray(double_ptr(ud_addr + 8 * core), (n_ground,))",
+        "        ag = ground_values(now, ground, 0)",
+        "        ground_load(ud, xmat, ag[4], ag[5], nv)",
+        f"    if ud[{K.N_SLOTS}] > 0.0:",
+        "        finish_bodies(ud, qfrc, nv)",
+        f"    if ud[{K.N_DRIVES}] > 0.0:",
+        "        drive_feeds(ud, qfrc, now)"]
 
 
-def _act_dyn_source(lay: Layout, o: dict, words: int, ptr) -> list[str]:
+def _act_dyn_source(o: dict, words: int, ptr) -> list[str]:
     """``act_dyn``: the states' rates that ``passive`` kept, into act_dot."""
+    g = lambda k: f"np.int64(head[{SHAPE_AT + k}])"  # noqa: E731
     return ["", "",
             "@cfunc(types.float64(types.voidptr, types.voidptr, types.int32), cache=True)",
             "def act_dyn(m, d, actuator):",
             "    # the states' rates into act_dot (one actuator holds them all: mujoco_mjcf)",
             f"    w = carray(d, ({words},), dtype=np.uint64)",
-            f"    ud = carray(double_ptr(np.int64(w[{o['userdata']}])), ({lay.core},))",
-            *([f"    act_dot = {ptr('act_dot', (lay.na,))}",
-               f"    for k in range({lay.na}):",
-               f"        act_dot[k] = ud[{lay.rates_at} + k]",
-               f"    return ud[{lay.rates_at}]"] if lay.na else ["    return 0.0"]),
+            f"    ud_addr = np.int64(w[{o['userdata']}])",
+            f"    head = carray(double_ptr(ud_addr), ({SHAPE_AT + SHAPE_SIZE},))",
+            f"    na, rates_at, core = {g(G_NA)}, {g(G_RATES_AT)}, {g(G_CORE)}",
+            "    if na == 0:",
+            "        return 0.0",
+            "    ud = carray(double_ptr(ud_addr), (core,))",
+            f"    act_dot = {ptr('act_dot', '(na,)')}",
+            "    for k in range(na):",
+            "        act_dot[k] = ud[rates_at + k]",
+            "    return ud[rates_at]",
             ""]
 
 
@@ -307,31 +355,31 @@ def _advance_source(rate: str) -> list[str]:
         "", ""]
 
 
-def _plane_lines(f, at: int, p0: int, p1: int, law: str, rate: str, lay: Layout, work: bool) -> list[str]:
-    """A plane element's lines (Passive.plane_law, the same arithmetic): both coordinates, the state
-    advanced (Euler) or its rates handed to MuJoCo (RK4), (Q_x, Q_y) applied and kept."""
-    p, y = f"ud[{p0}:{p1}]", at + PL_Y
-    lines = [f"    x, xd = qpos[int(ud[{at}])], qvel[int(ud[{at + 1}])]",
-             f"    y, yd = qpos[int(ud[{y}])], qvel[int(ud[{y + 1}])]"]
-    if f.law.state is None:
-        lines.append(f"    fx, fy = {law}(x, y, xd, yd, 0.0, 0.0, {p})")
+def _plane_lines(i: int, law) -> list[str]:
+    """A plane law's branch (Passive.plane_law, the same arithmetic): both coordinates, the state advanced
+    (Euler) or its rates handed to MuJoCo (RK4), (Q_x, Q_y) applied and kept."""
+    y = f"at + {PL_Y}"
+    lines = ["    x, xd = qpos[int(ud[at])], qvel[int(ud[at + 1])]",
+             f"    y, yd = qpos[int(ud[{y}])], qvel[int(ud[{y} + 1])]"]
+    if law.state is None:
+        lines.append(f"    fx, fy = law_{i}(x, y, xd, yd, 0.0, 0.0, p)")
     else:
-        lines += [f"    k = int(ud[{at + PL_SLOT}])",
+        lines += [f"    k = int(ud[at + {PL_SLOT}])",
                   "    sx, sy = act[k], act[k + 1]",
                   "    if moved:",
                   "        if dt > 0.0:",
-                  f"            sx, sy = advance2_{rate}(ud[{at + PL_PREVIOUS}], ud[{y + 2}], x, y, sx, sy, dt, {p})",
+                  f"            sx, sy = advance2_rate_{i}(ud[at + {PL_PREVIOUS}], ud[{y} + 2], x, y, sx, sy, dt, p)",
                   "            act[k], act[k + 1] = sx, sy",
-                  f"        ud[{at + PL_PREVIOUS}], ud[{y + 2}] = x, y",
+                  f"        ud[at + {PL_PREVIOUS}], ud[{y} + 2] = x, y",
                   "    elif not advance:",
-                  f"        rx, ry = {rate}(x, y, xd, yd, sx, sy, {p})",
-                  f"        ud[{lay.rates_at} + k], ud[{lay.rates_at} + k + 1] = rx, ry",
-                  f"    fx, fy = {law}(x, y, xd, yd, sx, sy, {p})"]
-    lines += [f"    ud[{at + PL_VALUE}], ud[{y + 3}] = fx, fy"]
-    if work:   # x', y' beside the values, and the power as a third value column
-        lines += [f"    ud[{at + PL_VALUE + 1}], ud[{y + 4}] = xd, yd",
-                  f"    ud[{at + PL_POWER}] = fx * xd + fy * yd"]
-    return lines + [f"    qfrc[int(ud[{at + 1}])] += fx", f"    qfrc[int(ud[{y + 1}])] += fy"]
+                  f"        rx, ry = rate_{i}(x, y, xd, yd, sx, sy, p)",
+                  "        ud[rates_at + k], ud[rates_at + k + 1] = rx, ry",
+                  f"    fx, fy = law_{i}(x, y, xd, yd, sx, sy, p)"]
+    lines += [f"    ud[at + {PL_VALUE}], ud[{y} + 3] = fx, fy",
+              "    if work:   # x', y' beside the values, and the power as a third value column",
+              f"        ud[at + {PL_VALUE + 1}], ud[{y} + 4] = xd, yd",
+              f"        ud[at + {PL_POWER}] = fx * xd + fy * yd"]
+    return lines + ["    qfrc[int(ud[at + 1])] += fx", f"    qfrc[int(ud[{y} + 1])] += fy"]
 
 
 def _advance_plane_source(rate: str) -> list[str]:
@@ -354,9 +402,10 @@ def fingerprint(text: str, bound: dict) -> str:
     return generated.fingerprint(text, bound, HELPERS)
 
 
-def callbacks(model: Model, lay: Layout, nbody: int):
-    """The generated module (``passive``, ``act_dyn``: numba cfuncs; keep it alive while installed),
-    compiled once per shape and process, from numba's disk cache when an earlier process compiled it."""
-    text, bound = source(model, lay, nbody)
+def callbacks(model: Model):
+    """The generated module (``passive``, ``act_dyn``: numba cfuncs; keep it alive while installed) for
+    ``model``'s set of laws, compiled once per set and process, from numba's disk cache when an earlier
+    process compiled it."""
+    text, bound = source(laws_of(model))
     return generated.load(text, bound, HELPERS, "mujoco_passive")
 

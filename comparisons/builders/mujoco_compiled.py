@@ -85,7 +85,7 @@ def run(model, s: dict, m, d, drives: list, pairs: list, t_out: np.ndarray, n_su
     lay = layout(model)
     ud = d.userdata
     pack(ud, model, m, drives, lay)
-    module = callbacks(model, lay, m.nbody)
+    module = callbacks(model)
     nd, n_out = len(drives), len(t_out)
     acc_half, q_at, qd_at, drive_qa = _drive_tables(drives, h, n_steps)
     uses_ptr, uses_k, uses_w = _uses_arrays(uses, n_steps)
