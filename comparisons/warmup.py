@@ -69,9 +69,9 @@ def every_mode_calls() -> list:
     shaped = [partial(run_seismic_job, e, Params(), structure_for(Params(), stories, restrainer), tiny_ground(),
                       TINY_DURATION, TINY_DT_OUT, None)
               for e in peers for stories, restrainer in ((0, True), (3, False))]
-    # Exudyn's generated forces are one module per set of laws: a mechanism of the model layer's laws
-    # (nsd compare --model) shares the one this tiny pendulum compiles
-    described = [partial(tiny_described_run, "exudyn")] if "exudyn" in peers else []
+    # Exudyn's generated forces and MuJoCo's passive callback are one module per set of laws: a mechanism
+    # of the model layer's laws (nsd compare --model) shares the ones this tiny pendulum compiles
+    described = [partial(tiny_described_run, e) for e in ("exudyn", "mujoco") if e in peers]
     return peer_calls(specs) + shaped + described
 
 
@@ -113,4 +113,5 @@ def tiny_described_run(engine: str) -> None:
     import tomllib
     from nsd_core.model.load import parse_model
     builder = importlib.import_module(f"comparisons.builders.{engine}")
-    builder.simulate(parse_model(tomllib.loads(TINY_MECHANISM)), 0.004, 0.002, {"step_size": 1e-3})
+    step = {"exudyn": {"step_size": 1e-3}, "mujoco": {"timestep": 1e-3}}[engine]
+    builder.simulate(parse_model(tomllib.loads(TINY_MECHANISM)), 0.004, 0.002, step)

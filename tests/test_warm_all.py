@@ -110,16 +110,20 @@ def test_without_nsd_warm_a_first_cycle_compiles_what_it_uses(tmp_path):
     assert not list(tmp_path.rglob(warm_all.MARK_IN_HOUSE)) and not list(tmp_path.rglob(warm_all.MARK))
 
 
-def test_nsd_warm_compiles_the_exudyn_module_every_model_law_mechanism_shares():
-    """``nsd warm``'s peer calls end with a tiny described pendulum on Exudyn; its generated forces are
-    the module of the model layer's laws, which a user's mechanism of those laws (the worked example,
-    Andrews' constant torque) shares: the same law set, the same generated text."""
+def test_nsd_warm_compiles_the_peer_modules_every_model_law_mechanism_shares():
+    """``nsd warm``'s peer calls end with a tiny described pendulum on Exudyn and on MuJoCo; their generated
+    forces and callback are the modules of the model layer's laws, which a user's mechanism of those laws
+    (the worked example, Andrews' constant torque) shares: the same law set, the same generated text."""
     import tomllib
     from comparisons import warmup
-    from comparisons.builders import exudyn_codegen
+    from comparisons.builders import exudyn_codegen, mujoco_codegen
     from nsd_core.model.load import load_model, parse_model
     calls = warmup.every_mode_calls()
-    assert any(getattr(c, "func", None) is warmup.tiny_described_run and c.args == ("exudyn",) for c in calls)
+    for engine in ("exudyn", "mujoco"):
+        assert any(getattr(c, "func", None) is warmup.tiny_described_run and c.args == (engine,) for c in calls)
+    warmup.tiny_described_run("mujoco")   # the described builder takes the settings it is given
+    assert mujoco_codegen.source(mujoco_codegen.laws_of(parse_model(tomllib.loads(warmup.TINY_MECHANISM))))[0] == \
+        mujoco_codegen.source(mujoco_codegen.laws_of(load_model(Path(__file__).resolve().parents[1] / "models" / "andrews.toml")))[0]
     tiny = exudyn_codegen.law_set(parse_model(tomllib.loads(warmup.TINY_MECHANISM)).forces)
     root = Path(__file__).resolve().parents[1] / "models"
     for name in ("fourbar_spring.toml", "andrews.toml"):
