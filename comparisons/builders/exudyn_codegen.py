@@ -69,11 +69,7 @@ def _head(*names: str, prefix: str = "") -> str:
 def source(laws) -> tuple[str, dict]:
     """The generated module's text for ``laws`` (law_set's list; an element's law code is its index
     there) and the law functions it expects bound by name."""
-    bound = {}
-    for i, law in enumerate(laws):
-        bound[f"law_{i}"] = law.force
-        if law.rate is not None:
-            bound[f"rate_{i}"] = law.rate
+    bound = generated.bound_laws(laws)
     lines = (_dispatch_source(laws) + _state_source() + _laws_source() + _evaluate_source()
              + _commit_source() + _outputs_source())
     return "\n".join(lines), bound

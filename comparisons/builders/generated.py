@@ -35,14 +35,16 @@ def _home(law) -> str:
     return getattr(law.force, "py_func", law.force).__module__
 
 
-def law_functions(elements) -> list:
-    """The distinct law functions (force, rate) of force elements, in order of first use."""
-    out = []
-    for f in elements:
-        for fn in (f.law.force, f.law.rate):
-            if fn is not None and all(fn is not g for g in out):
-                out.append(fn)
-    return out
+def bound_laws(laws) -> dict:
+    """The law functions a module generated for ``laws`` (law_set's list) calls, by the names its source
+    uses: ``law_<code>`` (Law.force) and ``rate_<code>`` (Law.rate, where the law has a state), the code
+    being the law's index in the list."""
+    bound = {}
+    for i, law in enumerate(laws):
+        bound[f"law_{i}"] = law.force
+        if law.rate is not None:
+            bound[f"rate_{i}"] = law.rate
+    return bound
 
 
 def identity(fn) -> str:

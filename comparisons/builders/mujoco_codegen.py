@@ -144,11 +144,13 @@ def pack(ud: np.ndarray, model: Model, m: mujoco.MjModel, drives: list, lay: Lay
     ud[:] = 0.0
     ud[K.JAC_FN] = function_address("mj_jac")   # < 2^53: exact as a float64
     code = {law.name: i for i, law in enumerate(laws_of(model))}
-    ud[SHAPE_AT:SHAPE_AT + SHAPE_SIZE] = (lay.nq, lay.nv, lay.na, m.nbody, lay.core, len(model.forces), lay.elements_at,
-                                          lay.rates_at, float(any(o.kind == "work" for o in model.outputs)))
+    work = float(any(o.kind == "work" for o in model.outputs))
+    ud[SHAPE_AT:SHAPE_AT + SHAPE_SIZE] = (lay.nq, lay.nv, lay.na, m.nbody, lay.core, len(model.forces),
+                                          lay.elements_at, lay.rates_at, work)
     for e, (f, at, (p0, p1)) in enumerate(zip(model.forces, lay.blocks, lay.params)):
         row = lay.elements_at + ELEMENT_SIZE * e
-        ud[row:row + ELEMENT_SIZE] = (code[f.law.name], at, p0, p1, float(f.law.acts_on == POINTS and f.direction is not None))
+        along = f.law.acts_on == POINTS and f.direction is not None
+        ud[row:row + ELEMENT_SIZE] = (code[f.law.name], at, p0, p1, float(along))
     ud[K.T_COMMIT] = np.nan   # the states not advanced yet (ADVANCE is the run's: mujoco_compiled)
     ud[K.N_DRIVES], ud[K.DRIVES_AT] = len(drives), lay.drives_at
     ud[K.N_SLOTS], ud[K.SLOTS_AT] = len(lay.slots), lay.slots_at
@@ -196,11 +198,7 @@ def laws_of(model: Model) -> list:
 def source(laws) -> tuple[str, dict]:
     """The generated module's text for ``laws`` (laws_of's list) and the law functions it expects bound
     by name (``law_<code>``, ``rate_<code>``)."""
-    bound = {}
-    for i, law in enumerate(laws):
-        bound[f"law_{i}"] = law.force
-        if law.rate is not None:
-            bound[f"rate_{i}"] = law.rate
+    bound = generated.bound_laws(laws)
     o = data_offsets()
     words = max(o.values()) + 1
     ptr = lambda field, shape: f"carray(double_ptr(np.int64(w[{o[field]}])), {shape})"  # noqa: E731
@@ -232,10 +230,14 @@ def _module_head(laws, bound: dict) -> list[str]:
           for line in (_advance_plane_source if law.acts_on == PLANE else _advance_source)(f"rate_{i}")]]
 
 
+def _shape_value(k: int) -> str:
+    """The source reading entry ``k`` (G_*) of the description's numbers in userdata, as an int64."""
+    return f"np.int64(head[{SHAPE_AT + k}])"
+
+
 def _passive_head(o: dict, words: int, ptr) -> list[str]:
     """``passive``'s start: the counts from userdata, mjData's arrays, the states' advance since the last
     call, the body slots, the loop over the element table."""
-    g = lambda k: f"np.int64(head[{SHAPE_AT + k}])"  # noqa: E731
     return [
         "@cfunc(types.void(types.voidptr, types.voidptr), cache=True)",
         "def passive(m, d):",
@@ -244,7 +246,7 @@ def _passive_head(o: dict, words: int, ptr) -> list[str]:
         f"    head = carray(double_ptr(ud_addr), ({SHAPE_AT + SHAPE_SIZE},))",
         # the kernels' integer arguments as int64 values, never literals: numba compiles a kernel once per
         # literal value it is called with
-        f"    nq, nv, na, nbody, core = {g(G_NQ)}, {g(G_NV)}, {g(G_NA)}, {g(G_NBODY)}, {g(G_CORE)}",
+        "    nq, nv, na, nbody, core = " + ", ".join(_shape_value(k) for k in (G_NQ, G_NV, G_NA, G_NBODY, G_CORE)),
         "    ud = carray(double_ptr(ud_addr), (core,))",
         f"    qpos = {ptr('qpos', '(nq,)')}",
         f"    qvel = {ptr('qvel', '(nv,)')}",
@@ -257,11 +259,11 @@ def _passive_head(o: dict, words: int, ptr) -> list[str]:
         f"    now = carray(d, ({o['time'] + 1},), dtype=np.float64)[{o['time']}]",
         f"    dt = now - ud[{K.T_COMMIT}]",
         "    moved = na > 0 and advance and not dt <= 0.0   # (NaN before the first: x recorded, no advance)",
-        f"    rates_at, work = {g(G_RATES_AT)}, head[{SHAPE_AT + G_WORK}] != 0.0",
+        f"    rates_at, work = {_shape_value(G_RATES_AT)}, head[{SHAPE_AT + G_WORK}] != 0.0",
         f"    if ud[{K.N_SLOTS}] > 0.0:",
         "        prepare_bodies(m, d, ud, ud_addr, xpos, qvel, nv)",
-        f"    table = {g(G_ELEMENTS_AT)}",
-        f"    for e in range({g(G_N_ELEMENTS)}):",
+        f"    table = {_shape_value(G_ELEMENTS_AT)}",
+        f"    for e in range({_shape_value(G_N_ELEMENTS)}):",
         f"        row = table + {ELEMENT_SIZE} * e",
         f"        c, at = np.int64(ud[row + {E_CODE}]), np.int64(ud[row + {E_AT}])",
         f"        p = ud[np.int64(ud[row + {E_P0}]):np.int64(ud[row + {E_P1}])]",
@@ -320,7 +322,6 @@ def _passive_tail(o: dict) -> list[str]:
 
 def _act_dyn_source(o: dict, words: int, ptr) -> list[str]:
     """``act_dyn``: the states' rates that ``passive`` kept, into act_dot."""
-    g = lambda k: f"np.int64(head[{SHAPE_AT + k}])"  # noqa: E731
     return ["", "",
             "@cfunc(types.float64(types.voidptr, types.voidptr, types.int32), cache=True)",
             "def act_dyn(m, d, actuator):",
@@ -328,7 +329,7 @@ def _act_dyn_source(o: dict, words: int, ptr) -> list[str]:
             f"    w = carray(d, ({words},), dtype=np.uint64)",
             f"    ud_addr = np.int64(w[{o['userdata']}])",
             f"    head = carray(double_ptr(ud_addr), ({SHAPE_AT + SHAPE_SIZE},))",
-            f"    na, rates_at, core = {g(G_NA)}, {g(G_RATES_AT)}, {g(G_CORE)}",
+            f"    na, rates_at, core = {_shape_value(G_NA)}, {_shape_value(G_RATES_AT)}, {_shape_value(G_CORE)}",
             "    if na == 0:",
             "        return 0.0",
             "    ud = carray(double_ptr(ud_addr), (core,))",
