@@ -17,7 +17,7 @@ from benchmarks.docs_common import ROOT, g, load, plain, provenance, table
 from benchmarks.docs_validation import compare_gate, compare_variant, convergence, power, tables_5_6, verdict_cost
 from benchmarks.docs_performance import (bench_cold, bench_cycle, bench_dask, bench_ida_farfield, bench_peer_seismic,
                                         bench_record_set, bench_rhs, bench_seismic, bench_start, bench_subnormals,
-                                        bench_exudyn_forces,
+                                        bench_csv_text, bench_exudyn_forces,
                                         compile_units,
                                         device_models, gate_times, work_precision)
 
@@ -261,7 +261,8 @@ RENDER = {"compare-gate": compare_gate, "convergence": convergence, "tables-5-6"
           "symbolic-equations": symbolic_equations, "symbolic-models": symbolic_models,
           "symbolic-campaign": symbolic_campaign, "symbolic-device": symbolic_device,
           "p695-evaluation": p695_evaluation, "p695-what-passes": p695_what_passes, "device-models": device_models,
-          "bench-subnormals": bench_subnormals, "exudyn-forces": bench_exudyn_forces}
+          "bench-subnormals": bench_subnormals, "exudyn-forces": bench_exudyn_forces,
+          "csv-text": bench_csv_text}
 
 
 def regenerate(text: str) -> str:

@@ -299,3 +299,18 @@ def bench_exudyn_forces() -> str:
               f"revisions: {same}.\n\n"
             + table(["revision", "evaluate, us a call", "advance (pre-step), us a call",
                      *[f"{k}, run s" for k in labels]], rows))
+
+
+def bench_csv_text() -> str:
+    """The gate's CSVs written both ways (benchmarks/bench_csv_text.py)."""
+    rec = load("bench_csv_text")
+    d = rec["data"]
+    rows = [[way, plain(d["median_cpu_s"][key]), g(d["ns_per_number"][key])]
+            for way, key in (("Python's \"%.10g\" a value, numpy.loadtxt to read back", "python"),
+                             ("compiled (nsd_core.common.decimal_text), the numbers returned", "compiled"))]
+    return (provenance(rec) + "\n"
+            + f"The default gate's {d['tables']} tables ({d['rows']} rows, {d['numbers']} numbers, "
+              f"{g(d['bytes'] / 1e6)} MB), written and read back in one process, median of {d['repeats']} "
+              f"alternating passes: {g(d['ratio'])}x less CPU; the files the same bytes: "
+              f"{'yes' if d['same_text'] else 'NO'}; the numbers the same bits: {'yes' if d['same_numbers'] else 'NO'}.\n\n"
+            + table(["how", "CPU s, every table", "ns a number"], rows))

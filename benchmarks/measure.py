@@ -90,6 +90,9 @@ MEASUREMENTS = {
     "bench_cold": (PY + ["benchmarks/bench_cold.py", "--out", "OUT"], "bench_cold.json", "json"),
     "bench_peer_seismic": (PY + ["benchmarks/bench_peer_seismic.py", "--repeats", "3", "--out", "OUT"],
                            "bench_peer_seismic.json", "json"),
+    # the gate's CSVs written with Python's "%.10g" and read back, against the compiled writer
+    "bench_csv_text": (PY + ["benchmarks/bench_csv_text.py", "--repeats", "3", "--out", "OUT"],
+                       "bench_csv_text.json", "json"),
 }
 MEASUREMENTS.update({
     # the symbolic engine: the derived equations of one small mechanism, and every benchmark description

@@ -191,14 +191,13 @@ class _Runs:
             self.results[(case.name, engine)] = res
             csv = run_csv(self.out, case, engine)
             if not resumed:  # the CSV first, then the record that marks it complete
-                write_csv(csv, res)
+                written = write_csv(csv, res)   # the numbers as the CSV reads back
                 atomic_write_json(csv.with_suffix(".json"), {"key": job_key(case, engine, self.order), "engine": engine,
                                                              "stats": res.stats, "wall_time": job["wall_time"]})
             self.tally["kept"] += 1  # on disk (its record written): what the interrupt message counts
             if not resumed:
                 # measure what was written, so a resumed run and an uninterrupted one agree exactly
-                res = read_csv(csv, engine)
-                res.stats = job["result"].stats
+                res = RunResult(engine, written.columns, written.units, job["result"].stats)
                 self.results[(case.name, engine)] = res
             wall = res.stats.get("wall_time", job["wall_time"])
             # the integration alone; compilation (compile_time) and the job's start-up stay apart

@@ -19,7 +19,8 @@ from typing import Any
 
 import numpy as np
 
-from nsd_core.common.files import atomic_write_text
+from nsd_core.common.decimal_text import table_text
+from nsd_core.common.files import atomic_write_bytes
 from nsd_core.device.columns import units_of
 
 BASE_COLUMNS = ("t", "u", "F", "F_device", "F_rod", "F_ropes", "F_wires", "spring_push", "spring_zeta", "cap_z",
@@ -102,21 +103,23 @@ def last_cycle(t: np.ndarray, frequency: float) -> np.ndarray:
 
 
 
-def write_columns(path: str | Path, columns: dict[str, np.ndarray]) -> None:
+def write_columns(path: str | Path, columns: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     """Numeric columns {name: values} as CSV with "name [unit]" headers, every unit from the one table
-    (nsd_core.device.columns; a column it does not know is a KeyError), atomically."""
+    (nsd_core.device.columns; a column it does not know is a KeyError), atomically; each value written
+    as ``"%.10g" % v`` (nsd_core.common.decimal_text, compiled). Returns the columns as the file reads
+    back (``read_csv``'s numbers, bit for bit), so a caller need not read it again."""
     header = ",".join(f"{n} [{u}]" for n, u in units_of(columns).items())
     data = np.column_stack(list(columns.values()))
-    # one %-format a row (the same text as f"{v:.10g}" a value, half the CPU: the gate's main process
-    # writes ~7 million numbers while the workers run)
-    row_format = ",".join(["%.10g"] * data.shape[1])
-    lines = [header] + [row_format % tuple(row) for row in data.astype(float).tolist()]
-    atomic_write_text(path, "\n".join(lines) + "\n")
+    body, read = table_text(data)
+    atomic_write_bytes(path, header.encode() + b"\n" + body)
+    return {n: read[:, i] for i, n in enumerate(columns)}
 
 
-def write_csv(path: str | Path, result: RunResult) -> None:
-    """A run's time series, every column with its unit (read back by ``read_csv``)."""
-    write_columns(path, {n: result.columns[n] for n in result.units})
+def write_csv(path: str | Path, result: RunResult) -> RunResult:
+    """A run's time series, every column with its unit; returns it as ``read_csv`` reads it back
+    (the engine and units of ``result``, no stats)."""
+    return RunResult(result.engine, write_columns(path, {n: result.columns[n] for n in result.units}),
+                     dict(result.units))
 
 
 def read_csv(path: str | Path, engine: str = "") -> RunResult:
