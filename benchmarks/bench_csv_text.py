@@ -1,6 +1,6 @@
 """Writing the gate's CSVs: Python's own "%.10g" per value and numpy.loadtxt to read the numbers back
 (the harness before 2026-11-30) against nsd_core.device.results.write_columns, which formats in
-compiled code and returns the numbers the file reads back (nsd_core.common.decimal_text).
+compiled code and returns the numbers the file reads back (nsd_core.device.decimal_text).
 
     python benchmarks/bench_csv_text.py --repeats 3 --out DIR
 
@@ -25,7 +25,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from nsd_core.common.decimal_text import TEXT_UNIT  # noqa: E402
+from nsd_core.device.decimal_text import TEXT_UNIT  # noqa: E402
 from nsd_core.common.files import atomic_write_json, atomic_write_text  # noqa: E402
 from nsd_core.device.columns import units_of  # noqa: E402
 from nsd_core.device.results import read_csv, write_columns  # noqa: E402

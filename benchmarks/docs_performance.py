@@ -307,7 +307,7 @@ def bench_csv_text() -> str:
     d = rec["data"]
     rows = [[way, plain(d["median_cpu_s"][key]), g(d["ns_per_number"][key])]
             for way, key in (("Python's \"%.10g\" a value, numpy.loadtxt to read back", "python"),
-                             ("compiled (nsd_core.common.decimal_text), the numbers returned", "compiled"))]
+                             ("compiled (nsd_core.device.decimal_text), the numbers returned", "compiled"))]
     return (provenance(rec) + "\n"
             + f"The default gate's {d['tables']} tables ({d['rows']} rows, {d['numbers']} numbers, "
               f"{g(d['bytes'] / 1e6)} MB), written and read back in one process, median of {d['repeats']} "

@@ -1,4 +1,4 @@
-"""The CSVs' numbers (nsd_core.common.decimal_text): each entry's text is Python's own "%.10g" and each
+"""The CSVs' numbers (nsd_core.device.decimal_text): each entry's text is Python's own "%.10g" and each
 value read back is numpy.loadtxt's of that text, bit for bit, on values chosen to sit on every
 boundary the compiled path decides, and on a run's real columns (write_csv against read_csv)."""
 from __future__ import annotations
@@ -8,7 +8,7 @@ import io
 import numpy as np
 import pytest
 
-from nsd_core.common.decimal_text import table_text
+from nsd_core.device.decimal_text import table_text
 from nsd_core.device.results import RunResult, read_csv, write_columns, write_csv
 
 

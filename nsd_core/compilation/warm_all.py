@@ -155,7 +155,7 @@ def items(peers: bool = True) -> list:
     from nsd_core.structure.seismic import simulate_seismic
     from nsd_core.compilation.warmup import warm
     from nsd_core.engine.timing import PATHS
-    from nsd_core.common.decimal_text import TEXT_UNIT   # the CSVs' numbers, written by every command
+    from nsd_core.device.decimal_text import TEXT_UNIT   # the CSVs' numbers, written by every command
     out = first_compile.unit_items() + [(f"warm-unit-{TEXT_UNIT}", partial(co.compile_now, TEXT_UNIT))]
     m, b = DEFAULT_SOLVER["method"], DEFAULT_SOLVER["backend"]
     # one lock per mode and per peer: the runs under one lock compile the same kernels (every drive

@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from nsd_core.common.decimal_text import table_text
+from nsd_core.device.decimal_text import table_text
 from nsd_core.common.files import atomic_write_bytes
 from nsd_core.device.columns import units_of
 
@@ -106,7 +106,7 @@ def last_cycle(t: np.ndarray, frequency: float) -> np.ndarray:
 def write_columns(path: str | Path, columns: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     """Numeric columns {name: values} as CSV with "name [unit]" headers, every unit from the one table
     (nsd_core.device.columns; a column it does not know is a KeyError), atomically; each value written
-    as ``"%.10g" % v`` (nsd_core.common.decimal_text, compiled). Returns the columns as the file reads
+    as ``"%.10g" % v`` (nsd_core.device.decimal_text, compiled). Returns the columns as the file reads
     back (``read_csv``'s numbers, bit for bit), so a caller need not read it again."""
     header = ",".join(f"{n} [{u}]" for n, u in units_of(columns).items())
     data = np.column_stack(list(columns.values()))
