@@ -8,6 +8,7 @@ import io
 import numpy as np
 import pytest
 
+from nsd_core.device import decimal_text
 from nsd_core.device.decimal_text import table_text
 from nsd_core.device.results import RunResult, read_csv, write_columns, write_csv
 
@@ -43,6 +44,15 @@ def test_boundaries_as_python():
     x = boundary_values()
     assert_as_python(x[: x.size // 7 * 7].reshape(-1, 7))
     assert_as_python(x.reshape(-1, 1))   # one column: every value ends a row
+
+
+def test_a_table_longer_than_a_chunk(monkeypatch):
+    """Rows go through in blocks of CHUNK_ROWS: blocks of 5 rows, the last one short, give the same text."""
+    monkeypatch.setattr(decimal_text, "CHUNK_ROWS", 5)
+    x = boundary_values()[:3 * 1001].reshape(-1, 3)
+    assert_as_python(x)
+    body, read = table_text(x[:, 0])   # a 1-D column: one value a row, read back in its shape
+    assert body.decode() == "".join("%.10g\n" % v for v in x[:, 0]) and read.shape == (1001,)
 
 
 def test_random_doubles_as_python():

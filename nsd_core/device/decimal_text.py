@@ -30,6 +30,7 @@ _LIMIT = 290               # decimal exponents handled here; beyond, Python's fo
 _HALF_WINDOW = 1e-4        # a scaled value this close to a half is left to Python (the error is <= 2.2e-6)
 # how an entry is written: FIXED (its digits and exponent), ZERO, NAN, INF; PYTHON: Python's formatter decides
 FIXED, PYTHON, ZERO, NAN, INF = 0, 1, 2, 3, 4
+CHUNK_ROWS = 1 << 14        # rows formatted at a time
 POWERS = np.array([float(f"1e{m}") for m in range(-2 * _LIMIT, 2 * _LIMIT + 1)])   # correctly rounded 10**m
 
 
@@ -170,11 +171,22 @@ def _python_parts(v: float) -> tuple[int, int]:
 
 def table_text(data: np.ndarray) -> tuple[bytes, np.ndarray]:
     """(the body's bytes, the values as read back) of a 2-D float table, row by row: each entry the
-    text of ``"%.10g" % v``, and ``float`` of that text, in ``data``'s shape."""
-    data = np.array(data, dtype=float, order="C")   # a writable copy: the one signature compiled
-    rows, columns = data.shape if data.ndim == 2 else (data.size, 1)
-    flat = data.ravel()
+    text of ``"%.10g" % v``, and ``float`` of that text, in ``data``'s shape; ``CHUNK_ROWS`` rows at a
+    time (the working arrays stay small whatever the table's length)."""
+    data = np.asarray(data, dtype=float)
+    table = data.reshape(-1, 1) if data.ndim == 1 else data
+    read = np.empty(table.shape)
     compile_once(TEXT_UNIT)
+    parts = []
+    for a in range(0, table.shape[0], CHUNK_ROWS):
+        body, values = _block_text(np.array(table[a:a + CHUNK_ROWS], order="C").ravel(), table.shape[1])
+        parts.append(body)
+        read[a:a + CHUNK_ROWS] = values.reshape(-1, table.shape[1])
+    return b"".join(parts), read.reshape(data.shape)
+
+
+def _block_text(flat: np.ndarray, columns: int) -> tuple[bytes, np.ndarray]:
+    """``table_text`` of a block of whole rows, flattened (a writable copy: the one signature compiled)."""
     mant, expo, kind = _decimal_parts(flat, POWERS)
     for i in np.flatnonzero(kind == PYTHON):   # finite and non-zero: the others are decided above
         mant[i], expo[i] = _python_parts(float(flat[i]))
@@ -184,11 +196,9 @@ def table_text(data: np.ndarray) -> tuple[bytes, np.ndarray]:
     read[kind == ZERO] = 0.0
     read[kind == INF] = np.inf
     read[kind == NAN] = np.nan
-    slow = np.flatnonzero(np.isnan(read) & (kind != NAN))
-    for i in slow:
+    for i in np.flatnonzero(np.isnan(read) & (kind != NAN)):
         read[i] = float("%.10g" % abs(float(flat[i])))
-    read = np.where(np.signbit(flat) & (kind != NAN), -read, read)
-    return body, read.reshape(rows, columns) if data.ndim == 2 else read
+    return body, np.where(np.signbit(flat) & (kind != NAN), -read, read)
 
 
 _F = types.Array(types.float64, 1, "C")
