@@ -31,7 +31,8 @@ _HALF_WINDOW = 1e-4        # a scaled value this close to a half is left to Pyth
 # how an entry is written: FIXED (its digits and exponent), ZERO, NAN, INF; PYTHON: Python's formatter decides
 FIXED, PYTHON, ZERO, NAN, INF = 0, 1, 2, 3, 4
 CHUNK_ROWS = 1 << 14        # rows formatted at a time
-POWERS = np.array([float(f"1e{m}") for m in range(-2 * _LIMIT, 2 * _LIMIT + 1)])   # correctly rounded 10**m
+_SPAN = _LIMIT + DIGITS     # the powers a scaling or a read-back uses: 10**m for |m| <= 300
+POWERS = np.array([float(f"1e{m}") for m in range(-_SPAN, _SPAN + 1)])   # correctly rounded 10**m
 
 
 @njit(cache=True)
