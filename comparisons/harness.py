@@ -197,7 +197,7 @@ class _Runs:
             self.tally["kept"] += 1  # on disk (its record written): what the interrupt message counts
             if not resumed:
                 # measure what was written, so a resumed run and an uninterrupted one agree exactly
-                res = RunResult(engine, written.columns, written.units, job["result"].stats)
+                written.stats, res = res.stats, written
                 self.results[(case.name, engine)] = res
             wall = res.stats.get("wall_time", job["wall_time"])
             # the integration alone; compilation (compile_time) and the job's start-up stay apart

@@ -7,7 +7,7 @@ import ast
 import re
 from pathlib import Path
 
-from comparisons.builders import exudyn_codegen, exudyn_kernels
+from comparisons.builders import exudyn_codegen, exudyn_kernels, generated
 from nsd_core.engine import compiled
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -87,7 +87,7 @@ def test_the_helpers_without_a_python_entry_are_used_only_in_compiled_code():
 
 
 def test_the_generated_module_s_helpers_are_private_and_its_users_call_only_entry_points():
-    laws = exudyn_codegen.law_set([])
+    laws = generated.law_set([])
     text, _ = exudyn_codegen.source(laws)
     helpers, entries = set(), set()
     for node in ast.parse(text).body:

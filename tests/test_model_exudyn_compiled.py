@@ -28,7 +28,7 @@ def test_generated_module_is_keyed_by_its_laws_not_the_model():
     a, b = _build("nsd_drive.toml").compiled, _build("nsd_drive.toml", 5e-4).compiled
     assert a.gen is b.gen
     assert a.F[a.F.size - 1] == 1e-3 and b.F[b.F.size - 1] == 5e-4   # the step is data, not code
-    laws = exudyn_codegen.law_set(a.elements)
+    laws = generated.law_set(a.elements)
     assert {"rope", "sma_wire", "push_spring", "hunt_crossley_stop", "linear_spring_damper",
             "joint_spring_damper"} <= {law.name for law in laws}
     text, bound = exudyn_codegen.source(laws)
@@ -39,7 +39,7 @@ def test_generated_module_is_keyed_by_its_laws_not_the_model():
     assert seismic.gen is a.gen and building.gen is a.gen
     assert len(building.elements) != len(a.elements) != len(seismic.elements)
     mechanism = _build("fourbar_spring.toml").compiled   # the model layer's laws alone: a smaller module
-    assert {law.name for law in exudyn_codegen.law_set(mechanism.elements)} < {law.name for law in laws}
+    assert {law.name for law in generated.law_set(mechanism.elements)} < {law.name for law in laws}
     assert mechanism.gen is not a.gen
 
 

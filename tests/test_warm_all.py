@@ -116,7 +116,7 @@ def test_nsd_warm_compiles_the_peer_modules_every_model_law_mechanism_shares():
     (the worked example, Andrews' constant torque) shares: the same law set, the same generated text."""
     import tomllib
     from comparisons import warmup
-    from comparisons.builders import exudyn_codegen, mujoco_codegen
+    from comparisons.builders import exudyn_codegen, generated, mujoco_codegen
     from nsd_core.model.load import load_model, parse_model
     calls = warmup.every_mode_calls()
     for engine in ("exudyn", "mujoco"):
@@ -124,9 +124,9 @@ def test_nsd_warm_compiles_the_peer_modules_every_model_law_mechanism_shares():
     warmup.tiny_described_run("mujoco")   # the described builder takes the settings it is given
     assert mujoco_codegen.source(mujoco_codegen.laws_of(parse_model(tomllib.loads(warmup.TINY_MECHANISM))))[0] == \
         mujoco_codegen.source(mujoco_codegen.laws_of(load_model(Path(__file__).resolve().parents[1] / "models" / "andrews.toml")))[0]
-    tiny = exudyn_codegen.law_set(parse_model(tomllib.loads(warmup.TINY_MECHANISM)).forces)
+    tiny = generated.law_set(parse_model(tomllib.loads(warmup.TINY_MECHANISM)).forces)
     root = Path(__file__).resolve().parents[1] / "models"
     for name in ("fourbar_spring.toml", "andrews.toml"):
-        assert exudyn_codegen.law_set(load_model(root / name).forces) == tiny, name
+        assert generated.law_set(load_model(root / name).forces) == tiny, name
     assert exudyn_codegen.source(tiny)[0] == exudyn_codegen.source(
-        exudyn_codegen.law_set(load_model(root / "andrews.toml").forces))[0]
+        generated.law_set(load_model(root / "andrews.toml").forces))[0]

@@ -45,7 +45,6 @@ from comparisons.builders import exudyn_kernels
 from nsd_core.model.laws import PLANE
 
 HELPERS = (exudyn_kernels,)
-law_set = generated.law_set   # the set of laws a module is generated for (shared with mujoco_codegen)
 EPS_REL, EPS_MIN = 1e-7, 1e-2   # forward-difference step: EPS_REL max(EPS_MIN, |q_i|) (Exudyn's defaults)
 # I's head: the counts, then the offsets of F's blocks, of I's blocks and of W's blocks
 HEAD = ("nb", "npts", "nj", "nactive", "pa", "pb", "e", "jax", "jx", "jy", "jpos", "jorig", "h",
@@ -67,7 +66,7 @@ def _head(*names: str, prefix: str = "") -> str:
 
 
 def source(laws) -> tuple[str, dict]:
-    """The generated module's text for ``laws`` (law_set's list; an element's law code is its index
+    """The generated module's text for ``laws`` (generated.law_set's list; an element's law code is its index
     there) and the law functions it expects bound by name."""
     bound = generated.bound_laws(laws)
     lines = (_dispatch_source(laws) + _state_source() + _laws_source() + _evaluate_source()

@@ -81,7 +81,8 @@ class CompiledForces:
         self.ref = np.concatenate([np.asarray(mbs.GetNodeParameter(n, "referenceCoordinates"), float)
                                    for n in self.nodes])
         # one generated module per set of laws: laws and states inside the compiled call (exudyn_codegen)
-        from comparisons.builders.exudyn_codegen import law_set, module_for, pack, source   # it imports this module
+        from comparisons.builders.exudyn_codegen import module_for, pack, source   # it imports this module
+        from comparisons.builders.generated import law_set
         laws = law_set(self.elements)
         self.F, self.I, self.W, sizes, params = pack(self, laws)
         self.gen = module_for(*source(laws))

@@ -197,8 +197,8 @@ def _block_text(flat: np.ndarray, columns: int) -> tuple[bytes, np.ndarray]:
     read[kind == ZERO] = 0.0
     read[kind == INF] = np.inf
     read[kind == NAN] = np.nan
-    for i in np.flatnonzero(np.isnan(read) & (kind != NAN)):
-        read[i] = float("%.10g" % abs(float(flat[i])))
+    for i in np.flatnonzero(np.isnan(read) & (kind != NAN)):   # the text's decimal, correctly rounded
+        read[i] = float(f"{mant[i]}e{expo[i] - 9}")
     return body, np.where(np.signbit(flat) & (kind != NAN), -read, read)
 
 

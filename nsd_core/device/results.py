@@ -102,7 +102,6 @@ def last_cycle(t: np.ndarray, frequency: float) -> np.ndarray:
     return t >= t[-1] - 1.0 / frequency - 1e-9 / frequency
 
 
-
 def write_columns(path: str | Path, columns: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     """Numeric columns {name: values} as CSV with "name [unit]" headers, every unit from the one table
     (nsd_core.device.columns; a column it does not know is a KeyError), atomically; each value written
